@@ -1,0 +1,261 @@
+"""The one definition of fixed-point arithmetic, shared by the Amaranth RTL and the NumPy twins.
+
+Every operation here is written once and works on two kinds of operand:
+
+* NumPy ``int64`` arrays (or Python ints): the bit-exact twins;
+* Amaranth values: the RTL.
+
+Values are raw two's-complement integers ``raw = round(x * 2**frac_bits)`` in a :class:`QFormat`.
+Rules:
+
+* **Rounding.** :func:`round_shift` drops fraction bits either by round-to-nearest (ties toward
+  +infinity, i.e. add half an LSB then floor) — the default — or by truncation (floor).
+* **Saturation, never wrap.** Every narrowing goes through :func:`saturate`, which clamps to the
+  target format's range. Products and sums in between are computed at full width (Amaranth grows
+  widths; the twins assert that no int64 intermediate comes near 2**62).
+* **Constants** are quantized once, with their representation error recorded
+  (:class:`FixedConstant`), either in a given format or normalized to use a whole operand
+  (mantissa plus shift: the most precise constant an 18-bit multiplier can take).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+from amaranth.hdl import Const, Mux, Value, ValueCastable, signed, unsigned
+
+__all__ = [
+    "ROUNDINGS", "QFormat", "FixedConstant", "FixedPointError", "is_hdl", "round_shift",
+    "round_shift_select", "saturate", "select", "check_int64",
+]
+
+ROUNDINGS = ("nearest", "truncate")
+_INT64_GUARD = 1 << 62
+
+
+class FixedPointError(ValueError):
+    """A format or constant that cannot hold what it is asked to hold."""
+
+
+@dataclass(frozen=True)
+class QFormat:
+    """A fixed-point format: ``int_bits`` integer bits (including the sign bit when signed) and
+    ``frac_bits`` fraction bits; width ``int_bits + frac_bits``."""
+
+    int_bits: int
+    frac_bits: int
+    signed: bool = True
+
+    def __post_init__(self):
+        if self.width < 1:
+            raise FixedPointError(f"format {self} has no bits")
+        if self.signed and self.int_bits < 1:
+            raise FixedPointError(f"signed format {self} needs at least the sign bit")
+
+    def __str__(self):
+        return f"{'s' if self.signed else 'u'}Q{self.int_bits}.{self.frac_bits}"
+
+    @property
+    def width(self) -> int:
+        return self.int_bits + self.frac_bits
+
+    @property
+    def min_raw(self) -> int:
+        return -(1 << (self.width - 1)) if self.signed else 0
+
+    @property
+    def max_raw(self) -> int:
+        return (1 << (self.width - 1)) - 1 if self.signed else (1 << self.width) - 1
+
+    @property
+    def lsb(self) -> float:
+        return 2.0 ** -self.frac_bits
+
+    @property
+    def min_value(self) -> float:
+        return self.min_raw * self.lsb
+
+    @property
+    def max_value(self) -> float:
+        return self.max_raw * self.lsb
+
+    def shape(self):
+        return signed(self.width) if self.signed else unsigned(self.width)
+
+    def contains(self, x: float) -> bool:
+        return self.min_value <= x <= self.max_value
+
+    def to_raw(self, x, rounding: str = "nearest", clamp: bool = True):
+        """Quantize real value(s) to raw integers (saturating when ``clamp``; else refusing)."""
+        arr = np.asarray(x, dtype=np.float64)
+        if not np.all(np.isfinite(arr)):
+            raise FixedPointError(f"cannot represent non-finite value(s) in {self}")
+        scaled = arr * (1 << self.frac_bits) if self.frac_bits >= 0 else \
+            arr / (1 << -self.frac_bits)
+        raw = np.floor(scaled + 0.5) if rounding == "nearest" else np.floor(scaled)
+        if not clamp and (np.any(raw < self.min_raw) or np.any(raw > self.max_raw)):
+            bad = arr[(raw < self.min_raw) | (raw > self.max_raw)].ravel()[0]
+            raise FixedPointError(f"value {bad:g} is outside {self} "
+                                  f"[{self.min_value:g}, {self.max_value:g}]")
+        raw = np.clip(raw, self.min_raw, self.max_raw).astype(np.int64)
+        return int(raw) if raw.ndim == 0 else raw
+
+    def to_float(self, raw):
+        return np.asarray(raw, dtype=np.float64) * self.lsb
+
+    def to_dict(self) -> dict:
+        return {"format": str(self), "int_bits": self.int_bits, "frac_bits": self.frac_bits,
+                "signed": self.signed, "width": self.width, "lsb": self.lsb,
+                "min": self.min_value, "max": self.max_value}
+
+    @staticmethod
+    def for_range(lo: float, hi: float, width: int, signed_: bool = True) -> "QFormat":
+        """The format of ``width`` bits with the most fraction bits that still holds [lo, hi]."""
+        mag = max(abs(lo), abs(hi), 1e-300)
+        int_bits = max(1, math.floor(math.log2(mag)) + 1 + (1 if signed_ else 0))
+        fmt = QFormat(int_bits, width - int_bits, signed_)
+        while not (fmt.contains(lo) and fmt.contains(hi)):
+            int_bits += 1
+            fmt = QFormat(int_bits, width - int_bits, signed_)
+        return fmt
+
+
+@dataclass(frozen=True)
+class FixedConstant:
+    """A real constant quantized to ``raw * 2**-frac_bits`` in ``width`` bits."""
+
+    name: str
+    value: float
+    raw: int
+    frac_bits: int
+    width: int
+    signed: bool = True
+
+    @property
+    def quantized(self) -> float:
+        return self.raw * 2.0 ** -self.frac_bits
+
+    @property
+    def abs_error(self) -> float:
+        return self.quantized - self.value
+
+    @property
+    def rel_error(self) -> float:
+        return self.abs_error / self.value if self.value != 0 else 0.0
+
+    @classmethod
+    def in_format(cls, name: str, value: float, fmt: QFormat, max_rel_error: float | None = None,
+                  exact: bool = False) -> "FixedConstant":
+        """Quantize ``value`` in ``fmt``; refuse if it does not fit, is not exact when ``exact``,
+        or misses ``max_rel_error``."""
+        if not math.isfinite(value):
+            raise FixedPointError(f"constant {name} = {value!r} is not finite")
+        if not fmt.contains(value):
+            raise FixedPointError(f"constant {name} = {value:g} does not fit {fmt} "
+                                  f"[{fmt.min_value:g}, {fmt.max_value:g}]")
+        c = cls(name, value, fmt.to_raw(value), fmt.frac_bits, fmt.width, fmt.signed)
+        if exact and c.abs_error != 0:
+            raise FixedPointError(f"constant {name} = {value:g} is not exactly representable in "
+                                  f"{fmt} (error {c.abs_error:.3g})")
+        c._check_rel(max_rel_error)
+        return c
+
+    @classmethod
+    def normalized(cls, name: str, value: float, width: int, signed: bool = True,
+                   max_rel_error: float | None = None) -> "FixedConstant":
+        """Quantize ``value`` with as many fraction bits as ``width`` allows (mantissa + shift)."""
+        if not math.isfinite(value):
+            raise FixedPointError(f"constant {name} = {value!r} is not finite")
+        if value == 0:
+            return cls(name, 0.0, 0, 0, width, signed)
+        if value < 0 and not signed:
+            raise FixedPointError(f"constant {name} = {value:g} is negative but unsigned")
+        mag_bits = width - 1 if signed else width
+        frac = mag_bits - 1 - math.floor(math.log2(abs(value)))
+        raw = int(math.floor(value * 2.0 ** frac + 0.5))
+        if abs(raw) >= (1 << mag_bits):       # rounding carried into a new bit
+            frac -= 1
+            raw = int(math.floor(value * 2.0 ** frac + 0.5))
+        c = cls(name, value, raw, frac, width, signed)
+        c._check_rel(max_rel_error)
+        return c
+
+    def _check_rel(self, max_rel_error):
+        if max_rel_error is not None and abs(self.rel_error) > max_rel_error:
+            raise FixedPointError(f"constant {self.name} = {self.value:g} has relative "
+                                  f"representation error {self.rel_error:.3g} > "
+                                  f"{max_rel_error:g} in {self.width} bits")
+
+    def to_dict(self) -> dict:
+        return {"value": self.value, "raw": self.raw, "frac_bits": self.frac_bits,
+                "width": self.width, "quantized": self.quantized,
+                "abs_error": self.abs_error, "rel_error": self.rel_error}
+
+
+# ----------------------------------------------------------------------------------------------
+# Operations, written once for NumPy ints and Amaranth values.
+
+def is_hdl(x) -> bool:
+    return isinstance(x, (Value, ValueCastable))
+
+
+def select(cond, a, b):
+    """``a`` where ``cond`` else ``b`` (``Mux`` for RTL, ``np.where`` for the twin)."""
+    if is_hdl(cond) or is_hdl(a) or is_hdl(b):
+        return Mux(cond, a, b)
+    return np.where(cond, a, b)
+
+
+def round_shift(x, shift: int, rounding: str = "nearest"):
+    """Drop ``shift`` fraction bits (``shift < 0`` adds bits, exactly)."""
+    if rounding not in ROUNDINGS:
+        raise FixedPointError(f"unknown rounding {rounding!r}; known: {ROUNDINGS}")
+    if shift <= 0:
+        return x << -shift if shift else x
+    if rounding == "nearest":
+        x = x + (1 << (shift - 1))
+    return x >> shift
+
+
+def round_shift_select(x, shifts: Sequence[int], index, rounding: str = "nearest"):
+    """:func:`round_shift` by ``shifts[index]``, where ``index`` varies per element/cycle."""
+    if is_hdl(x) or is_hdl(index):
+        distinct = sorted(set(int(s) for s in shifts))
+        if len(distinct) == 1:
+            return round_shift(x, distinct[0], rounding)
+        return _mux_tree([round_shift(x, int(s), rounding) for s in shifts], index)
+    s = np.asarray(shifts, dtype=np.int64)[np.asarray(index)]
+    x = np.asarray(x, dtype=np.int64)
+    if np.any(s <= 0):
+        raise FixedPointError("variable shifts must be >= 1")
+    if rounding == "nearest":
+        x = x + (np.int64(1) << (s - 1))
+    return x >> s
+
+
+def _mux_tree(options, index):
+    out = options[-1]
+    for i in range(len(options) - 2, -1, -1):
+        out = Mux(index == i, options[i], out)
+    return out
+
+
+def saturate(x, fmt: QFormat):
+    """Clamp ``x`` into ``fmt`` (the result has ``fmt``'s width in RTL)."""
+    if is_hdl(x):
+        lo = Const(fmt.min_raw, fmt.shape())
+        hi = Const(fmt.max_raw, fmt.shape())
+        clamped = Mux(x > fmt.max_raw, hi, Mux(x < fmt.min_raw, lo, x))
+        return clamped[:fmt.width].as_signed() if fmt.signed else clamped[:fmt.width]
+    return np.clip(x, fmt.min_raw, fmt.max_raw)
+
+
+def check_int64(name: str, x) -> None:
+    """Twin guard: refuse any int64 intermediate that could have overflowed."""
+    arr = np.asarray(x)
+    if arr.size and int(np.max(np.abs(arr))) >= _INT64_GUARD:
+        raise OverflowError(f"twin intermediate {name} reached 2**62; the format choice would "
+                            f"overflow int64")

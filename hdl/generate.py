@@ -1,0 +1,40 @@
+"""Verilog generation: deterministic output plus a JSON description of the generated core."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from amaranth.back import verilog
+from amaranth.lib.wiring import In
+
+from .izhikevich import IzhikevichConfig, IzhikevichCore
+
+__all__ = ["izhikevich_verilog", "generate_izhikevich"]
+
+
+def izhikevich_verilog(config: IzhikevichConfig, name: str = "izhikevich_core") -> str:
+    """Verilog text of the core (no source locations, so the same config gives the same bytes)."""
+    return verilog.convert(IzhikevichCore(config), name=name, emit_src=False)
+
+
+def generate_izhikevich(out: Path, n_neurons: int = 2500, clock_hz: float = 40e6,
+                        update_hz: float = 16e3, config: IzhikevichConfig | None = None,
+                        name: str = "izhikevich_core") -> list[Path]:
+    """Write ``out/<name>.v`` and ``out/<name>.json``; returns the paths."""
+    cfg = config or IzhikevichConfig(n_neurons=n_neurons, clock_hz=clock_hz, update_hz=update_hz)
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    core = IzhikevichCore(cfg)
+    text = verilog.convert(core, name=name, emit_src=False)
+    desc = cfg.to_dict()
+    desc["module"] = name
+    desc["ports"] = {pname: {"direction": "in" if member.flow == In else "out",
+                             "width": member.shape.width if hasattr(member.shape, "width")
+                             else len(getattr(core, pname)),
+                             "signed": bool(getattr(member.shape, "signed", False))}
+                     for pname, member in core.signature.members.items()}
+    vpath, jpath = out / f"{name}.v", out / f"{name}.json"
+    vpath.write_text(text)
+    jpath.write_text(json.dumps(desc, indent=2, sort_keys=True) + "\n")
+    return [vpath, jpath]
