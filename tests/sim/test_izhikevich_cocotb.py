@@ -24,7 +24,7 @@ CASES = {
     # the default 2500-neuron, 40 MHz / 16 kHz configuration, back-to-back sweeps
     "n2500_default": {"core": {"n_neurons": 2500, "clock_hz": 40e6, "update_hz": 16e3,
                                "spike_fifo_depth": 2048},
-                      "sweeps": 3, "current_range": [0.0, 400.0], "writes_per_sweep": 20},
+                      "sweeps": 6, "current_range": [0.0, 500.0], "writes_per_sweep": 20},
 }
 
 

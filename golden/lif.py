@@ -1,0 +1,774 @@
+"""Float64 reference models of leaky integrate-and-fire (LIF) neurons, vectorized over neurons.
+
+Two families from the design brief (section 6).
+
+Continuous LIF (mechanoreceptor networks)
+-----------------------------------------
+::
+
+    tau_m dv/dt = -(v - v_rest) + I_total,      I_total = I_ext + I_A - I_G
+    if v >= v_th:  spike, v <- v_reset, v held at v_reset for t_ref
+
+Units: ``v``, ``v_th``, ``v_reset``, ``v_rest`` in mV; every current ``I`` in mV (it is the
+current times the membrane resistance, so ``v_inf = v_rest + I``); times in ms. Defaults: threshold
+18 mV above a 0 mV rest (brief); ``tau_m`` 20 ms (excitatory; 10 ms for inhibitory cells); the
+brief gives no reset or refractory value, so ``v_reset = 11 mV``, ``t_ref = 2 ms`` (excitatory;
+1 ms inhibitory) are taken from the Brunel-Wang/Mazzoni LIF network family whose threshold,
+``tau_m`` and 1 ms latency the brief quotes.
+
+Time grid and spike convention (same as :mod:`cuneate.golden.izhikevich`): update ``k`` advances
+``t = k dt`` to ``(k+1) dt`` with the input ``I[k]`` (evaluated at ``t = k dt``) held constant over
+the step; the threshold is tested on the updated ``v`` (``>=``); a spike produced by update ``k`` is
+reported at ``(k+1) dt``. After a spike, the next ``n_ref = ceil(t_ref / dt)`` updates leave ``v``
+clamped at ``v_reset`` and cannot spike (so with ``t_ref`` a multiple of ``dt``, integration
+resumes exactly ``t_ref`` after the spike).
+
+Integration schemes (``scheme=``):
+
+``"exact"`` (default)
+    Exact exponential integration for input constant within a step:
+    ``v' = v_inf + (v - v_inf) exp(-dt/tau_m)`` with ``v_inf = v_rest + I[k]``. For a constant
+    suprathreshold input the inter-spike interval is then
+    ``t_ref + tau_m ln((v_inf - v_reset)/(v_inf - v_th))`` rounded *up* to the grid (at most one
+    ``dt`` late when ``t_ref`` is a multiple of ``dt``).
+``"euler"``
+    Forward Euler: ``v' = v + (dt/tau_m) (v_rest - v + I[k])``. Refused for ``dt >= 2 tau_m``,
+    where it is unstable.
+
+Synapses: difference of exponentials (current based, no conductance)::
+
+    I_syn(t) = w * sum_j K(t - t_j - L),     K(s) = (exp(-s/tau_d) - exp(-s/tau_r)) / N  (s >= 0)
+                                              K(s) = 0                                  (s < 0)
+
+with presynaptic spike times ``t_j``, latency ``L`` (1 ms in the brief) and normalization ``N``:
+``"peak"`` (default: ``max K = 1`` so ``w`` is the peak current in mV; ``N = K_raw(t_peak)``),
+``"area"`` (``N = tau_d - tau_r``: ``K`` integrates to 1 ms^-1, so ``w`` is a charge in mV ms) or
+``"none"`` (``N = 1``). The peak is at ``t_peak = tau_r tau_d/(tau_d - tau_r) ln(tau_d/tau_r)``.
+:func:`synaptic_current` evaluates the sum directly (exact at any time); the network simulator
+:func:`simulate_lif_network` uses two exactly-decaying exponential traces per synapse type, which
+gives the same values on the grid. Default time constants (the brief gives none): AMPA rise 0.4 ms,
+decay 2 ms; GABA rise 0.25 ms, decay 5 ms.
+
+Force transduction: ``I(t) = k1 + k2 f(t)`` (:func:`force_to_current`).
+
+Discrete LIF (quantized networks)
+---------------------------------
+::
+
+    u[t] = alpha u[t-1] + sum_i w_i x_i[t],      alpha = exp(-dt/tau)
+    if u[t] > u_th (strict):  spike s[t] = 1,  u[t] <- u_rest
+
+Dimensionless; ``t`` counts time steps. Defaults from the brief: ``alpha = 0.389``, ``u_th = 0.65``,
+``u_rest = 0``. An optional refractory period of ``r`` steps holds ``u`` at ``u_rest`` (input
+ignored, no spike) for the ``r`` steps after a spike. The state before the first step is
+``u[-1] = u0`` (default ``u_rest``).
+
+Validation: every entry point raises :class:`ValueError` with a clear message on non-finite or
+wrong-shaped input, non-positive time constants or steps, ``v_reset >= v_th``, unknown options.
+A state that becomes non-finite raises :class:`LIFDivergenceError`; no NaN escapes silently.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .izhikevich import current_schedule, group_spikes
+
+__all__ = [
+    "V_TH", "V_RESET", "V_REST", "TAU_M_EXC_MS", "TAU_M_INH_MS", "T_REF_EXC_MS", "T_REF_INH_MS",
+    "LATENCY_MS", "LIF_SCHEMES", "NORMALIZATIONS", "STATE_BOUND",
+    "DISCRETE_ALPHA", "DISCRETE_U_TH",
+    "LIFDivergenceError", "DiffExpSynapse", "AMPA", "GABA",
+    "diff_exp_peak_time", "diff_exp_kernel", "synaptic_current", "force_to_current",
+    "lif_step", "LIFResult", "simulate_lif", "simulate_lif_network",
+    "DiscreteLIFResult", "discrete_alpha", "simulate_discrete_lif",
+]
+
+V_TH = 18.0
+V_RESET = 11.0
+V_REST = 0.0
+TAU_M_EXC_MS = 20.0
+TAU_M_INH_MS = 10.0
+T_REF_EXC_MS = 2.0
+T_REF_INH_MS = 1.0
+LATENCY_MS = 1.0
+LIF_SCHEMES = ("exact", "euler")
+NORMALIZATIONS = ("peak", "area", "none")
+STATE_BOUND = 1e6
+DISCRETE_ALPHA = 0.389
+DISCRETE_U_TH = 0.65
+
+# relative slack used when turning a time into a whole number of steps (absorbs float rounding,
+# e.g. 1.0 / 0.1 = 10.000000000000002)
+_GRID_EPS = 1e-9
+# cap on the number of float64 temporaries of one kernel evaluation block
+_BLOCK_ELEMS = 1 << 22
+
+
+class LIFDivergenceError(FloatingPointError):
+    """A LIF membrane potential became non-finite or exceeded the state bound."""
+
+    def __init__(self, neuron: int, step: int, dt_ms: float, v: float, scheme: str,
+                 bound: float):
+        self.neuron, self.step, self.dt_ms, self.v, self.scheme = neuron, step, dt_ms, v, scheme
+        super().__init__(
+            f"LIF state diverged: neuron {neuron}, update {step} (t = {(step + 1) * dt_ms:g} ms), "
+            f"dt = {dt_ms:g} ms, scheme {scheme!r}: v = {v!r} (bound |v| <= {bound:g}); check the "
+            f"input current and dt")
+
+
+# ----------------------------------------------------------------------------- validation helpers
+
+def _num(value, name: str, *, positive=False, nonneg=False) -> float:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a number, got {value!r}") from None
+    if not np.isfinite(v):
+        raise ValueError(f"{name} must be finite, got {value!r}")
+    if positive and not v > 0:
+        raise ValueError(f"{name} must be > 0, got {value!r}")
+    if nonneg and not v >= 0:
+        raise ValueError(f"{name} must be >= 0, got {value!r}")
+    return v
+
+
+def _array(x, name: str, ndim: tuple[int, ...] | None = None) -> np.ndarray:
+    try:
+        arr = np.asarray(x, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{name} must be numeric array-like: {exc}") from None
+    if ndim is not None and arr.ndim not in ndim:
+        raise ValueError(f"{name} must be {' or '.join(f'{d}-D' for d in ndim)}, got shape "
+                         f"{arr.shape}")
+    bad = ~np.isfinite(arr)
+    if bad.any():
+        idx = tuple(int(i) for i in np.argwhere(bad)[0])
+        raise ValueError(f"{name} contains a non-finite value ({arr[idx]!r}) at index "
+                         f"{idx if len(idx) != 1 else idx[0]}")
+    return arr
+
+
+def _per_neuron(x, n: int, name: str, *, positive=False, nonneg=False) -> np.ndarray:
+    arr = _array(x, name, ndim=(0, 1))
+    if arr.ndim == 1 and arr.shape[0] != n:
+        raise ValueError(f"{name} has {arr.shape[0]} values for {n} neurons")
+    arr = np.broadcast_to(arr, (n,)).astype(np.float64)
+    if positive and not np.all(arr > 0):
+        raise ValueError(f"{name} must be > 0, got {arr[~(arr > 0)][0]!r}")
+    if nonneg and not np.all(arr >= 0):
+        raise ValueError(f"{name} must be >= 0, got {arr[~(arr >= 0)][0]!r}")
+    return arr
+
+
+def _check_taus(tau_rise_ms, tau_decay_ms) -> tuple[float, float]:
+    tr = _num(tau_rise_ms, "tau_rise_ms", positive=True)
+    td = _num(tau_decay_ms, "tau_decay_ms", positive=True)
+    if not tr < td:
+        raise ValueError(f"a difference of exponentials needs 0 < tau_rise_ms < tau_decay_ms, got "
+                         f"tau_rise_ms={tr!r}, tau_decay_ms={td!r}")
+    return tr, td
+
+
+def _check_normalize(normalize: str) -> str:
+    if normalize not in NORMALIZATIONS:
+        raise ValueError(f"normalize must be one of {', '.join(map(repr, NORMALIZATIONS))}, got "
+                         f"{normalize!r}")
+    return normalize
+
+
+# ----------------------------------------------------------------------------------- synapses
+
+def diff_exp_peak_time(tau_rise_ms: float, tau_decay_ms: float) -> float:
+    """Time (ms) of the maximum of ``exp(-t/tau_d) - exp(-t/tau_r)``:
+    ``tau_r tau_d / (tau_d - tau_r) * ln(tau_d / tau_r)``."""
+    tr, td = _check_taus(tau_rise_ms, tau_decay_ms)
+    return tr * td / (td - tr) * math.log(td / tr)
+
+
+def _norm_factor(tr: float, td: float, normalize: str) -> float:
+    if normalize == "none":
+        return 1.0
+    if normalize == "area":
+        return td - tr
+    tp = tr * td / (td - tr) * math.log(td / tr)
+    return math.exp(-tp / td) - math.exp(-tp / tr)
+
+
+def _kernel_unchecked(s: np.ndarray, tr: float, td: float, norm: float) -> np.ndarray:
+    pos = s >= 0
+    sp = np.where(pos, s, 0.0)
+    return np.where(pos, (np.exp(-sp / td) - np.exp(-sp / tr)) / norm, 0.0)
+
+
+def diff_exp_kernel(t_ms, tau_rise_ms: float, tau_decay_ms: float,
+                    normalize: str = "peak") -> np.ndarray:
+    """Difference-of-exponentials kernel ``K(t)`` (0 for ``t < 0``), see the module docstring.
+
+    Parameters
+    ----------
+    t_ms
+        Times in ms (any shape, finite).
+    tau_rise_ms, tau_decay_ms
+        Time constants in ms, ``0 < tau_rise < tau_decay``.
+    normalize
+        ``"peak"`` (max 1), ``"area"`` (integral 1 ms^-1) or ``"none"``.
+    """
+    tr, td = _check_taus(tau_rise_ms, tau_decay_ms)
+    t = _array(t_ms, "t_ms")
+    return _kernel_unchecked(t, tr, td, _norm_factor(tr, td, _check_normalize(normalize)))
+
+
+def _spike_lists(spike_times_ms, name: str) -> tuple[list[np.ndarray], bool]:
+    """Return (list of 1-D spike-time arrays, was_single)."""
+    if isinstance(spike_times_ms, np.ndarray) or np.isscalar(spike_times_ms):
+        arr = _array(spike_times_ms, name, ndim=(0, 1))
+        return [np.atleast_1d(arr)], True
+    seq = list(spike_times_ms)
+    if all(np.isscalar(x) for x in seq):
+        return [_array(seq, name, ndim=(1,))], True
+    return [_array(s, f"{name}[{i}]", ndim=(0, 1)).reshape(-1) for i, s in enumerate(seq)], False
+
+
+def _pair_array(x, n_pre: int, n_post: int | None, name: str, *, nonneg=False):
+    arr = _array(x, name, ndim=(0, 1, 2))
+    if arr.ndim == 1 and arr.shape[0] != n_pre:
+        raise ValueError(f"{name} has {arr.shape[0]} values for {n_pre} presynaptic sources")
+    if arr.ndim == 2:
+        if arr.shape[0] != n_pre or (n_post is not None and arr.shape[1] != n_post):
+            raise ValueError(f"{name} must have shape ({n_pre}, n_post), got {arr.shape}")
+    if nonneg and not np.all(arr >= 0):
+        raise ValueError(f"{name} must be >= 0 (conduction latencies and delays cannot be "
+                         f"negative)")
+    return arr
+
+
+def synaptic_current(spike_times_ms, t_grid_ms, tau_rise_ms: float, tau_decay_ms: float,
+                     latency_ms=LATENCY_MS, weight=1.0, normalize: str = "peak") -> np.ndarray:
+    """Difference-of-exponentials synaptic current on a time grid, by direct summation.
+
+    ``I(t) = sum_pre w[pre, post] sum_j K(t - t_j^pre - L[pre, post])``.
+
+    Parameters
+    ----------
+    spike_times_ms
+        Either one 1-D array of presynaptic spike times (ms) or a list of such arrays (one per
+        presynaptic source).
+    t_grid_ms
+        1-D array of evaluation times (ms); need not be uniform.
+    tau_rise_ms, tau_decay_ms
+        Kernel time constants (ms), ``0 < tau_rise < tau_decay``.
+    latency_ms
+        Latency ``L`` >= 0: scalar, per source ``(n_pre,)``, or per pair ``(n_pre, n_post)``.
+    weight
+        ``w``: scalar, per source ``(n_pre,)`` or per pair ``(n_pre, n_post)``. Its sign is kept.
+    normalize
+        Kernel normalization, see :func:`diff_exp_kernel`.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(n_t,)`` when neither ``latency_ms`` nor ``weight`` is 2-D (sum over sources), else
+        ``(n_t, n_post)``.
+    """
+    tr, td = _check_taus(tau_rise_ms, tau_decay_ms)
+    norm = _norm_factor(tr, td, _check_normalize(normalize))
+    spikes, _ = _spike_lists(spike_times_ms, "spike_times_ms")
+    t = _array(t_grid_ms, "t_grid_ms", ndim=(1,))
+    n_pre = len(spikes)
+    lat = _pair_array(latency_ms, n_pre, None, "latency_ms", nonneg=True)
+    w = _pair_array(weight, n_pre, lat.shape[1] if lat.ndim == 2 else None, "weight")
+    two_d = lat.ndim == 2 or w.ndim == 2
+    n_post = lat.shape[1] if lat.ndim == 2 else (w.shape[1] if w.ndim == 2 else 1)
+    lat2 = np.broadcast_to(lat.reshape(lat.shape + (1,) * (2 - lat.ndim)) if lat.ndim == 1
+                           else lat, (n_pre, n_post))
+    w2 = np.broadcast_to(w.reshape(w.shape + (1,) * (2 - w.ndim)) if w.ndim == 1 else w,
+                         (n_pre, n_post))
+    out = np.zeros((t.shape[0], n_post))
+    for i, s in enumerate(spikes):
+        if s.size == 0 or not np.any(w2[i]):
+            continue
+        chunk = max(1, _BLOCK_ELEMS // max(1, t.shape[0] * n_post))
+        acc = np.zeros((t.shape[0], n_post))
+        for j0 in range(0, s.size, chunk):
+            sj = s[j0:j0 + chunk]
+            rel = t[:, None, None] - lat2[i][None, :, None] - sj[None, None, :]
+            acc += _kernel_unchecked(rel, tr, td, norm).sum(axis=2)
+        out += acc * w2[i][None, :]
+    if not np.all(np.isfinite(out)):
+        raise ValueError("synaptic current overflowed float64; check the weights")
+    return out if two_d else out[:, 0]
+
+
+@dataclass(frozen=True)
+class DiffExpSynapse:
+    """A current-based difference-of-exponentials synapse (see the module docstring).
+
+    Attributes
+    ----------
+    tau_rise_ms, tau_decay_ms
+        Time constants in ms, ``0 < tau_rise < tau_decay``.
+    weight
+        Peak current in mV for ``normalize="peak"`` (sign kept; in a network, excitatory and
+        inhibitory synapses take positive weights and GABA is subtracted).
+    latency_ms
+        Delay between a presynaptic spike and the start of the response, ms (>= 0).
+    normalize
+        ``"peak"``, ``"area"`` or ``"none"``.
+    """
+
+    tau_rise_ms: float
+    tau_decay_ms: float
+    weight: float = 1.0
+    latency_ms: float = LATENCY_MS
+    normalize: str = "peak"
+
+    def __post_init__(self):
+        _check_taus(self.tau_rise_ms, self.tau_decay_ms)
+        _num(self.weight, "weight")
+        _num(self.latency_ms, "latency_ms", nonneg=True)
+        _check_normalize(self.normalize)
+
+    @property
+    def peak_time_ms(self) -> float:
+        """Time from spike arrival (after the latency) to the peak of the response."""
+        return diff_exp_peak_time(self.tau_rise_ms, self.tau_decay_ms)
+
+    def kernel(self, t_ms) -> np.ndarray:
+        """``weight * K(t - latency)`` for a single presynaptic spike at ``t = 0``."""
+        return self.weight * diff_exp_kernel(np.asarray(t_ms, dtype=np.float64) - self.latency_ms,
+                                             self.tau_rise_ms, self.tau_decay_ms, self.normalize)
+
+    def current(self, spike_times_ms, t_grid_ms) -> np.ndarray:
+        """Current trace on ``t_grid_ms`` from one array (or list of arrays) of spike times."""
+        return synaptic_current(spike_times_ms, t_grid_ms, self.tau_rise_ms, self.tau_decay_ms,
+                                self.latency_ms, self.weight, self.normalize)
+
+
+#: AMPA-like excitatory synapse (rise 0.4 ms, decay 2 ms, latency 1 ms, unit peak).
+AMPA = DiffExpSynapse(0.4, 2.0, 1.0, LATENCY_MS)
+#: GABA-like inhibitory synapse (rise 0.25 ms, decay 5 ms, latency 1 ms, unit peak).
+GABA = DiffExpSynapse(0.25, 5.0, 1.0, LATENCY_MS)
+
+
+def force_to_current(force, k1, k2) -> np.ndarray:
+    """Force-to-current transduction ``I = k1 + k2 * f`` (element-wise, broadcasting).
+
+    ``force`` in the sensor's force unit (e.g. N), ``k1`` in mV, ``k2`` in mV per force unit;
+    ``k1``/``k2`` may be per-taxel arrays broadcastable against ``force``.
+    """
+    f = _array(force, "force")
+    a = _array(k1, "k1")
+    b = _array(k2, "k2")
+    try:
+        with np.errstate(over="ignore", invalid="ignore"):
+            out = a + b * f
+    except ValueError as exc:
+        raise ValueError(f"k1, k2 and force do not broadcast: {exc}") from None
+    if not np.all(np.isfinite(out)):
+        raise ValueError("force_to_current overflowed float64")
+    return out
+
+
+# ------------------------------------------------------------------------- continuous LIF
+
+def lif_step(v, I, dt_ms: float, tau_m_ms, v_rest=V_REST, scheme: str = "exact"):
+    """One membrane update *without* threshold/reset: returns ``v'`` (see module docstring)."""
+    if scheme == "exact":
+        v_inf = v_rest + I
+        return v_inf + (v - v_inf) * np.exp(-dt_ms / tau_m_ms)
+    if scheme == "euler":
+        return v + (dt_ms / tau_m_ms) * (v_rest - v + I)
+    raise ValueError(f"unknown LIF scheme {scheme!r}; known: {', '.join(LIF_SCHEMES)}")
+
+
+@dataclass
+class LIFResult:
+    """Outcome of :func:`simulate_lif` / :func:`simulate_lif_network`."""
+
+    dt_ms: float
+    scheme: str
+    n_steps: int
+    spikes_ms: list[np.ndarray]
+    spike_steps: list[np.ndarray]
+    v: np.ndarray                            # final membrane potential (n_neurons,)
+    v_trace: np.ndarray | None = None        # (n_steps + 1, n_neurons) when recorded
+    i_exc_trace: np.ndarray | None = None    # (n_steps, n_neurons), network only
+    i_inh_trace: np.ndarray | None = None    # (n_steps, n_neurons), network only
+
+    @property
+    def spike_counts(self) -> np.ndarray:
+        return np.array([len(s) for s in self.spikes_ms])
+
+
+def _resolve_steps(current, duration_ms, n_steps, dt_ms) -> int:
+    if duration_ms is not None and n_steps is not None:
+        raise ValueError("give at most one of duration_ms and n_steps")
+    if n_steps is not None:
+        if int(n_steps) != n_steps or n_steps < 0:
+            raise ValueError(f"n_steps must be a non-negative integer, got {n_steps!r}")
+        return int(n_steps)
+    if duration_ms is not None:
+        d = _num(duration_ms, "duration_ms", nonneg=True)
+        return int(round(d / dt_ms))
+    if callable(current) or np.ndim(current) == 0:
+        raise ValueError("a constant or callable current needs duration_ms or n_steps")
+    return int(np.shape(current)[0])
+
+
+def _infer_n(current, n_neurons, *arrays) -> int:
+    if n_neurons is not None:
+        if int(n_neurons) != n_neurons or n_neurons < 1:
+            raise ValueError(f"n_neurons must be a positive integer, got {n_neurons!r}")
+        return int(n_neurons)
+    if not callable(current) and np.ndim(current) == 2:
+        return int(np.shape(current)[1])
+    for a in arrays:
+        if np.ndim(a) == 1:
+            return int(np.shape(a)[0])
+    return 1
+
+
+class _Membranes:
+    """Shared LIF membrane bookkeeping (parameters, refractory counters, spike collection)."""
+
+    def __init__(self, n, dt_ms, tau_m_ms, v_th, v_reset, v_rest, t_ref_ms, scheme, v0,
+                 state_bound):
+        if scheme not in LIF_SCHEMES:
+            raise ValueError(f"unknown LIF scheme {scheme!r}; known: {', '.join(LIF_SCHEMES)}")
+        self.n, self.dt, self.scheme = n, dt_ms, scheme
+        self.tau = _per_neuron(tau_m_ms, n, "tau_m_ms", positive=True)
+        self.v_th = _per_neuron(v_th, n, "v_th")
+        self.v_reset = _per_neuron(v_reset, n, "v_reset")
+        self.v_rest = _per_neuron(v_rest, n, "v_rest")
+        t_ref = _per_neuron(t_ref_ms, n, "t_ref_ms", nonneg=True)
+        if not np.all(self.v_reset < self.v_th):
+            i = int(np.flatnonzero(~(self.v_reset < self.v_th))[0])
+            raise ValueError(f"v_reset must be below v_th (neuron {i}: v_reset = "
+                             f"{self.v_reset[i]!r}, v_th = {self.v_th[i]!r})")
+        if scheme == "euler" and not np.all(dt_ms < 2 * self.tau):
+            raise ValueError(f"forward Euler is unstable for dt_ms >= 2 tau_m (dt_ms = {dt_ms!r}, "
+                             f"min tau_m = {self.tau.min()!r}); use scheme='exact' or a smaller dt")
+        self.n_ref = np.ceil(t_ref / dt_ms - _GRID_EPS).astype(np.int64).clip(min=0)
+        self.decay = np.exp(-dt_ms / self.tau)
+        self.v = self.v_rest.copy() if v0 is None else _per_neuron(v0, n, "v0")
+        self.ref = np.zeros(n, dtype=np.int64)
+        self.bound = state_bound
+        self.hit_steps: list[np.ndarray] = []
+        self.hit_neurons: list[np.ndarray] = []
+
+    def update(self, k: int, I) -> np.ndarray:
+        if self.scheme == "exact":
+            v_inf = self.v_rest + I
+            v_new = v_inf + (self.v - v_inf) * self.decay
+        else:
+            v_new = self.v + (self.dt / self.tau) * (self.v_rest - self.v + I)
+        bad = ~(np.isfinite(v_new) & (np.abs(v_new) <= self.bound))
+        if bad.any():
+            i = int(np.flatnonzero(bad)[0])
+            raise LIFDivergenceError(i, k, self.dt, float(v_new[i]), self.scheme, self.bound)
+        frozen = self.ref > 0
+        v_new = np.where(frozen, self.v_reset, v_new)
+        spiked = (~frozen) & (v_new >= self.v_th)
+        self.ref = np.where(frozen, self.ref - 1, self.ref)
+        if spiked.any():
+            idx = np.flatnonzero(spiked)
+            self.hit_neurons.append(idx)
+            self.hit_steps.append(np.full(idx.size, k, dtype=np.int64))
+            v_new = np.where(spiked, self.v_reset, v_new)
+            self.ref = np.where(spiked, self.n_ref, self.ref)
+        self.v = v_new
+        return spiked
+
+    def result(self, n_steps, v_tr, i_exc=None, i_inh=None) -> LIFResult:
+        steps = group_spikes(self.hit_steps, self.hit_neurons, self.n)
+        return LIFResult(dt_ms=self.dt, scheme=self.scheme, n_steps=n_steps,
+                         spikes_ms=[(s + 1) * self.dt for s in steps], spike_steps=steps,
+                         v=self.v, v_trace=v_tr, i_exc_trace=i_exc, i_inh_trace=i_inh)
+
+
+def simulate_lif(current, dt_ms: float, *, duration_ms: float | None = None,
+                 n_steps: int | None = None, n_neurons: int | None = None,
+                 tau_m_ms=TAU_M_EXC_MS, v_th=V_TH, v_reset=V_RESET, v_rest=V_REST,
+                 t_ref_ms=T_REF_EXC_MS, scheme: str = "exact", v0=None, record: bool = True,
+                 state_bound: float = STATE_BOUND) -> LIFResult:
+    """Simulate uncoupled continuous LIF neurons driven by an input current.
+
+    Parameters
+    ----------
+    current
+        Input current in mV (current x resistance). As in
+        :func:`cuneate.golden.izhikevich.current_schedule`: a number, a per-step 1-D array of
+        length ``n_steps``, a ``(n_steps, n_neurons)`` array, or a callable ``f(t_ms)`` evaluated
+        at the start of each update.
+    dt_ms
+        Time step in ms (> 0).
+    duration_ms, n_steps
+        Run length (at most one); inferred from an array ``current`` when both are omitted.
+    n_neurons
+        Population size (inferred from a 2-D current or a per-neuron parameter array, else 1).
+    tau_m_ms, v_th, v_reset, v_rest, t_ref_ms
+        Scalars or per-neuron arrays (ms / mV); ``tau_m > 0``, ``t_ref >= 0``,
+        ``v_reset < v_th``.
+    scheme
+        ``"exact"`` (default) or ``"euler"`` (see the module docstring).
+    v0
+        Initial potential (default ``v_rest``).
+    record
+        Keep the ``(n_steps + 1, n_neurons)`` membrane trace (row 0 is the initial state).
+
+    Raises
+    ------
+    ValueError
+        Bad parameters or input.
+    LIFDivergenceError
+        If ``|v|`` becomes non-finite or exceeds ``state_bound``.
+    """
+    dt = _num(dt_ms, "dt_ms", positive=True)
+    steps = _resolve_steps(current, duration_ms, n_steps, dt)
+    n = _infer_n(current, n_neurons, tau_m_ms, v_th, v_reset, v_rest, t_ref_ms, v0)
+    mem = _Membranes(n, dt, tau_m_ms, v_th, v_reset, v_rest, t_ref_ms, scheme, v0, state_bound)
+    I_of = current_schedule(current, steps, n, dt)
+    v_tr = None
+    if record:
+        v_tr = np.empty((steps + 1, n))
+        v_tr[0] = mem.v
+    with np.errstate(over="ignore", invalid="ignore"):
+        for k in range(steps):
+            mem.update(k, I_of(k))
+            if record:
+                v_tr[k + 1] = mem.v
+    return mem.result(steps, v_tr)
+
+
+class _ExpTraces:
+    """Exact grid implementation of a difference-of-exponentials synapse population.
+
+    A spike arriving at ``t_a`` (between grid points) is added to the two traces at the first grid
+    time ``t_m >= t_a`` as ``w exp(-(t_m - t_a)/tau)``; the traces then decay exactly by
+    ``exp(-dt/tau)`` per step, so ``c (x_d - x_r)`` equals the directly summed kernel on the grid.
+    """
+
+    def __init__(self, syn: DiffExpSynapse, n: int, dt: float):
+        self.tr, self.td, self.lat = syn.tau_rise_ms, syn.tau_decay_ms, syn.latency_ms
+        self.c = syn.weight / _norm_factor(self.tr, self.td, syn.normalize)
+        self.dt = dt
+        self.dec_d, self.dec_r = math.exp(-dt / self.td), math.exp(-dt / self.tr)
+        self.xd = np.zeros(n)
+        self.xr = np.zeros(n)
+        self.pending: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+
+    def current(self) -> np.ndarray:
+        return self.c * (self.xd - self.xr)
+
+    def schedule(self, t_arrival: float, w_post: np.ndarray) -> None:
+        m = int(math.ceil(t_arrival / self.dt - _GRID_EPS))
+        off = max(0.0, m * self.dt - t_arrival)
+        add_d = w_post * math.exp(-off / self.td)
+        add_r = w_post * math.exp(-off / self.tr)
+        if m in self.pending:
+            pd, pr = self.pending[m]
+            self.pending[m] = (pd + add_d, pr + add_r)
+        else:
+            self.pending[m] = (add_d, add_r)
+
+    def advance(self, m: int) -> None:
+        """Move the traces from grid index ``m - 1`` to ``m``."""
+        self.xd *= self.dec_d
+        self.xr *= self.dec_r
+        p = self.pending.pop(m, None)
+        if p is not None:
+            self.xd += p[0]
+            self.xr += p[1]
+
+
+def _weight_matrix(w, n: int, name: str) -> np.ndarray:
+    arr = _array(w, name, ndim=(0, 2))
+    arr = np.broadcast_to(arr, (n, n)).astype(np.float64) if arr.ndim == 0 else arr
+    if arr.shape != (n, n):
+        raise ValueError(f"{name} must have shape ({n}, {n}) [pre, post], got {arr.shape}")
+    if not np.all(arr >= 0):
+        raise ValueError(f"{name} must be >= 0 (the sign comes from the synapse type: AMPA adds, "
+                         f"GABA subtracts)")
+    return arr
+
+
+def simulate_lif_network(n: int, weights_exc, weights_inh, ext_current, dt_ms: float, *,
+                         duration_ms: float | None = None, n_steps: int | None = None,
+                         tau_m_ms=TAU_M_EXC_MS, v_th=V_TH, v_reset=V_RESET, v_rest=V_REST,
+                         t_ref_ms=T_REF_EXC_MS, ampa: DiffExpSynapse = AMPA,
+                         gaba: DiffExpSynapse = GABA, scheme: str = "exact", v0=None,
+                         record: bool = True, state_bound: float = STATE_BOUND) -> LIFResult:
+    """Simulate ``n`` recurrently coupled LIF neurons, ``I_total = I_ext + I_A - I_G``.
+
+    Parameters
+    ----------
+    n
+        Number of neurons.
+    weights_exc, weights_inh
+        Non-negative ``(n, n)`` matrices ``W[pre, post]`` (or a scalar for all pairs). A spike of
+        ``pre`` reported at ``t_s`` adds ``W[pre, post] * syn.weight * K(t - t_s - syn.latency)``
+        to ``I_A`` (``ampa``) or ``I_G`` (``gaba``) of ``post``. A neuron excites or inhibits
+        according to its row of non-zero entries.
+    ext_current
+        External current in mV, as for :func:`simulate_lif` (e.g. from :func:`force_to_current`).
+    ampa, gaba
+        Synapse types (time constants, latency, unit weight, normalization).
+    Other parameters
+        As in :func:`simulate_lif`; per-neuron arrays allow excitatory (20 ms, 2 ms refractory)
+        and inhibitory (10 ms, 1 ms) cells in one network.
+
+    Returns
+    -------
+    LIFResult
+        With ``i_exc_trace``/``i_inh_trace`` (``I_A``/``I_G`` used by each update) when
+        ``record``.
+
+    Notes
+    -----
+    Synaptic currents use the exact two-trace recursion described in :class:`_ExpTraces`, which
+    reproduces :func:`synaptic_current` on the grid. The current for update ``k`` is the value at
+    ``t = k dt``.
+    """
+    if int(n) != n or n < 1:
+        raise ValueError(f"n must be a positive integer, got {n!r}")
+    n = int(n)
+    dt = _num(dt_ms, "dt_ms", positive=True)
+    We = _weight_matrix(weights_exc, n, "weights_exc")
+    Wi = _weight_matrix(weights_inh, n, "weights_inh")
+    for name, syn in (("ampa", ampa), ("gaba", gaba)):
+        if not isinstance(syn, DiffExpSynapse):
+            raise ValueError(f"{name} must be a DiffExpSynapse, got {type(syn).__name__}")
+    steps = _resolve_steps(ext_current, duration_ms, n_steps, dt)
+    mem = _Membranes(n, dt, tau_m_ms, v_th, v_reset, v_rest, t_ref_ms, scheme, v0, state_bound)
+    I_of = current_schedule(ext_current, steps, n, dt)
+    exc, inh = _ExpTraces(ampa, n, dt), _ExpTraces(gaba, n, dt)
+    v_tr = i_e = i_g = None
+    if record:
+        v_tr = np.empty((steps + 1, n))
+        v_tr[0] = mem.v
+        i_e = np.empty((steps, n))
+        i_g = np.empty((steps, n))
+    with np.errstate(over="ignore", invalid="ignore"):
+        for k in range(steps):
+            IA, IG = exc.current(), inh.current()
+            spiked = mem.update(k, I_of(k) + IA - IG)
+            if record:
+                v_tr[k + 1] = mem.v
+                i_e[k], i_g[k] = IA, IG
+            if spiked.any():
+                t_s = (k + 1) * dt
+                for pre in np.flatnonzero(spiked):
+                    if We[pre].any():
+                        exc.schedule(t_s + exc.lat, We[pre])
+                    if Wi[pre].any():
+                        inh.schedule(t_s + inh.lat, Wi[pre])
+            exc.advance(k + 1)
+            inh.advance(k + 1)
+    return mem.result(steps, v_tr, i_e, i_g)
+
+
+# --------------------------------------------------------------------------- discrete LIF
+
+def discrete_alpha(tau: float, dt: float) -> float:
+    """Decay factor ``alpha = exp(-dt / tau)`` of the discrete LIF (same time unit for both)."""
+    return math.exp(-_num(dt, "dt", positive=True) / _num(tau, "tau", positive=True))
+
+
+@dataclass
+class DiscreteLIFResult:
+    """Outcome of :func:`simulate_discrete_lif`.
+
+    ``spikes`` (n_steps, n_neurons) bool; ``u`` the state carried to the next step (after reset);
+    ``u_pre`` the value compared with the threshold (before reset; ``u_rest`` while refractory).
+    """
+
+    spikes: np.ndarray
+    u: np.ndarray
+    u_pre: np.ndarray
+    alpha: float
+    u_th: float
+    u_rest: float
+    refractory_steps: int
+
+    @property
+    def spike_counts(self) -> np.ndarray:
+        return self.spikes.sum(axis=0)
+
+
+def simulate_discrete_lif(inputs, weights, alpha: float | None = None,
+                          u_th: float = DISCRETE_U_TH, u_rest: float = 0.0,
+                          refractory_steps: int = 0, *, tau: float | None = None,
+                          dt: float | None = None, u0=None) -> DiscreteLIFResult:
+    """Simulate a layer of discrete-time LIF neurons (see the module docstring).
+
+    Parameters
+    ----------
+    inputs
+        ``(n_steps, n_inputs)`` input spikes or real values ``x_i[t]``.
+    weights
+        ``(n_inputs, n_neurons)`` (or ``(n_inputs,)`` for a single neuron); any sign.
+    alpha
+        Membrane decay per step in ``[0, 1]``; default 0.389 unless ``tau`` and ``dt`` are given
+        (then ``alpha = exp(-dt/tau)``; giving both forms is an error).
+    u_th
+        Threshold; a spike needs ``u > u_th`` (strict).
+    u_rest
+        Reset value.
+    refractory_steps
+        Steps after a spike during which ``u`` is held at ``u_rest`` and cannot spike.
+    u0
+        State before the first step (scalar or ``(n_neurons,)``; default ``u_rest``).
+    """
+    x = _array(inputs, "inputs", ndim=(2,))
+    w = _array(weights, "weights", ndim=(1, 2))
+    if w.ndim == 1:
+        w = w[:, None]
+    if w.shape[0] != x.shape[1]:
+        raise ValueError(f"weights must have shape (n_inputs={x.shape[1]}, n_neurons), got "
+                         f"{w.shape}")
+    if (tau is None) != (dt is None):
+        raise ValueError("give both tau and dt (alpha = exp(-dt/tau)) or neither")
+    if tau is not None:
+        if alpha is not None:
+            raise ValueError("give either alpha or (tau, dt), not both")
+        a = discrete_alpha(tau, dt)
+    else:
+        a = DISCRETE_ALPHA if alpha is None else _num(alpha, "alpha")
+    if not 0.0 <= a <= 1.0:
+        raise ValueError(f"alpha must lie in [0, 1] (a decay factor), got {a!r}")
+    th = _num(u_th, "u_th")
+    rest = _num(u_rest, "u_rest")
+    if int(refractory_steps) != refractory_steps or refractory_steps < 0:
+        raise ValueError(f"refractory_steps must be a non-negative integer, got "
+                         f"{refractory_steps!r}")
+    r = int(refractory_steps)
+    n_steps, n = x.shape[0], w.shape[1]
+    u = np.full(n, rest) if u0 is None else _per_neuron(u0, n, "u0")
+    with np.errstate(over="ignore", invalid="ignore"):
+        drive = x @ w
+    if not np.all(np.isfinite(drive)):
+        raise ValueError("input drive x @ w overflowed float64")
+    spikes = np.zeros((n_steps, n), dtype=bool)
+    u_tr = np.empty((n_steps, n))
+    u_pre = np.empty((n_steps, n))
+    ref = np.zeros(n, dtype=np.int64)
+    for t in range(n_steps):
+        frozen = ref > 0
+        with np.errstate(over="ignore", invalid="ignore"):
+            un = np.where(frozen, rest, a * u + drive[t])
+        if not np.all(np.isfinite(un)):
+            i = int(np.flatnonzero(~np.isfinite(un))[0])
+            raise ValueError(f"discrete LIF state overflowed float64 at step {t}, neuron {i} "
+                             f"(u = {un[i]!r})")
+        s = (~frozen) & (un > th)
+        u_pre[t] = un
+        spikes[t] = s
+        u = np.where(s, rest, un)
+        u_tr[t] = u
+        ref = np.where(frozen, ref - 1, np.where(s, r, 0))
+    return DiscreteLIFResult(spikes=spikes, u=u_tr, u_pre=u_pre, alpha=a, u_th=th, u_rest=rest,
+                             refractory_steps=r)
