@@ -1,0 +1,235 @@
+"""IzhikevichCore: configuration checks, twin vs golden bound, RTL vs twin in the Amaranth
+simulator (every update), flags, generation, and the float32 accuracy yardstick."""
+
+import json
+
+import numpy as np
+import pytest
+from amaranth.sim import Simulator
+
+from cuneate.golden import izhikevich as golden
+from cuneate.golden.metrics import compare_populations
+from cuneate.hdl.generate import generate_izhikevich
+from cuneate.hdl.izhikevich import (PIPELINE_DEPTH, ConfigError, IzhikevichConfig,
+                                    IzhikevichCore, IzhikevichTwin)
+
+
+# ---------------------------------------------------------------------------------------------
+# configuration refusals
+@pytest.mark.parametrize("kwargs, match", [
+    ({"n_neurons": 2501}, "do not fit one sweep"),
+    ({"n_neurons": 4, "clock_hz": 64e3}, "pipeline"),
+    ({"clock_hz": 40.5e6 + 1}, "not an integer"),
+    ({"update_hz": 1e3, "n_neurons": 100}, "worst-case v before reset"),
+    ({"state_int_bits": 6}, "does not fit"),
+    ({"param_sets": [(0.02, 0.2, 35.0, 8.0)]}, "not below threshold"),
+    ({"param_sets": [(0.0, 0.2, -65.0, 8.0)]}, "a must be > 0"),
+    ({"rounding": "up"}, "rounding"),
+    ({"n_neurons": 8, "clock_hz": 128e3, "neuron_sets": [0] * 7}, "neuron_sets"),
+    ({"n_neurons": 8, "clock_hz": 128e3, "neuron_sets": [1] * 8}, "neuron_sets"),
+    ({"v_frac_bits": 30, "u_frac_bits": 34}, "fraction bits"),
+])
+def test_config_refuses_what_cannot_hold(kwargs, match):
+    with pytest.raises(ConfigError, match=match):
+        IzhikevichConfig(**kwargs)
+
+
+def test_default_config_and_constant_errors():
+    cfg = IzhikevichConfig()
+    assert cfg.n_neurons == 2500 and cfg.cycles_per_tick == 2500 and cfg.dt_ms == 0.0625
+    assert cfg.dt_shift == 4 and cfg.operand_width == 18
+    for fmt in (cfg.W, cfg.Q, cfg.Y):
+        assert fmt.width == 18
+    d = cfg.to_dict()
+    print("\nconstant representation errors (relative):")
+    for name, c in d["constants"].items():
+        print(f"  {name:16s} {c['value']:+.8g} -> {c['quantized']:+.10g}  rel {c['rel_error']:+.2e}")
+        assert abs(c["rel_error"]) < 2.0 ** -16
+    assert d["multipliers"] == 4 and d["pipeline_depth"] == PIPELINE_DEPTH
+    assert d["worst_case"]["v_pre_max_mV"] < cfg.V.max_value
+
+
+def test_non_power_of_two_dt_uses_a_multiplier_and_stays_in_bound():
+    cfg = IzhikevichConfig(n_neurons=20, clock_hz=20e3 * 20, update_hz=20e3)
+    assert cfg.dt_shift is None and cfg.to_dict()["multipliers"] == 5
+    _check_twin_against_golden(cfg, seed=5)
+
+
+# ---------------------------------------------------------------------------------------------
+# twin vs golden, one step from the same state
+def _check_twin_against_golden(cfg, seed, n=20000):
+    rng = np.random.default_rng(seed)
+    twin = IzhikevichTwin(cfg)
+    v = cfg.V.to_raw(rng.uniform(-100, 29.9, n))
+    u = cfg.U.to_raw(rng.uniform(-30, 40, n))
+    I = cfg.I.to_raw(rng.uniform(-50, 300, n))
+    sel = rng.integers(0, len(cfg.sets), n)
+    out = twin.update(v, u, I, sel)
+    vf, uf, If = cfg.V.to_float(v), cfg.U.to_float(u), cfg.I.to_float(I)
+    a, b, c, d = (np.array([cfg.sets[s][j] for s in sel]) for j in range(4))
+    gv, gu, gs, gv_pre = golden.step(vf, uf, If, a, b, c, d, cfg.dt_ms, "euler")
+    bv, bu = cfg.one_step_bound(vf, uf, If)
+    agree = gs == out["spike"]
+    near = np.abs(gv_pre - cfg.v_th) <= bv
+    assert np.all(agree | near)
+    ev = np.abs(cfg.V.to_float(out["v"]) - gv)[agree]
+    eu = np.abs(cfg.U.to_float(out["u"]) - gu)[agree]
+    print(f"\nmax |v-v_golden| {ev.max():.3e} (max ratio to bound {np.max(ev / bv[agree]):.3f}),"
+          f" max |u-u_golden| {eu.max():.3e} (ratio {np.max(eu / bu[agree]):.3f})")
+    assert np.all(ev <= bv[agree]) and np.all(eu <= bu[agree])
+    return ev, eu
+
+
+@pytest.mark.parametrize("rounding", ["nearest", "truncate"])
+def test_twin_one_step_within_derived_bound(rounding):
+    cfg = IzhikevichConfig(n_neurons=2500, param_sets=("RS", "IB", "CH", "FS", "LTS", "RZ"),
+                           rounding=rounding)
+    _check_twin_against_golden(cfg, seed=1)
+
+
+def test_twin_saturates_instead_of_wrapping():
+    cfg = IzhikevichConfig(n_neurons=8, clock_hz=128e3)
+    twin = IzhikevichTwin(cfg)
+    v = np.full(8, cfg.V.min_raw)
+    u = np.full(8, cfg.U.max_raw)
+    out = twin.update(v, u, np.full(8, cfg.I.min_raw), np.zeros(8, dtype=int))
+    assert np.all(out["v"] == cfg.V.min_raw)       # pulled further down: clamps, no wrap
+    assert np.all(out["u"] <= cfg.U.max_raw)
+
+
+# ---------------------------------------------------------------------------------------------
+# RTL vs twin in the Amaranth simulator, every update
+def _run_rtl(cfg, n_sweeps, rng, writes_per_sweep=3, hold_ready=True, tick_schedule=None):
+    dut = IzhikevichCore(cfg)
+    N = cfg.n_neurons
+    rec = {"updates": [], "stream": [], "done": [], "overrun": 0, "overflow": 0}
+
+    async def bench(ctx):
+        ctx.set(dut.spike_ready, int(hold_ready))
+        cycle = 0
+        pending = [(n, int(cfg.I.to_raw(rng.uniform(-5, 150)))) for n in range(N)]
+        total = tick_schedule[-1] + 3 * N if tick_schedule else (n_sweeps + 1) * cfg.cycles_per_tick
+        for cycle in range(total):
+            if tick_schedule is not None:
+                ctx.set(dut.tick, int(cycle in tick_schedule))
+            if pending:
+                n, raw = pending.pop(0)
+            elif rng.random() < writes_per_sweep / N:
+                n, raw = int(rng.integers(N)), int(cfg.I.to_raw(rng.uniform(-5, 150)))
+            else:
+                n = None
+            if n is not None:
+                ctx.set(dut.i_wr_en, 1)
+                ctx.set(dut.i_wr_addr, n)
+                ctx.set(dut.i_wr_data, raw)
+            else:
+                ctx.set(dut.i_wr_en, 0)
+            await ctx.tick()
+            if ctx.get(dut.upd_valid):
+                rec["updates"].append((ctx.get(dut.upd_index), ctx.get(dut.upd_v),
+                                       ctx.get(dut.upd_u), ctx.get(dut.upd_current),
+                                       ctx.get(dut.upd_spike)))
+            if ctx.get(dut.sweep_done):
+                rec["done"].append((ctx.get(dut.sweep_number), ctx.get(dut.sweep_count)))
+            if ctx.get(dut.spike_valid) and hold_ready:
+                rec["stream"].append((ctx.get(dut.spike_index), ctx.get(dut.spike_sweep)))
+        rec["overrun"] = ctx.get(dut.overrun)
+        rec["overflow"] = ctx.get(dut.spike_overflow)
+
+    sim = Simulator(dut)
+    sim.add_clock(1e-6)
+    sim.add_testbench(bench)
+    sim.run()
+    return rec
+
+
+def test_rtl_matches_twin_every_update_amaranth():
+    N = 16
+    cfg = IzhikevichConfig(n_neurons=N, clock_hz=16e3 * 20, param_sets=("RS", "IB", "CH", "FS"),
+                           neuron_sets=[i % 4 for i in range(N)], spike_fifo_depth=32)
+    rec = _run_rtl(cfg, 60, np.random.default_rng(3))
+    ups = np.array(rec["updates"], dtype=np.int64)
+    n_full = len(ups) // N
+    assert n_full >= 59
+    ups = ups[:n_full * N].reshape(n_full, N, 5)
+    assert np.all(ups[:, :, 0] == np.arange(N))                 # one neuron per cycle, in order
+    twin = IzhikevichTwin(cfg)
+    v, u = twin.v.copy(), twin.u.copy()
+    spikes_total = 0
+    for k in range(n_full):
+        out = twin.update(v, u, ups[k, :, 3], twin.sel)
+        np.testing.assert_array_equal(out["v"], ups[k, :, 1], err_msg=f"sweep {k} v")
+        np.testing.assert_array_equal(out["u"], ups[k, :, 2], err_msg=f"sweep {k} u")
+        np.testing.assert_array_equal(out["spike"], ups[k, :, 4].astype(bool))
+        v, u = out["v"], out["u"]
+        spikes_total += int(out["spike"].sum())
+        assert rec["done"][k] == (k, int(out["spike"].sum()))
+    assert spikes_total > 20
+    expected_stream = [(int(n), k) for k in range(n_full) for n in np.flatnonzero(ups[k, :, 4])]
+    assert rec["stream"][:len(expected_stream)] == expected_stream
+    assert rec["overrun"] == 0 and rec["overflow"] == 0
+
+
+def test_overrun_flag_when_tick_arrives_mid_sweep():
+    N = 10
+    cfg = IzhikevichConfig(n_neurons=N, clock_hz=16e3 * N, tick_source="external")
+    ok = _run_rtl(cfg, 0, np.random.default_rng(0), tick_schedule=[0, N, 2 * N])
+    assert ok["overrun"] == 0 and len(ok["done"]) == 3
+    bad = _run_rtl(cfg, 0, np.random.default_rng(0), tick_schedule=[0, N // 2])
+    assert bad["overrun"] == 1 and len(bad["done"]) == 1
+
+
+def test_spike_overflow_flag_when_consumer_stalls():
+    N = 8
+    cfg = IzhikevichConfig(n_neurons=N, clock_hz=16e3 * N, spike_fifo_depth=4,
+                           param_sets=("FS",))
+    rec = _run_rtl(cfg, 200, np.random.default_rng(1), hold_ready=False)
+    assert sum(c for _, c in rec["done"]) > 4
+    assert rec["overflow"] == 1
+
+
+# ---------------------------------------------------------------------------------------------
+def test_generation_is_deterministic_and_described(tmp_path):
+    a = generate_izhikevich(tmp_path / "a", n_neurons=300, clock_hz=4.8e6)
+    b = generate_izhikevich(tmp_path / "b", n_neurons=300, clock_hz=4.8e6)
+    assert a[0].read_bytes() == b[0].read_bytes()
+    text = a[0].read_text()
+    assert "module izhikevich_core" in text and str(tmp_path) not in text and "/work" not in text
+    desc = json.loads(a[1].read_text())
+    assert desc["n_neurons"] == 300 and desc["pipeline_depth"] == 5 and desc["dt_ms"] == 0.0625
+    assert desc["ports"]["i_wr_data"] == {"direction": "in", "width": 18, "signed": True}
+    assert desc["formats"]["V"]["width"] == 26
+
+
+# ---------------------------------------------------------------------------------------------
+BATTERY = [(p, i) for p in ("RS", "IB", "CH", "FS") for i in (4.0, 10.0, 30.0, 100.0)]
+
+
+def test_accuracy_yardstick_fixed_vs_float32():
+    """RS/IB/CH/FS x I in {4, 10, 30, 100}, 1 s: fixed point against float64 Euler, beside
+    float32 Euler (the yardstick)."""
+    names = [p for p, _ in BATTERY]
+    cur = np.array([i for _, i in BATTERY])
+    n = len(BATTERY)
+    g64 = golden.simulate(names, lambda t: cur, n_neurons=n, duration_ms=1000.0)
+    g32 = golden.simulate(names, lambda t: cur, n_neurons=n, duration_ms=1000.0,
+                          dtype=np.float32)
+    sets = ("RS", "IB", "CH", "FS")
+    cfg = IzhikevichConfig(n_neurons=n, clock_hz=16e3 * n, param_sets=sets,
+                           neuron_sets=[sets.index(p) for p in names])
+    fixed = IzhikevichTwin(cfg).run(cur, 16000)
+    dt = cfg.dt_ms
+    c32 = compare_populations(g64.spikes_ms, g32.spikes_ms, dt, 0.005)
+    cfx = compare_populations(g64.spikes_ms, fixed, dt, 0.005)
+    print("\npreset     I  n64  n32  nfix  f32 +-1tick  fix +-1tick  VP32   VPfix")
+    for (p, i), a, b in zip(BATTERY, c32["per_train"], cfx["per_train"]):
+        print(f"{p:4s} {i:6.1f} {a['n_a']:4d} {a['n_b']:4d} {b['n_b']:5d}   {a['fraction_within_tick']:.3f}"
+              f"        {b['fraction_within_tick']:.3f}   {a['vp_distance']:.3f}  {b['vp_distance']:.3f}")
+    print(f"total: float32 counts equal {c32['counts_equal']}, within +-1 tick "
+          f"{c32['fraction_within_tick']:.4f}, mean VP {c32['mean_vp_distance']:.4f}; fixed counts "
+          f"equal {cfx['counts_equal']}, within +-1 tick {cfx['fraction_within_tick']:.4f}, "
+          f"mean VP {cfx['mean_vp_distance']:.4f}")
+    assert c32["counts_equal"] and cfx["counts_equal"]
+    assert cfx["fraction_within_tick"] >= 0.95
+    assert cfx["fraction_within_tick"] >= c32["fraction_within_tick"] - 0.01
+    assert cfx["mean_vp_distance"] <= 1.2 * c32["mean_vp_distance"] + 1e-9
