@@ -93,9 +93,10 @@ class QFormat:
         arr = np.asarray(x, dtype=np.float64)
         if not np.all(np.isfinite(arr)):
             raise FixedPointError(f"cannot represent non-finite value(s) in {self}")
-        scaled = arr * (1 << self.frac_bits) if self.frac_bits >= 0 else \
-            arr / (1 << -self.frac_bits)
-        raw = np.floor(scaled + 0.5) if rounding == "nearest" else np.floor(scaled)
+        scaled = np.ldexp(arr, self.frac_bits)          # exact: scaling by a power of two
+        raw = np.floor(scaled)
+        if rounding == "nearest":                      # exact: scaled - floor(scaled) is exact
+            raw = raw + (scaled - raw >= 0.5)
         if not clamp and (np.any(raw < self.min_raw) or np.any(raw > self.max_raw)):
             bad = arr[(raw < self.min_raw) | (raw > self.max_raw)].ravel()[0]
             raise FixedPointError(f"value {bad:g} is outside {self} "
@@ -114,13 +115,12 @@ class QFormat:
     @staticmethod
     def for_range(lo: float, hi: float, width: int, signed_: bool = True) -> "QFormat":
         """The format of ``width`` bits with the most fraction bits that still holds [lo, hi]."""
-        mag = max(abs(lo), abs(hi), 1e-300)
-        int_bits = max(1, math.floor(math.log2(mag)) + 1 + (1 if signed_ else 0))
-        fmt = QFormat(int_bits, width - int_bits, signed_)
-        while not (fmt.contains(lo) and fmt.contains(hi)):
-            int_bits += 1
+        for int_bits in range(1, width + 129):   # more int bits than width: negative frac
             fmt = QFormat(int_bits, width - int_bits, signed_)
-        return fmt
+            if fmt.contains(lo) and fmt.contains(hi):
+                return fmt
+        raise FixedPointError(f"no {width}-bit {'signed' if signed_ else 'unsigned'} format "
+                              f"holds [{lo:g}, {hi:g}]")
 
 
 @dataclass(frozen=True)
@@ -256,6 +256,6 @@ def saturate(x, fmt: QFormat):
 def check_int64(name: str, x) -> None:
     """Twin guard: refuse any int64 intermediate that could have overflowed."""
     arr = np.asarray(x)
-    if arr.size and int(np.max(np.abs(arr))) >= _INT64_GUARD:
+    if arr.size and (int(np.max(arr)) >= _INT64_GUARD or int(np.min(arr)) <= -_INT64_GUARD):
         raise OverflowError(f"twin intermediate {name} reached 2**62; the format choice would "
                             f"overflow int64")

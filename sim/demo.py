@@ -42,6 +42,37 @@ def run_demo(out: Path) -> int:
         print("generated hardware:")
         for f in files:
             print(f"  {f}")
+        for line in core_summary():
+            print(line)
     for line in golden_summary():
         print(line)
     return 0
+
+
+def core_summary() -> list[str]:
+    from ..golden.izhikevich import simulate
+    from ..golden.metrics import compare_trains
+    from ..hdl.izhikevich import IzhikevichConfig, IzhikevichTwin
+    cfg = IzhikevichConfig()
+    d = cfg.to_dict()
+    f = d["formats"]
+    lines = [f"IzhikevichCore: {cfg.n_neurons} neurons, {cfg.clock_hz / 1e6:g} MHz, "
+             f"{cfg.update_hz / 1e3:g} kHz per neuron (dt = {cfg.dt_ms:g} ms), "
+             f"{d['pipeline_depth']}-stage pipeline, {d['multipliers']} multipliers "
+             f"{cfg.operand_width}x{cfg.operand_width}",
+             f"  formats: v {f['V']['format']}, u {f['U']['format']}, I {f['I']['format']}, "
+             f"operands w {f['W']['format']}, q {f['Q']['format']}, y {f['Y']['format']}",
+             "  worst constant error: " + max(
+                 ((f"{k} {abs(c['rel_error']):.2e}", abs(c["rel_error"]))
+                  for k, c in d["constants"].items()), key=lambda x: x[1])[0]]
+    small = IzhikevichConfig(n_neurons=8, clock_hz=16e3 * 8, tick_source="external")
+    t0 = time.perf_counter()
+    fixed = IzhikevichTwin(small).run(10.0, 16000)[0]
+    tf = time.perf_counter() - t0
+    g = simulate("RS", 10.0, duration_ms=1000.0).spikes_ms[0]
+    c = compare_trains(g, fixed, cfg.dt_ms, q_per_ms=0.005)
+    lines.append(f"  fixed point vs float64 golden, RS, I = 10, 1 s: {c['n_b']} vs {c['n_a']} "
+                 f"spikes, {100 * c['fraction_within_tick']:.1f} % within +-1 tick, "
+                 f"max |dt| {c['max_abs_error_ms']:g} ms, VP(q = 5/s) {c['vp_distance']:.4f} "
+                 f"(twin {tf:.2f} s)")
+    return lines
