@@ -48,6 +48,7 @@ from typing import Sequence
 import numpy as np
 
 from . import izhikevich
+from ._validate import finite_array, number
 from .lif import diff_exp_kernel, diff_exp_peak_time, synaptic_current
 
 __all__ = [
@@ -89,10 +90,7 @@ def _inputs(input_spike_times) -> list[np.ndarray]:
             raise ValueError(f"input_spike_times[{i}] must be numeric") from None
         if arr is None:
             raise ValueError(f"input_spike_times[{i}] must be 1-D, got shape {np.shape(s)}")
-        if not np.all(np.isfinite(arr)):
-            j = int(np.flatnonzero(~np.isfinite(arr))[0])
-            raise ValueError(f"input_spike_times[{i}] has a non-finite spike time at index {j}")
-        out.append(arr)
+        out.append(finite_array(arr, f"input_spike_times[{i}]"))
     if not out:
         raise ValueError("input_spike_times is empty: give one spike-time array per afferent")
     return out
@@ -105,9 +103,7 @@ def _matrix(x, n_inputs: int, name: str) -> np.ndarray:
     if arr.ndim != 2 or arr.shape[1] != n_inputs:
         raise ValueError(f"{name} must have shape (n_cuneate, n_inputs={n_inputs}) or "
                          f"({n_inputs},), got {np.shape(x)}")
-    if not np.all(np.isfinite(arr)):
-        raise ValueError(f"{name} contains non-finite values")
-    return arr
+    return finite_array(arr, name)
 
 
 def psp_drive(input_spike_times, delays_ms, t_grid_ms, J: float = J_MV_PER_MS, weights=None,
@@ -142,12 +138,7 @@ def psp_drive(input_spike_times, delays_ms, t_grid_ms, J: float = J_MV_PER_MS, w
     w = np.ones_like(delays) if weights is None else _matrix(weights, n_in, "weights")
     if w.shape != delays.shape:
         raise ValueError(f"weights shape {w.shape} does not match delays shape {delays.shape}")
-    try:
-        Jf = float(J)
-    except (TypeError, ValueError):
-        raise ValueError(f"J must be a number, got {J!r}") from None
-    if not np.isfinite(Jf):
-        raise ValueError(f"J must be finite, got {J!r}")
+    Jf = number(J, "J")
     cur = synaptic_current(spikes, t_grid_ms, tau_rise_ms, tau_decay_ms, latency_ms=delays.T,
                            weight=w.T, normalize=normalize)
     return Jf * cur
@@ -166,15 +157,8 @@ def simulate_cuneate(input_spike_times, delays_ms, duration_ms: float,
     ``izhikevich.simulate(params, I, n_steps=n_steps, n_neurons=n_cuneate, dt_ms=dt_ms,
     scheme=scheme, ...)``. ``params`` may be a preset or a list of per-neuron sets.
     """
-    try:
-        dt = float(dt_ms)
-        dur = float(duration_ms)
-    except (TypeError, ValueError):
-        raise ValueError("duration_ms and dt_ms must be numbers") from None
-    if not (np.isfinite(dt) and dt > 0):
-        raise ValueError(f"dt_ms must be a positive finite number, got {dt_ms!r}")
-    if not (np.isfinite(dur) and dur >= 0):
-        raise ValueError(f"duration_ms must be a non-negative finite number, got {duration_ms!r}")
+    dt = number(dt_ms, "dt_ms", positive=True)
+    dur = number(duration_ms, "duration_ms", nonneg=True)
     n_steps = int(round(dur / dt))
     t_grid = np.arange(n_steps) * dt
     drive = psp_drive(input_spike_times, delays_ms, t_grid, J=J, weights=weights,

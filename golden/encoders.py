@@ -47,6 +47,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ._validate import finite_array, number
+
 __all__ = [
     "DEFAULT_GAIN_K", "DEFAULT_R_OHM", "DEFAULT_CM", "DEFAULT_FA_TAU_MS", "RECTIFY_MODES",
     "opponent_difference", "sa_current", "fa_current",
@@ -64,43 +66,14 @@ DEFAULT_FA_TAU_MS = 1.0
 RECTIFY_MODES = ("abs", "positive", None)
 
 
+def _sample_channel(idx: tuple[int, ...]) -> str:
+    return f"sample {idx[0]}" + (f", channel {idx[1]}" if len(idx) == 2 else "")
+
+
 def _signal(x, name: str = "signal") -> np.ndarray:
     """Validate a sampled signal: float64, 1-D or 2-D (time on axis 0), non-empty, finite."""
-    try:
-        arr = np.asarray(x, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be numeric array-like: {exc}") from None
-    if arr.ndim not in (1, 2):
-        raise ValueError(f"{name} must have shape (n_steps,) or (n_steps, n_channels), "
-                         f"got {arr.ndim}-D shape {arr.shape}")
-    if arr.shape[0] == 0:
-        raise ValueError(f"{name} is empty (needs at least one sample)")
-    bad = ~np.isfinite(arr)
-    if bad.any():
-        idx = np.argwhere(bad)[0]
-        where = f"sample {idx[0]}" + (f", channel {idx[1]}" if arr.ndim == 2 else "")
-        raise ValueError(f"{name} contains a non-finite value ({arr[tuple(idx)]!r}) at {where}")
-    return arr
-
-
-def _positive(value, name: str) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a number, got {value!r}") from None
-    if not (np.isfinite(v) and v > 0):
-        raise ValueError(f"{name} must be a positive finite number, got {value!r}")
-    return v
-
-
-def _finite(value, name: str) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a number, got {value!r}") from None
-    if not np.isfinite(v):
-        raise ValueError(f"{name} must be finite, got {value!r}")
-    return v
+    return finite_array(x, name, ndim=(1, 2), nonempty=True,
+                        shapes="(n_steps,) or (n_steps, n_channels)", where=_sample_channel)
 
 
 def _check_out(out: np.ndarray, what: str) -> None:
@@ -160,9 +133,9 @@ def sa_current(signal, gain_K: float = DEFAULT_GAIN_K, R_ohm: float = DEFAULT_R_
         Current in mV/ms, same shape as ``signal``.
     """
     s = _signal(signal)
-    K = _finite(gain_K, "gain_K")
-    R = _positive(R_ohm, "R_ohm")
-    th = _finite(threshold, "threshold")
+    K = number(gain_K, "gain_K")
+    R = number(R_ohm, "R_ohm", positive=True)
+    th = number(threshold, "threshold")
     with np.errstate(over="ignore", invalid="ignore"):
         out = np.where(s >= th, (K / R) * s, 0.0)
     _check_out(out, "SA current")
@@ -201,10 +174,10 @@ def fa_current(signal, dt_ms: float, gain: float = DEFAULT_GAIN_K / DEFAULT_R_OH
         Current in mV/ms, same shape as ``signal``.
     """
     s = _signal(signal)
-    dt = _positive(dt_ms, "dt_ms")
-    G = _finite(gain, "gain")
-    tau = _positive(tau_ms, "tau_ms")
-    cm = _positive(Cm, "Cm")
+    dt = number(dt_ms, "dt_ms", positive=True)
+    G = number(gain, "gain")
+    tau = number(tau_ms, "tau_ms", positive=True)
+    cm = number(Cm, "Cm", positive=True)
     if rectify not in RECTIFY_MODES:
         raise ValueError(f"rectify must be one of 'abs', 'positive' or None, got {rectify!r}")
     deriv = np.zeros_like(s)

@@ -47,12 +47,13 @@ band edges, and non-finite traces (the message names the first bad sample index 
 
 from __future__ import annotations
 
-import math
 import re
 from dataclasses import dataclass
 
 import numpy as np
 import scipy.signal
+
+from ._validate import finite_array, number
 
 __all__ = [
     "LAMBDA_B_NM", "P_E", "THERMO_PER_K", "FS_HZ", "DEFAULT_GAIN_S", "STABILITY_TOL",
@@ -74,29 +75,6 @@ FILTER_KINDS = ("butter", "bessel", "cheby1", "cheby2", "ellip")
 
 # ------------------------------------------------------------------------------- physics
 
-def _finite_array(x, name: str) -> np.ndarray:
-    try:
-        arr = np.asarray(x, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be numeric array-like: {exc}") from None
-    bad = ~np.isfinite(arr)
-    if bad.any():
-        idx = tuple(int(i) for i in np.argwhere(bad)[0])
-        raise ValueError(f"{name} contains a non-finite value ({arr[idx]!r}) at index "
-                         f"{idx if len(idx) != 1 else idx[0]}")
-    return arr
-
-
-def _finite(value, name: str) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a number, got {value!r}") from None
-    if not math.isfinite(v):
-        raise ValueError(f"{name} must be finite, got {value!r}")
-    return v
-
-
 def bragg_shift_nm(strain, delta_T_K=0.0, lambda_B_nm: float = LAMBDA_B_NM, p_e: float = P_E,
                    thermo: float = THERMO_PER_K) -> np.ndarray:
     """Bragg wavelength shift ``lambda_B [(1 - p_e) strain + thermo delta_T]`` in nm.
@@ -115,15 +93,13 @@ def bragg_shift_nm(strain, delta_T_K=0.0, lambda_B_nm: float = LAMBDA_B_NM, p_e:
         ``alpha + xi``, thermal expansion plus thermo-optic coefficient in 1/K (6.5e-6 gives
         ~10 pm/K at 1550 nm).
     """
-    eps = _finite_array(strain, "strain")
-    dT = _finite_array(delta_T_K, "delta_T_K")
-    lam = _finite(lambda_B_nm, "lambda_B_nm")
-    if lam <= 0:
-        raise ValueError(f"lambda_B_nm must be > 0, got {lambda_B_nm!r}")
-    pe = _finite(p_e, "p_e")
+    eps = finite_array(strain, "strain")
+    dT = finite_array(delta_T_K, "delta_T_K")
+    lam = number(lambda_B_nm, "lambda_B_nm", positive=True)
+    pe = number(p_e, "p_e")
     if not 0 <= pe < 1:
         raise ValueError(f"p_e must lie in [0, 1), got {p_e!r}")
-    th = _finite(thermo, "thermo")
+    th = number(thermo, "thermo")
     try:
         out = lam * ((1.0 - pe) * eps + th * dT)
     except ValueError as exc:
@@ -366,22 +342,13 @@ class IIRFilter:
         return scipy.signal.freqz(self.b, self.a, worN=n, fs=fs_hz)
 
 
+def _sample_grating(idx: tuple[int, ...]) -> str:
+    return f"sample index {idx[0]}" + (f" (grating {idx[1]})" if len(idx) == 2 else "")
+
+
 def _trace(x, name: str) -> np.ndarray:
-    try:
-        arr = np.asarray(x, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be numeric array-like: {exc}") from None
-    if arr.ndim not in (1, 2):
-        raise ValueError(f"{name} must have shape (n_samples,) or (n_samples, n_gratings), got "
-                         f"{arr.shape}")
-    if arr.shape[0] == 0:
-        raise ValueError(f"{name} is empty")
-    bad = ~np.isfinite(arr)
-    if bad.any():
-        idx = np.argwhere(bad)[0]
-        where = f"sample index {idx[0]}" + (f" (grating {idx[1]})" if arr.ndim == 2 else "")
-        raise ValueError(f"{name} contains a non-finite value ({arr[tuple(idx)]!r}) at {where}")
-    return arr
+    return finite_array(x, name, ndim=(1, 2), nonempty=True,
+                        shapes="(n_samples,) or (n_samples, n_gratings)", where=_sample_grating)
 
 
 #: The band-pass exactly as published (unstable: real pole at 1.0627, see the module docstring).
@@ -398,9 +365,8 @@ def design_bandpass(low_hz: float, high_hz: float, fs_hz: float = FS_HZ, order: 
     :class:`UnstableFilterError` if the designed ``ba`` coefficients are not stable (possible for
     high orders and narrow bands; use a lower order).
     """
-    lo, hi, fs = _finite(low_hz, "low_hz"), _finite(high_hz, "high_hz"), _finite(fs_hz, "fs_hz")
-    if fs <= 0:
-        raise ValueError(f"fs_hz must be > 0, got {fs_hz!r}")
+    lo, hi = number(low_hz, "low_hz"), number(high_hz, "high_hz")
+    fs = number(fs_hz, "fs_hz", positive=True)
     if not 0 < lo < hi < fs / 2:
         raise ValueError(f"band edges must satisfy 0 < low_hz < high_hz < fs_hz/2 = {fs / 2:g}, "
                          f"got low_hz={lo:g}, high_hz={hi:g}")
@@ -410,9 +376,9 @@ def design_bandpass(low_hz: float, high_hz: float, fs_hz: float = FS_HZ, order: 
         raise ValueError(f"kind must be one of {', '.join(FILTER_KINDS)}, got {kind!r}")
     kw = {}
     if kind in ("cheby1", "ellip"):
-        kw["rp"] = _finite(rp_db, "rp_db")
+        kw["rp"] = number(rp_db, "rp_db")
     if kind in ("cheby2", "ellip"):
-        kw["rs"] = _finite(rs_db, "rs_db")
+        kw["rs"] = number(rs_db, "rs_db")
     b, a = scipy.signal.iirfilter(int(order), [lo, hi], btype="bandpass", ftype=kind, fs=fs,
                                   output="ba", **kw)
     filt = IIRFilter(b=b, a=a)
@@ -446,10 +412,8 @@ class FbgFrontEnd:
     def __post_init__(self):
         if not isinstance(self.filter, IIRFilter):
             raise ValueError(f"filter must be an IIRFilter, got {type(self.filter).__name__}")
-        _finite(self.gain, "gain")
-        fs = _finite(self.fs_hz, "fs_hz")
-        if fs <= 0:
-            raise ValueError(f"fs_hz must be > 0, got {self.fs_hz!r}")
+        number(self.gain, "gain")
+        number(self.fs_hz, "fs_hz", positive=True)
         self.filter.require_stable()
 
     @property

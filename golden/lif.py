@@ -75,6 +75,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ._validate import finite_array, number
 from .izhikevich import current_schedule, group_spikes
 
 __all__ = [
@@ -122,38 +123,8 @@ class LIFDivergenceError(FloatingPointError):
 
 # ----------------------------------------------------------------------------- validation helpers
 
-def _num(value, name: str, *, positive=False, nonneg=False) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a number, got {value!r}") from None
-    if not np.isfinite(v):
-        raise ValueError(f"{name} must be finite, got {value!r}")
-    if positive and not v > 0:
-        raise ValueError(f"{name} must be > 0, got {value!r}")
-    if nonneg and not v >= 0:
-        raise ValueError(f"{name} must be >= 0, got {value!r}")
-    return v
-
-
-def _array(x, name: str, ndim: tuple[int, ...] | None = None) -> np.ndarray:
-    try:
-        arr = np.asarray(x, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be numeric array-like: {exc}") from None
-    if ndim is not None and arr.ndim not in ndim:
-        raise ValueError(f"{name} must be {' or '.join(f'{d}-D' for d in ndim)}, got shape "
-                         f"{arr.shape}")
-    bad = ~np.isfinite(arr)
-    if bad.any():
-        idx = tuple(int(i) for i in np.argwhere(bad)[0])
-        raise ValueError(f"{name} contains a non-finite value ({arr[idx]!r}) at index "
-                         f"{idx if len(idx) != 1 else idx[0]}")
-    return arr
-
-
 def _per_neuron(x, n: int, name: str, *, positive=False, nonneg=False) -> np.ndarray:
-    arr = _array(x, name, ndim=(0, 1))
+    arr = finite_array(x, name, ndim=(0, 1))
     if arr.ndim == 1 and arr.shape[0] != n:
         raise ValueError(f"{name} has {arr.shape[0]} values for {n} neurons")
     arr = np.broadcast_to(arr, (n,)).astype(np.float64)
@@ -165,8 +136,8 @@ def _per_neuron(x, n: int, name: str, *, positive=False, nonneg=False) -> np.nda
 
 
 def _check_taus(tau_rise_ms, tau_decay_ms) -> tuple[float, float]:
-    tr = _num(tau_rise_ms, "tau_rise_ms", positive=True)
-    td = _num(tau_decay_ms, "tau_decay_ms", positive=True)
+    tr = number(tau_rise_ms, "tau_rise_ms", positive=True)
+    td = number(tau_decay_ms, "tau_decay_ms", positive=True)
     if not tr < td:
         raise ValueError(f"a difference of exponentials needs 0 < tau_rise_ms < tau_decay_ms, got "
                          f"tau_rise_ms={tr!r}, tau_decay_ms={td!r}")
@@ -218,23 +189,24 @@ def diff_exp_kernel(t_ms, tau_rise_ms: float, tau_decay_ms: float,
         ``"peak"`` (max 1), ``"area"`` (integral 1 ms^-1) or ``"none"``.
     """
     tr, td = _check_taus(tau_rise_ms, tau_decay_ms)
-    t = _array(t_ms, "t_ms")
+    t = finite_array(t_ms, "t_ms")
     return _kernel_unchecked(t, tr, td, _norm_factor(tr, td, _check_normalize(normalize)))
 
 
 def _spike_lists(spike_times_ms, name: str) -> tuple[list[np.ndarray], bool]:
     """Return (list of 1-D spike-time arrays, was_single)."""
     if isinstance(spike_times_ms, np.ndarray) or np.isscalar(spike_times_ms):
-        arr = _array(spike_times_ms, name, ndim=(0, 1))
+        arr = finite_array(spike_times_ms, name, ndim=(0, 1))
         return [np.atleast_1d(arr)], True
     seq = list(spike_times_ms)
     if all(np.isscalar(x) for x in seq):
-        return [_array(seq, name, ndim=(1,))], True
-    return [_array(s, f"{name}[{i}]", ndim=(0, 1)).reshape(-1) for i, s in enumerate(seq)], False
+        return [finite_array(seq, name, ndim=(1,))], True
+    return [finite_array(s, f"{name}[{i}]", ndim=(0, 1)).reshape(-1)
+            for i, s in enumerate(seq)], False
 
 
 def _pair_array(x, n_pre: int, n_post: int | None, name: str, *, nonneg=False):
-    arr = _array(x, name, ndim=(0, 1, 2))
+    arr = finite_array(x, name, ndim=(0, 1, 2))
     if arr.ndim == 1 and arr.shape[0] != n_pre:
         raise ValueError(f"{name} has {arr.shape[0]} values for {n_pre} presynaptic sources")
     if arr.ndim == 2:
@@ -277,7 +249,7 @@ def synaptic_current(spike_times_ms, t_grid_ms, tau_rise_ms: float, tau_decay_ms
     tr, td = _check_taus(tau_rise_ms, tau_decay_ms)
     norm = _norm_factor(tr, td, _check_normalize(normalize))
     spikes, _ = _spike_lists(spike_times_ms, "spike_times_ms")
-    t = _array(t_grid_ms, "t_grid_ms", ndim=(1,))
+    t = finite_array(t_grid_ms, "t_grid_ms", ndim=(1,))
     n_pre = len(spikes)
     lat = _pair_array(latency_ms, n_pre, None, "latency_ms", nonneg=True)
     w = _pair_array(weight, n_pre, lat.shape[1] if lat.ndim == 2 else None, "weight")
@@ -328,8 +300,8 @@ class DiffExpSynapse:
 
     def __post_init__(self):
         _check_taus(self.tau_rise_ms, self.tau_decay_ms)
-        _num(self.weight, "weight")
-        _num(self.latency_ms, "latency_ms", nonneg=True)
+        number(self.weight, "weight")
+        number(self.latency_ms, "latency_ms", nonneg=True)
         _check_normalize(self.normalize)
 
     @property
@@ -360,9 +332,9 @@ def force_to_current(force, k1, k2) -> np.ndarray:
     ``force`` in the sensor's force unit (e.g. N), ``k1`` in mV, ``k2`` in mV per force unit;
     ``k1``/``k2`` may be per-taxel arrays broadcastable against ``force``.
     """
-    f = _array(force, "force")
-    a = _array(k1, "k1")
-    b = _array(k2, "k2")
+    f = finite_array(force, "force")
+    a = finite_array(k1, "k1")
+    b = finite_array(k2, "k2")
     try:
         with np.errstate(over="ignore", invalid="ignore"):
             out = a + b * f
@@ -412,7 +384,7 @@ def _resolve_steps(current, duration_ms, n_steps, dt_ms) -> int:
             raise ValueError(f"n_steps must be a non-negative integer, got {n_steps!r}")
         return int(n_steps)
     if duration_ms is not None:
-        d = _num(duration_ms, "duration_ms", nonneg=True)
+        d = number(duration_ms, "duration_ms", nonneg=True)
         return int(round(d / dt_ms))
     if callable(current) or np.ndim(current) == 0:
         raise ValueError("a constant or callable current needs duration_ms or n_steps")
@@ -527,7 +499,7 @@ def simulate_lif(current, dt_ms: float, *, duration_ms: float | None = None,
     LIFDivergenceError
         If ``|v|`` becomes non-finite or exceeds ``state_bound``.
     """
-    dt = _num(dt_ms, "dt_ms", positive=True)
+    dt = number(dt_ms, "dt_ms", positive=True)
     steps = _resolve_steps(current, duration_ms, n_steps, dt)
     n = _infer_n(current, n_neurons, tau_m_ms, v_th, v_reset, v_rest, t_ref_ms, v0)
     mem = _Membranes(n, dt, tau_m_ms, v_th, v_reset, v_rest, t_ref_ms, scheme, v0, state_bound)
@@ -586,7 +558,7 @@ class _ExpTraces:
 
 
 def _weight_matrix(w, n: int, name: str) -> np.ndarray:
-    arr = _array(w, name, ndim=(0, 2))
+    arr = finite_array(w, name, ndim=(0, 2))
     arr = np.broadcast_to(arr, (n, n)).astype(np.float64) if arr.ndim == 0 else arr
     if arr.shape != (n, n):
         raise ValueError(f"{name} must have shape ({n}, {n}) [pre, post], got {arr.shape}")
@@ -636,7 +608,7 @@ def simulate_lif_network(n: int, weights_exc, weights_inh, ext_current, dt_ms: f
     if int(n) != n or n < 1:
         raise ValueError(f"n must be a positive integer, got {n!r}")
     n = int(n)
-    dt = _num(dt_ms, "dt_ms", positive=True)
+    dt = number(dt_ms, "dt_ms", positive=True)
     We = _weight_matrix(weights_exc, n, "weights_exc")
     Wi = _weight_matrix(weights_inh, n, "weights_inh")
     for name, syn in (("ampa", ampa), ("gaba", gaba)):
@@ -675,7 +647,7 @@ def simulate_lif_network(n: int, weights_exc, weights_inh, ext_current, dt_ms: f
 
 def discrete_alpha(tau: float, dt: float) -> float:
     """Decay factor ``alpha = exp(-dt / tau)`` of the discrete LIF (same time unit for both)."""
-    return math.exp(-_num(dt, "dt", positive=True) / _num(tau, "tau", positive=True))
+    return math.exp(-number(dt, "dt", positive=True) / number(tau, "tau", positive=True))
 
 
 @dataclass
@@ -723,8 +695,8 @@ def simulate_discrete_lif(inputs, weights, alpha: float | None = None,
     u0
         State before the first step (scalar or ``(n_neurons,)``; default ``u_rest``).
     """
-    x = _array(inputs, "inputs", ndim=(2,))
-    w = _array(weights, "weights", ndim=(1, 2))
+    x = finite_array(inputs, "inputs", ndim=(2,))
+    w = finite_array(weights, "weights", ndim=(1, 2))
     if w.ndim == 1:
         w = w[:, None]
     if w.shape[0] != x.shape[1]:
@@ -737,11 +709,11 @@ def simulate_discrete_lif(inputs, weights, alpha: float | None = None,
             raise ValueError("give either alpha or (tau, dt), not both")
         a = discrete_alpha(tau, dt)
     else:
-        a = DISCRETE_ALPHA if alpha is None else _num(alpha, "alpha")
+        a = DISCRETE_ALPHA if alpha is None else number(alpha, "alpha")
     if not 0.0 <= a <= 1.0:
         raise ValueError(f"alpha must lie in [0, 1] (a decay factor), got {a!r}")
-    th = _num(u_th, "u_th")
-    rest = _num(u_rest, "u_rest")
+    th = number(u_th, "u_th")
+    rest = number(u_rest, "u_rest")
     if int(refractory_steps) != refractory_steps or refractory_steps < 0:
         raise ValueError(f"refractory_steps must be a non-negative integer, got "
                          f"{refractory_steps!r}")
