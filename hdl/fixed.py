@@ -29,6 +29,7 @@ from amaranth.hdl import Const, Mux, Value, ValueCastable, signed, unsigned
 
 __all__ = [
     "ROUNDINGS", "QFormat", "FixedConstant", "FixedPointError", "is_hdl", "round_shift",
+    "round_shift_add",
     "round_shift_select", "saturate", "select", "check_int64",
 ]
 
@@ -210,14 +211,33 @@ def select(cond, a, b):
 
 
 def round_shift(x, shift: int, rounding: str = "nearest"):
-    """Drop ``shift`` fraction bits (``shift < 0`` adds bits, exactly)."""
+    """Drop ``shift`` fraction bits (``shift < 0`` adds bits, exactly).
+
+    Round-to-nearest is ``floor(x / 2**shift + 1/2)``, computed as ``(x >> shift) + bit`` where
+    ``bit`` is bit ``shift - 1`` of ``x`` (the first dropped bit). That equals
+    ``(x + 2**(shift-1)) >> shift`` exactly, but in hardware it is a carry-in of the next adder
+    instead of a full-width addition in front of it.
+    """
     if rounding not in ROUNDINGS:
         raise FixedPointError(f"unknown rounding {rounding!r}; known: {ROUNDINGS}")
     if shift <= 0:
         return x << -shift if shift else x
-    if rounding == "nearest":
-        x = x + (1 << (shift - 1))
-    return x >> shift
+    if rounding == "truncate":
+        return x >> shift
+    if is_hdl(x):
+        return (x >> shift) + x[shift - 1]
+    return (x >> shift) + ((x >> (shift - 1)) & 1)
+
+
+def round_shift_add(x, const: int, shift: int, rounding: str = "nearest"):
+    """``round_shift(x + const, shift)`` for a ``const`` whose low ``shift`` bits are zero,
+    computed as ``(x >> shift) + (const >> shift) + first dropped bit``: one adder, not two."""
+    if shift <= 0 or const % (1 << shift):
+        return round_shift(x + const, shift, rounding)
+    if rounding == "truncate":
+        return (x >> shift) + (const >> shift)
+    bit = x[shift - 1] if is_hdl(x) else (x >> (shift - 1)) & 1
+    return (x >> shift) + (const >> shift) + bit
 
 
 def round_shift_select(x, shifts: Sequence[int], index, rounding: str = "nearest"):
@@ -232,7 +252,7 @@ def round_shift_select(x, shifts: Sequence[int], index, rounding: str = "nearest
     if np.any(s <= 0):
         raise FixedPointError("variable shifts must be >= 1")
     if rounding == "nearest":
-        x = x + (np.int64(1) << (s - 1))
+        return (x >> s) + ((x >> (s - 1)) & 1)
     return x >> s
 
 
@@ -243,8 +263,18 @@ def _mux_tree(options, index):
     return out
 
 
-def saturate(x, fmt: QFormat):
-    """Clamp ``x`` into ``fmt`` (the result has ``fmt``'s width in RTL)."""
+def saturate(x, fmt: QFormat, bounds: tuple[int, int] | None = None):
+    """Clamp ``x`` into ``fmt`` (the result has ``fmt``'s width in RTL).
+
+    ``bounds`` are proven raw bounds ``(lo, hi)`` of ``x``. When they lie inside ``fmt`` no
+    value can overflow, so no clamp logic is built (the result is only resized); otherwise
+    the clamp is built as usual. Saturation is never replaced by wrapping.
+    """
+    fits = bounds is not None and fmt.min_raw <= bounds[0] <= bounds[1] <= fmt.max_raw
+    if fits:
+        if is_hdl(x):
+            return x[:fmt.width].as_signed() if fmt.signed else x[:fmt.width]
+        return x
     if is_hdl(x):
         lo = Const(fmt.min_raw, fmt.shape())
         hi = Const(fmt.max_raw, fmt.shape())

@@ -34,7 +34,7 @@ from amaranth.lib.wiring import In, Out
 
 from ..golden import izhikevich as golden
 from .fixed import (FixedConstant, FixedPointError, QFormat, check_int64, is_hdl,
-                    round_shift, round_shift_select, saturate, select)
+                    round_shift, round_shift_add, round_shift_select, saturate, select)
 
 __all__ = ["ConfigError", "IzhikevichConfig", "IzhikevichTwin", "IzhikevichCore",
            "PIPELINE_DEPTH"]
@@ -194,6 +194,7 @@ class IzhikevichConfig:
         y_max = b_max * max(abs(self.V.min_value), abs(self.V.max_value)) + \
             max(abs(self.U.min_value), abs(self.U.max_value))
         self.Y = QFormat.for_range(-y_max, y_max, ow)
+        self._derive_bounds()
         # shifts aligning products to the state formats
         self.shift_p = self.Q.frac_bits + self.W.frac_bits - self.V.frac_bits
         self.shift_q = self.KA.frac_bits + self.W.frac_bits - self.Q.frac_bits
@@ -224,6 +225,28 @@ class IzhikevichConfig:
         self.u0 = [FixedConstant.in_format(f"u0[{i}]", b * self.v0, self.U)
                    for i, (a, b, c, d) in enumerate(self.sets)]
         self.sel_bits = max(1, (len(self.sets) - 1).bit_length())
+
+    def _derive_bounds(self):
+        """Proven raw bounds of the narrowed operands (every map below is monotone), used to
+        leave out clamp logic that can never act."""
+        r = self.rounding
+        sv = self.V.frac_bits - self.W.frac_bits
+        lo, hi = self.V.min_raw, self.V.max_raw
+        self.bounds_vq = (round_shift(lo, sv, r), round_shift(hi, sv, r))
+        self.bounds_wq = (round_shift(lo + self.WOFF.raw, sv, r),
+                          round_shift(hi + self.WOFF.raw, sv, r))
+        q_ends = [w * self.KA.raw for w in self.bounds_wq]
+        sq = self.KA.frac_bits + self.W.frac_bits - self.Q.frac_bits
+        self.bounds_qq = (round_shift(min(q_ends), sq, r), round_shift(max(q_ends), sq, r))
+        bv_lo = bv_hi = 0
+        for b in self.beta:
+            ends = [vq * b.raw for vq in self.bounds_vq]
+            sb = b.frac_bits + self.W.frac_bits - self.U.frac_bits
+            bv_lo = min(bv_lo, round_shift(min(ends), sb, r))
+            bv_hi = max(bv_hi, round_shift(max(ends), sb, r))
+        sy = self.U.frac_bits - self.Y.frac_bits
+        self.bounds_y = (round_shift(bv_lo - self.U.max_raw, sy, r),
+                         round_shift(bv_hi - self.U.min_raw, sy, r))
 
     # ------------------------------------------------------------------------------------------
     # Error bound of one update against float64 Euler from the same state.
@@ -290,50 +313,65 @@ class IzhikevichConfig:
 # Amaranth values (RTL) alike.
 
 def stage2_operands(cfg: IzhikevichConfig, v, u, I):
-    """Operands: w = v + 62.5 and v rounded to multiplier width; dt*(I - u) or its operand."""
+    """Operands: w = v + 62.5 and v rounded to multiplier width; the ``I - u`` operand when dt
+    is not a power of two (else ``I`` passes through to stage 3)."""
     r = cfg.rounding
-    w = v + cfg.WOFF.raw
-    wq = saturate(round_shift(w, cfg.V.frac_bits - cfg.W.frac_bits, r), cfg.W)
-    vq = saturate(round_shift(v, cfg.V.frac_bits - cfg.W.frac_bits, r), cfg.W)
+    wq = saturate(round_shift_add(v, cfg.WOFF.raw, cfg.V.frac_bits - cfg.W.frac_bits, r), cfg.W,
+                  cfg.bounds_wq)
+    vq = saturate(round_shift(v, cfg.V.frac_bits - cfg.W.frac_bits, r), cfg.W, cfg.bounds_vq)
     if cfg.dt_shift is not None:
-        s = cfg.dt_shift
-        dti = round_shift(I, cfg.I.frac_bits + s - cfg.V.frac_bits, r)
-        dtu = round_shift(u, cfg.U.frac_bits + s - cfg.V.frac_bits, r)
-        x = dti - dtu
+        x = I
     else:
         x_full = round_shift(I, cfg.I.frac_bits - cfg.U.frac_bits, r) - u
         x = saturate(round_shift(x_full, cfg.U.frac_bits - cfg.X.frac_bits, r), cfg.X)
     return {"wq": wq, "vq": vq, "x": x}
 
 
-def stage3_products(cfg: IzhikevichConfig, wq, vq, x, sel):
-    """Multipliers 1 and 3 (and 5 when dt is not a power of two)."""
+def stage3_products(cfg: IzhikevichConfig, wq, vq, x, u, sel):
+    """Multipliers 1 and 3 (and 5, ``dt (I - u)``, when dt is not a power of two; when it is,
+    ``dt I - dt u`` by shifts, the rounding of ``dt u`` folded into the subtraction)."""
     out = {"q": wq * cfg.KA.raw, "bvp": vq * _lookup([b.raw for b in cfg.beta], sel)}
-    out["x"] = x if cfg.dt_shift is not None else x * cfg.KDT.raw
+    if cfg.dt_shift is not None:
+        s, r = cfg.dt_shift, cfg.rounding
+        dti = round_shift(x, cfg.I.frac_bits + s - cfg.V.frac_bits, r)
+        su = cfg.U.frac_bits + s - cfg.V.frac_bits
+        if su > 0 and r == "nearest":
+            # dti - ((u >> su) + bit) == dti + ~(u >> su) + ~bit   (two's complement)
+            bit_n = ~u[su - 1] if is_hdl(u) else 1 - ((u >> (su - 1)) & 1)
+            out["x"] = dti + ~(u >> su) + bit_n
+        else:
+            out["x"] = dti - round_shift(u, su, r)
+    else:
+        out["x"] = x * cfg.KDT.raw
     return out
 
 
-def stage4_products(cfg: IzhikevichConfig, q, bvp, wq, u, sel):
-    """Multipliers 2 and 4: (A dt w) w and (a dt)(b v - u)."""
+def stage4_products(cfg: IzhikevichConfig, q, bvp, wq, v, u, x, sel):
+    """Multipliers 2 and 4: (A dt w) w and (a dt)(b v - u); the part of v' that does not wait
+    for a product, ``v + dt (I - u) + dt (C - B^2/4A)``, is summed here too."""
     r = cfg.rounding
-    qq = saturate(round_shift(q, cfg.shift_q, r), cfg.Q)
+    qq = saturate(round_shift(q, cfg.shift_q, r), cfg.Q, cfg.bounds_qq)
     bv = round_shift_select(bvp, cfg.shift_b, sel, r)
-    y = saturate(round_shift(bv - u, cfg.U.frac_bits - cfg.Y.frac_bits, r), cfg.Y)
-    return {"p": qq * wq, "m": y * _lookup([a.raw for a in cfg.alpha], sel)}
-
-
-def stage5_update(cfg: IzhikevichConfig, v, u, p, m, x, sel):
-    """Sum, threshold, reset and saturation into the state formats."""
-    r = cfg.rounding
+    y = saturate(round_shift(bv - u, cfg.U.frac_bits - cfg.Y.frac_bits, r), cfg.Y, cfg.bounds_y)
     if cfg.dt_shift is not None:
         dx = x
     else:
         dx = round_shift(x, cfg.X.frac_bits + cfg.KDT.frac_bits - cfg.V.frac_bits, r)
-    v_pre = v + round_shift(p, cfg.shift_p, r) + dx + cfg.K0.raw
-    u_new = saturate(u + round_shift_select(m, cfg.shift_a, sel, r), cfg.U)
+    return {"p": qq * wq, "m": y * _lookup([a.raw for a in cfg.alpha], sel),
+            "vb": v + dx + cfg.K0.raw, "ud": u + _lookup([d.raw for d in cfg.d], sel)}
+
+
+def stage5_update(cfg: IzhikevichConfig, vb, u, ud, p, m, sel):
+    """Sum, threshold, reset and saturation into the state formats. On a spike
+    ``u' = sat(u + d + (a dt)(b v - u))`` (one saturation; ``u + d`` comes from stage 4)."""
+    r = cfg.rounding
+    v_pre = vb + round_shift(p, cfg.shift_p, r)
+    du = round_shift_select(m, cfg.shift_a, sel, r)
+    u_new = saturate(u + du, cfg.U)
+    u_spk = saturate(ud + du, cfg.U)
     spike = v_pre >= cfg.VTH.raw
     v_out = select(spike, _lookup([c.raw for c in cfg.c], sel), saturate(v_pre, cfg.V))
-    u_out = select(spike, saturate(u_new + _lookup([d.raw for d in cfg.d], sel), cfg.U), u_new)
+    u_out = select(spike, u_spk, u_new)
     return {"v": v_out, "u": u_out, "spike": spike, "v_pre": v_pre}
 
 
@@ -368,13 +406,13 @@ class IzhikevichTwin:
         cfg = self.cfg
         v, u, I, sel = (np.asarray(x, dtype=np.int64) for x in (v, u, I, sel))
         s2 = stage2_operands(cfg, v, u, I)
-        s3 = stage3_products(cfg, s2["wq"], s2["vq"], s2["x"], sel)
-        s4 = stage4_products(cfg, s3["q"], s3["bvp"], s2["wq"], u, sel)
+        s3 = stage3_products(cfg, s2["wq"], s2["vq"], s2["x"], u, sel)
+        s4 = stage4_products(cfg, s3["q"], s3["bvp"], s2["wq"], v, u, s3["x"], sel)
         for k in ("q", "bvp", "x"):
             check_int64(k, s3[k])
         for k in ("p", "m"):
             check_int64(k, s4[k])
-        return stage5_update(cfg, v, u, s4["p"], s4["m"], s3["x"], sel)
+        return stage5_update(cfg, s4["vb"], u, s4["ud"], s4["p"], s4["m"], sel)
 
     def sweep(self):
         """Update every neuron once (one tick); returns the boolean spike vector."""
@@ -414,12 +452,13 @@ class IzhikevichCore(wiring.Component):
 
     1. **Fetch** - the sweep counter addresses the state (v, u), current and set-select RAMs
        (synchronous read).
-    2. **Operands** - ``w = v + 62.5`` and ``v`` rounded to multiplier width; ``dt I - dt u``
-       by exact shifts (or ``I - u`` as an operand when dt is not a power of two).
-    3. **Multiply 1** - ``(A dt) w`` and ``b v`` (and ``dt (I - u)``).
-    4. **Multiply 2** - ``((A dt) w) w`` and ``(a dt)(b v - u)``.
-    5. **Update** - sum into ``v'`` and ``u'``, threshold, reset, saturate; write back to the
-       state RAM and register the outputs.
+    2. **Operands** - ``w = v + 62.5`` and ``v`` rounded to multiplier width (and ``I - u`` as
+       an operand when dt is not a power of two).
+    3. **Multiply 1** - ``(A dt) w`` and ``b v``; ``dt I - dt u`` by shifts (or a multiplier).
+    4. **Multiply 2** - ``((A dt) w) w`` and ``(a dt)(b v - u)``; meanwhile
+       ``v + dt (I - u) + dt (C - B^2/4A)`` is summed.
+    5. **Update** - add the products into ``v'`` and ``u'`` (rounding as a carry-in),
+       threshold, reset, saturate; write back to the state RAM and register the outputs.
 
     Sweeps start on a tick (internal divider of ``clock_hz / update_hz`` cycles, or the ``tick``
     input with ``tick_source="external"``). A tick that arrives while a sweep is still being
@@ -537,17 +576,17 @@ class IzhikevichCore(wiring.Component):
             reg("sel", sel_rd.data, 3)
         wq3, vq3, x3 = reg("wq", s2["wq"], 3), reg("vq", s2["vq"], 3), reg("x", s2["x"], 3)
         # --- stage 3 ----------------------------------------------------------------------
-        s3 = stage3_products(cfg, wq3, vq3, x3, sel3)
+        s3 = stage3_products(cfg, wq3, vq3, x3, u3, sel3)
         v4, u4, i4, sel4, wq4 = (reg(n, x, 4) for n, x in
                                  (("v", v3), ("u", u3), ("i", i3), ("sel", sel3), ("wq", wq3)))
         q4, bvp4, x4 = reg("q", s3["q"], 4), reg("bvp", s3["bvp"], 4), reg("x", s3["x"], 4)
         # --- stage 4 ----------------------------------------------------------------------
-        s4 = stage4_products(cfg, q4, bvp4, wq4, u4, sel4)
-        v5, u5, i5, sel5, x5 = (reg(n, x, 5) for n, x in
-                                (("v", v4), ("u", u4), ("i", i4), ("sel", sel4), ("x", x4)))
-        p5, m5 = reg("p", s4["p"], 5), reg("m", s4["m"], 5)
+        s4 = stage4_products(cfg, q4, bvp4, wq4, v4, u4, x4, sel4)
+        u5, i5, sel5 = (reg(n, x, 5) for n, x in (("u", u4), ("i", i4), ("sel", sel4)))
+        vb5, p5, m5 = reg("vb", s4["vb"], 5), reg("p", s4["p"], 5), reg("m", s4["m"], 5)
+        ud5 = reg("ud", s4["ud"], 5)
         # --- stage 5 ----------------------------------------------------------------------
-        s5 = stage5_update(cfg, v5, u5, p5, m5, x5, sel5)
+        s5 = stage5_update(cfg, vb5, u5, ud5, p5, m5, sel5)
         v_out = Signal(V.shape())
         u_out = Signal(U.shape())
         spike = Signal()
