@@ -184,6 +184,22 @@ class FixedConstant:
         c._check_rel(max_rel_error)
         return c
 
+    @classmethod
+    def scaled(cls, name: str, value: float, frac_bits: int, width: int, signed: bool = True,
+               max_rel_error: float | None = None) -> "FixedConstant":
+        """Quantize ``value`` as ``raw * 2**-frac_bits`` in ``width`` bits (any ``frac_bits``,
+        also more than ``width``, as for a shared exponent); refuse if it does not fit."""
+        if not math.isfinite(value):
+            raise FixedPointError(f"constant {name} = {value!r} is not finite")
+        raw = int(math.floor(math.ldexp(value, frac_bits) + 0.5))
+        lo, hi = (-(1 << (width - 1)), (1 << (width - 1)) - 1) if signed else (0, (1 << width) - 1)
+        if not lo <= raw <= hi:
+            raise FixedPointError(f"constant {name} = {value:g} does not fit {width} bits with "
+                                  f"{frac_bits} fraction bits")
+        c = cls(name, value, raw, frac_bits, width, signed)
+        c._check_rel(max_rel_error)
+        return c
+
     def _check_rel(self, max_rel_error):
         if max_rel_error is not None and abs(self.rel_error) > max_rel_error:
             raise FixedPointError(f"constant {self.name} = {self.value:g} has relative "

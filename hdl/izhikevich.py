@@ -86,6 +86,9 @@ class IzhikevichConfig:
         ``"internal"`` (divider of ``clock_hz / update_hz``) or ``"external"`` (``tick`` input).
     spike_fifo_depth, sweep_number_width
         Spike stream buffering and the width of the (wrapping) sweep number.
+    y_int_bits
+        Integer bits of the ``b v - u`` operand. Default: the fewest that provably hold every
+        state (no clamp needed); fewer bits buy precision but clamp in extreme states.
     """
 
     n_neurons: int = 2500
@@ -102,6 +105,7 @@ class IzhikevichConfig:
     tick_source: str = "internal"
     spike_fifo_depth: int = 64
     sweep_number_width: int = 16
+    y_int_bits: int | None = None
     v0: float = golden.V0
     v_th: float = golden.V_TH
 
@@ -175,7 +179,11 @@ class IzhikevichConfig:
             self.X = None
         if not self.sets:
             raise ConfigError("no parameter sets")
-        self.beta = [FixedConstant.normalized(f"b[{i}]", b, ow, max_rel_error=2.0 ** -12)
+        # b shares one exponent across the table (so b v needs no per-set shift); its
+        # mantissa is normalized to the largest |b|
+        b_norm = FixedConstant.normalized("b", max((abs(st[1]) for st in self.sets)), ow)
+        self.beta = [FixedConstant.scaled(f"b[{i}]", b, b_norm.frac_bits, ow,
+                                          max_rel_error=2.0 ** -12)
                      for i, (a, b, c, d) in enumerate(self.sets)]
         self.alpha = [FixedConstant.normalized(f"a*dt[{i}]", a * dt, ow,
                                                max_rel_error=2.0 ** -12)
@@ -193,18 +201,20 @@ class IzhikevichConfig:
         b_max = max(abs(b.quantized) for b in self.beta)
         y_max = b_max * max(abs(self.V.min_value), abs(self.V.max_value)) + \
             max(abs(self.U.min_value), abs(self.U.max_value))
-        self.Y = QFormat.for_range(-y_max, y_max, ow)
-        self._derive_bounds()
+        self.Y = QFormat.for_range(-y_max, y_max, ow) if self.y_int_bits is None else \
+            QFormat(self.y_int_bits, ow - self.y_int_bits)
         # shifts aligning products to the state formats
         self.shift_p = self.Q.frac_bits + self.W.frac_bits - self.V.frac_bits
         self.shift_q = self.KA.frac_bits + self.W.frac_bits - self.Q.frac_bits
-        self.shift_b = [b.frac_bits + self.W.frac_bits - self.U.frac_bits for b in self.beta]
+        self.shift_b = self.beta[0].frac_bits + self.W.frac_bits - self.U.frac_bits
+        self.shift_y = self.shift_b + self.U.frac_bits - self.Y.frac_bits
         self.shift_a = [a.frac_bits + self.Y.frac_bits - self.U.frac_bits for a in self.alpha]
-        for name, s in [("b*v", min(self.shift_b)), ("(a dt) y", min(self.shift_a)),
-                        ("q", self.shift_q)]:
+        for name, s in [("b*v", self.shift_y), ("(a dt) y", min(self.shift_a)),
+                        ("q", self.shift_q), ("p", self.shift_p)]:
             if s < 1:
                 raise ConfigError(f"product {name} has fewer fraction bits than its target "
                                   f"format; reduce the state fraction bits")
+        self._derive_bounds()
         # worst-case overshoot of v above threshold must fit the state format
         u_min = self.U.min_value
         f_max = golden.A * self.v_th ** 2 + golden.B * self.v_th + golden.C - u_min + \
@@ -238,15 +248,10 @@ class IzhikevichConfig:
         q_ends = [w * self.KA.raw for w in self.bounds_wq]
         sq = self.KA.frac_bits + self.W.frac_bits - self.Q.frac_bits
         self.bounds_qq = (round_shift(min(q_ends), sq, r), round_shift(max(q_ends), sq, r))
-        bv_lo = bv_hi = 0
-        for b in self.beta:
-            ends = [vq * b.raw for vq in self.bounds_vq]
-            sb = b.frac_bits + self.W.frac_bits - self.U.frac_bits
-            bv_lo = min(bv_lo, round_shift(min(ends), sb, r))
-            bv_hi = max(bv_hi, round_shift(max(ends), sb, r))
-        sy = self.U.frac_bits - self.Y.frac_bits
-        self.bounds_y = (round_shift(bv_lo - self.U.max_raw, sy, r),
-                         round_shift(bv_hi - self.U.min_raw, sy, r))
+        bvp = [vq * b.raw for vq in self.bounds_vq for b in self.beta]
+        ush = [self.U.min_raw << self.shift_b, self.U.max_raw << self.shift_b]
+        self.bounds_y = (round_shift(min(bvp) - ush[1], self.shift_y, r),
+                         round_shift(max(bvp) - ush[0], self.shift_y, r))
 
     # ------------------------------------------------------------------------------------------
     # Error bound of one update against float64 Euler from the same state.
@@ -309,10 +314,11 @@ class IzhikevichConfig:
 
 
 # ----------------------------------------------------------------------------------------------
-# The datapath, one function per pipeline stage. Each works on NumPy int64 arrays (twin) and on
-# Amaranth values (RTL) alike.
+# The datapath as four steps (operands and multiply1 share pipeline stage 3, multiply2 is
+# stage 4, update_state stage 5). Each works on NumPy int64 arrays (twin) and on Amaranth
+# values (RTL) alike.
 
-def stage2_operands(cfg: IzhikevichConfig, v, u, I):
+def operands(cfg: IzhikevichConfig, v, u, I):
     """Operands: w = v + 62.5 and v rounded to multiplier width; the ``I - u`` operand when dt
     is not a power of two (else ``I`` passes through to stage 3)."""
     r = cfg.rounding
@@ -327,10 +333,14 @@ def stage2_operands(cfg: IzhikevichConfig, v, u, I):
     return {"wq": wq, "vq": vq, "x": x}
 
 
-def stage3_products(cfg: IzhikevichConfig, wq, vq, x, u, sel):
+def multiply1(cfg: IzhikevichConfig, wq, vq, x, u, sel):
     """Multipliers 1 and 3 (and 5, ``dt (I - u)``, when dt is not a power of two; when it is,
     ``dt I - dt u`` by shifts, the rounding of ``dt u`` folded into the subtraction)."""
     out = {"q": wq * cfg.KA.raw, "bvp": vq * _lookup([b.raw for b in cfg.beta], sel)}
+    # y = round((b v - u) / 2**shift_y) is computed in stage 4 as (bvp - uy) >> shift_y with
+    # uy = u << shift_b, minus half an LSB of y when rounding to nearest (exact, one adder)
+    half_y = (1 << (cfg.shift_y - 1)) if cfg.rounding == "nearest" else 0
+    out["uy"] = (u << cfg.shift_b) - half_y
     if cfg.dt_shift is not None:
         s, r = cfg.dt_shift, cfg.rounding
         dti = round_shift(x, cfg.I.frac_bits + s - cfg.V.frac_bits, r)
@@ -346,31 +356,67 @@ def stage3_products(cfg: IzhikevichConfig, wq, vq, x, u, sel):
     return out
 
 
-def stage4_products(cfg: IzhikevichConfig, q, bvp, wq, v, u, x, sel):
-    """Multipliers 2 and 4: (A dt w) w and (a dt)(b v - u); the part of v' that does not wait
-    for a product, ``v + dt (I - u) + dt (C - B^2/4A)``, is summed here too."""
+def multiply2(cfg: IzhikevichConfig, q, bvp, uy, wq, v, u, x, sel):
+    """Multipliers 2 and 4: (A dt w) w and (a dt)(b v - u). Meanwhile the addends of stage 5 are
+    prepared, pre-shifted to the products' scale with the rounding half folded in, so that
+    each sum of stage 5 is a single adder: ``v + dt (I - u) + dt (C - B^2/4A)`` for ``v'``,
+    ``u`` and ``u + d`` for ``u'``."""
     r = cfg.rounding
     qq = saturate(round_shift(q, cfg.shift_q, r), cfg.Q, cfg.bounds_qq)
-    bv = round_shift_select(bvp, cfg.shift_b, sel, r)
-    y = saturate(round_shift(bv - u, cfg.U.frac_bits - cfg.Y.frac_bits, r), cfg.Y, cfg.bounds_y)
+    y = saturate((bvp - uy) >> cfg.shift_y, cfg.Y, cfg.bounds_y)
     if cfg.dt_shift is not None:
         dx = x
     else:
         dx = round_shift(x, cfg.X.frac_bits + cfg.KDT.frac_bits - cfg.V.frac_bits, r)
+    near = r == "nearest"
+    vb = v + dx + cfg.K0.raw
+    vb_sh = (vb << cfg.shift_p) + ((1 << (cfg.shift_p - 1)) if near else 0)
+    # threshold and lower clamp of v' become sign tests of sums formed in stage 5:
+    # v' >= v_th  <=>  vb_sh - (v_th << shift_p) + p >= 0   (likewise for V.min)
+    vb_th = vb_sh - (cfg.VTH.raw << cfg.shift_p)
+    vb_lo = vb_sh - (cfg.V.min_raw << cfg.shift_p)
+    shifts = cfg.shift_a
+    halves = [(1 << (sa - 1)) if near else 0 for sa in shifts]
+    ud = u + _lookup([d.raw for d in cfg.d], sel)
+    if len(set(shifts)) == 1:
+        u_sh = (u << shifts[0]) + halves[0]
+        ud_sh = (ud << shifts[0]) + halves[0]
+    else:
+        u_sh = _select_by(sel, [(u << sa) + h for sa, h in zip(shifts, halves)])
+        ud_sh = _select_by(sel, [(ud << sa) + h for sa, h in zip(shifts, halves)])
     return {"p": qq * wq, "m": y * _lookup([a.raw for a in cfg.alpha], sel),
-            "vb": v + dx + cfg.K0.raw, "ud": u + _lookup([d.raw for d in cfg.d], sel)}
+            "vb_sh": vb_sh, "vb_th": vb_th, "vb_lo": vb_lo, "u_sh": u_sh, "ud_sh": ud_sh}
 
 
-def stage5_update(cfg: IzhikevichConfig, vb, u, ud, p, m, sel):
-    """Sum, threshold, reset and saturation into the state formats. On a spike
-    ``u' = sat(u + d + (a dt)(b v - u))`` (one saturation; ``u + d`` comes from stage 4)."""
-    r = cfg.rounding
-    v_pre = vb + round_shift(p, cfg.shift_p, r)
-    du = round_shift_select(m, cfg.shift_a, sel, r)
-    u_new = saturate(u + du, cfg.U)
-    u_spk = saturate(ud + du, cfg.U)
-    spike = v_pre >= cfg.VTH.raw
-    v_out = select(spike, _lookup([c.raw for c in cfg.c], sel), saturate(v_pre, cfg.V))
+def _select_by(sel, options):
+    """``options[sel]`` (a mux in RTL, per-element choice in the twin)."""
+    if is_hdl(sel):
+        out = options[-1]
+        for i in range(len(options) - 2, -1, -1):
+            out = Mux(sel == i, options[i], out)
+        return out
+    return np.choose(np.asarray(sel), [np.broadcast_to(o, np.shape(sel)) for o in options])
+
+
+def update_state(cfg: IzhikevichConfig, vb_sh, vb_th, vb_lo, u_sh, ud_sh, p, m, sel):
+    """Sum, threshold, reset and saturation into the state formats:
+    ``v' = (vb_sh + p) >> shift_p`` and ``u' = (u_sh + m) >> shift_a`` (or ``ud_sh`` on a
+    spike, i.e. ``u' = sat(u + d + (a dt)(b v - u))`` with one saturation). The threshold test
+    and the lower clamp of ``v'`` are signs of ``vb_th + p`` and ``vb_lo + p``; ``v'`` needs no
+    upper clamp: above threshold it is replaced by ``c``."""
+    v_pre = (vb_sh + p) >> cfg.shift_p
+    spike = (vb_th + p) >= 0
+    under = (vb_lo + p) < 0
+    shifts = cfg.shift_a
+    if len(set(shifts)) == 1:
+        u_new, u_spk = (u_sh + m) >> shifts[0], (ud_sh + m) >> shifts[0]
+    else:
+        u_new = _select_by(sel, [(u_sh + m) >> sa for sa in shifts])
+        u_spk = _select_by(sel, [(ud_sh + m) >> sa for sa in shifts])
+    u_new, u_spk = saturate(u_new, cfg.U), saturate(u_spk, cfg.U)
+    v_keep = select(under, cfg.V.min_raw, saturate(v_pre, cfg.V, (cfg.V.min_raw,
+                                                                  cfg.VTH.raw)))
+    v_out = select(spike, _lookup([c.raw for c in cfg.c], sel), v_keep)
     u_out = select(spike, u_spk, u_new)
     return {"v": v_out, "u": u_out, "spike": spike, "v_pre": v_pre}
 
@@ -405,14 +451,15 @@ class IzhikevichTwin:
         """One update of the given neurons (raw int64 arrays); returns the stage-5 dict."""
         cfg = self.cfg
         v, u, I, sel = (np.asarray(x, dtype=np.int64) for x in (v, u, I, sel))
-        s2 = stage2_operands(cfg, v, u, I)
-        s3 = stage3_products(cfg, s2["wq"], s2["vq"], s2["x"], u, sel)
-        s4 = stage4_products(cfg, s3["q"], s3["bvp"], s2["wq"], v, u, s3["x"], sel)
-        for k in ("q", "bvp", "x"):
+        s2 = operands(cfg, v, u, I)
+        s3 = multiply1(cfg, s2["wq"], s2["vq"], s2["x"], u, sel)
+        s4 = multiply2(cfg, s3["q"], s3["bvp"], s3["uy"], s2["wq"], v, u, s3["x"], sel)
+        for k in ("q", "bvp", "x", "uy"):
             check_int64(k, s3[k])
-        for k in ("p", "m"):
+        for k in ("p", "m", "vb_sh", "vb_th", "vb_lo", "u_sh", "ud_sh"):
             check_int64(k, s4[k])
-        return stage5_update(cfg, s4["vb"], u, s4["ud"], s4["p"], s4["m"], sel)
+        return update_state(cfg, *(s4[k] for k in ("vb_sh", "vb_th", "vb_lo", "u_sh", "ud_sh",
+                                                   "p", "m")), sel)
 
     def sweep(self):
         """Update every neuron once (one tick); returns the boolean spike vector."""
@@ -452,9 +499,10 @@ class IzhikevichCore(wiring.Component):
 
     1. **Fetch** - the sweep counter addresses the state (v, u), current and set-select RAMs
        (synchronous read).
-    2. **Operands** - ``w = v + 62.5`` and ``v`` rounded to multiplier width (and ``I - u`` as
-       an operand when dt is not a power of two).
-    3. **Multiply 1** - ``(A dt) w`` and ``b v``; ``dt I - dt u`` by shifts (or a multiplier).
+    2. **Read** - the RAM outputs are registered (no logic after the block RAM).
+    3. **Operands, multiply 1** - ``w = v + 62.5`` and ``v`` rounded to multiplier width, then
+       ``(A dt) w`` and ``b v``; ``dt I - dt u`` by shifts (or ``I - u`` rounded and
+       multiplied by ``dt`` when dt is not a power of two).
     4. **Multiply 2** - ``((A dt) w) w`` and ``(a dt)(b v - u)``; meanwhile
        ``v + dt (I - u) + dt (C - B^2/4A)`` is summed.
     5. **Update** - add the products into ``v'`` and ``u'`` (rounding as a carry-in),
@@ -478,7 +526,8 @@ class IzhikevichCore(wiring.Component):
     ``upd_valid/upd_index/upd_v/upd_u/upd_current/upd_spike``
         Every update as it leaves the pipeline (for scoreboards and probes).
     ``sweep_done/sweep_count/sweep_number``
-        Pulse with the last update of a sweep, the number of spikes in it, and its number.
+        Pulse in the cycle after the last update of a sweep is on ``upd_*``, with the number of
+        spikes in that sweep and its number.
     """
 
     def __init__(self, config: IzhikevichConfig | None = None, **kwargs):
@@ -561,32 +610,30 @@ class IzhikevichCore(wiring.Component):
         for a, b in ((t2, t3), (t3, t4), (t4, t5)):
             m.d.sync += [b[0].eq(a[0]), b[1].eq(a[1]), b[2].eq(a[2])]
 
-        # --- stage 2 ----------------------------------------------------------------------
-        v2 = st_rd.data[:V.width].as_signed()
-        u2 = st_rd.data[V.width:].as_signed()
-        i2 = cur_rd.data
-        s2 = stage2_operands(cfg, v2, u2, i2)
-
+        # --- stage 2: the RAM outputs go straight into registers -------------------------
         def reg(name, value, stage):
             sig_ = Signal(value.shape(), name=f"{name}{stage}")
             m.d.sync += sig_.eq(value)
             return sig_
 
-        v3, u3, i3, sel3 = reg("v", v2, 3), reg("u", u2, 3), reg("i", i2, 3), \
-            reg("sel", sel_rd.data, 3)
-        wq3, vq3, x3 = reg("wq", s2["wq"], 3), reg("vq", s2["vq"], 3), reg("x", s2["x"], 3)
-        # --- stage 3 ----------------------------------------------------------------------
-        s3 = stage3_products(cfg, wq3, vq3, x3, u3, sel3)
+        v3 = reg("v", st_rd.data[:V.width].as_signed(), 3)
+        u3 = reg("u", st_rd.data[V.width:].as_signed(), 3)
+        i3, sel3 = reg("i", cur_rd.data, 3), reg("sel", sel_rd.data, 3)
+        # --- stage 3: operands and the first multipliers ----------------------------------
+        s2 = operands(cfg, v3, u3, i3)
+        wq3, vq3, x3 = s2["wq"], s2["vq"], s2["x"]
+        s3 = multiply1(cfg, wq3, vq3, x3, u3, sel3)
         v4, u4, i4, sel4, wq4 = (reg(n, x, 4) for n, x in
                                  (("v", v3), ("u", u3), ("i", i3), ("sel", sel3), ("wq", wq3)))
         q4, bvp4, x4 = reg("q", s3["q"], 4), reg("bvp", s3["bvp"], 4), reg("x", s3["x"], 4)
+        uy4 = reg("uy", s3["uy"], 4)
         # --- stage 4 ----------------------------------------------------------------------
-        s4 = stage4_products(cfg, q4, bvp4, wq4, v4, u4, x4, sel4)
-        u5, i5, sel5 = (reg(n, x, 5) for n, x in (("u", u4), ("i", i4), ("sel", sel4)))
-        vb5, p5, m5 = reg("vb", s4["vb"], 5), reg("p", s4["p"], 5), reg("m", s4["m"], 5)
-        ud5 = reg("ud", s4["ud"], 5)
+        s4 = multiply2(cfg, q4, bvp4, uy4, wq4, v4, u4, x4, sel4)
+        i5, sel5 = reg("i", i4, 5), reg("sel", sel4, 5)
+        p5, m5 = reg("p", s4["p"], 5), reg("m", s4["m"], 5)
+        sums5 = [reg(n, s4[n], 5) for n in ("vb_sh", "vb_th", "vb_lo", "u_sh", "ud_sh")]
         # --- stage 5 ----------------------------------------------------------------------
-        s5 = stage5_update(cfg, vb5, u5, ud5, p5, m5, sel5)
+        s5 = update_state(cfg, *sums5, p5, m5, sel5)
         v_out = Signal(V.shape())
         u_out = Signal(U.shape())
         spike = Signal()
@@ -596,24 +643,27 @@ class IzhikevichCore(wiring.Component):
         m.d.sync += [self.upd_valid.eq(t5[0]), self.upd_index.eq(t5[1]), self.upd_v.eq(v_out),
                      self.upd_u.eq(u_out), self.upd_current.eq(i5), self.upd_spike.eq(spike)]
 
-        # --- per-sweep spike count --------------------------------------------------------
+        # --- bookkeeping from the registered outputs (off the datapath's critical path) -----
+        upd_sweep = Signal(cfg.sweep_number_width)
+        m.d.sync += upd_sweep.eq(t5[2])
         count = Signal(range(N + 1))
-        last = t5[0] & (t5[1] == N - 1)
+        last = self.upd_valid & (self.upd_index == N - 1)
         m.d.sync += self.sweep_done.eq(last)
         with m.If(last):
-            m.d.sync += [self.sweep_count.eq(count + spike), self.sweep_number.eq(t5[2]),
-                         count.eq(0)]
-        with m.Elif(t5[0]):
-            m.d.sync += count.eq(count + spike)
+            m.d.sync += [self.sweep_count.eq(count + self.upd_spike),
+                         self.sweep_number.eq(upd_sweep), count.eq(0)]
+        with m.Elif(self.upd_valid):
+            m.d.sync += count.eq(count + self.upd_spike)
 
         # --- spike stream -----------------------------------------------------------------
         iw = (N - 1).bit_length() or 1
         m.submodules.spike_fifo = fifo = SyncFIFOBuffered(
             width=iw + cfg.sweep_number_width, depth=cfg.spike_fifo_depth)
-        m.d.comb += [fifo.w_data.eq(Cat(t5[1][:iw], t5[2])), fifo.w_en.eq(spike),
+        push = self.upd_valid & self.upd_spike
+        m.d.comb += [fifo.w_data.eq(Cat(self.upd_index[:iw], upd_sweep)), fifo.w_en.eq(push),
                      self.spike_valid.eq(fifo.r_rdy), fifo.r_en.eq(self.spike_ready),
                      self.spike_index.eq(fifo.r_data[:iw]),
                      self.spike_sweep.eq(fifo.r_data[iw:])]
-        with m.If(spike & ~fifo.w_rdy):
+        with m.If(push & ~fifo.w_rdy):
             m.d.sync += self.spike_overflow.eq(1)
         return m
