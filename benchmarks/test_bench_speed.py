@@ -1,0 +1,237 @@
+"""Simulation speed of every engine: NumPy twin, float golden model, cocotb on Icarus/Verilator,
+and the Amaranth simulator.
+
+Figures are printed and written to ``benchmarks/results/speed_*.json``. Only sanity is asserted
+(runs complete, figures positive); speeds depend on the machine. "x real time" compares with the
+core itself, which does ``n_neurons * update_hz`` updates per second (16 kHz per neuron).
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import statistics
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from cuneate.golden import izhikevich as golden
+from cuneate.hdl.izhikevich import IzhikevichConfig, IzhikevichTwin
+
+pytestmark = pytest.mark.benchmark
+
+UPDATE_HZ = 16e3
+SIZES = (2500, 10000)
+REPEATS = 3
+
+
+def _median_time(fn, repeats: int = REPEATS) -> tuple[float, list[float]]:
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return statistics.median(times), times
+
+
+# ----------------------------------------------------------------------------------------------
+# NumPy: bit-exact twin and float golden model
+
+def twin_rate(n: int, sweeps: int = 200) -> dict:
+    cfg = IzhikevichConfig(n_neurons=n, clock_hz=UPDATE_HZ * n, update_hz=UPDATE_HZ)
+    twin = IzhikevichTwin(cfg)
+    twin.set_currents(10.0)
+    for _ in range(5):                                   # warm-up
+        twin.sweep()
+    spikes = [0]
+
+    def run():
+        spikes[0] = 0                                    # spikes of the last repeat
+        for _ in range(sweeps):
+            spikes[0] += int(twin.sweep().sum())
+
+    t, times = _median_time(run)
+    ups = n * sweeps / t
+    return {"engine": "twin (int64)", "neurons": n, "updates": n * sweeps, "median_s": t,
+            "updates_per_s": ups, "x_real_time": ups / (n * UPDATE_HZ),
+            "spikes": spikes[0], "times_s": times}
+
+
+def golden_rate(n: int, dtype=np.float64, duration_ms: float = 20.0) -> dict:
+    dt = golden.DEFAULT_DT_MS
+    steps = int(round(duration_ms / dt))
+    golden.simulate("RS", 10.0, n_steps=5, n_neurons=n, dtype=dtype)     # warm-up
+    out = {}
+
+    def run():
+        out["r"] = golden.simulate("RS", 10.0, duration_ms=duration_ms, n_neurons=n,
+                                   dtype=dtype)
+
+    t, times = _median_time(run)
+    ups = n * steps / t
+    return {"engine": f"golden ({np.dtype(dtype).name})", "neurons": n, "updates": n * steps,
+            "median_s": t, "updates_per_s": ups, "x_real_time": ups / (n * UPDATE_HZ),
+            "spikes": int(np.sum(out["r"].spike_counts)), "times_s": times}
+
+
+def test_numpy_engines(bench):
+    rows = []
+    for n in SIZES:
+        rows.append(twin_rate(n))
+        rows.append(golden_rate(n, np.float64))
+        rows.append(golden_rate(n, np.float32))
+    bench.report("speed_numpy", "NumPy engines: updates per second (RS, I = 10 mV/ms, median "
+                 f"of {REPEATS})", rows,
+                 columns=["engine", "neurons", "updates", "median_s", "updates_per_s",
+                          "x_real_time", "spikes"])
+    for r in rows:
+        assert r["updates_per_s"] > 0 and r["spikes"] > 0, r
+
+
+# ----------------------------------------------------------------------------------------------
+# cocotb on the generated Verilog
+
+def _scoreboard_cases() -> dict:
+    """The CASES table of tests/sim/test_izhikevich_cocotb.py (loaded by path, so the benchmark
+    always measures the configuration the test suite checks)."""
+    path = Path(__file__).resolve().parents[1] / "tests" / "sim" / "test_izhikevich_cocotb.py"
+    spec = importlib.util.spec_from_file_location("_bench_izh_cocotb_cases", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod.CASES
+
+
+def cocotb_scoreboard_rate(simulator: str, build_root: Path, case: str = "n240_mixed") -> dict:
+    from cuneate.hdl.generate import izhikevich_verilog
+    from cuneate.sim.benches.izhikevich_tb import make_config
+    from cuneate.sim.runner import run_cocotb
+
+    spec = dict(_scoreboard_cases()[case], seed=11)
+    cfg = make_config(spec["core"])
+    build_dir = build_root / f"scoreboard_{case}_{simulator}"
+    build_dir.mkdir(parents=True, exist_ok=True)
+    src = build_dir / "izhikevich_core.v"
+    src.write_text(izhikevich_verilog(cfg))
+    t0 = time.perf_counter()
+    run = run_cocotb(simulator, [src], "izhikevich_core", "cuneate.sim.benches.izhikevich_tb",
+                     build_dir, config=spec, testcase="scoreboard")
+    total = time.perf_counter() - t0
+    r = run.report
+    return {"simulator": simulator, "test": f"scoreboard {case}", "neurons": cfg.n_neurons,
+            "cycles": r["cycles"], "sim_wall_s": r["wall_s"], "cycles_per_s": r["cycles_per_s"],
+            "build_and_run_s": total, "updates_checked": r["updates_checked"],
+            "twin_mismatches": r["twin_mismatches"]}
+
+
+def cocotb_engine_rate(simulator: str, build_root: Path, n: int = 240,
+                       sweeps: int = 100) -> dict:
+    from cuneate.hdl.generate import izhikevich_verilog
+    from cuneate.sim.engines import engine_config
+    from cuneate.sim.runner import run_cocotb
+
+    p = golden.PRESETS["RS"]
+    cfg = engine_config({"a": p.a, "b": p.b, "c": p.c, "d": p.d}, n, UPDATE_HZ)
+    currents = np.linspace(0.0, 40.0, cfg.n_neurons)
+    build_dir = build_root / f"engine_n{n}_{simulator}"
+    build_dir.mkdir(parents=True, exist_ok=True)
+    src = build_dir / "izhikevich_core.v"
+    src.write_text(izhikevich_verilog(cfg))
+    core = {"n_neurons": cfg.n_neurons, "clock_hz": cfg.clock_hz, "update_hz": cfg.update_hz,
+            "param_sets": [list(s) for s in cfg.sets], "tick_source": "external",
+            "spike_fifo_depth": cfg.spike_fifo_depth}
+    t0 = time.perf_counter()
+    run = run_cocotb(simulator, [src], "izhikevich_core", "cuneate.sim.benches.izhikevich_tb",
+                     build_dir, config={"core": core, "currents": list(map(float, currents)),
+                                        "sweeps": sweeps}, testcase="engine")
+    total = time.perf_counter() - t0
+    r = run.report
+    return {"simulator": simulator, "test": f"engine n{n} x {sweeps} sweeps",
+            "neurons": cfg.n_neurons, "cycles": r["cycles"], "sim_wall_s": r["wall_s"],
+            "cycles_per_s": r["cycles"] / r["wall_s"], "build_and_run_s": total,
+            "spikes": sum(len(s) for s in r["spike_sweeps"])}
+
+
+@pytest.mark.parametrize("simulator", ["icarus", "verilator"])
+def test_cocotb(simulator, bench, bench_build):
+    rows = [cocotb_scoreboard_rate(simulator, bench_build),
+            cocotb_engine_rate(simulator, bench_build)]
+    bench.report(f"speed_cocotb_{simulator}", f"cocotb on {simulator}: simulated cycles per "
+                 "second (Python bench in the loop every cycle)", rows,
+                 columns=["simulator", "test", "neurons", "cycles", "sim_wall_s",
+                          "cycles_per_s", "build_and_run_s"])
+    assert rows[0]["twin_mismatches"] == 0 and rows[0]["updates_checked"] > 0
+    assert rows[1]["spikes"] > 0
+    for r in rows:
+        assert r["cycles"] > 0 and r["cycles_per_s"] > 0, r
+
+
+# ----------------------------------------------------------------------------------------------
+# Amaranth simulator
+
+def amaranth_rate(n: int = 16, cycles: int = 4000) -> list[dict]:
+    """Cycles per second of the Amaranth simulator on an ``n``-neuron core, (a) free-running
+    (internal tick, no testbench) and (b) driven per cycle by an async testbench that sets the
+    external tick and polls the spike stream, like the ``amaranth`` engine does."""
+    from amaranth.sim import Simulator
+    from cuneate.hdl.izhikevich import IzhikevichCore
+
+    rows = []
+    # (a) free-running
+    cfg = IzhikevichConfig(n_neurons=n, clock_hz=UPDATE_HZ * n, update_hz=UPDATE_HZ)
+    t0 = time.perf_counter()
+    dut = IzhikevichCore(cfg)
+    sim = Simulator(dut)
+    sim.add_clock(1e-6)
+    t1 = time.perf_counter()
+    sim.run_until(100e-6)                          # first cycles include compilation
+    t2 = time.perf_counter()
+    sim.run_until((100 + cycles) * 1e-6)
+    t3 = time.perf_counter()
+    rows.append({"mode": "free-running (internal tick)", "neurons": n, "cycles": cycles,
+                 "setup_s": (t1 - t0) + (t2 - t1), "run_s": t3 - t2,
+                 "cycles_per_s": cycles / (t3 - t2)})
+
+    # (b) testbench-driven
+    cfg = IzhikevichConfig(n_neurons=n, clock_hz=UPDATE_HZ * n, update_hz=UPDATE_HZ,
+                           tick_source="external", spike_fifo_depth=max(16, n + 4))
+    dut = IzhikevichCore(cfg)
+    raw = cfg.I.to_raw(np.linspace(0.0, 40.0, n))
+    state = {"spikes": 0}
+
+    async def tb(ctx):
+        ctx.set(dut.spike_ready, 1)
+        for i in range(n):
+            ctx.set(dut.i_wr_en, 1)
+            ctx.set(dut.i_wr_addr, i)
+            ctx.set(dut.i_wr_data, int(raw[i]))
+            await ctx.tick()
+        ctx.set(dut.i_wr_en, 0)
+        state["t0"] = time.perf_counter()
+        for c in range(cycles):
+            ctx.set(dut.tick, int(c % n == 0))
+            await ctx.tick()
+            if ctx.get(dut.spike_valid):
+                state["spikes"] += 1
+        state["t1"] = time.perf_counter()
+
+    t0 = time.perf_counter()
+    sim = Simulator(dut)
+    sim.add_clock(1e-6)
+    sim.add_testbench(tb)
+    sim.run()
+    t1 = time.perf_counter()
+    run_s = state["t1"] - state["t0"]
+    rows.append({"mode": "testbench-driven (external tick)", "neurons": n, "cycles": cycles,
+                 "setup_s": (t1 - t0) - run_s, "run_s": run_s, "cycles_per_s": cycles / run_s,
+                 "spikes": state["spikes"]})
+    return rows
+
+
+def test_amaranth_simulator(bench):
+    rows = amaranth_rate()
+    bench.report("speed_amaranth", "Amaranth simulator: cycles per second (small core)", rows,
+                 columns=["mode", "neurons", "cycles", "setup_s", "run_s", "cycles_per_s"])
+    for r in rows:
+        assert r["cycles_per_s"] > 0, r
+    assert rows[1]["spikes"] > 0
