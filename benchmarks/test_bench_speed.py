@@ -126,24 +126,14 @@ def cocotb_scoreboard_rate(simulator: str, build_root: Path, case: str = "n240_m
 
 def cocotb_engine_rate(simulator: str, build_root: Path, n: int = 240,
                        sweeps: int = 100) -> dict:
-    from cuneate.hdl.generate import izhikevich_verilog
-    from cuneate.sim.engines import engine_config
-    from cuneate.sim.runner import run_cocotb
+    from cuneate.sim.engines import engine_config, run_cocotb_engine
 
     p = golden.PRESETS["RS"]
     cfg = engine_config({"a": p.a, "b": p.b, "c": p.c, "d": p.d}, n, UPDATE_HZ)
     currents = np.linspace(0.0, 40.0, cfg.n_neurons)
-    build_dir = build_root / f"engine_n{n}_{simulator}"
-    build_dir.mkdir(parents=True, exist_ok=True)
-    src = build_dir / "izhikevich_core.v"
-    src.write_text(izhikevich_verilog(cfg))
-    core = {"n_neurons": cfg.n_neurons, "clock_hz": cfg.clock_hz, "update_hz": cfg.update_hz,
-            "param_sets": [list(s) for s in cfg.sets], "tick_source": "external",
-            "spike_fifo_depth": cfg.spike_fifo_depth}
     t0 = time.perf_counter()
-    run = run_cocotb(simulator, [src], "izhikevich_core", "cuneate.sim.benches.izhikevich_tb",
-                     build_dir, config={"core": core, "currents": list(map(float, currents)),
-                                        "sweeps": sweeps}, testcase="engine")
+    run = run_cocotb_engine(simulator, cfg, currents, sweeps,
+                            build_root / f"engine_n{n}_{simulator}")
     total = time.perf_counter() - t0
     r = run.report
     return {"simulator": simulator, "test": f"engine n{n} x {sweeps} sweeps",
@@ -192,39 +182,19 @@ def amaranth_rate(n: int = 16, cycles: int = 4000) -> list[dict]:
                  "setup_s": (t1 - t0) + (t2 - t1), "run_s": t3 - t2,
                  "cycles_per_s": cycles / (t3 - t2)})
 
-    # (b) testbench-driven
-    cfg = IzhikevichConfig(n_neurons=n, clock_hz=UPDATE_HZ * n, update_hz=UPDATE_HZ,
-                           tick_source="external", spike_fifo_depth=max(16, n + 4))
-    dut = IzhikevichCore(cfg)
-    raw = cfg.I.to_raw(np.linspace(0.0, 40.0, n))
-    state = {"spikes": 0}
-
-    async def tb(ctx):
-        ctx.set(dut.spike_ready, 1)
-        for i in range(n):
-            ctx.set(dut.i_wr_en, 1)
-            ctx.set(dut.i_wr_addr, i)
-            ctx.set(dut.i_wr_data, int(raw[i]))
-            await ctx.tick()
-        ctx.set(dut.i_wr_en, 0)
-        state["t0"] = time.perf_counter()
-        for c in range(cycles):
-            ctx.set(dut.tick, int(c % n == 0))
-            await ctx.tick()
-            if ctx.get(dut.spike_valid):
-                state["spikes"] += 1
-        state["t1"] = time.perf_counter()
-
+    # (b) the `amaranth` engine of `cuneate simulate` (testbench-driven, external tick)
+    from cuneate.golden.izhikevich import PRESETS
+    from cuneate.sim.engines import run_hardware_engine
+    params = dict(zip("abcd", PRESETS["RS"].as_tuple()))
+    currents = list(np.linspace(0.0, 40.0, n))
+    sweeps = cycles // n
     t0 = time.perf_counter()
-    sim = Simulator(dut)
-    sim.add_clock(1e-6)
-    sim.add_testbench(tb)
-    sim.run()
-    t1 = time.perf_counter()
-    run_s = state["t1"] - state["t0"]
-    rows.append({"mode": "testbench-driven (external tick)", "neurons": n, "cycles": cycles,
-                 "setup_s": (t1 - t0) - run_s, "run_s": run_s, "cycles_per_s": cycles / run_s,
-                 "spikes": state["spikes"]})
+    _, spikes = run_hardware_engine("amaranth", params, currents, sweeps * 1000.0 / UPDATE_HZ,
+                                    update_hz=UPDATE_HZ)
+    run_s = time.perf_counter() - t0
+    rows.append({"mode": "amaranth engine (external tick)", "neurons": n,
+                 "cycles": sweeps * n, "setup_s": 0.0, "run_s": run_s,
+                 "cycles_per_s": sweeps * n / run_s, "spikes": sum(map(len, spikes))})
     return rows
 
 

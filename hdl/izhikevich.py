@@ -34,7 +34,7 @@ from amaranth.lib.wiring import In, Out
 
 from ..golden import izhikevich as golden
 from .fixed import (FixedConstant, FixedPointError, QFormat, check_int64, is_hdl,
-                    round_shift, round_shift_add, round_shift_select, saturate, select)
+                    round_shift, round_shift_add, saturate, select)
 
 __all__ = ["ConfigError", "IzhikevichConfig", "IzhikevichTwin", "IzhikevichCore",
            "PIPELINE_DEPTH"]
@@ -144,7 +144,7 @@ class IzhikevichConfig:
         if self.rounding not in ("nearest", "truncate"):
             raise ConfigError(f"unknown rounding {self.rounding!r}")
         if self.tick_source not in ("internal", "external"):
-            raise ConfigError(f"tick_source must be 'internal' or 'external'")
+            raise ConfigError("tick_source must be 'internal' or 'external'")
         if self.operand_width < 8:
             raise ConfigError("operand_width must be >= 8")
         if not self.param_sets:

@@ -5,7 +5,7 @@ It exercises a clocked register, a synchronous reset and a combinational output,
 the smoke test needs to show that export, build and per-cycle checking work.
 """
 
-from amaranth import Module, Signal
+from amaranth import Module
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 

@@ -16,8 +16,6 @@ no idle cycles) - the results depend only on ``update_hz`` (dt), not on the cloc
 
 from __future__ import annotations
 
-import json
-import math
 import tempfile
 from pathlib import Path
 
@@ -25,7 +23,7 @@ import numpy as np
 
 from ..hdl.izhikevich import PIPELINE_DEPTH, IzhikevichConfig, IzhikevichTwin
 
-__all__ = ["engine_config", "run_hardware_engine", "HARDWARE_ENGINES"]
+__all__ = ["engine_config", "run_hardware_engine", "run_cocotb_engine", "HARDWARE_ENGINES"]
 
 HARDWARE_ENGINES = ("fixed", "amaranth", "icarus", "verilator")
 MIN_NEURONS = 8
@@ -108,14 +106,12 @@ def _run_amaranth(cfg: IzhikevichConfig, cur, n_sweeps: int):
     return spikes
 
 
-def _run_cocotb(simulator: str, cfg: IzhikevichConfig, cur, n_sweeps: int,
-                build_dir: Path | None):
+def run_cocotb_engine(simulator: str, cfg: IzhikevichConfig, cur, n_sweeps: int,
+                      build_dir: Path):
+    """Generate the core for ``cfg`` and run the cocotb ``engine`` bench in ``build_dir``;
+    returns the :class:`~cuneate.sim.runner.CocotbRun` (its report has the spike sweeps)."""
     from ..hdl.generate import izhikevich_verilog
     from .runner import run_cocotb
-    tmp = None
-    if build_dir is None:
-        tmp = tempfile.TemporaryDirectory(prefix=f"cuneate-{simulator}-")
-        build_dir = Path(tmp.name)
     build_dir = Path(build_dir)
     build_dir.mkdir(parents=True, exist_ok=True)
     src = build_dir / "izhikevich_core.v"
@@ -123,11 +119,14 @@ def _run_cocotb(simulator: str, cfg: IzhikevichConfig, cur, n_sweeps: int,
     core = {"n_neurons": cfg.n_neurons, "clock_hz": cfg.clock_hz, "update_hz": cfg.update_hz,
             "param_sets": [list(s) for s in cfg.sets], "tick_source": "external",
             "spike_fifo_depth": cfg.spike_fifo_depth}
-    try:
-        run = run_cocotb(simulator, [src], "izhikevich_core", "cuneate.sim.benches.izhikevich_tb",
-                         build_dir, config={"core": core, "currents": list(map(float, cur)),
-                                            "sweeps": n_sweeps}, testcase="engine")
-        return run.report["spike_sweeps"]
-    finally:
-        if tmp is not None:
-            tmp.cleanup()
+    return run_cocotb(simulator, [src], "izhikevich_core", "cuneate.sim.benches.izhikevich_tb",
+                      build_dir, config={"core": core, "currents": list(map(float, cur)),
+                                         "sweeps": n_sweeps}, testcase="engine")
+
+
+def _run_cocotb(simulator: str, cfg: IzhikevichConfig, cur, n_sweeps: int,
+                build_dir: Path | None):
+    if build_dir is not None:
+        return run_cocotb_engine(simulator, cfg, cur, n_sweeps, build_dir).report["spike_sweeps"]
+    with tempfile.TemporaryDirectory(prefix=f"cuneate-{simulator}-") as tmp:
+        return run_cocotb_engine(simulator, cfg, cur, n_sweeps, Path(tmp)).report["spike_sweeps"]

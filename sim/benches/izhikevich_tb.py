@@ -26,7 +26,7 @@ import time
 import cocotb
 import numpy as np
 from cocotb.clock import Clock
-from cocotb.triggers import FallingEdge, ReadOnly, RisingEdge
+from cocotb.triggers import FallingEdge, RisingEdge
 
 from cuneate.golden import izhikevich as golden
 from cuneate.hdl.izhikevich import PIPELINE_DEPTH, IzhikevichConfig, IzhikevichTwin

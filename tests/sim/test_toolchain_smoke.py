@@ -1,6 +1,5 @@
 """Toolchain smoke test: Amaranth -> Verilog -> cocotb on Icarus and on Verilator."""
 
-from pathlib import Path
 
 import pytest
 from amaranth.back import verilog
