@@ -257,3 +257,52 @@ def test_accuracy_parity_with_float32_on_a_wide_battery():
     assert c32["counts_equal"] and cfx["counts_equal"]
     assert cfx["fraction_within_tick"] >= c32["fraction_within_tick"] - 0.005
     assert cfx["mean_vp_distance"] <= 1.25 * c32["mean_vp_distance"]
+
+
+def test_host_parameter_set_write_takes_effect_from_the_next_fetch():
+    """Switch neuron 3 from RS to FS mid-run: its updates follow FS from then on."""
+    N = 8
+    cfg = IzhikevichConfig(n_neurons=N, clock_hz=16e3 * N, param_sets=("RS", "FS"),
+                           tick_source="external")
+    dut = IzhikevichCore(cfg)
+    raw = int(cfg.I.to_raw(12.0))
+    switch_sweep = 40
+    ups = []
+
+    async def bench(ctx):
+        ctx.set(dut.spike_ready, 1)
+        for i in range(N):
+            ctx.set(dut.i_wr_en, 1)
+            ctx.set(dut.i_wr_addr, i)
+            ctx.set(dut.i_wr_data, raw)
+            await ctx.tick()
+        ctx.set(dut.i_wr_en, 0)
+        for c in range(120 * N + 8):
+            ctx.set(dut.tick, int(c % N == 0 and c // N < 120))
+            # between sweeps: no fetch of neuron 3 is in flight
+            switch = c == switch_sweep * N
+            ctx.set(dut.sel_wr_en, int(switch))
+            ctx.set(dut.sel_wr_addr, 3)
+            ctx.set(dut.sel_wr_data, 1)
+            await ctx.tick()
+            if ctx.get(dut.upd_valid):
+                ups.append((ctx.get(dut.upd_index), ctx.get(dut.upd_v), ctx.get(dut.upd_u),
+                            ctx.get(dut.upd_current)))
+
+    sim = Simulator(dut)
+    sim.add_clock(1e-6)
+    sim.add_testbench(bench)
+    sim.run()
+    ups = np.array(ups, dtype=np.int64).reshape(120, N, 4)
+    twin = IzhikevichTwin(cfg)
+    v, u = twin.v.copy(), twin.u.copy()
+    for k in range(120):
+        sel = np.zeros(N, dtype=np.int64)
+        if k >= switch_sweep:
+            sel[3] = 1
+        out = twin.update(v, u, ups[k, :, 3], sel)
+        np.testing.assert_array_equal(out["v"], ups[k, :, 1], err_msg=f"sweep {k}")
+        np.testing.assert_array_equal(out["u"], ups[k, :, 2], err_msg=f"sweep {k}")
+        v, u = out["v"], out["u"]
+    # and the switch made a difference: neuron 3 now differs from its RS neighbours
+    assert ups[-1, 3, 1] != ups[-1, 2, 1] or ups[-1, 3, 2] != ups[-1, 2, 2]
