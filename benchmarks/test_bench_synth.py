@@ -149,6 +149,15 @@ def _bits(v) -> int:
     return int(s, 2) if set(s) <= {"0", "1"} and s else 0
 
 
+def _dsp_registers(netlist: Path, cell_type: str, params: tuple[str, ...], value) -> list[dict]:
+    """For every ``cell_type`` cell of a Yosys JSON netlist: its name and ``value(parameter)``
+    for each of ``params`` (which pipeline registers the multiplier block uses)."""
+    net = json.loads(netlist.read_text())
+    return [{"cell": cname.lstrip("\\"), **{k: value(cell["parameters"].get(k)) for k in params}}
+            for mod in net["modules"].values() for cname, cell in mod.get("cells", {}).items()
+            if cell["type"] == cell_type]
+
+
 def synth_xc6s(workdir: Path, verilog: Path, verilog_text: str, tag: str = "xc6s") -> dict:
     """``synth_xilinx -family xc6s``; cell counts, memory and DSP mapping."""
     log, seconds = run_yosys(
@@ -160,15 +169,9 @@ def synth_xc6s(workdir: Path, verilog: Path, verilog_text: str, tag: str = "xc6s
     lutram = sum(v for k, v in cells.items() if k in XC6S_LUTRAM)
     ffs = sum(v for k, v in cells.items() if re.fullmatch(r"FD\w*|LD\w*", k))
     r16, r8 = cells.get("RAMB16BWER", 0), cells.get("RAMB8BWER", 0)
-    dsp_regs = []
-    net = json.loads((workdir / f"{tag}_netlist.json").read_text())
-    for mod in net["modules"].values():
-        for cname, cell in mod.get("cells", {}).items():
-            if cell["type"] == "DSP48A1":
-                p = cell["parameters"]
-                dsp_regs.append({"cell": cname.lstrip("\\"), **{
-                    k: _bits(p.get(k, 0)) for k in ("A0REG", "A1REG", "B0REG", "B1REG",
-                                                    "CREG", "DREG", "MREG", "PREG")}})
+    dsp_regs = _dsp_registers(workdir / f"{tag}_netlist.json", "DSP48A1",
+                              ("A0REG", "A1REG", "B0REG", "B1REG", "CREG", "DREG", "MREG",
+                               "PREG"), lambda v: _bits(v or 0))
     return {"flow": "synth_xilinx -family xc6s", "seconds": seconds, "cells": cells,
             "LUTs": luts, "LUTs as memory": lutram, "FFs": ffs, "CARRY4": cells.get("CARRY4", 0),
             "RAMB16BWER": r16, "RAMB8BWER": r8, "RAMB16 equiv.": r16 + r8 / 2,
@@ -185,15 +188,9 @@ def synth_ecp5(workdir: Path, verilog: Path, verilog_text: str, tag: str = "ecp5
                  f"tee -q -o {tag}_stat.json stat -json; tee -q -o {tag}_stat.txt stat",
         f"{tag}.log")
     cells = _cell_totals(workdir / f"{tag}_stat.json")
-    mult_regs = []
-    net = json.loads((workdir / f"{tag}.json").read_text())
-    for mod in net["modules"].values():
-        for cname, cell in mod.get("cells", {}).items():
-            if cell["type"] == "MULT18X18D":
-                p = cell["parameters"]
-                mult_regs.append({"cell": cname.lstrip("\\"), **{
-                    k: p.get(k, "NONE") for k in ("REG_INPUTA_CLK", "REG_INPUTB_CLK",
-                                                  "REG_PIPELINE_CLK", "REG_OUTPUT_CLK")}})
+    mult_regs = _dsp_registers(workdir / f"{tag}.json", "MULT18X18D",
+                               ("REG_INPUTA_CLK", "REG_INPUTB_CLK", "REG_PIPELINE_CLK",
+                                "REG_OUTPUT_CLK"), lambda v: "NONE" if v is None else v)
     lut4 = cells.get("LUT4", 0)
     ccu2 = cells.get("CCU2C", 0)
     return {"flow": "synth_ecp5", "seconds": seconds, "cells": cells, "netlist": str(
@@ -259,7 +256,8 @@ def pnr_ecp5(workdir: Path, netlist: Path, freq_mhz: float = 100.0,
         fmax = {freqs[-1][0]: float(freqs[-1][1])}
     if proc.returncode != 0 and not fmax:
         return None, f"nextpnr-ecp5 failed (rc {proc.returncode}); see {log}"
-    return {"seconds": seconds, "speed": speed, "seed": seed, "target_mhz": freq_mhz, "fmax_mhz": fmax,
+    return {"seconds": seconds, "speed": speed, "seed": seed, "target_mhz": freq_mhz,
+            "fmax_mhz": fmax,
             "fmax_estimates_in_log": [float(f) for _, f in freqs], "utilization": util,
             "critical_path": crit, "rc": proc.returncode, "log": str(log)}, None
 
@@ -347,8 +345,9 @@ def test_pnr_ecp5(bench, synth_dir, ecp5_default, default_core):
             pytest.skip(reason)
         results.append(result)
         rows += [{"speed grade": f"-{speed}", "seed": seed, "clock": k, "fmax_MHz": v,
-                  "target_MHz": result["target_mhz"], "core clock MHz": clock_mhz, "margin over core clock %":
-                  100.0 * (v - clock_mhz) / clock_mhz} for k, v in result["fmax_mhz"].items()]
+                  "target_MHz": result["target_mhz"], "core clock MHz": clock_mhz,
+                  "margin over core clock %": 100.0 * (v - clock_mhz) / clock_mhz}
+                 for k, v in result["fmax_mhz"].items()]
     slowest = [r for r in results if r["speed"] == 6]
     result = max(slowest, key=lambda r: min(r["fmax_mhz"].values()))
     fmax = result["fmax_mhz"]
@@ -359,9 +358,9 @@ def test_pnr_ecp5(bench, synth_dir, ecp5_default, default_core):
              "%": 100.0 * v["used"] / v["available"]} for k, v in result["utilization"].items()]
     print(bench.format_table(util))
     if result["critical_path"]:
-        print("critical path (best -6 run): " + ", ".join(f"{k} {v:.3g}" if isinstance(v, float) else
-                                            f"{k} {v}" for k, v in
-                                            result["critical_path"].items()))
+        print("critical path (best -6 run): " + ", ".join(
+            f"{k} {v:.3g}" if isinstance(v, float) else f"{k} {v}"
+            for k, v in result["critical_path"].items()))
     assert fmax and all(v > 0 for v in fmax.values())
 
 
