@@ -5,13 +5,14 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 VENV="${VENV:-.venv}"
-EXTRAS="${CUNEATE_EXTRAS:-test}"
+EXTRAS="${CUNEATE_EXTRAS:-test,synth}"
 
 need_apt=()
 command -v iverilog >/dev/null 2>&1 || need_apt+=(iverilog)
 command -v make >/dev/null 2>&1 || need_apt+=(make)
 command -v g++ >/dev/null 2>&1 || need_apt+=(g++)
 command -v perl >/dev/null 2>&1 || need_apt+=(perl)
+command -v z3 >/dev/null 2>&1 || need_apt+=(z3)
 if [ ${#need_apt[@]} -gt 0 ]; then
     echo "setup: installing system packages: ${need_apt[*]}"
     if [ "$(id -u)" = 0 ]; then
@@ -29,7 +30,7 @@ fi
 PYTHON="${PYTHON:-}"
 if [ -z "$PYTHON" ]; then
     for cand in python3.13 python3.12 python3.11 python3; do
-        if command -v "$cand" >/dev/null 2>&1 && "$cand" -c 'import sys; sys.exit(sys.version_info < (3, 11))'; then
+        if command -v "$cand" >/dev/null 2>&1 && "$cand" -c 'import sys; sys.exit(sys.version_info < (3, 11))' 2>/dev/null; then
             PYTHON="$cand"; break
         fi
     done
@@ -43,5 +44,6 @@ if [ ! -x "$VENV/bin/python" ]; then
     "$PYTHON" -m venv "$VENV" || { echo "setup: venv failed; apt-get install -y python3-venv" >&2; exit 1; }
 fi
 "$VENV/bin/python" -m pip install -q --upgrade "pip>=23" "setuptools>=69" wheel
-"$VENV/bin/python" -m pip install -q -e ".[${EXTRAS}]"
+# the build backend warns about editable installs of mapped package folders; not actionable
+PYTHONWARNINGS=ignore "$VENV/bin/python" -m pip install -q -e ".[${EXTRAS}]"
 "$VENV/bin/cuneate" doctor

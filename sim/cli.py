@@ -1,54 +1,26 @@
 """The ``cuneate`` command line.
 
-Subcommands: ``doctor``, ``simulate``, ``generate``, ``filter check``, ``demo``. Bad arguments exit
-with status 2 and a one-line reason on stderr; a failed check exits 1.
+Commands: ``doctor``, ``simulate BLOCK``, ``generate BLOCK``, ``filter check``, ``demo``, and
+those registered by the command modules listed in :data:`COMMAND_MODULES` (each a ``cli_*.py``
+module of this package with a ``register(groups)`` function). Bad arguments exit with status 2
+and a one-line reason on stderr; a failed check exits 1.
 """
 
 from __future__ import annotations
 
-import argparse
+import importlib
 import json
-import math
 import sys
 from pathlib import Path
 
-__all__ = ["main", "build_parser"]
+from .cliutil import CliError, CommandGroups, Parser, finite_float
 
+__all__ = ["main", "build_parser", "COMMAND_MODULES", "CliError"]
 
-class CliError(Exception):
-    """A user error: printed as one line, exit status 2."""
-
-
-class _Parser(argparse.ArgumentParser):
-    def error(self, message):  # one line, no usage dump
-        raise CliError(f"{self.prog}: {message}")
-
-
-def _finite_float(text: str) -> float:
-    try:
-        val = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    if not math.isfinite(val):
-        raise argparse.ArgumentTypeError(f"not a finite number: {text!r}")
-    return val
-
-
-def _positive_float(text: str) -> float:
-    val = _finite_float(text)
-    if val <= 0:
-        raise argparse.ArgumentTypeError(f"must be > 0: {text!r}")
-    return val
-
-
-def _positive_int(text: str) -> int:
-    try:
-        val = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
-    if val < 1:
-        raise argparse.ArgumentTypeError(f"must be >= 1: {text!r}")
-    return val
+#: Command modules of this package; each adds its parsers through ``register(groups)``.
+COMMAND_MODULES = [
+    "cli_izhikevich",
+]
 
 
 # --------------------------------------------------------------------------------------------
@@ -62,80 +34,6 @@ def cmd_doctor(args) -> int:
     else:
         print(format_doctor(statuses))
     return 0 if ok else 1
-
-
-# --------------------------------------------------------------------------------------------
-# simulate
-ENGINES = ("golden", "fixed", "amaranth", "icarus", "verilator")
-
-
-def _neuron_params(args):
-    from ..golden.izhikevich import PRESETS
-    base = PRESETS[args.preset]
-    vals = {k: getattr(base, k) for k in "abcd"}
-    for k in "abcd":
-        if getattr(args, k) is not None:
-            vals[k] = getattr(args, k)
-    return vals
-
-
-def _currents(args, n):
-    cur = args.current
-    if len(cur) == 1:
-        return [cur[0]] * n
-    if len(cur) != n:
-        raise CliError(f"--current takes one value or one per neuron ({n}), got {len(cur)}")
-    return list(cur)
-
-
-def cmd_simulate(args) -> int:
-    import numpy as np
-    from ..golden import izhikevich as gz
-
-    n = args.neurons
-    params = _neuron_params(args)
-    currents = _currents(args, n)
-    if args.engine == "golden":
-        dt_ms = args.dt_ms if args.dt_ms is not None else (
-            1000.0 / args.update_hz if args.update_hz else gz.DEFAULT_DT_MS)
-        try:
-            cur = np.asarray(currents, dtype=float)
-            res = gz.simulate((params["a"], params["b"], params["c"], params["d"]),
-                              (lambda t_ms: cur) if n > 1 else float(cur[0]),
-                              duration_ms=args.duration_ms, n_neurons=n, dt_ms=dt_ms,
-                              scheme=args.scheme)
-        except gz.DivergenceError as exc:
-            print(f"cuneate simulate: {exc}", file=sys.stderr)
-            return 1
-        spikes = [s.tolist() for s in res.spikes_ms]
-    else:
-        if args.scheme != "euler":
-            raise CliError(f"engine {args.engine!r} implements forward Euler only "
-                           f"(--scheme {args.scheme} is a golden-engine option)")
-        if args.dt_ms is not None:
-            raise CliError(f"engine {args.engine!r} takes its dt from --update-hz "
-                           f"(dt = 1000/update_hz ms), not --dt-ms")
-        from .engines import run_hardware_engine
-        try:
-            dt_ms, spikes = run_hardware_engine(
-                args.engine, params=params, currents=currents, duration_ms=args.duration_ms,
-                update_hz=args.update_hz or 16e3, clock_hz=args.clock_hz,
-                build_dir=Path(args.build_dir) if args.build_dir else None)
-        except ValueError as exc:
-            raise CliError(f"cuneate simulate: {exc}") from None
-    out = {"engine": args.engine, "model": "izhikevich", "dt_ms": dt_ms,
-           "scheme": args.scheme, "duration_ms": args.duration_ms, "neurons": n,
-           "params": params, "current": currents, "spikes_ms": spikes}
-    if args.json:
-        print(json.dumps(out))
-    else:
-        print(f"engine {args.engine}, dt = {dt_ms:g} ms, {args.duration_ms:g} ms, "
-              f"a={params['a']:g} b={params['b']:g} c={params['c']:g} d={params['d']:g}")
-        for i, s in enumerate(spikes):
-            rate = 1000.0 * len(s) / args.duration_ms if args.duration_ms else 0.0
-            head = ", ".join(f"{t:g}" for t in s[:6]) + (" ..." if len(s) > 6 else "")
-            print(f"  neuron {i}: I = {currents[i]:g}, {len(s)} spikes ({rate:.1f} Hz): {head}")
-    return 0
 
 
 # --------------------------------------------------------------------------------------------
@@ -154,75 +52,43 @@ def cmd_filter_check(args) -> int:
 
 
 # --------------------------------------------------------------------------------------------
-# generate
-def cmd_generate(args) -> int:
-    from ..hdl.generate import generate_izhikevich
-    try:
-        files = generate_izhikevich(Path(args.out), n_neurons=args.neurons,
-                                    clock_hz=args.clock_hz, update_hz=args.update_hz)
-    except ValueError as exc:
-        raise CliError(f"cuneate generate: {exc}") from None
-    for f in files:
-        print(f)
-    return 0
-
-
-# --------------------------------------------------------------------------------------------
 # demo
 def cmd_demo(args) -> int:
+    from .cliutil import output_dir
     from .demo import run_demo
-    return run_demo(Path(args.out))
+    return run_demo(output_dir(args.out))
 
 
-def build_parser() -> argparse.ArgumentParser:
-    p = _Parser(prog="cuneate", description=__doc__.splitlines()[0])
-    sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
+def build_parser() -> Parser:
+    p = Parser(prog="cuneate", description=__doc__.splitlines()[0])
+    sub = p.add_subparsers(dest="command", required=True, parser_class=Parser)
 
     d = sub.add_parser("doctor", help="check the toolchain (exit 0 when usable)")
     d.add_argument("--json", action="store_true", help="print a JSON object")
     d.set_defaults(func=cmd_doctor)
 
-    s = sub.add_parser("simulate", help="simulate a model on an engine")
-    s.add_argument("model", choices=["izhikevich"])
-    s.add_argument("--engine", choices=ENGINES, default="golden")
-    from ..golden.izhikevich import PRESETS, SCHEMES
-    s.add_argument("--preset", choices=list(PRESETS), default="RS", type=str.upper)
-    for k in "abcd":
-        s.add_argument(f"--{k}", type=_finite_float, default=None,
-                       help=f"override the preset's {k}")
-    s.add_argument("--current", type=_finite_float, nargs="+", default=[10.0],
-                   help="input current (mV/ms): one value, or one per neuron")
-    s.add_argument("--duration-ms", type=_positive_float, default=1000.0)
-    s.add_argument("--neurons", type=_positive_int, default=1)
-    s.add_argument("--dt-ms", type=_positive_float, default=None,
-                   help="golden engine step (default 1/16 ms)")
-    s.add_argument("--update-hz", type=_positive_float, default=None,
-                   help="per-neuron update rate of the hardware engines (default 16e3)")
-    s.add_argument("--clock-hz", type=_positive_float, default=40e6)
-    s.add_argument("--scheme", choices=SCHEMES, default="euler")
-    s.add_argument("--build-dir", default=None, help="HDL simulator build directory")
-    s.add_argument("--json", action="store_true")
-    s.set_defaults(func=cmd_simulate)
-
-    g = sub.add_parser("generate", help="generate Verilog for a hardware block")
-    g.add_argument("block", choices=["izhikevich"])
-    g.add_argument("--neurons", type=_positive_int, default=2500)
-    g.add_argument("--clock-hz", type=_positive_float, default=40e6)
-    g.add_argument("--update-hz", type=_positive_float, default=16e3)
-    g.add_argument("--out", required=True)
-    g.set_defaults(func=cmd_generate)
+    s = sub.add_parser("simulate", help="simulate a hardware block on an engine")
+    s_models = s.add_subparsers(dest="model", required=True, parser_class=Parser,
+                                metavar="BLOCK")
+    g = sub.add_parser("generate", help="generate Verilog and a JSON description of a block")
+    g_models = g.add_subparsers(dest="block", required=True, parser_class=Parser,
+                                metavar="BLOCK")
 
     f = sub.add_parser("filter", help="FBG pre-processing filters")
-    fsub = f.add_subparsers(dest="filter_command", required=True, parser_class=_Parser)
+    fsub = f.add_subparsers(dest="filter_command", required=True, parser_class=Parser)
     fc = fsub.add_parser("check", help="print poles, radii and the stability verdict")
-    fc.add_argument("--b", type=_finite_float, nargs="+", required=True)
-    fc.add_argument("--a", type=_finite_float, nargs="+", required=True)
+    fc.add_argument("--b", type=finite_float, nargs="+", required=True)
+    fc.add_argument("--a", type=finite_float, nargs="+", required=True)
     fc.add_argument("--json", action="store_true")
     fc.set_defaults(func=cmd_filter_check)
 
     dm = sub.add_parser("demo", help="generate the hardware and print a golden-model summary")
     dm.add_argument("--out", default="out/demo")
     dm.set_defaults(func=cmd_demo)
+
+    groups = CommandGroups(root=sub, simulate=s_models, generate=g_models)
+    for name in COMMAND_MODULES:
+        importlib.import_module(f"{__package__}.{name}").register(groups)
     return p
 
 
