@@ -3,8 +3,14 @@
 Equations (Izhikevich 2003)::
 
     dv/dt = A v^2 + B v + C - u + I      A = 0.04 /(ms mV), B = 5 /ms, C = 140 mV/ms
-    du/dt = a (b v - u)
+    du/dt = a (b (v - v_u) - lambda u)   v_u = 0, lambda = 1 (the standard form)
     if v >= v_th (30 mV):  v <- c,  u <- u + d
+
+``A``, ``B``, ``C``, ``v_u`` and ``lambda`` (``u_leak``) belong to a parameter set
+(:class:`IzhikevichParams`): the classic presets use the standard values, and the published
+figure code of Izhikevich (2004) uses ``0.04 v^2 + 4.1 v + 108`` for class-1 excitability and
+the integrator, and ``du/dt = a b (v + 65)`` (``v_u = -65``, ``lambda = 0``) for accommodation
+(see :mod:`cuneate.golden.behaviours`). ``a``, ``b`` and ``d`` may be negative or zero.
 
 Project conventions (shared by every engine, golden, fixed-point twin and RTL):
 
@@ -40,8 +46,8 @@ import numpy as np
 
 __all__ = [
     "A", "B", "C", "V_TH", "V0", "SCHEMES", "DEFAULT_DT_MS", "STATE_BOUND",
-    "IzhikevichParams", "PRESETS", "DivergenceError", "IzhikevichResult",
-    "resolve_params", "derivatives", "step", "simulate", "current_schedule", "group_spikes",
+    "IzhikevichParams", "PRESETS", "DivergenceError", "IzhikevichResult", "NeuronParams",
+    "to_params", "resolve_param_sets", "resolve_params", "derivatives", "step", "simulate", "current_schedule", "group_spikes",
 ]
 
 A = 0.04
@@ -56,25 +62,68 @@ SCHEMES = ("euler", "izhikevich", "rk4")
 
 @dataclass(frozen=True)
 class IzhikevichParams:
-    """One Izhikevich parameter set (a, b dimensionless rates; c, d in mV)."""
+    """One Izhikevich parameter set.
+
+    ``a`` (1/ms, the time scale of the recovery variable ``u``) and ``b`` (the sensitivity of
+    ``u`` to ``v``) set the recovery, ``c`` (mV) the reset and ``d`` (mV/ms) the jump of ``u`` at
+    a spike; ``A``, ``B``, ``C`` are the coefficients of the
+    v-equation and ``v_u``, ``u_leak`` the form of the u-equation
+    ``du/dt = a (b (v - v_u) - u_leak u)`` (``u_leak`` is 1 or 0). ``name`` only labels the set
+    in messages and reports.
+    """
 
     a: float
     b: float
     c: float
     d: float
+    A: float = 0.04
+    B: float = 5.0
+    C: float = 140.0
+    u_leak: float = 1.0
+    v_u: float = 0.0
+    name: str = field(default="", compare=False)
+
+    def __post_init__(self):
+        for k in ("a", "b", "c", "d", "A", "B", "C", "u_leak", "v_u"):
+            val = getattr(self, k)
+            if not isinstance(val, (int, float, np.integer, np.floating)) or not np.isfinite(val):
+                raise ValueError(f"Izhikevich parameter {k} must be a finite number, got {val!r}")
+        if self.u_leak not in (0.0, 1.0):
+            raise ValueError(f"u_leak must be 1 (du/dt = a (b v - u)) or 0 "
+                             f"(du/dt = a b (v - v_u)), got {self.u_leak!r}")
+        if not self.A > 0:
+            raise ValueError(f"the v-equation needs A > 0 (a quadratic with a minimum), "
+                             f"got A = {self.A!r}")
 
     def as_tuple(self) -> tuple[float, float, float, float]:
         return (self.a, self.b, self.c, self.d)
 
+    @property
+    def standard(self) -> bool:
+        """True when A, B, C and the u-equation have their standard (2003) values."""
+        return (self.A, self.B, self.C, self.u_leak, self.v_u) == (A, B, C, 1.0, 0.0)
+
+    def label(self) -> str:
+        return self.name or f"(a={self.a:g}, b={self.b:g}, c={self.c:g}, d={self.d:g})"
+
+    def to_dict(self) -> dict:
+        out = {"a": self.a, "b": self.b, "c": self.c, "d": self.d}
+        if not self.standard:
+            out |= {"A": self.A, "B": self.B, "C": self.C, "u_leak": self.u_leak,
+                    "v_u": self.v_u}
+        if self.name:
+            out["name"] = self.name
+        return out
+
 
 #: Classic parameter sets (Izhikevich 2003/2004).
 PRESETS: Mapping[str, IzhikevichParams] = {
-    "RS": IzhikevichParams(0.02, 0.2, -65.0, 8.0),   # regular spiking
-    "IB": IzhikevichParams(0.02, 0.2, -55.0, 4.0),   # intrinsically bursting
-    "CH": IzhikevichParams(0.02, 0.2, -50.0, 2.0),   # chattering
-    "FS": IzhikevichParams(0.1, 0.2, -65.0, 2.0),    # fast spiking
-    "LTS": IzhikevichParams(0.02, 0.25, -65.0, 2.0),  # low-threshold spiking
-    "RZ": IzhikevichParams(0.1, 0.26, -65.0, 2.0),   # resonator
+    "RS": IzhikevichParams(0.02, 0.2, -65.0, 8.0, name="RS"),    # regular spiking
+    "IB": IzhikevichParams(0.02, 0.2, -55.0, 4.0, name="IB"),    # intrinsically bursting
+    "CH": IzhikevichParams(0.02, 0.2, -50.0, 2.0, name="CH"),    # chattering
+    "FS": IzhikevichParams(0.1, 0.2, -65.0, 2.0, name="FS"),     # fast spiking
+    "LTS": IzhikevichParams(0.02, 0.25, -65.0, 2.0, name="LTS"),  # low-threshold spiking
+    "RZ": IzhikevichParams(0.1, 0.26, -65.0, 2.0, name="RZ"),    # resonator
 }
 
 
@@ -91,64 +140,121 @@ class DivergenceError(FloatingPointError):
             f"v = {v!r}, u = {u!r} (bound |state| <= {bound:g}); reduce dt or the input current")
 
 
-def resolve_params(params, n_neurons: int | None = None, dtype=np.float64):
-    """Turn a preset name, an :class:`IzhikevichParams`, or a sequence of either (one per neuron)
-    into four arrays ``(a, b, c, d)`` of shape ``(n_neurons,)``."""
-    def one(p):
-        if isinstance(p, str):
-            try:
-                return PRESETS[p.upper()].as_tuple()
-            except KeyError:
-                raise ValueError(f"unknown Izhikevich preset {p!r}; known: {', '.join(PRESETS)}") \
-                    from None
-        if isinstance(p, IzhikevichParams):
-            return p.as_tuple()
+def to_params(p) -> IzhikevichParams:
+    """One parameter set from a preset name, an :class:`IzhikevichParams`, a 4-tuple
+    ``(a, b, c, d)`` or a mapping with keys ``a, b, c, d`` and optionally ``A, B, C, u_leak, v_u,
+    name``."""
+    if isinstance(p, IzhikevichParams):
+        return p
+    if isinstance(p, str):
+        try:
+            return PRESETS[p.upper()]
+        except KeyError:
+            raise ValueError(f"unknown Izhikevich preset {p!r}; known: {', '.join(PRESETS)}") \
+                from None
+    if isinstance(p, Mapping):
+        unknown = set(p) - {"a", "b", "c", "d", "A", "B", "C", "u_leak", "v_u", "name"}
+        if unknown:
+            raise ValueError(f"unknown Izhikevich parameter(s) {sorted(unknown)}")
+        missing = [k for k in "abcd" if k not in p]
+        if missing:
+            raise ValueError(f"a parameter set needs a, b, c, d; missing {missing}")
+        kw = {k: (str(v) if k == "name" else float(v)) for k, v in p.items()}
+        return IzhikevichParams(**kw)
+    try:
         t = tuple(float(x) for x in p)
-        if len(t) != 4:
-            raise ValueError(f"a parameter set needs 4 values (a, b, c, d), got {len(t)}")
-        return t
-
-    if isinstance(params, (str, IzhikevichParams)) or (
-            isinstance(params, Sequence) and len(params) == 4
-            and all(isinstance(x, (int, float, np.floating)) for x in params)):
-        rows = [one(params)] * (1 if n_neurons is None else n_neurons)
-    else:
-        rows = [one(p) for p in params]
-        if n_neurons is not None and len(rows) != n_neurons:
-            raise ValueError(f"{len(rows)} parameter sets given for {n_neurons} neurons")
-    arr = np.asarray(rows, dtype=dtype)
-    if not np.all(np.isfinite(arr)):
-        raise ValueError("Izhikevich parameters must be finite")
-    return arr[:, 0].copy(), arr[:, 1].copy(), arr[:, 2].copy(), arr[:, 3].copy()
+    except (TypeError, ValueError):
+        raise ValueError(f"cannot read an Izhikevich parameter set from {p!r}") from None
+    if len(t) != 4:
+        raise ValueError(f"a parameter set needs 4 values (a, b, c, d), got {len(t)}")
+    return IzhikevichParams(*t)
 
 
-def derivatives(v, u, I, a, b):
+def _is_single(params) -> bool:
+    return isinstance(params, (str, IzhikevichParams, Mapping)) or (
+        isinstance(params, Sequence) and len(params) == 4
+        and all(isinstance(x, (int, float, np.integer, np.floating)) for x in params))
+
+
+def resolve_param_sets(params, n_neurons: int | None = None) -> list[IzhikevichParams]:
+    """One :class:`IzhikevichParams` per neuron (a single set is repeated)."""
+    if _is_single(params):
+        return [to_params(params)] * (1 if n_neurons is None else n_neurons)
+    rows = [to_params(p) for p in params]
+    if n_neurons is not None and len(rows) != n_neurons:
+        raise ValueError(f"{len(rows)} parameter sets given for {n_neurons} neurons")
+    return rows
+
+
+@dataclass
+class NeuronParams:
+    """Per-neuron parameter arrays (shape ``(n_neurons,)``) of every coefficient."""
+
+    a: np.ndarray
+    b: np.ndarray
+    c: np.ndarray
+    d: np.ndarray
+    A: np.ndarray
+    B: np.ndarray
+    C: np.ndarray
+    u_leak: np.ndarray
+    v_u: np.ndarray
+
+    @classmethod
+    def from_sets(cls, sets: Sequence[IzhikevichParams], dtype=np.float64) -> "NeuronParams":
+        keys = ("a", "b", "c", "d", "A", "B", "C", "u_leak", "v_u")
+        return cls(**{k: np.array([getattr(s, k) for s in sets], dtype=dtype) for k in keys})
+
+    def extras(self) -> dict:
+        """Keyword arguments of :func:`step` beyond ``a, b, c, d``."""
+        return {"A": self.A, "B": self.B, "C": self.C, "u_leak": self.u_leak, "v_u": self.v_u}
+
+
+def resolve_params(params, n_neurons: int | None = None, dtype=np.float64):
+    """Arrays ``(a, b, c, d)`` of shape ``(n_neurons,)`` (see :func:`resolve_param_sets`)."""
+    np_ = NeuronParams.from_sets(resolve_param_sets(params, n_neurons), dtype)
+    return np_.a.copy(), np_.b.copy(), np_.c.copy(), np_.d.copy()
+
+
+def derivatives(v, u, I, a, b, *, A=A, B=B, C=C, u_leak=1.0, v_u=0.0):
     """Right-hand side ``(dv/dt, du/dt)`` in mV/ms."""
     dt_v = A * v * v + B * v + C - u + I
-    return dt_v, a * (b * v - u)
+    return dt_v, a * (b * (v - v_u) - u_leak * u)
 
 
-def step(v, u, I, a, b, c, d, dt_ms, scheme="euler"):
+def _uterm(b, v, u, u_leak, v_u):
+    """``b (v - v_u) - u_leak u``, written so that the standard form keeps its exact
+    floating-point operation order ``b v - u``."""
+    if np.all(np.asarray(u_leak) == 1.0) and np.all(np.asarray(v_u) == 0.0):
+        return b * v - u
+    return b * (v - v_u) - u_leak * u
+
+
+def step(v, u, I, a, b, c, d, dt_ms, scheme="euler", *, A=A, B=B, C=C, u_leak=1.0, v_u=0.0):
     """Advance every neuron by one update.
 
     Returns ``(v_new, u_new, spiked, v_pre)`` where ``v_pre`` is the membrane potential before the
     threshold/reset (useful to judge how close a spike decision was). Arithmetic is done in the
-    dtype of ``v`` (float64 normally; float32 for the precision yardstick).
+    dtype of ``v`` (float64 normally; float32 for the precision yardstick). ``A, B, C, u_leak,
+    v_u`` are scalars or per-neuron arrays (see :class:`IzhikevichParams`).
     """
     dtype = v.dtype
     dt = dtype.type(dt_ms)
-    Ad, Bd, Cd = dtype.type(A), dtype.type(B), dtype.type(C)
+
+    def cast(x):
+        return np.asarray(x, dtype=dtype) if np.ndim(x) else dtype.type(x)
+    Ad, Bd, Cd, lam, vu = (cast(x) for x in (A, B, C, u_leak, v_u))
     if scheme == "euler":
         v_new = v + dt * (Ad * v * v + Bd * v + Cd - u + I)
-        u_new = u + dt * (a * (b * v - u))
+        u_new = u + dt * (a * _uterm(b, v, u, lam, vu))
     elif scheme == "izhikevich":
         h = dtype.type(0.5) * dt
         v_half = v + h * (Ad * v * v + Bd * v + Cd - u + I)
         v_new = v_half + h * (Ad * v_half * v_half + Bd * v_half + Cd - u + I)
-        u_new = u + dt * (a * (b * v_new - u))
+        u_new = u + dt * (a * _uterm(b, v_new, u, lam, vu))
     elif scheme == "rk4":
         def f(vv, uu):
-            return Ad * vv * vv + Bd * vv + Cd - uu + I, a * (b * vv - uu)
+            return Ad * vv * vv + Bd * vv + Cd - uu + I, a * _uterm(b, vv, uu, lam, vu)
         h = dtype.type(0.5) * dt
         k1v, k1u = f(v, u)
         k2v, k2u = f(v + h * k1v, u + h * k1u)
@@ -246,14 +352,15 @@ def simulate(params="RS", current=10.0, *, duration_ms: float | None = None,
              n_steps: int | None = None, n_neurons: int | None = None,
              dt_ms: float = DEFAULT_DT_MS, scheme: str = "euler", v0=None, u0=None,
              record: bool = False, dtype=np.float64,
-             state_bound: float = STATE_BOUND) -> IzhikevichResult:
+             state_bound: float = STATE_BOUND, progress=None) -> IzhikevichResult:
     """Simulate a population of Izhikevich neurons.
 
     Parameters
     ----------
     params
         Preset name (``"RS"``, ``"IB"``, ``"CH"``, ``"FS"``, ``"LTS"``, ``"RZ"``), an
-        :class:`IzhikevichParams`, a 4-tuple ``(a, b, c, d)``, or a list of those (one per neuron).
+        :class:`IzhikevichParams`, a 4-tuple ``(a, b, c, d)``, a mapping, or a list of those (one
+        per neuron). A reset ``c`` at or above ``v_th`` is refused (:class:`ValueError`).
     current
         Input current in mV/ms; see :func:`current_schedule`.
     duration_ms, n_steps
@@ -270,6 +377,8 @@ def simulate(params="RS", current=10.0, *, duration_ms: float | None = None,
         Keep the whole ``v``/``u`` trace (memory ``2 (n_steps+1) n_neurons`` values).
     dtype
         ``numpy.float64`` (reference) or ``numpy.float32`` (the precision yardstick).
+    progress
+        Called with the number of updates done, every 1000 updates (for progress bars).
 
     Raises
     ------
@@ -289,14 +398,19 @@ def simulate(params="RS", current=10.0, *, duration_ms: float | None = None,
     if n_steps < 0:
         raise ValueError("n_steps must be >= 0")
     dtype = np.dtype(dtype)
-    single = isinstance(params, (str, IzhikevichParams)) or (
-        isinstance(params, Sequence) and len(params) == 4
-        and all(isinstance(x, (int, float, np.floating)) for x in params))
     if n_neurons is None:
-        n_neurons = 1 if single else len(params)
+        n_neurons = 1 if _is_single(params) else len(params)
     if n_neurons < 1:
         raise ValueError("n_neurons must be >= 1")
-    a, b, c, d = resolve_params(params, n_neurons, dtype=dtype)
+    sets = resolve_param_sets(params, n_neurons)
+    for i, s in enumerate(sets):
+        if not s.c < V_TH:
+            raise ValueError(f"parameter set of neuron {i} {s.label()}: reset c = {s.c:g} mV is "
+                             f"not below the threshold v_th = {V_TH:g} mV (the neuron would "
+                             f"spike on every update)")
+    prm = NeuronParams.from_sets(sets, dtype)
+    a, b, c, d = prm.a, prm.b, prm.c, prm.d
+    extras = prm.extras()
     v = np.full(n_neurons, V0, dtype=dtype) if v0 is None else \
         np.broadcast_to(np.asarray(v0, dtype=dtype), (n_neurons,)).copy()
     u = (b * v).astype(dtype) if u0 is None else \
@@ -312,7 +426,7 @@ def simulate(params="RS", current=10.0, *, duration_ms: float | None = None,
     hit_neurons: list[np.ndarray] = []
     with np.errstate(over="ignore", invalid="ignore"):
         for k in range(n_steps):
-            v, u, spiked, v_pre = step(v, u, I_of(k), a, b, c, d, dt_ms, scheme)
+            v, u, spiked, v_pre = step(v, u, I_of(k), a, b, c, d, dt_ms, scheme, **extras)
             bad = ~(np.isfinite(v_pre) & np.isfinite(u) & (np.abs(v_pre) <= state_bound)
                     & (np.abs(u) <= state_bound))
             if bad.any():
@@ -325,6 +439,8 @@ def simulate(params="RS", current=10.0, *, duration_ms: float | None = None,
                 hit_steps.append(np.full(idx.size, k, dtype=np.int64))
             if record:
                 v_tr[k + 1], u_tr[k + 1] = v, u
+            if progress is not None and (k + 1) % 1000 == 0:
+                progress(k + 1)
     steps = group_spikes(hit_steps, hit_neurons, n_neurons)
     return IzhikevichResult(dt_ms=dt_ms, scheme=scheme, n_steps=n_steps,
                             spikes_ms=[(s + 1) * dt_ms for s in steps], v=v, u=u,

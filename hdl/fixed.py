@@ -30,7 +30,7 @@ from amaranth.hdl import Const, Mux, Value, ValueCastable, signed, unsigned
 __all__ = [
     "ROUNDINGS", "QFormat", "FixedConstant", "FixedPointError", "is_hdl", "round_shift",
     "round_shift_add",
-    "round_shift_select", "saturate", "select", "check_int64",
+    "round_shift_select", "saturate", "narrow", "clamp_flagged", "select", "check_int64",
 ]
 
 ROUNDINGS = ("nearest", "truncate")
@@ -297,6 +297,48 @@ def saturate(x, fmt: QFormat, bounds: tuple[int, int] | None = None):
         clamped = Mux(x > fmt.max_raw, hi, Mux(x < fmt.min_raw, lo, x))
         return clamped[:fmt.width].as_signed() if fmt.signed else clamped[:fmt.width]
     return np.clip(x, fmt.min_raw, fmt.max_raw)
+
+
+def narrow(x, fmt: QFormat, bounds: tuple[int, int], name: str = "value"):
+    """Resize ``x`` to ``fmt`` where its proven raw ``bounds`` fit: no clamp, no flag. Raises
+    :class:`FixedPointError` (at construction, when the RTL or the twin is built) if they do
+    not: an unflagged narrowing that could clamp is never built."""
+    lo, hi = bounds
+    if not fmt.min_raw <= lo <= hi <= fmt.max_raw:
+        raise FixedPointError(f"{name}: proven range [{lo}, {hi}] (raw) does not fit {fmt}; "
+                              f"a clamp here would be silent")
+    if is_hdl(x):
+        v = x[:fmt.width]
+        return v.as_signed() if fmt.signed else v
+    return x
+
+
+def clamp_flagged(x, lo: int, hi: int, fmt: QFormat, bounds: tuple[int, int] | None = None):
+    """Clamp ``x`` into the raw interval ``[lo, hi]`` (inside ``fmt``) and say when it acted.
+
+    Returns ``(value, below, above)``: ``value`` has ``fmt``'s width in RTL; ``below`` /
+    ``above`` are true exactly when ``x < lo`` / ``x > hi`` (the clamp changed the value). When
+    the proven ``bounds`` of ``x`` lie inside ``[lo, hi]`` no comparator is built and both flags
+    are constant false. This is the one place where a saturation that can act is built, so that
+    it is never silent.
+    """
+    if not fmt.min_raw <= lo <= hi <= fmt.max_raw:
+        raise FixedPointError(f"clamp levels [{lo}, {hi}] are outside {fmt}")
+    fits = bounds is not None and lo <= bounds[0] <= bounds[1] <= hi
+    if is_hdl(x):
+        if fits:
+            v = x[:fmt.width]
+            return (v.as_signed() if fmt.signed else v), Const(0, 1), Const(0, 1)
+        below, above = x < lo, x > hi
+        clamped = Mux(above, Const(hi, fmt.shape()), Mux(below, Const(lo, fmt.shape()), x))
+        v = clamped[:fmt.width]
+        return (v.as_signed() if fmt.signed else v), below, above
+    arr = np.asarray(x)
+    if fits:
+        z = np.zeros(arr.shape, dtype=bool)
+        return arr, z, z
+    below, above = arr < lo, arr > hi
+    return np.clip(arr, lo, hi), below, above
 
 
 def check_int64(name: str, x) -> None:

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import os
+import threading
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -35,13 +36,14 @@ class CocotbRun:
 def run_cocotb(simulator: str, sources: list[Path], toplevel: str, test_module: str,
                build_dir: Path, config: dict | None = None, testcase: str | None = None,
                build_args: list[str] | None = None, waves: bool = False,
-               quiet: bool = True) -> CocotbRun:
+               quiet: bool = True, progress=None) -> CocotbRun:
     """Build ``sources`` with ``simulator`` and run the cocotb ``test_module`` on ``toplevel``.
 
     ``config`` is written to ``build_dir/config.json`` and passed as ``CUNEATE_BENCH_CONFIG``;
     the bench writes ``build_dir/report.json`` (path in ``CUNEATE_BENCH_REPORT``), returned as
     :attr:`CocotbRun.report`. Raises :class:`SimulatorFailed` unless at least one test ran and none
-    failed.
+    failed. ``progress``, if given, is called with the count a bench writes to
+    ``build_dir/progress.json`` (``{"done": n}``) while the simulator runs.
     """
     if simulator not in SIMULATORS:
         raise ValueError(f"unknown simulator {simulator!r}; known: {', '.join(SIMULATORS)}")
@@ -53,9 +55,11 @@ def run_cocotb(simulator: str, sources: list[Path], toplevel: str, test_module: 
     build_dir.mkdir(parents=True, exist_ok=True)
     cfg_path = build_dir / "config.json"
     report_path = build_dir / "report.json"
-    cfg_path.write_text(json.dumps(config or {}))
-    if report_path.exists():
-        report_path.unlink()
+    progress_path = build_dir / "progress.json"
+    cfg_path.write_text(json.dumps((config or {}) | {"progress_file": str(progress_path)}))
+    for f in (report_path, progress_path):
+        if f.exists():
+            f.unlink()
 
     args = list(build_args or [])
     if simulator == "verilator":
@@ -68,9 +72,30 @@ def run_cocotb(simulator: str, sources: list[Path], toplevel: str, test_module: 
                  log_file=log)
     env = {"CUNEATE_BENCH_CONFIG": str(cfg_path), "CUNEATE_BENCH_REPORT": str(report_path),
            "COCOTB_LOG_LEVEL": os.environ.get("COCOTB_LOG_LEVEL", "WARNING")}
-    results = runner.test(test_module=test_module, hdl_toplevel=toplevel, build_dir=build_dir,
-                          test_dir=build_dir, extra_env=env, testcase=testcase, waves=waves,
-                          log_file=build_dir / "test.log" if quiet else None)
+    stop = threading.Event()
+    poller = None
+    if progress is not None:
+        def poll():
+            last = -1
+            while not stop.wait(0.5):
+                try:
+                    done = int(json.loads(progress_path.read_text())["done"])
+                except (OSError, ValueError, KeyError):
+                    continue
+                if done != last:
+                    progress(done)
+                    last = done
+        poller = threading.Thread(target=poll, daemon=True)
+        poller.start()
+    try:
+        results = runner.test(test_module=test_module, hdl_toplevel=toplevel,
+                              build_dir=build_dir, test_dir=build_dir, extra_env=env,
+                              testcase=testcase, waves=waves,
+                              log_file=build_dir / "test.log" if quiet else None)
+    finally:
+        stop.set()
+        if poller is not None:
+            poller.join()
     n_tests, n_failed = get_results(Path(results))
     report = json.loads(report_path.read_text()) if report_path.exists() else None
     run = CocotbRun(simulator, build_dir, n_tests, n_failed, Path(results), report)

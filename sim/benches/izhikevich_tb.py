@@ -5,12 +5,16 @@ figures to ``CUNEATE_BENCH_REPORT``. Two tests:
 
 ``scoreboard``
     Watches every cycle. Each update that leaves the pipeline is collected; when a sweep is
-    complete it is checked, vectorized, against (a) the bit-exact twin advanced from the DUT's
-    own previous state with the current the DUT reports it used - zero mismatches allowed - and
-    (b) the float64 golden Euler step from the same state, within the error bound derived from
-    the formats. The current used must be the last one the host wrote (or, for a write in the
-    cycle of the fetch, the one before). The spike stream and per-sweep counts must agree with
-    the updates; nothing may overflow or overrun.
+    complete it is checked by :class:`cuneate.sim.scoreboard.SweepChecker`: (a) the bit-exact
+    twin advanced from the DUT's own previous state with the current the DUT reports it used,
+    clamp flags included - zero mismatches allowed - and (b) the float64 golden Euler step from
+    the same state, within the error bound derived from the formats, for every update no clamp
+    touched (a flagged clamp is an expected deviation, counted). The current used must be the
+    last one the host wrote (or, for a write in the cycle of the fetch, the one before). The
+    spike stream, the per-sweep spike and clamp counters and the sticky clamp flags must agree
+    with the updates; nothing may overflow or overrun. Currents are random in
+    ``current_range`` (rewritten during sweeps), or, with ``flip_every``, held at the two ends
+    of the range and flipped every ``flip_every`` sweeps (the full-scale extremes).
 ``engine``
     Writes the currents, drives external ticks and records the spike stream: the
     ``icarus``/``verilator`` engines of ``cuneate simulate``.
@@ -28,8 +32,8 @@ import numpy as np
 from cocotb.clock import Clock
 from cocotb.triggers import FallingEdge, RisingEdge
 
-from cuneate.golden import izhikevich as golden
-from cuneate.hdl.izhikevich import PIPELINE_DEPTH, IzhikevichConfig, IzhikevichTwin
+from cuneate.hdl.izhikevich import CLAMP_KINDS, PIPELINE_DEPTH, IzhikevichConfig
+from cuneate.sim.scoreboard import SweepChecker
 
 
 def _load():
@@ -43,10 +47,8 @@ def _report(data):
 
 
 def make_config(core: dict) -> IzhikevichConfig:
-    core = dict(core)
-    core["param_sets"] = tuple(tuple(p) if isinstance(p, list) else p
-                               for p in core.get("param_sets", ("RS",)))
-    return IzhikevichConfig(**core)
+    """The core configuration from its JSON form (:meth:`IzhikevichConfig.to_kwargs`)."""
+    return IzhikevichConfig.from_kwargs(core)
 
 
 class TB:
@@ -62,7 +64,7 @@ class TB:
         d = self.dut
         d.rst.value = 1
         for s in (d.i_wr_en, d.sel_wr_en, d.i_wr_addr, d.i_wr_data, d.sel_wr_addr,
-                  d.sel_wr_data):
+                  d.sel_wr_data, d.clamp_clear):
             s.value = 0
         d.spike_ready.value = 1
         if self.cfg.tick_source == "external":
@@ -96,12 +98,13 @@ async def scoreboard(dut):
     cfgj = _load()
     cfg = make_config(cfgj["core"])
     N = cfg.n_neurons
-    twin = IzhikevichTwin(cfg)
+    checker = SweepChecker(cfg)
     tb = TB(dut, cfg)
     rng = random.Random(cfgj.get("seed", 1))
     n_sweeps = cfgj["sweeps"]
     lo, hi = cfgj.get("current_range", [0.0, 40.0])
     writes_per_sweep = cfgj.get("writes_per_sweep", 4)
+    flip_every = cfgj.get("flip_every")
     await tb.start()
 
     async def driver():
@@ -115,31 +118,48 @@ async def scoreboard(dut):
             else:
                 await FallingEdge(dut.clk)
 
-    cocotb.start_soon(driver())
-    prev_v = np.full(N, cfg.V0.raw, dtype=np.int64)
-    prev_u = np.array([cfg.u0[s].raw for s in cfg.neuron_sets], dtype=np.int64)
-    sel = np.asarray(cfg.neuron_sets, dtype=np.int64)
-    buf = {k: np.zeros(N, dtype=np.int64) for k in ("v", "u", "i", "spike", "cycle")}
+    async def flipper():
+        # full-scale extremes: neuron n starts at hi (even n) or lo (odd n); all flip to the
+        # other end every flip_every sweeps
+        level = [hi if n % 2 == 0 else lo for n in range(N)]
+        for n in range(N):
+            await tb.write_current(n, cfg.I.to_raw(level[n]))
+        period = flip_every * cfg.cycles_per_tick
+        while True:
+            for _ in range(period - N):
+                await FallingEdge(dut.clk)
+            level = [hi if x == lo else lo for x in level]
+            for n in range(N):
+                await tb.write_current(n, cfg.I.to_raw(level[n]))
+
+    cocotb.start_soon(flipper() if flip_every else driver())
+    buf = {k: np.zeros(N, dtype=np.int64) for k in ("v", "u", "i", "spike", "clamp", "cycle")}
     fill = 0
-    stats = {"sweeps_checked": 0, "updates_checked": 0, "twin_mismatches": 0,
-             "golden_v_max_err": 0.0, "golden_u_max_err": 0.0, "golden_v_max_ratio": 0.0,
-             "golden_u_max_ratio": 0.0, "golden_bound_violations": 0,
-             "spike_disagreements_near_threshold": 0, "spike_disagreements": 0,
-             "spikes": 0, "stream_spikes": 0, "current_violations": 0, "count_mismatches": 0}
+    extra = {"stream_spikes": 0, "current_violations": 0, "count_mismatches": 0,
+             "clamp_counter_mismatches": 0, "sticky_mismatches": 0}
     stream: list[tuple[int, int]] = []
-    done: list[tuple[int, int]] = []
-    expected_done: list[tuple[int, int]] = []
+    done: list[tuple] = []
+    expected_done: list[tuple] = []
     expected_stream: list[tuple[int, int]] = []
+    sticky_seen = 0
+    sticky_due = False
     t0 = time.perf_counter()
     d = dut
-    while stats["sweeps_checked"] < n_sweeps:
+    counters = [getattr(d, f"sweep_clamps_{k}") for k in CLAMP_KINDS]
+    while checker.stats.sweeps_checked < n_sweeps:
         await FallingEdge(d.clk)
         tb.cycle += 1
+        if sticky_due:
+            # one cycle after a sweep's last update the sticky flags hold every clamp so far
+            sticky_due = False
+            if int(d.clamp_flags.value) != sticky_seen:
+                extra["sticky_mismatches"] += 1
         # sample the outputs registered at the last rising edge
         if int(d.spike_valid.value):
             stream.append((int(d.spike_index.value), int(d.spike_sweep.value)))
         if int(d.sweep_done.value):
-            done.append((int(d.sweep_number.value), int(d.sweep_count.value)))
+            done.append((int(d.sweep_number.value), int(d.sweep_count.value),
+                         *(int(c.value) for c in counters)))
         if not int(d.upd_valid.value):
             continue
         idx = int(d.upd_index.value)
@@ -151,66 +171,54 @@ async def scoreboard(dut):
         buf["u"][idx] = d.upd_u.value.to_signed()
         buf["i"][idx] = d.upd_current.value.to_signed()
         buf["spike"][idx] = int(d.upd_spike.value)
+        buf["clamp"][idx] = int(d.upd_clamp.value)
         buf["cycle"][idx] = tb.cycle
         fill += 1
         if idx != N - 1:
             continue
-        sweep_no = stats["sweeps_checked"]        # sweeps are numbered from 0 after reset
+        sweep_no = checker.stats.sweeps_checked        # sweeps are numbered from 0 after reset
         # ---- whole sweep collected: vectorized checks ----
-        out = twin.update(prev_v, prev_u, buf["i"], sel)
+        checker.check(buf["v"], buf["u"], buf["i"], buf["spike"], buf["clamp"])
         spk = buf["spike"].astype(bool)
-        mism = (out["v"] != buf["v"]) | (out["u"] != buf["u"]) | (out["spike"] != spk)
-        stats["twin_mismatches"] += int(mism.sum())
-        if mism.any():
-            k = int(np.flatnonzero(mism)[0])
-            dut._log.error(f"sweep {sweep_no} neuron {k}: DUT v={buf['v'][k]} u={buf['u'][k]} "
-                           f"spike={spk[k]}, twin v={out['v'][k]} u={out['u'][k]} "
-                           f"spike={out['spike'][k]}")
-        # golden one-step from the DUT's own previous state
-        vf, uf = cfg.V.to_float(prev_v), cfg.U.to_float(prev_u)
-        If = cfg.I.to_float(buf["i"])
-        a, b, c, dd = (np.array([cfg.sets[s][j] for s in sel]) for j in range(4))
-        gv, gu, gspk, gv_pre = golden.step(vf, uf, If, a, b, c, dd, cfg.dt_ms, "euler")
-        bv, bu = cfg.one_step_bound(vf, uf, If)
-        fv, fu = cfg.V.to_float(buf["v"]), cfg.U.to_float(buf["u"])
-        agree = gspk == spk
-        ev = np.abs(fv - gv)[agree]
-        eu = np.abs(fu - gu)[agree]
-        stats["golden_v_max_err"] = max(stats["golden_v_max_err"], float(ev.max(initial=0)))
-        stats["golden_u_max_err"] = max(stats["golden_u_max_err"], float(eu.max(initial=0)))
-        stats["golden_v_max_ratio"] = max(stats["golden_v_max_ratio"],
-                                          float((ev / bv[agree]).max(initial=0)))
-        stats["golden_u_max_ratio"] = max(stats["golden_u_max_ratio"],
-                                          float((eu / bu[agree]).max(initial=0)))
-        stats["golden_bound_violations"] += int((ev > bv[agree]).sum() + (eu > bu[agree]).sum())
-        near = np.abs(gv_pre - cfg.v_th) <= bv
-        stats["spike_disagreements_near_threshold"] += int((~agree & near).sum())
-        stats["spike_disagreements"] += int((~agree & ~near).sum())
         # currents used must be the ones the host wrote
         for n in range(N):
             fetch = int(buf["cycle"][n]) - PIPELINE_DEPTH
             if int(buf["i"][n]) not in tb.allowed_currents(n, fetch):
-                stats["current_violations"] += 1
-        expected_done.append((sweep_no % (1 << cfg.sweep_number_width), int(spk.sum())))
+                extra["current_violations"] += 1
+        sums = SweepChecker.sweep_clamp_sums(buf["clamp"])
+        expected_done.append((sweep_no % (1 << cfg.sweep_number_width), int(spk.sum()),
+                              *(sums[k] for k in CLAMP_KINDS)))
         expected_stream += [(int(n), sweep_no) for n in np.flatnonzero(spk)]
-        stats["spikes"] += int(spk.sum())
-        stats["sweeps_checked"] += 1
-        stats["updates_checked"] += N
-        prev_v, prev_u = buf["v"].copy(), buf["u"].copy()
+        sticky_seen |= checker.stats.clamp_sticky
+        sticky_due = True
     # drain the spike stream
     for _ in range(cfg.spike_fifo_depth + 4):
         await FallingEdge(d.clk)
         if int(d.spike_valid.value):
             stream.append((int(d.spike_index.value), int(d.spike_sweep.value)))
         if int(d.sweep_done.value):
-            done.append((int(d.sweep_number.value), int(d.sweep_count.value)))
+            done.append((int(d.sweep_number.value), int(d.sweep_count.value),
+                         *(int(c.value) for c in counters)))
     elapsed = time.perf_counter() - t0
-    stats["count_mismatches"] = sum(a != b for a, b in zip(done, expected_done)) + \
+    extra["count_mismatches"] = sum(a[:2] != b[:2] for a, b in zip(done, expected_done)) + \
         max(0, len(expected_done) - len(done))
+    extra["clamp_counter_mismatches"] = sum(a[2:] != b[2:] for a, b in zip(done, expected_done))
     first = expected_stream[0][1] if expected_stream else 0
     stream_checked = [s for s in stream if s[1] >= first][:len(expected_stream)]
-    stats["stream_spikes"] = len(stream_checked)
-    stats["stream_matches"] = stream_checked == expected_stream
+    extra["stream_spikes"] = len(stream_checked)
+    extra["stream_matches"] = stream_checked == expected_stream
+    # a clear empties the sticky flags except for the clamp registered in the same cycle,
+    # which must not be lost; afterwards they accumulate again
+    pending = int(d.upd_clamp.value)
+    d.clamp_clear.value = 1
+    await FallingEdge(d.clk)
+    d.clamp_clear.value = 0
+    after_clear = int(d.clamp_flags.value)
+    pending2 = pending | int(d.upd_clamp.value)
+    await FallingEdge(d.clk)
+    extra["clear_mismatches"] = int(after_clear != pending) + \
+        int(int(d.clamp_flags.value) != pending2)
+    stats = checker.stats.to_dict() | extra
     stats["overrun"] = int(d.overrun.value)
     stats["spike_overflow"] = int(d.spike_overflow.value)
     stats["cycles"] = tb.cycle
@@ -218,11 +226,11 @@ async def scoreboard(dut):
     stats["cycles_per_s"] = tb.cycle / elapsed if elapsed else None
     stats["bound_v_at_rest"] = float(cfg.one_step_bound(-65.0, -13.0, 0.0)[0])
     _report(stats)
-    assert stats["twin_mismatches"] == 0, "RTL differs from the twin"
-    assert stats["golden_bound_violations"] == 0, "fixed point left the golden error bound"
-    assert stats["spike_disagreements"] == 0, "spike decision differs away from threshold"
+    assert not checker.failures(), "; ".join(checker.failures())
     assert stats["current_violations"] == 0, "an update used a current the host never wrote"
     assert stats["count_mismatches"] == 0, "sweep_count disagrees with the updates"
+    assert stats["clamp_counter_mismatches"] == 0, "per-sweep clamp counters disagree"
+    assert stats["sticky_mismatches"] == 0, "sticky clamp flags disagree with the updates"
     assert stats["stream_matches"], "spike stream differs from the spiking updates"
     assert stats["overrun"] == 0 and stats["spike_overflow"] == 0
 
@@ -246,11 +254,22 @@ async def engine(dut):
     base, last_raw = 0, 0
     t0 = time.perf_counter()
     cycles = 0
+    clamps = {k: 0 for k in CLAMP_KINDS}
+    counters = {k: getattr(d, f"sweep_clamps_{k}") for k in CLAMP_KINDS}
     total = n_sweeps * period + PIPELINE_DEPTH + cfg.spike_fifo_depth + 4
+    progress_file = cfgj.get("progress_file")
+    swept = 0
     for c in range(total):
         d.tick.value = int(c % period == 0 and c // period < n_sweeps)
         await FallingEdge(d.clk)
         cycles += 1
+        if int(d.sweep_done.value):
+            for k in CLAMP_KINDS:
+                clamps[k] += int(counters[k].value)
+            swept += 1
+            if progress_file and swept % 1000 == 0:
+                with open(progress_file, "w") as f:
+                    json.dump({"done": swept}, f)
         if int(d.spike_valid.value):
             raw = int(d.spike_sweep.value)
             if raw < last_raw:
@@ -258,6 +277,9 @@ async def engine(dut):
             last_raw = raw
             spikes[int(d.spike_index.value)].append(base + raw)
     elapsed = time.perf_counter() - t0
+    sticky = int(d.clamp_flags.value)
     _report({"spike_sweeps": spikes, "cycles": cycles, "wall_s": elapsed,
-             "overrun": int(d.overrun.value), "spike_overflow": int(d.spike_overflow.value)})
+             "overrun": int(d.overrun.value), "spike_overflow": int(d.spike_overflow.value),
+             "clamp_counts": clamps,
+             "clamp_sticky": {k: bool(sticky >> i & 1) for i, k in enumerate(CLAMP_KINDS)}})
     assert int(d.overrun.value) == 0 and int(d.spike_overflow.value) == 0

@@ -10,8 +10,8 @@ from amaranth.sim import Simulator
 from cuneate.golden import izhikevich as golden
 from cuneate.golden.metrics import compare_populations
 from cuneate.hdl.generate import generate_izhikevich
-from cuneate.hdl.izhikevich import (PIPELINE_DEPTH, ConfigError, IzhikevichConfig,
-                                    IzhikevichCore, IzhikevichTwin)
+from cuneate.hdl.izhikevich import (CLAMP_KINDS, PIPELINE_DEPTH, ConfigError,
+                                    IzhikevichConfig, IzhikevichCore, IzhikevichTwin)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -20,10 +20,15 @@ from cuneate.hdl.izhikevich import (PIPELINE_DEPTH, ConfigError, IzhikevichConfi
     ({"n_neurons": 2501}, "do not fit one sweep"),
     ({"n_neurons": 4, "clock_hz": 64e3}, "pipeline"),
     ({"clock_hz": 40.5e6 + 1}, "not an integer"),
-    ({"update_hz": 1e3, "n_neurons": 100}, "worst-case v before reset"),
-    ({"state_int_bits": 6}, "does not fit"),
+    ({"update_hz": 1e3, "n_neurons": 100}, "diverges for currents in the accepted range"),
+    ({"state_int_bits": 6}, "too narrow"),
+    ({"u_int_bits": 9}, "u needs 10 integer bits"),
+    ({"v_int_bits": 8}, "v needs 9 integer bits"),
     ({"param_sets": [(0.02, 0.2, 35.0, 8.0)]}, "not below threshold"),
-    ({"param_sets": [(0.0, 0.2, -65.0, 8.0)]}, "a must be > 0"),
+    ({"param_sets": [(-0.02, -1.0, -60.0, 8.0)]}, "diverges"),
+    ({"current_range": (-600, 0)}, "outside the current format"),
+    ({"current_range": (5, 5)}, "lo < hi"),
+    ({"saturation": "wrap"}, "saturation"),
     ({"rounding": "up"}, "rounding"),
     ({"n_neurons": 8, "clock_hz": 128e3, "neuron_sets": [0] * 7}, "neuron_sets"),
     ({"n_neurons": 8, "clock_hz": 128e3, "neuron_sets": [1] * 8}, "neuron_sets"),
@@ -38,8 +43,11 @@ def test_default_config_and_constant_errors():
     cfg = IzhikevichConfig()
     assert cfg.n_neurons == 2500 and cfg.cycles_per_tick == 2500 and cfg.dt_ms == 0.0625
     assert cfg.dt_shift == 4 and cfg.operand_width == 18
-    for fmt in (cfg.W, cfg.Q, cfg.Y):
+    for fmt in (cfg.W, cfg.Q):
         assert fmt.width == 18
+    # u reaches 441 at I = 512: v sQ9.18, u sQ10.20, and y keeps its 2**-9 LSB with one more
+    # integer bit (a 19 x 18 product)
+    assert (str(cfg.V), str(cfg.U), str(cfg.Y)) == ("sQ9.18", "sQ10.20", "sQ10.9")
     d = cfg.to_dict()
     print("\nconstant representation errors (relative):")
     for name, c in d["constants"].items():
@@ -87,27 +95,102 @@ def test_twin_one_step_within_derived_bound(rounding):
     _check_twin_against_golden(cfg, seed=1)
 
 
-def test_twin_saturates_instead_of_wrapping():
+def test_default_clamps_cannot_act_for_accepted_inputs():
+    """The v floor lies below the proven lower root: from the corner of the clamp box with the
+    most negative current, v still rises, so the v_low clamp cannot act."""
     cfg = IzhikevichConfig(n_neurons=8, clock_hz=128e3)
+    assert not any(cfg.to_dict()["clamps"][k]["can_act_for_accepted_inputs"]
+                   for k in ("v_low", "u_high", "u_low", "current", "y"))
+    out = IzhikevichTwin(cfg).update(np.full(8, cfg.v_floor_raw), np.full(8, cfg.u_hi_raw),
+                                     np.full(8, cfg.I.min_raw), np.zeros(8, dtype=int))
+    assert np.all(out["v"] > cfg.v_floor_raw) and not np.any(out["clamp"])
+
+
+def test_twin_saturates_instead_of_wrapping_and_flags_it():
+    """Formats narrowed below the proven range (saturation='flag'): pushed outward, the state
+    is held at the clamp levels, never wrapped, and every clamp that acted is flagged."""
+    cfg = IzhikevichConfig(n_neurons=8, clock_hz=128e3, v_int_bits=8, u_int_bits=7,
+                           current_range=(-300.0, 300.0), saturation="flag")
+    d = cfg.to_dict()["clamps"]
+    assert d["v_low"]["can_act_for_accepted_inputs"] and d["u_high"]["can_act_for_accepted_inputs"]
+    assert cfg.v_floor_raw == cfg.V.min_raw and cfg.u_hi_raw == cfg.U.max_raw
     twin = IzhikevichTwin(cfg)
-    v = np.full(8, cfg.V.min_raw)
-    u = np.full(8, cfg.U.max_raw)
-    out = twin.update(v, u, np.full(8, cfg.I.min_raw), np.zeros(8, dtype=int))
-    assert np.all(out["v"] == cfg.V.min_raw)       # pulled further down: clamps, no wrap
-    assert np.all(out["u"] <= cfg.U.max_raw)
+    zero = np.zeros(8, dtype=int)
+    out = twin.update(np.full(8, cfg.v_floor_raw), np.full(8, cfg.u_hi_raw),
+                      np.full(8, cfg.I.to_raw(-300.0)), zero)
+    assert np.all(out["v"] == cfg.v_floor_raw) and np.all(out["v_low"])
+    assert np.all(out["clamp"] & 1) and not out["u_low"].any()
+    # u pushed above its ceiling by a spike's d: clamped to u_hi and flagged u_high
+    out = twin.update(np.full(8, cfg.VTH.raw - 1), np.full(8, cfg.u_hi_raw),
+                      np.full(8, cfg.I.to_raw(300.0)), zero)
+    assert np.all(out["spike"]) and np.all(out["u"] == cfg.u_hi_raw) and np.all(out["u_high"])
+    assert not out["v_low"].any()
+    # a host current outside the accepted range: used clamped, flagged
+    out = twin.update(np.full(8, cfg.V.to_raw(-65.0)), np.full(8, cfg.U.to_raw(-13.0)),
+                      np.full(8, cfg.I.to_raw(500.0)), zero)
+    ref = twin.update(np.full(8, cfg.V.to_raw(-65.0)), np.full(8, cfg.U.to_raw(-13.0)),
+                      np.full(8, cfg.i_hi_raw), zero)
+    assert np.all(out["current"]) and not ref["current"].any()
+    assert np.array_equal(out["v"], ref["v"]) and np.array_equal(out["u"], ref["u"])
+
+
+def _behaviour_config(letter):
+    from cuneate.golden.behaviours import BEHAVIOURS
+    b = BEHAVIOURS[letter]
+    return IzhikevichConfig(n_neurons=8, clock_hz=128e3, param_sets=(b.params,),
+                            current_range=b.current_range, v_init=[b.v0] * 8,
+                            u_init=[b.u0] * 8)
+
+
+@pytest.mark.parametrize("which", ["RS", "IB", "CH", "FS", "LTS", "RZ"] +
+                         [f"behaviour {k}" for k in "ABCDEFGHIJKLMNOPQRS"])
+def test_one_step_bound_over_the_whole_clamp_box(which):
+    """Single-set cores get the tightest derived formats: from random states filling the whole
+    box [v_floor, v_th) x [u_lo, u_hi] and currents over the accepted range, no clamp acts and
+    every update stays within the golden bound (an operand format too narrow for the state it
+    carries would show here)."""
+    cfg = _behaviour_config(which[-1]) if which.startswith("behaviour") else \
+        IzhikevichConfig(n_neurons=8, clock_hz=128e3, param_sets=(which,))
+    rng = np.random.default_rng(11)
+    n = 40000
+    v = rng.integers(cfg.v_floor_raw, cfg.VTH.raw, n)
+    u = rng.integers(cfg.u_lo_raw, cfg.u_hi_raw + 1, n)
+    I = rng.integers(cfg.i_lo_raw, cfg.i_hi_raw + 1, n)
+    corners = np.array([[cfg.v_floor_raw, cfg.u_lo_raw], [cfg.v_floor_raw, cfg.u_hi_raw],
+                        [cfg.VTH.raw - 1, cfg.u_lo_raw], [cfg.VTH.raw - 1, cfg.u_hi_raw]])
+    v[:4], u[:4], I[:4] = corners[:, 0], corners[:, 1], cfg.i_lo_raw
+    v[4:8], u[4:8], I[4:8] = corners[:, 0], corners[:, 1], cfg.i_hi_raw
+    sel = np.zeros(n, dtype=int)
+    out = IzhikevichTwin(cfg).update(v, u, I, sel)
+    vf, uf, If = cfg.V.to_float(v), cfg.U.to_float(u), cfg.I.to_float(I)
+    gv, gu, gs, gvp = cfg.golden_step(vf, uf, If, sel)
+    bv, bu = cfg.one_step_bound(vf, uf, If, sel)
+    ok = ~out["v_low"] & ~out["u_high"] & ~out["u_low"] & ~out["y"] & ~out["current"]
+    agree = (gs == out["spike"]) & ok
+    near = np.abs(gvp - cfg.v_th) <= bv
+    assert np.all(agree | near | ~ok)
+    ev = np.abs(cfg.V.to_float(out["v"]) - gv)[agree]
+    eu = np.abs(cfg.U.to_float(out["u"]) - gu)[agree]
+    assert np.all(ev <= bv[agree]) and np.all(eu <= bu[agree])
+    # u may leave the box only by a spike's d or the pull towards b v: flagged, never silent
+    assert not out["v_low"].any() and not out["y"].any() and not out["current"].any()
+    assert np.all(out["u_high"] | out["u_low"] | agree | near)
 
 
 # ---------------------------------------------------------------------------------------------
 # RTL vs twin in the Amaranth simulator, every update
-def _run_rtl(cfg, n_sweeps, rng, writes_per_sweep=3, hold_ready=True, tick_schedule=None):
+def _run_rtl(cfg, n_sweeps, rng, writes_per_sweep=3, hold_ready=True, tick_schedule=None,
+             current_range=(-5.0, 150.0), clear_at=()):
     dut = IzhikevichCore(cfg)
     N = cfg.n_neurons
-    rec = {"updates": [], "stream": [], "done": [], "overrun": 0, "overflow": 0}
+    lo, hi = current_range
+    rec = {"updates": [], "stream": [], "done": [], "overrun": 0, "overflow": 0, "sticky": [],
+           "clamps": [], "upd_clamp": []}
 
     async def bench(ctx):
         ctx.set(dut.spike_ready, int(hold_ready))
         cycle = 0
-        pending = [(n, int(cfg.I.to_raw(rng.uniform(-5, 150)))) for n in range(N)]
+        pending = [(n, int(cfg.I.to_raw(rng.uniform(lo, hi)))) for n in range(N)]
         total = tick_schedule[-1] + 3 * N if tick_schedule else (n_sweeps + 1) * cfg.cycles_per_tick
         for cycle in range(total):
             if tick_schedule is not None:
@@ -115,7 +198,7 @@ def _run_rtl(cfg, n_sweeps, rng, writes_per_sweep=3, hold_ready=True, tick_sched
             if pending:
                 n, raw = pending.pop(0)
             elif rng.random() < writes_per_sweep / N:
-                n, raw = int(rng.integers(N)), int(cfg.I.to_raw(rng.uniform(-5, 150)))
+                n, raw = int(rng.integers(N)), int(cfg.I.to_raw(rng.uniform(lo, hi)))
             else:
                 n = None
             if n is not None:
@@ -124,13 +207,18 @@ def _run_rtl(cfg, n_sweeps, rng, writes_per_sweep=3, hold_ready=True, tick_sched
                 ctx.set(dut.i_wr_data, raw)
             else:
                 ctx.set(dut.i_wr_en, 0)
+            ctx.set(dut.clamp_clear, int(cycle in clear_at))
             await ctx.tick()
             if ctx.get(dut.upd_valid):
                 rec["updates"].append((ctx.get(dut.upd_index), ctx.get(dut.upd_v),
                                        ctx.get(dut.upd_u), ctx.get(dut.upd_current),
-                                       ctx.get(dut.upd_spike)))
+                                       ctx.get(dut.upd_spike), ctx.get(dut.upd_clamp)))
+            rec["sticky"].append(ctx.get(dut.clamp_flags))
+            rec["upd_clamp"].append(ctx.get(dut.upd_clamp))
             if ctx.get(dut.sweep_done):
                 rec["done"].append((ctx.get(dut.sweep_number), ctx.get(dut.sweep_count)))
+                rec["clamps"].append(tuple(ctx.get(getattr(dut, f"sweep_clamps_{k}"))
+                                           for k in CLAMP_KINDS))
             if ctx.get(dut.spike_valid) and hold_ready:
                 rec["stream"].append((ctx.get(dut.spike_index), ctx.get(dut.spike_sweep)))
         rec["overrun"] = ctx.get(dut.overrun)
@@ -143,31 +231,69 @@ def _run_rtl(cfg, n_sweeps, rng, writes_per_sweep=3, hold_ready=True, tick_sched
     return rec
 
 
-def test_rtl_matches_twin_every_update_amaranth():
-    N = 16
-    cfg = IzhikevichConfig(n_neurons=N, clock_hz=16e3 * 20, param_sets=("RS", "IB", "CH", "FS"),
-                           neuron_sets=[i % 4 for i in range(N)], spike_fifo_depth=32)
-    rec = _run_rtl(cfg, 60, np.random.default_rng(3))
+def _check_rtl_against_twin(cfg, rec, min_sweeps):
+    """Every recorded update equals the twin from the previous state (flags included); the
+    per-sweep spike and clamp counters equal the sums; returns (spikes, clamp counts)."""
+    N = cfg.n_neurons
     ups = np.array(rec["updates"], dtype=np.int64)
     n_full = len(ups) // N
-    assert n_full >= 59
-    ups = ups[:n_full * N].reshape(n_full, N, 5)
+    assert n_full >= min_sweeps
+    ups = ups[:n_full * N].reshape(n_full, N, 6)
     assert np.all(ups[:, :, 0] == np.arange(N))                 # one neuron per cycle, in order
     twin = IzhikevichTwin(cfg)
     v, u = twin.v.copy(), twin.u.copy()
     spikes_total = 0
+    clamps = np.zeros(len(CLAMP_KINDS), dtype=np.int64)
     for k in range(n_full):
         out = twin.update(v, u, ups[k, :, 3], twin.sel)
         np.testing.assert_array_equal(out["v"], ups[k, :, 1], err_msg=f"sweep {k} v")
         np.testing.assert_array_equal(out["u"], ups[k, :, 2], err_msg=f"sweep {k} u")
         np.testing.assert_array_equal(out["spike"], ups[k, :, 4].astype(bool))
+        np.testing.assert_array_equal(out["clamp"], ups[k, :, 5], err_msg=f"sweep {k} clamps")
         v, u = out["v"], out["u"]
         spikes_total += int(out["spike"].sum())
         assert rec["done"][k] == (k, int(out["spike"].sum()))   # one cycle after the sweep
-    assert spikes_total > 20
+        per = tuple(int(((out["clamp"] >> b) & 1).sum()) for b in range(len(CLAMP_KINDS)))
+        assert rec["clamps"][k] == per
+        clamps += per
     expected_stream = [(int(n), k) for k in range(n_full) for n in np.flatnonzero(ups[k, :, 4])]
     assert rec["stream"][:len(expected_stream)] == expected_stream
+    return spikes_total, clamps
+
+
+def test_rtl_matches_twin_every_update_amaranth():
+    N = 16
+    cfg = IzhikevichConfig(n_neurons=N, clock_hz=16e3 * 20, param_sets=("RS", "IB", "CH", "FS"),
+                           neuron_sets=[i % 4 for i in range(N)], spike_fifo_depth=32)
+    rec = _run_rtl(cfg, 60, np.random.default_rng(3))
+    spikes, clamps = _check_rtl_against_twin(cfg, rec, 59)
+    assert spikes > 20 and not clamps.any() and not any(rec["sticky"])
     assert rec["overrun"] == 0 and rec["overflow"] == 0
+
+
+def test_rtl_flags_counts_and_clears_every_clamp_amaranth():
+    """Formats narrower than the proven range (saturation='flag'): every clamp kind acts; the
+    RTL flags each exactly as the twin does, counts them per sweep, keeps them sticky, and a
+    clear empties the flags without losing a clamp of the same cycle."""
+    N = 8
+    cfg = IzhikevichConfig(n_neurons=N, clock_hz=16e3 * 12, param_sets=("RS", "FS"),
+                           neuron_sets=[i % 2 for i in range(N)], v_int_bits=8, u_int_bits=5,
+                           y_int_bits=5, current_range=(-400.0, 400.0), saturation="flag",
+                           spike_fifo_depth=64)
+    clear_at = (300 * 12, 300 * 12 + 1)
+    rec = _run_rtl(cfg, 400, np.random.default_rng(7), writes_per_sweep=0.02,
+                   current_range=(-512.0, 511.99), clear_at=clear_at)
+    spikes, clamps = _check_rtl_against_twin(cfg, rec, 399)
+    print(f"\nclamps per kind {dict(zip(CLAMP_KINDS, clamps.tolist()))}, spikes {spikes}")
+    assert np.all(clamps > 0)
+    # sticky flags after edge c = (0 if cleared in cycle c else flags before) | the clamps on
+    # upd_clamp before that edge: never dropped, and a clamp in the clear cycle is kept
+    expected, prev_uc = 0, 0
+    for c, (s, uc) in enumerate(zip(rec["sticky"], rec["upd_clamp"])):
+        expected = (0 if c in clear_at else expected) | prev_uc
+        assert s == expected, f"cycle {c}: sticky {s:#x}, expected {expected:#x}"
+        prev_uc = uc
+    assert rec["sticky"][clear_at[0] - 1] != 0 and rec["sticky"][-1] != 0
 
 
 def test_overrun_flag_when_tick_arrives_mid_sweep():
@@ -198,7 +324,7 @@ def test_generation_is_deterministic_and_described(tmp_path):
     desc = json.loads(a[1].read_text())
     assert desc["n_neurons"] == 300 and desc["pipeline_depth"] == 5 and desc["dt_ms"] == 0.0625
     assert desc["ports"]["i_wr_data"] == {"direction": "in", "width": 18, "signed": True}
-    assert desc["formats"]["V"]["width"] == 26
+    assert desc["formats"]["V"]["width"] == 27
 
 
 # ---------------------------------------------------------------------------------------------

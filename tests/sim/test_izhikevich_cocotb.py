@@ -1,8 +1,12 @@
 """Per-cycle scoreboard of the generated Izhikevich core on Icarus and Verilator.
 
-Every update leaving the pipeline is checked against the bit-exact twin (zero mismatches) and
-the float64 golden step from the DUT's own state (within the derived bound), while the host
-rewrites currents during sweeps.
+Every update leaving the pipeline is checked against the bit-exact twin (zero mismatches, clamp
+flags included) and the float64 golden step from the DUT's own state (within the derived bound
+for every unflagged update), while the host rewrites currents during sweeps. Two cases run long
+enough to reach the extremes: the full-scale case holds the default formats at +-512 mV/ms
+(u reaches its ceiling, then the flip drives v to its deepest transient) with no clamp acting;
+the clamp case narrows the formats (saturation="flag") so that every clamp kind acts, and checks
+the flags, counters and sticky bits.
 """
 
 import json
@@ -25,6 +29,22 @@ CASES = {
     "n2500_default": {"core": {"n_neurons": 2500, "clock_hz": 40e6, "update_hz": 16e3,
                                "spike_fifo_depth": 2048},
                       "sweeps": 6, "current_range": [0.0, 500.0], "writes_per_sweep": 20},
+    # full scale: the six presets held at -512 / +511.996 mV/ms, flipped every 1000 sweeps
+    "full_scale_long": {"core": {"n_neurons": 12, "clock_hz": 16e3 * 16, "update_hz": 16e3,
+                                 "param_sets": ["RS", "IB", "CH", "FS", "LTS", "RZ"],
+                                 "neuron_sets": [i // 2 for i in range(12)],
+                                 "spike_fifo_depth": 64},
+                        "sweeps": 2200, "current_range": [-512.0, 511.99609375],
+                        "flip_every": 1000},
+    # formats narrower than the proven range: every clamp kind acts, flagged and counted
+    "clamps": {"core": {"n_neurons": 16, "clock_hz": 16e3 * 20, "update_hz": 16e3,
+                        "param_sets": ["RS", "FS", "IB", "CH"],
+                        "neuron_sets": [i % 4 for i in range(16)],
+                        "v_int_bits": 8, "u_int_bits": 5, "y_int_bits": 5,
+                        "current_range": [-400.0, 400.0], "saturation": "flag",
+                        "spike_fifo_depth": 64},
+               "sweeps": 400, "current_range": [-512.0, 511.99609375],
+               "writes_per_sweep": 0.25},
 }
 
 
@@ -44,7 +64,15 @@ def test_scoreboard(simulator, case, build_root):
     print(f"\n{simulator} {case}: " + json.dumps(r))
     assert r["sweeps_checked"] == spec["sweeps"]
     assert r["updates_checked"] == spec["sweeps"] * cfg.n_neurons
-    assert r["twin_mismatches"] == 0
+    assert r["twin_mismatches"] == 0 and r["flag_mismatches"] == 0
     assert r["golden_bound_violations"] == 0 and r["golden_v_max_ratio"] <= 1.0
     assert r["spike_disagreements"] == 0
     assert r["spikes"] > 0 and r["stream_matches"]
+    assert r["clamp_counter_mismatches"] == 0 and r["sticky_mismatches"] == 0
+    assert r["clear_mismatches"] == 0
+    if case == "clamps":
+        # every clamp kind acted, and was flagged, counted and excused from the golden bound
+        assert all(n > 0 for n in r["clamp_counts"].values()), r["clamp_counts"]
+        assert r["flagged_updates"] > 0
+    else:
+        assert r["flagged_updates"] == 0 and not any(r["clamp_counts"].values())

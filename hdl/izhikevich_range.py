@@ -1,0 +1,197 @@
+"""The state range an Izhikevich parameter set can reach for currents in an accepted range.
+
+The core's state formats and clamp levels are sized from this range (see
+:class:`cuneate.hdl.izhikevich.IzhikevichConfig`), so that no clamp acts for any accepted input.
+The range is derived in two parts:
+
+**u (recovery variable): a documented worst-case search.** Forward Euler in float64 at the core's
+``dt`` (the scheme the core implements) runs every parameter set from each of its initial states
+under a battery of stimuli spanning the accepted range ``[I_lo, I_hi]``:
+
+* constant currents at 17 evenly spaced levels from ``I_lo`` to ``I_hi`` (both included) and 0;
+* steps ``I_lo -> I_hi`` and ``I_hi -> I_lo`` at half time;
+* square waves between ``I_lo``/``I_hi``, ``0``/``I_hi`` and ``I_lo``/``0`` with periods of
+  2 updates (the fastest the tick rate allows), 1, 2, 5, 10, 20, 50 and 100 ms and duty cycles
+  25, 50 and 75 %;
+* linear ramps ``I_lo -> I_hi`` and ``I_hi -> I_lo`` over the run.
+
+The run lasts ``clip(10 / |a|, 400, 3000)`` ms (ten recovery time constants of the slowest set).
+The largest ``u`` comes from sustained maximal drive (more current, more spikes, each adding
+``d``); square waves, steps and ramps were measured not to exceed it. The search's extremes are
+widened by a margin ``0.02 (u_max - u_min) + max(|d|)`` (one recovery jump more than ever seen,
+plus 2 % for the difference between the float search and the fixed-point datapath). A
+trajectory that diverges (non-finite or beyond 1e4 in magnitude) refuses the configuration,
+naming the parameter set, the stimulus and the time.
+
+**v (membrane potential): a bound proven from the u bound.** With ``u <= u_hi`` and
+``I >= I_lo``, ``dv/dt >= f(v) = A v^2 + B v + C - u_hi + I_lo``. Below the lower root ``r`` of
+``f`` the potential rises, and one Euler update maps ``v`` to at least
+``g(v) = v + dt f(v)``, a parabola with its minimum at ``v* = -(1/dt + B) / (2A)``. Hence
+``v >= min(r, min over [r, v_th] of g)``, i.e. ``r`` when ``v* <= r`` (small ``dt``: the update
+is monotone) and ``g(v*)`` otherwise (Euler overshoots below the root). The stored ``v`` is
+below ``v_th`` (a spike resets it to ``c``), so ``v`` lies in ``[v_floor, v_th)`` with
+``v_floor`` that bound minus a margin of 1 mV + 1 %. When ``f`` has no root, ``v`` never falls
+and the floor is the lowest of the initial ``v``, the resets ``c`` and the search minimum.
+
+Everything downstream (multiplier operands, sums) follows from these two intervals by interval
+arithmetic in the configuration.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+from functools import lru_cache
+
+import numpy as np
+
+from ..golden import izhikevich as golden
+
+__all__ = ["SetRange", "RangeSearchError", "reachable_ranges", "stimulus_battery",
+           "SEARCH_STATE_BOUND"]
+
+SEARCH_STATE_BOUND = 1e4
+
+
+class RangeSearchError(ValueError):
+    """A parameter set whose state diverges for a current in the accepted range."""
+
+
+@dataclass(frozen=True)
+class SetRange:
+    """Reachable state range of one parameter set (mV; ``u`` in mV/ms units of the model)."""
+
+    label: str
+    i_lo: float
+    i_hi: float
+    duration_ms: float
+    n_stimuli: int
+    u_min_search: float
+    u_max_search: float
+    u_worst_stimulus: str
+    v_min_search: float
+    v_pre_max_search: float
+    u_lo: float            # u clamp levels: search extremes widened by the margin
+    u_hi: float
+    v_floor_proven: float  # analytic lower bound of v for u <= u_hi, I >= I_lo
+    v_floor: float         # v clamp level: the proven bound minus the margin
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+def stimulus_battery(i_lo: float, i_hi: float, dt_ms: float, n_steps: int):
+    """The search stimuli as ``(names, I)`` with ``I`` of shape ``(n_steps, n_stimuli)``."""
+    t = np.arange(n_steps) * dt_ms
+    cols, names = [], []
+    for level in np.unique(np.concatenate([np.linspace(i_lo, i_hi, 17),
+                                           [0.0] if i_lo < 0 < i_hi else []])):
+        cols.append(np.full(n_steps, level))
+        names.append(f"constant I = {level:g}")
+    half = n_steps // 2
+    cols.append(np.where(np.arange(n_steps) < half, i_lo, i_hi))
+    names.append(f"step {i_lo:g} -> {i_hi:g}")
+    cols.append(np.where(np.arange(n_steps) < half, i_hi, i_lo))
+    names.append(f"step {i_hi:g} -> {i_lo:g}")
+    pairs = [(i_lo, i_hi)]
+    if i_lo < 0 < i_hi:
+        pairs += [(0.0, i_hi), (i_lo, 0.0)]
+    for lo, hi in pairs:
+        for period in (2 * dt_ms, 1.0, 2.0, 5.0, 10.0, 20.0, 50.0, 100.0):
+            for duty in (0.25, 0.5, 0.75):
+                cols.append(np.where((t % period) < duty * period, hi, lo))
+                names.append(f"square {lo:g}/{hi:g}, period {period:g} ms, duty {duty:g}")
+    cols.append(np.linspace(i_lo, i_hi, n_steps))
+    names.append(f"ramp {i_lo:g} -> {i_hi:g}")
+    cols.append(np.linspace(i_hi, i_lo, n_steps))
+    names.append(f"ramp {i_hi:g} -> {i_lo:g}")
+    return names, np.stack(cols, axis=1)
+
+
+def _v_floor_bound(p: golden.IzhikevichParams, u_hi: float, i_lo: float, dt: float,
+                   v_th: float) -> float | None:
+    """Proven lower bound of v (see the module docstring), or None when f has no root."""
+    k = p.C - u_hi + i_lo
+    disc = p.B * p.B - 4 * p.A * k
+    if disc < 0:
+        return None
+    r = (-p.B - math.sqrt(disc)) / (2 * p.A)
+    v_star = -(1.0 / dt + p.B) / (2 * p.A)
+    if v_star <= r or v_star >= v_th:
+        return r
+    return min(r, v_star + dt * (p.A * v_star * v_star + p.B * v_star + k))
+
+
+def reachable_ranges(sets, dt_ms: float, i_lo: float, i_hi: float, inits, v_th: float
+                     ) -> list[SetRange]:
+    """Reachable state range of each parameter set.
+
+    Parameters
+    ----------
+    sets
+        :class:`~cuneate.golden.izhikevich.IzhikevichParams`, one per set.
+    inits
+        Per set, a tuple of initial states ``((v0, u0), ...)`` used by the configuration.
+    """
+    key = (tuple(sets), float(dt_ms), float(i_lo), float(i_hi),
+           tuple(tuple((float(v), float(u)) for v, u in s) for s in inits), float(v_th))
+    return list(_cached(key))
+
+
+@lru_cache(maxsize=256)
+def _cached(key) -> tuple[SetRange, ...]:
+    sets, dt, i_lo, i_hi, inits, v_th = key
+    slowest = min((abs(s.a) for s in sets if s.a != 0), default=0.1)
+    duration = float(np.clip(10.0 / slowest, 400.0, 3000.0))
+    n_steps = int(round(duration / dt))
+    names, stim = stimulus_battery(i_lo, i_hi, dt, n_steps)
+    n_stim = stim.shape[1]
+    cols_set, cols_v0, cols_u0 = [], [], []
+    for si, (s, st) in enumerate(zip(sets, inits)):
+        for v0, u0 in st:
+            cols_set += [si] * n_stim
+            cols_v0 += [v0] * n_stim
+            cols_u0 += [u0] * n_stim
+    cols_set = np.asarray(cols_set)
+    n_rep = len(cols_set) // n_stim
+    prm = golden.NeuronParams.from_sets([sets[i] for i in cols_set])
+    extras = prm.extras()
+    v = np.asarray(cols_v0, dtype=np.float64)
+    u = np.asarray(cols_u0, dtype=np.float64)
+    v_min, u_min, u_max, v_pre_max = v.copy(), u.copy(), u.copy(), v.copy()
+    with np.errstate(over="ignore", invalid="ignore"):
+        for k in range(n_steps):
+            I = np.tile(stim[k], n_rep)
+            v, u, _, v_pre = golden.step(v, u, I, prm.a, prm.b, prm.c, prm.d, dt, "euler",
+                                         **extras)
+            bad = ~(np.isfinite(v_pre) & np.isfinite(u) & (np.abs(v_pre) <= SEARCH_STATE_BOUND)
+                    & (np.abs(u) <= SEARCH_STATE_BOUND))
+            if bad.any():
+                j = int(np.flatnonzero(bad)[0])
+                s = sets[cols_set[j]]
+                raise RangeSearchError(
+                    f"parameter set {s.label()} diverges for currents in the accepted range "
+                    f"[{i_lo:g}, {i_hi:g}] mV/ms: under '{names[j % n_stim]}' the state leaves "
+                    f"|v|, |u| <= {SEARCH_STATE_BOUND:g} at t = {(k + 1) * dt:g} ms (dt = "
+                    f"{dt:g} ms); narrow the accepted current range (current_range) or use a "
+                    f"smaller dt")
+            np.minimum(v_min, v, out=v_min)
+            np.minimum(u_min, u, out=u_min)
+            np.maximum(u_max, u, out=u_max)
+            np.maximum(v_pre_max, v_pre, out=v_pre_max)
+    out = []
+    for si, (s, st) in enumerate(zip(sets, inits)):
+        sel = cols_set == si
+        umn, umx = float(u_min[sel].min()), float(u_max[sel].max())
+        worst = names[int(np.flatnonzero(sel)[np.argmax(u_max[sel])]) % n_stim]
+        margin = 0.02 * (umx - umn) + max(abs(x.d) for x in sets)
+        u_lo, u_hi = umn - margin, umx + margin
+        vmn = float(v_min[sel].min())
+        proven = _v_floor_bound(s, u_hi, i_lo, dt, v_th)
+        lowest = min([vmn, s.c] + [v0 for v0, _ in st])
+        base = lowest if proven is None else min(proven, lowest)
+        v_floor = base - (1.0 + 0.01 * abs(base))
+        out.append(SetRange(s.label(), i_lo, i_hi, duration, n_stim, umn, umx, worst, vmn,
+                            float(v_pre_max[sel].max()), u_lo, u_hi,
+                            base if proven is None else proven, v_floor))
+    return tuple(out)
