@@ -1,0 +1,101 @@
+"""The host transport interface: how the host driver talks to a core.
+
+Every engine (the bit-exact twin, the Amaranth simulator, cocotb on Icarus and Verilator) and
+the board's UART link implement :class:`Transport`. The driver writes raw currents with the
+sweep (tick) from which they take effect, lets the core run, and collects spikes; counters
+report every frame, write and spike so that loss is never silent.
+
+Conventions
+-----------
+* Ticks count sweeps of the core from 0. A spike produced by the update of sweep ``k`` carries
+  ``tick == k``; in milliseconds it is at ``(k + 1) * dt`` (the golden convention).
+* A current written for tick ``k`` is used by every update of sweep ``k`` and later, until
+  overwritten. Ticks never go backwards: a write for a tick already run is an error, never
+  applied late.
+* Neuron indices are core-global (population offsets are the driver's business).
+"""
+
+from __future__ import annotations
+
+import abc
+from dataclasses import dataclass, field
+
+import numpy as np
+
+__all__ = ["SpikeBatch", "Transport", "TransportError"]
+
+
+class TransportError(RuntimeError):
+    """Something was lost or refused on the way to or from a core (one line naming what and
+    where: a sequence gap, a dropped frame, a FIFO overflow, a late write)."""
+
+
+@dataclass
+class SpikeBatch:
+    """Spikes as two parallel int64 arrays, sorted by ``(tick, neuron)``."""
+
+    tick: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    neuron: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+
+    def __post_init__(self):
+        self.tick = np.asarray(self.tick, dtype=np.int64).ravel()
+        self.neuron = np.asarray(self.neuron, dtype=np.int64).ravel()
+        if self.tick.shape != self.neuron.shape:
+            raise ValueError(f"SpikeBatch: {self.tick.size} ticks but {self.neuron.size} neurons")
+        order = np.lexsort((self.neuron, self.tick))
+        self.tick, self.neuron = self.tick[order], self.neuron[order]
+
+    def __len__(self) -> int:
+        return int(self.tick.size)
+
+    @classmethod
+    def concat(cls, batches) -> "SpikeBatch":
+        batches = list(batches)
+        if not batches:
+            return cls()
+        return cls(np.concatenate([b.tick for b in batches]),
+                   np.concatenate([b.neuron for b in batches]))
+
+    def times_ms(self, dt_ms: float, n_neurons: int, first: int = 0) -> list[np.ndarray]:
+        """Spike times per neuron (``first`` .. ``first + n_neurons - 1``) in ms, ``(k+1) dt``."""
+        out = []
+        for i in range(first, first + n_neurons):
+            out.append((self.tick[self.neuron == i] + 1) * dt_ms)
+        return out
+
+
+class Transport(abc.ABC):
+    """One way of reaching a core: an engine or a board link."""
+
+    name: str = "transport"
+
+    @abc.abstractmethod
+    def open(self, config) -> None:
+        """Prepare a core with ``config`` (a core configuration, e.g. ``IzhikevichConfig``)."""
+
+    @abc.abstractmethod
+    def write_currents(self, tick: int, first: int, raw: np.ndarray) -> None:
+        """Raw currents (integers in the core's current format) for neurons ``first`` ..
+        ``first + len(raw) - 1``, in effect from sweep ``tick`` on."""
+
+    @abc.abstractmethod
+    def run(self, n_ticks: int) -> None:
+        """Let the core advance ``n_ticks`` sweeps."""
+
+    @abc.abstractmethod
+    def collect(self) -> SpikeBatch:
+        """Every spike of the sweeps run so far and not yet collected."""
+
+    @abc.abstractmethod
+    def counters(self) -> dict[str, int]:
+        """Frames or writes sent, spikes received, gaps, drops, overflows, clamp counts."""
+
+    def close(self) -> None:
+        """Release the core (simulator process, serial port)."""
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+        return False
