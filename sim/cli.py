@@ -97,7 +97,8 @@ def main(argv=None) -> int:
         args = build_parser().parse_args(argv)
         return args.func(args)
     except CliError as exc:
-        print(str(exc), file=sys.stderr)
+        msg = str(exc)
+        print(msg if msg.startswith("cuneate") else f"cuneate: {msg}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         return 130

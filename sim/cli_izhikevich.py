@@ -14,13 +14,14 @@ import json
 import os
 import sys
 
+from .engines import HARDWARE_ENGINES
 from .cliutil import (CliError, CommandGroups, finite_float, output_dir, positive_float,
                       positive_int)
 
 __all__ = ["register", "ENGINES", "add_core_options", "core_from_args", "parse_param_set",
            "estimate_run"]
 
-ENGINES = ("golden", "fixed", "amaranth", "icarus", "verilator")
+ENGINES = ("golden",) + HARDWARE_ENGINES
 
 #: Conservative speeds on a small machine (updates or cycles per second) and memory per neuron
 #: (bytes), used to estimate a run before starting it.
@@ -116,6 +117,9 @@ def _neuron_sets(spec: str, n: int, n_sets: int) -> list[int]:
 
 def core_kwargs(args, param_sets, n_core: int) -> dict:
     """Constructor keywords of the core described by the shared options."""
+    if n_core * args.update_hz > args.clock_hz:     # refuse before building per-neuron lists
+        core_from_args({"n_neurons": n_core, "clock_hz": args.clock_hz,
+                        "update_hz": args.update_hz, "param_sets": tuple(param_sets)})
     kw = {"n_neurons": n_core, "clock_hz": args.clock_hz, "update_hz": args.update_hz,
           "param_sets": tuple(param_sets),
           "neuron_sets": _neuron_sets(args.neuron_sets, n_core, len(param_sets)),
@@ -179,9 +183,9 @@ def estimate_run(engine: str, n: int, n_sweeps: int, rate_hz: float = 50.0) -> d
     from .engines import MIN_NEURONS
     n_core = max(n, MIN_NEURONS)
     work = n_core * n_sweeps                        # updates (= cycles on HDL simulators)
-    seconds = work / _SPEED[engine]
+    seconds = work / _SPEED.get(engine, _SPEED["verilator"])
     spikes = n * n_sweeps * rate_hz / 16e3
-    mem = n_core * _BYTES_PER_NEURON[engine] + spikes * _BYTES_PER_SPIKE_OUT + (64 << 20)
+    mem = n_core * _BYTES_PER_NEURON.get(engine, 200) + spikes * _BYTES_PER_SPIKE_OUT + (64 << 20)
     return {"updates": work, "seconds": seconds, "bytes": mem}
 
 
@@ -214,9 +218,9 @@ def cmd_simulate(args) -> int:
 
     n = args.neurons
     sets = _param_sets(args)
-    currents = _currents(args, n)
     n_core = max(n, MIN_NEURONS)
     kw = core_kwargs(args, sets, n_core)
+    currents = _currents(args, n)
     if args.neuron_sets != "cycle":           # one index per neuron given: pad idle ones
         kw["neuron_sets"] = _neuron_sets(args.neuron_sets, n, len(sets)) + [0] * (n_core - n)
     cfg = core_from_args(kw)                  # the same refusals as `generate`
@@ -229,9 +233,10 @@ def cmd_simulate(args) -> int:
             raise CliError(f"engine {args.engine!r} takes its dt from --update-hz "
                            f"(dt = 1000/update_hz ms), not --dt-ms")
         for x in currents:
-            if not cfg.I.contains(x):
-                raise CliError(f"cuneate simulate: current {x:g} is outside the core's input "
-                               f"format {cfg.I} [{cfg.I.min_value:g}, {cfg.I.max_value:g}]")
+            if not cfg.i_lo <= x <= cfg.i_hi:
+                raise CliError(f"cuneate simulate: current {x:g} is outside the core's "
+                               f"accepted range [{cfg.i_lo:g}, {cfg.i_hi:g}] mV/ms (format "
+                               f"{cfg.I}; see --current-range)")
     dt_ms = args.dt_ms if (golden_run and args.dt_ms is not None) else cfg.dt_ms
     n_sweeps = int(round(args.duration_ms / dt_ms))
     if n_sweeps < 1:
@@ -245,7 +250,7 @@ def cmd_simulate(args) -> int:
                        f"{avail / 2**30:.1f} GiB available; reduce --neurons or --duration-ms")
     if est["seconds"] > args.max_minutes * 60 and not args.force:
         raise CliError(f"cuneate simulate: about {_fmt_time(est['seconds'])} on {args.engine} "
-                       f"({est['updates']:.3g} updates at ~{_SPEED[args.engine]:.2g}/s), more "
+                       f"({est['updates']:.3g} updates at ~{_SPEED.get(args.engine, _SPEED['verilator']):.2g}/s), more "
                        f"than --max-minutes {args.max_minutes:g}; shorten the run, pick a "
                        f"faster engine, or pass --force to run it with a progress bar")
     bar, progress = _progress_bar(n_sweeps, f"{args.engine} sweeps",
