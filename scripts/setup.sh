@@ -43,7 +43,12 @@ if [ ! -x "$VENV/bin/python" ]; then
     echo "setup: creating $VENV with $PYTHON"
     "$PYTHON" -m venv "$VENV" || { echo "setup: venv failed; apt-get install -y python3-venv" >&2; exit 1; }
 fi
-"$VENV/bin/python" -m pip install -q --upgrade "pip>=23" "setuptools>=69" wheel
+# pip install, minus the notes pip prints for configured package locations that do not exist
+# on this machine (index or find-links entries of the machine's pip configuration)
+pip_quiet() {
+    "$VENV/bin/python" -m pip "$@" 2> >(grep -v "^WARNING: Location '.*' is ignored: it is neither a file nor a directory\.$" >&2)
+}
+pip_quiet install -q --upgrade "pip>=23" "setuptools>=69" wheel
 # the build backend warns about editable installs of mapped package folders; not actionable
-PYTHONWARNINGS=ignore "$VENV/bin/python" -m pip install -q -e ".[${EXTRAS}]"
+PYTHONWARNINGS=ignore pip_quiet install -q -e ".[${EXTRAS}]"
 "$VENV/bin/cuneate" doctor
