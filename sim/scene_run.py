@@ -1,0 +1,330 @@
+"""Run a scene: synthesize (or load) the traces, drive the core, decode, compare engines.
+
+Only what the scene calls for is computed:
+
+* effects: :func:`cuneate.golden.tactile.apply_effects` calls only the listed effects;
+* blocks: :data:`BLOCKS` maps a population model to the function that builds its hardware
+  configuration; only the models the scene's populations use are built, each sized to its
+  neurons (all trials of a scene are separate neurons of one core, so one build and one run
+  serve every trial);
+* engines: :data:`ENGINES` maps an engine name to its runner; only the scene's engines run.
+
+:func:`run_scene` returns a :class:`SceneRun` whose ``ran`` lists exactly the effects, blocks
+and engines computed, with wall time per stage and per engine.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..golden import izhikevich as golden
+from ..golden import metrics
+from ..golden.fbg import IIRFilter, design_bandpass
+from ..golden.tactile import (MATERIALS, GraspSpec, Material, Pad, SlideSpec, apply_effects,
+                              synthesize_grasp, synthesize_slide)
+from ..hdl.fixed import QFormat
+from .decode import decode, isi_samples, trial_features
+from .driver import AfferentEncoding, FbgDriver
+from .scenes import Scene
+
+__all__ = ["SceneRun", "run_scene", "BLOCKS", "ENGINES", "synthesize", "build_neurons"]
+
+
+@dataclass
+class Neurons:
+    """The scene's driven neurons, in core order (trial-major, then population, then grating)."""
+
+    trial: list = field(default_factory=list)
+    population: list = field(default_factory=list)
+    grating: list = field(default_factory=list)
+    preset: list = field(default_factory=list)
+    encoding: list = field(default_factory=list)
+
+    def __len__(self):
+        return len(self.trial)
+
+
+@dataclass
+class SceneRun:
+    scene: Scene
+    classes: list
+    trial_class: list
+    traces: list                # per trial: (n_samples, channels) nm
+    trial_info: list
+    neurons: Neurons
+    currents: np.ndarray        # (n_samples, n_neurons) float mV/ms
+    saturations: dict
+    config: object
+    dt_ms: float
+    n_ticks: int
+    spikes: dict                # engine -> list of arrays (ms) per neuron
+    counters: dict              # engine -> transport counters
+    decoded: dict               # engine -> Decoded
+    agreement: dict
+    ran: dict
+    timing: dict
+
+
+# --------------------------------------------------------------------------- stimulus
+def _material(m) -> Material:
+    if isinstance(m, str):
+        return MATERIALS[m]
+    return Material(m["name"], m["young_MPa"] * 1e6, m["poisson"], m["diameter_mm"] * 1e-3,
+                    m["height_mm"] * 1e-3)
+
+
+def synthesize(scene: Scene):
+    """Traces for every trial: ``(classes, trial_class, traces, info, effect_counts)``."""
+    st, sen, sc = scene["stimulus"], scene["sensor"], scene["scene"]
+    rng = np.random.default_rng(sc["seed"])
+    fs = sen["sample_rate_hz"]
+    classes = scene.classes()
+    trial_class, traces, infos = [], [], []
+    effect_params = {e: sen[e] for e in sen["effects"] if e != "strain"}
+    counts_all: dict = {}
+    if st["kind"] == "recorded":
+        from .traces import load_trace
+        tr = load_trace(st["file"], time_key=st["time_key"], data_key=st["data_key"],
+                        struct=st["struct"] or None, time_unit=st["time_unit"],
+                        shift_unit=st["shift_unit"], expect_fs_hz=fs,
+                        channels=sen["channels"])
+        return classes, [classes[0]], [tr.d_lambda_nm], [tr.info], {}
+    for c, cls in enumerate(classes):
+        for t in range(sc["trials"]):
+            if st["kind"] == "grasp":
+                spec = GraspSpec(
+                    velocity_m_per_s=st["velocity_mm_per_s"] * 1e-3,
+                    pad=Pad(st["pad_young_MPa"] * 1e6, st["pad_area_mm2"] * 1e-6,
+                            st["pad_thickness_mm"] * 1e-3, st["contact_length_mm"] * 1e-3),
+                    coupling_microstrain_per_N=tuple(st["coupling_microstrain_per_N"]),
+                    stop_nm=st["stop_nm"], contact_ms=st["contact_ms"],
+                    duration_ms=sc["duration_ms"], fs_hz=fs,
+                    spread_velocity=st["spread_velocity"], spread_pad=st["spread_pad"],
+                    spread_young=st["spread_young"], spread_coupling=st["spread_coupling"])
+                strain, info = synthesize_grasp(_material(st["materials"][c]), spec, rng,
+                                                sen["lambda_B_nm"])
+            else:
+                spec = SlideSpec(speed_m_per_s=st["speed_mm_per_s"] * 1e-3,
+                                 depth_microstrain=st["depth_microstrain"],
+                                 normal_force_N=st["normal_force_N"], ramp_ms=st["ramp_ms"],
+                                 coupling_microstrain_per_N=st["slide_coupling_microstrain_per_N"],
+                                 spacing_m=st["spacing_mm"] * 1e-3, n_gratings=sen["channels"],
+                                 duration_ms=sc["duration_ms"], fs_hz=fs,
+                                 spread_speed=st["spread_speed"],
+                                 spread_force=st["spread_force"])
+                strain, info = synthesize_slide(spec, rng, st["periods_mm"][c] * 1e-3)
+            tr = apply_effects(strain, sen["effects"], effect_params, rng, fs,
+                               sen["lambda_B_nm"])
+            for e, cnt in tr.effect_counts.items():
+                agg = counts_all.setdefault(e, {})
+                for k, v in cnt.items():
+                    if isinstance(v, (int, np.integer)) and not isinstance(v, bool):
+                        agg[k] = agg.get(k, 0) + int(v)
+                    elif isinstance(v, float):
+                        agg[k] = max(agg.get(k, v), v)
+            trial_class.append(cls)
+            traces.append(tr.d_lambda_nm)
+            infos.append(info)
+    return classes, trial_class, traces, infos, counts_all
+
+
+# --------------------------------------------------------------------------- neurons, blocks
+def _filter(fe, fs) -> IIRFilter:
+    if fe["filter_b"] is not None:
+        f = IIRFilter(b=fe["filter_b"], a=fe["filter_a"])
+        f.require_stable()
+        return f
+    return design_bandpass(fe["filter_low_hz"], fe["filter_high_hz"], fs, fe["filter_order"],
+                           fe["filter_kind"])
+
+
+def build_neurons(scene: Scene, n_trials: int) -> Neurons:
+    fe, fs = scene["frontend"], scene["sensor"]["sample_rate_hz"]
+    filt = None
+    nn = Neurons()
+    encs = {}
+    for p in scene.populations:
+        if p["encoding"] == "FA":
+            filt = filt or _filter(fe, fs)
+            encs[p["name"]] = AfferentEncoding(
+                "FA", p["gain"] if p["gain"] is not None else fe["gain_S"],
+                fe["delta_lambda_unit_pm"], filt, fe["fa_rectify"], 0.0, fs)
+        elif p["encoding"] == "SA":
+            encs[p["name"]] = AfferentEncoding(
+                "SA", p["gain"] if p["gain"] is not None else fe["sa_gain"], fe["sa_unit_pm"],
+                None, "none", fe["sa_threshold_pm"], fs)
+    for t in range(n_trials):
+        for p in scene.populations:
+            for g in p["gratings"]:
+                nn.trial.append(t)
+                nn.population.append(p["name"])
+                nn.grating.append(g)
+                nn.preset.append(p["preset"])
+                nn.encoding.append(encs[p["name"]])
+    return nn
+
+
+def build_izhikevich(scene: Scene, neurons: Neurons):
+    """The Izhikevich core for the scene's Izhikevich neurons (one parameter set per preset),
+    sized to them; refused if they do not fit the hardware clock's capacity."""
+    from .engines import engine_core
+    hw = scene["hardware"]
+    n = len(neurons)
+    capacity = int(hw["clock_hz"] // hw["update_hz"])
+    if n > capacity:
+        raise ValueError(f"the scene needs {n} Izhikevich neurons but a core at "
+                         f"{hw['clock_hz']:g} Hz / {hw['update_hz']:g} Hz holds {capacity}")
+    presets = sorted(set(neurons.preset))
+    core = {"param_sets": tuple(presets), "neuron_sets": [presets.index(p) for p in neurons.preset],
+            "update_hz": hw["update_hz"],
+            "current_format": QFormat(hw["current_int_bits"], hw["current_frac_bits"]),
+            "rounding": hw["rounding"]}
+    cfg = engine_core(core, n)
+    return cfg, {"block": "izhikevich_core", "neurons": n, "core_neurons": cfg.n_neurons,
+                 "capacity_at_clock": capacity, "param_sets": presets,
+                 "current_format": str(cfg.I), "dt_ms": cfg.dt_ms}
+
+
+#: Population model -> builder of its hardware configuration. Only the models a scene uses
+#: are looked up and called.
+BLOCKS = {"izhikevich": build_izhikevich}
+
+
+# --------------------------------------------------------------------------- engines
+def run_golden(ctx) -> tuple[list, dict]:
+    """Float64 golden model (forward Euler, same dt) on the unquantized currents, held per
+    tick exactly as the driver holds them."""
+    cfg, drv = ctx["config"], ctx["driver"]
+    n = len(ctx["neurons"])
+    params = [golden.to_params(p) for p in ctx["neurons"].preset]
+    cur = drv.held(ctx["currents"], ctx["n_ticks"])
+    r = golden.simulate(params, cur, n_steps=ctx["n_ticks"], n_neurons=n, dt_ms=cfg.dt_ms,
+                        scheme="euler", progress=ctx.get("progress"))
+    return [np.asarray(s) for s in r.spikes_ms], {"spikes": int(sum(len(s) for s in
+                                                                    r.spikes_ms))}
+
+
+def _run_transport(engine):
+    def run(ctx):
+        from .transports import make_transport
+        kw = {}
+        if engine != "fixed":
+            bd = ctx.get("build_dir")
+            kw = {"build_dir": (Path(bd) / engine) if bd else None}
+        tr = make_transport(engine, **kw)
+        tr.open(ctx["config"])
+        res = ctx["driver"].stream(tr, None, ctx["n_ticks"], raw=ctx["raw"])
+        tr.close()
+        n = len(ctx["neurons"])
+        return res.spikes.times_ms(ctx["config"].dt_ms, n), res.counters
+    return run
+
+
+#: Engine name -> runner. Only the scene's engines are looked up and called.
+ENGINES = {"golden": run_golden, "fixed": _run_transport("fixed"),
+           "amaranth": _run_transport("amaranth"), "icarus": _run_transport("icarus"),
+           "verilator": _run_transport("verilator")}
+
+
+def _agreement(a: list, b: list, dt_ms: float) -> dict:
+    cnt_a = np.array([len(s) for s in a])
+    cnt_b = np.array([len(s) for s in b])
+    vp = [metrics.victor_purpura(x, y, 1.0) for x, y in zip(a, b)]
+    within = [metrics.fraction_within(x, y, dt_ms) for x, y in zip(a, b)]
+    within = [w for w in within if w is not None]
+    return {"neurons": len(a), "spikes_a": int(cnt_a.sum()), "spikes_b": int(cnt_b.sum()),
+            "identical_trains": int(sum(np.array_equal(x, y) for x, y in zip(a, b))),
+            "mean_abs_count_diff": float(np.mean(np.abs(cnt_a - cnt_b))) if a else 0.0,
+            "max_abs_count_diff": int(np.max(np.abs(cnt_a - cnt_b))) if a else 0,
+            "mean_victor_purpura_q1": float(np.mean(vp)) if vp else 0.0,
+            "fraction_within_1_tick": float(np.mean(within)) if within else None}
+
+
+def run_scene(scene: Scene, engines: list[str] | None = None, build_dir: Path | None = None,
+              progress: bool = False, log=None) -> SceneRun:
+    """Run ``scene`` (its engines, or ``engines``)."""
+    timing: dict = {}
+    say = log or (lambda msg: None)
+    t0 = time.perf_counter()
+    classes, trial_class, traces, infos, effect_counts = synthesize(scene)
+    timing["stimulus_s"] = time.perf_counter() - t0
+    say(f"stimulus: {len(traces)} trial(s) of {traces[0].shape[0]} samples x "
+        f"{traces[0].shape[1]} grating(s) ({timing['stimulus_s']:.2f} s)")
+    t0 = time.perf_counter()
+    neurons = build_neurons(scene, len(traces))
+    models = sorted({p["model"] for p in scene.populations})
+    blocks, cfg = [], None
+    for m in models:
+        cfg_m, desc = BLOCKS[m](scene, neurons)
+        blocks.append(desc)
+        cfg = cfg_m
+    sen = scene["sensor"]
+    on_gap = "hold" if "dropped_samples" in sen["effects"] else "error"
+    drv = FbgDriver(cfg, neurons.encoding, sen["sample_rate_hz"],
+                    scene["frontend"]["latency_ticks"], on_gap=on_gap)
+    dl = np.stack([traces[t][:, g] for t, g in zip(neurons.trial, neurons.grating)], axis=1)
+    x, gaps = drv.fill_gaps(dl)
+    currents = drv.currents(x)
+    if scene["frontend"]["window"] == "loading":
+        # the front end sees the loading phase only (contact to stop), per trial
+        t_ms = np.arange(dl.shape[0]) * 1000.0 / sen["sample_rate_hz"]
+        for i, t in enumerate(neurons.trial):
+            inf = infos[t]
+            outside = (t_ms < scene["stimulus"]["contact_ms"]) | (t_ms > inf["stop_ms"])
+            currents[outside, i] = 0.0
+    raw, sat = drv.quantize(currents)
+    sat["gaps_held"] = gaps
+    n_ticks = dl.shape[0] * drv.hold_ticks
+    timing["front_end_s"] = time.perf_counter() - t0
+    ctx = {"config": cfg, "driver": drv, "neurons": neurons, "currents": currents, "raw": raw,
+           "n_ticks": n_ticks, "build_dir": build_dir}
+    spikes, counters, eng_t = {}, {}, {}
+    for e in (engines or scene.engines):
+        if e not in ENGINES:
+            raise ValueError(f"unknown engine {e!r}; known: {', '.join(ENGINES)}")
+        t0 = time.perf_counter()
+        bar = None
+        if progress and e in ("golden", "fixed"):
+            from tqdm import tqdm
+            bar = tqdm(total=n_ticks, desc=e, unit="tick", leave=False)
+        ctx["progress"] = (lambda k, b=bar: b.update(k - b.n)) if bar else None
+        try:
+            spikes[e], counters[e] = ENGINES[e](ctx)
+        finally:
+            if bar:
+                bar.close()
+        eng_t[e] = time.perf_counter() - t0
+        say(f"engine {e}: {sum(len(s) for s in spikes[e])} spikes ({eng_t[e]:.1f} s)")
+    timing["engines_s"] = eng_t
+    t0 = time.perf_counter()
+    dec = scene["decoder"]
+    decoded = {}
+    if dec["kind"] != "none":
+        window = dec["window_ms"]
+        for e, sp in spikes.items():
+            fn = isi_samples if dec["features"] == "isi" else trial_features
+            X, y = fn(sp, neurons.trial, neurons.grating, trial_class, window)
+            decoded[e] = decode(X, y, classes, dec["kind"], dec["cv_folds"], dec["max_depth"],
+                                dec["neighbours"], scene["scene"]["seed"], dec["features"])
+    timing["decode_s"] = time.perf_counter() - t0
+    agreement = {}
+    names = list(spikes)
+    ref = "fixed" if "fixed" in spikes else None
+    for e in names:
+        if e == ref:
+            continue
+        other = ref or names[0]
+        if e == other:
+            continue
+        agreement[f"{e} vs {other}"] = _agreement(spikes[e], spikes[other], cfg.dt_ms)
+    ran = {"effects": list(effect_counts) if effect_counts else
+           ([] if scene["stimulus"]["kind"] == "recorded" else ["strain"]),
+           "effect_counts": effect_counts, "blocks": blocks, "engines": list(spikes),
+           "front_end": sorted({f"{e.mode}" for e in neurons.encoding}),
+           "stimulus": scene["stimulus"]["kind"]}
+    return SceneRun(scene, classes, trial_class, traces, infos, neurons, currents, sat, cfg,
+                    cfg.dt_ms, n_ticks, spikes, counters, decoded, agreement, ran, timing)

@@ -1,0 +1,120 @@
+"""``cuneate run``: a scene end to end, only what it calls for, and its report."""
+
+import json
+import re
+
+import numpy as np
+import pytest
+
+from cuneate.golden import tactile
+from cuneate.sim import cli, scene_run
+from cuneate.sim.scenes import DEFAULT_SCENE_TOML, parse_scene
+from cuneate.sim.toolchain import SIMULATORS
+
+SMALL = DEFAULT_SCENE_TOML.replace("trials = 10", "trials = 4").replace(
+    "cv_folds = 50", "cv_folds = 10")
+
+
+def _scene(text=SMALL, engines=("golden", "fixed")):
+    text = re.sub(r"engines = \[.*\]", "engines = [" + ", ".join(f'"{e}"' for e in engines)
+                  + "]", text)
+    return parse_scene(text, "small.toml")
+
+
+@pytest.fixture(scope="module")
+def small_run():
+    return scene_run.run_scene(_scene())
+
+
+def test_golden_and_fixed_decode_alike(small_run):
+    r = small_run
+    assert len(r.neurons) == 4 * 4 * 2
+    g, f = r.decoded["golden"], r.decoded["fixed"]
+    assert g.accuracy is not None and f.accuracy is not None
+    assert g.accuracy > 0.5 and f.accuracy > 0.5            # chance is 0.25
+    assert abs(g.accuracy - f.accuracy) <= r.scene["decoder"]["tolerance"]
+    a = r.agreement["golden vs fixed"]
+    assert a["spikes_a"] > 0 and a["mean_abs_count_diff"] <= 1.0
+    assert r.saturations["format_high"] == 0 and r.saturations["format_low"] == 0
+
+
+def test_report_lists_exactly_what_ran(small_run):
+    ran = small_run.ran
+    assert ran["effects"] == ["strain"]
+    assert ran["engines"] == ["golden", "fixed"]
+    assert [b["block"] for b in ran["blocks"]] == ["izhikevich_core"]
+    # the core is sized to the scene's neurons, not to the 2500 of the default hardware
+    assert ran["blocks"][0]["neurons"] == 32 and ran["blocks"][0]["core_neurons"] == 32
+    assert small_run.config.n_neurons == 32
+
+
+def test_unrequested_engines_effects_and_blocks_are_not_instantiated(monkeypatch):
+    called = []
+
+    def spy(name):
+        def f(*a, **k):
+            called.append(name)
+            raise AssertionError(f"{name} must not run")
+        return f
+    for e in ("verilator", "icarus", "amaranth", "golden"):
+        monkeypatch.setitem(scene_run.ENGINES, e, spy(e))
+    for e in tactile.EFFECTS:
+        monkeypatch.setitem(tactile.EFFECTS, e, spy(e))
+    monkeypatch.setitem(scene_run.BLOCKS, "cuneate", spy("cuneate block"))
+    monkeypatch.setitem(scene_run.BLOCKS, "lif", spy("lif block"))
+    r = scene_run.run_scene(_scene(engines=("fixed",)))
+    assert called == [] and list(r.spikes) == ["fixed"]
+    # and an effect that is listed is computed (the spy is reached)
+    text = SMALL.replace('effects = ["strain"]', 'effects = ["strain", "noise"]')
+    with pytest.raises(AssertionError, match="noise must not run"):
+        scene_run.run_scene(_scene(text, engines=("fixed",)))
+
+
+def test_dropped_samples_are_held_and_counted():
+    text = SMALL.replace('effects = ["strain"]',
+                         'effects = ["strain", "dropped_samples"]\n'
+                         'dropped_samples = {probability = 0.01}')
+    r = scene_run.run_scene(_scene(text, engines=("fixed",)))
+    n = r.ran["effect_counts"]["dropped_samples"]["samples_dropped"]
+    assert n > 0 and r.saturations["gaps_held"] == n * 2      # both gratings of each sample
+
+
+def test_cli_run_writes_report_with_every_figure(tmp_path, capsys):
+    p = tmp_path / "s.toml"
+    p.write_text(SMALL.replace('engines = ["golden", "fixed", "verilator"]',
+                               'engines = ["golden", "fixed"]'))
+    out = tmp_path / "rep"
+    assert cli.main(["run", str(p), "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert re.search(r"golden\s+accuracy\s+\d+\.\d %", text)
+    assert re.search(r"fixed\s+accuracy\s+\d+\.\d %", text)
+    page = (out / "index.html").read_text()
+    links = re.findall(r'src="([^"]+)"', page)
+    assert {"traces.png", "currents.png", "raster_golden.png", "raster_fixed.png",
+            "isi_golden.png", "confusion_fixed.png"} <= set(links)
+    for link in links:
+        f = out / link
+        assert f.is_file() and f.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    summ = json.loads((out / "run.json").read_text())
+    assert summ["ran"]["engines"] == ["golden", "fixed"]
+    assert set(summ["accuracy"]) == {"golden", "fixed"}
+
+
+def test_example_slide_scene_runs(tmp_path, capsys):
+    assert cli.main(["run", "examples/slide_texture.toml", "--out", str(tmp_path)]) == 0
+    summ = json.loads((tmp_path / "run.json").read_text())
+    assert summ["ran"]["front_end"] == ["FA", "SA"]
+    assert summ["ran"]["effects"] == ["strain", "noise", "resolution"]
+    assert summ["accuracy"]["fixed"] > 1 / 3 + 0.2
+
+
+@pytest.mark.cocotb
+@pytest.mark.parametrize("simulator", SIMULATORS)
+def test_scene_on_hdl_simulator_equals_twin(simulator, tmp_path):
+    text = SMALL.replace("trials = 4", "trials = 1").replace("duration_ms = 700",
+                                                             "duration_ms = 250")
+    r = scene_run.run_scene(_scene(text, engines=("fixed", simulator)), build_dir=tmp_path)
+    a = r.agreement[f"{simulator} vs fixed"]
+    assert a["spikes_a"] > 0 and a["identical_trains"] == a["neurons"] == 8
+    for x, y in zip(r.spikes[simulator], r.spikes["fixed"]):
+        assert np.array_equal(x, y)
