@@ -175,7 +175,10 @@ def write_report(run, out: Path) -> Path:
     ran = run.ran
     t = run.timing
     stage_rows = [["stimulus", _f(t["stimulus_s"], 2)], ["front end", _f(t["front_end_s"], 2)]]
-    stage_rows += [[f"engine {e}", _f(v, 2)] for e, v in t["engines_s"].items()]
+    for e, v in t["engines_s"].items():
+        sim_ms = run.counters.get(e, {}).get("simulate_ms")
+        note = f" (simulation {sim_ms / 1000:.2f} s, rest generate + build)" if sim_ms else ""
+        stage_rows.append([f"engine {e}{note}", _f(v, 2)])
     stage_rows += [["decode", _f(t["decode_s"], 2)]]
     figs = "".join(f'<figure><img src="{n}" alt="{n}"><figcaption>{n}</figcaption></figure>'
                    for n in figure_names(run))

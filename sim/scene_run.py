@@ -211,16 +211,19 @@ def run_golden(ctx) -> tuple[list, dict]:
 def _run_transport(engine):
     def run(ctx):
         from .transports import make_transport
-        kw = {}
+        kw = {"progress": ctx.get("progress")}
         if engine != "fixed":
             bd = ctx.get("build_dir")
-            kw = {"build_dir": (Path(bd) / engine) if bd else None}
+            kw["build_dir"] = (Path(bd) / engine) if bd else None
         tr = make_transport(engine, **kw)
         tr.open(ctx["config"])
         res = ctx["driver"].stream(tr, None, ctx["n_ticks"], raw=ctx["raw"])
         tr.close()
         n = len(ctx["neurons"])
-        return res.spikes.times_ms(ctx["config"].dt_ms, n), res.counters
+        cnt = dict(res.counters)
+        if hasattr(tr, "sim_s"):    # batch engines: the simulation without generation/build
+            cnt["simulate_ms"] = int(round(tr.sim_s * 1000))
+        return res.spikes.times_ms(ctx["config"].dt_ms, n), cnt
     return run
 
 
@@ -288,7 +291,7 @@ def run_scene(scene: Scene, engines: list[str] | None = None, build_dir: Path | 
             raise ValueError(f"unknown engine {e!r}; known: {', '.join(ENGINES)}")
         t0 = time.perf_counter()
         bar = None
-        if progress and e in ("golden", "fixed"):
+        if progress:
             from tqdm import tqdm
             bar = tqdm(total=n_ticks, desc=e, unit="tick", leave=False)
         ctx["progress"] = (lambda k, b=bar: b.update(k - b.n)) if bar else None

@@ -54,17 +54,17 @@ def check_trace(path, t, x, time_unit="s", shift_unit="nm", expect_fs_hz=None,
     bad = ~np.isfinite(t)
     if bad.any():
         raise TraceError(f"{path}: row {int(np.flatnonzero(bad)[0])}: time stamp is "
-                         f"{t[bad][0]!r}")
+                         f"{float(t[bad][0])!r}")
     bad = ~np.isfinite(x)
     if bad.any():
         r, c = (int(v) for v in np.argwhere(bad)[0])
-        raise TraceError(f"{path}: row {r}, grating {c}: sample is {x[r, c]!r} "
+        raise TraceError(f"{path}: row {r}, grating {c}: sample is {float(x[r, c])!r} "
                          f"({int(bad.sum())} non-finite sample(s) in all)")
     dt = np.diff(t)
     if np.any(dt <= 0):
         r = int(np.flatnonzero(dt <= 0)[0]) + 1
-        raise TraceError(f"{path}: row {r}: time stamp {t[r]!r} does not increase (previous "
-                         f"{t[r - 1]!r})")
+        raise TraceError(f"{path}: row {r}: time stamp {float(t[r])!r} does not increase "
+                         f"(previous {float(t[r - 1])!r})")
     step = float(np.median(dt))
     if np.any(dt > 1.5 * step):
         r = int(np.flatnonzero(dt > 1.5 * step)[0]) + 1

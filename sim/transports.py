@@ -79,6 +79,10 @@ class TwinTransport(_Buffered):
 
     name = "fixed"
 
+    def __init__(self, buffer_writes: int = BUFFER_WRITES, progress=None):
+        super().__init__(buffer_writes)
+        self.progress = progress
+
     def open(self, config) -> None:
         super().open(config)
         self.twin = IzhikevichTwin(config)
@@ -109,6 +113,8 @@ class TwinTransport(_Buffered):
                 self.cnt["spikes_counted"] += idx.size
             self.tick += 1
             self.cnt["sweeps"] += 1
+            if self.progress is not None and self.tick % 1000 == 0:
+                self.progress(self.tick)
         self.clamps = dict(tw.clamp_counts)
         self.wall_s += time.perf_counter() - t0
 
@@ -158,6 +164,8 @@ class _Batch(_Buffered):
         self.cnt["overrun"] += rep["overrun"]
         self.cnt["sweeps"] += rep["sweeps"]
         self.clamps = {k: int(rep["clamp_counts"][k]) for k in CLAMP_KINDS}
+        #: wall time of the simulation proper (the rest of wall_s is generation and build)
+        self.sim_s = float(rep.get("wall_s", self.wall_s))
         b = SpikeBatch(rep["spike_tick"], rep["spike_neuron"])
         self.cnt["spikes"] += len(b)
         return b
@@ -250,13 +258,15 @@ class AmaranthTransport(_Batch):
         sim = Simulator(dut)
         sim.add_clock(1e-6)
         sim.add_testbench(bench)
+        t0 = time.perf_counter()
         sim.run()
+        rep["wall_s"] = time.perf_counter() - t0
         return rep
 
 
 #: Engine name -> transport factory (``build_dir`` and ``progress`` keywords).
 TRANSPORTS = {
-    "fixed": lambda **kw: TwinTransport(),
+    "fixed": lambda **kw: TwinTransport(progress=kw.get("progress")),
     "amaranth": lambda **kw: AmaranthTransport(**kw),
     "icarus": lambda **kw: CocotbTransport("icarus", **kw),
     "verilator": lambda **kw: CocotbTransport("verilator", **kw),
