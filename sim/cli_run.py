@@ -73,6 +73,9 @@ def cmd_run(args) -> int:
         acc = "-" if d is None else (f"{100 * d.accuracy:.1f} %" if d.accuracy is not None
                                      else d.reason)
         print(f"  {e:10s} accuracy {acc:>8s}  ({t:.1f} s)")
+    for k, v in run.decode_agreement.items():
+        print(f"  accuracy {k}: differs by {100 * v['difference']:.1f} points (tolerance "
+              f"{100 * v['tolerance']:.1f}): {'within' if v['within'] else 'OUTSIDE'}")
     s = run.saturations
     n_sat = s.get("format_low", 0) + s.get("format_high", 0)
     if n_sat:

@@ -134,7 +134,8 @@ def summary_dict(run) -> dict:
         "dt_ms": run.dt_ms,
         "accuracy": {e: d.accuracy for e, d in run.decoded.items()},
         "decoded": {e: d.to_dict() for e, d in run.decoded.items()},
-        "agreement": run.agreement, "saturations": run.saturations,
+        "agreement": run.agreement, "decode_agreement": run.decode_agreement,
+        "saturations": run.saturations,
         "current_per_class": class_currents(run), "ran": run.ran, "timing": run.timing,
         "counters": run.counters,
         "spike_counts": {e: int(sum(len(s) for s in sp)) for e, sp in run.spikes.items()},
@@ -196,6 +197,10 @@ figure{{display:inline-block;margin:4px;}}img{{max-width:520px;}}</style></head>
 classes, {len(run.neurons)} neurons, {run.n_ticks} ticks of {run.dt_ms:g} ms.</p>
 <h2>Decoding accuracy (cross-validated)</h2>
 {_table(acc_rows, ["engine", "accuracy %", "samples", "folds", "decoder", "engine run s"])}
+<p>{html.escape("; ".join(
+    f"{k}: accuracies differ by {100 * v['difference']:.1f} points, tolerance "
+    f"{100 * v['tolerance']:.1f}: {'within' if v['within'] else 'OUTSIDE'}"
+    for k, v in run.decode_agreement.items()))}</p>
 <h2>Engine agreement</h2>
 {_table(agr_rows, ["pair", "spikes A", "spikes B", "identical trains", "mean |count diff|",
                    "max |count diff|", "mean VP (q=1/ms)", "within 1 tick"])}

@@ -67,6 +67,7 @@ class SceneRun:
     agreement: dict
     ran: dict
     timing: dict
+    decode_agreement: dict = field(default_factory=dict)
 
 
 # --------------------------------------------------------------------------- stimulus
@@ -324,10 +325,21 @@ def run_scene(scene: Scene, engines: list[str] | None = None, build_dir: Path | 
         if e == other:
             continue
         agreement[f"{e} vs {other}"] = _agreement(spikes[e], spikes[other], cfg.dt_ms)
+    dec_agree = {}
+    if "golden" in decoded:
+        tol = dec["tolerance"]
+        for e, d in decoded.items():
+            g = decoded["golden"]
+            if e == "golden" or d.accuracy is None or g.accuracy is None:
+                continue
+            diff = abs(d.accuracy - g.accuracy)
+            dec_agree[f"{e} vs golden"] = {"difference": diff, "tolerance": tol,
+                                           "within": bool(diff <= tol)}
     ran = {"effects": list(effect_counts) if effect_counts else
            ([] if scene["stimulus"]["kind"] == "recorded" else ["strain"]),
            "effect_counts": effect_counts, "blocks": blocks, "engines": list(spikes),
            "front_end": sorted({f"{e.mode}" for e in neurons.encoding}),
            "stimulus": scene["stimulus"]["kind"]}
     return SceneRun(scene, classes, trial_class, traces, infos, neurons, currents, sat, cfg,
-                    cfg.dt_ms, n_ticks, spikes, counters, decoded, agreement, ran, timing)
+                    cfg.dt_ms, n_ticks, spikes, counters, decoded, agreement, ran, timing,
+                    dec_agree)

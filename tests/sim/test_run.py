@@ -33,6 +33,7 @@ def test_golden_and_fixed_decode_alike(small_run):
     assert g.accuracy is not None and f.accuracy is not None
     assert g.accuracy > 0.5 and f.accuracy > 0.5            # chance is 0.25
     assert abs(g.accuracy - f.accuracy) <= r.scene["decoder"]["tolerance"]
+    assert r.decode_agreement["fixed vs golden"]["within"]
     a = r.agreement["golden vs fixed"]
     assert a["spikes_a"] > 0 and a["mean_abs_count_diff"] <= 1.0
     assert r.saturations["format_high"] == 0 and r.saturations["format_low"] == 0
@@ -141,3 +142,18 @@ def test_report_renders_in_headless_chromium_without_console_messages(tmp_path):
     assert console == [], console
     for link in re.findall(r'src="([^"]+)"', dom):
         assert (out / link).is_file(), link
+
+
+@pytest.mark.long
+@pytest.mark.cocotb
+def test_default_scene_on_golden_fixed_and_verilator(tmp_path, capsys):
+    """The README's main job, as shipped: 40 grasps on golden, fixed and Verilator."""
+    assert cli.main(["run", "--out", str(tmp_path)]) == 0
+    text = capsys.readouterr().out
+    for e in ("golden", "fixed", "verilator"):
+        assert re.search(rf"{e}\s+accuracy\s+\d+\.\d %", text)
+    summ = json.loads((tmp_path / "run.json").read_text())
+    assert summ["ran"]["engines"] == ["golden", "fixed", "verilator"]
+    assert summ["agreement"]["verilator vs fixed"]["identical_trains"] == 80
+    assert summ["decode_agreement"]["fixed vs golden"]["within"]
+    assert summ["accuracy"]["verilator"] == summ["accuracy"]["fixed"] > 0.6
