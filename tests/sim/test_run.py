@@ -111,10 +111,11 @@ def test_example_slide_scene_runs(tmp_path, capsys):
 
 @pytest.mark.cocotb
 @pytest.mark.parametrize("simulator", SIMULATORS)
-def test_scene_on_hdl_simulator_equals_twin(simulator, tmp_path):
+def test_scene_on_hdl_simulator_equals_twin(simulator, build_root):
     text = SMALL.replace("trials = 4", "trials = 1").replace("duration_ms = 700",
                                                              "duration_ms = 250")
-    r = scene_run.run_scene(_scene(text, engines=("fixed", simulator)), build_dir=tmp_path)
+    r = scene_run.run_scene(_scene(text, engines=("fixed", simulator)),
+                             build_dir=build_root / f"scene_{simulator}")
     a = r.agreement[f"{simulator} vs fixed"]
     assert a["spikes_a"] > 0 and a["identical_trains"] == a["neurons"] == 8
     for x, y in zip(r.spikes[simulator], r.spikes["fixed"]):
