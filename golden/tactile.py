@@ -49,7 +49,8 @@ from ._validate import number
 from .fbg import bragg_shift_nm, strain_sensitivity_pm_per_microstrain
 
 __all__ = ["Material", "MATERIALS", "Pad", "contact_stiffness", "series_stiffness",
-           "GraspSpec", "SlideSpec", "synthesize_grasp", "synthesize_slide", "EFFECTS",
+           "GraspSpec", "SlideSpec", "PulseSpec", "synthesize_grasp", "synthesize_slide",
+           "synthesize_pulse", "EFFECTS",
            "EFFECT_ORDER", "apply_effects", "Trace"]
 
 
@@ -209,6 +210,34 @@ def synthesize_slide(spec: SlideSpec, rng: np.random.Generator,
                      + spec.depth_microstrain * tex * (load / fn)) * 1e-6
     return out, {"speed_m_per_s": s, "normal_force_N": fn, "period_m": per,
                  "vibration_hz": s / per}
+
+
+@dataclass(frozen=True)
+class PulseSpec:
+    """A rectangular normal-force pulse on the pad (linear rise and fall of ``edge_ms``),
+    ``amplitude_N`` for ``width_ms`` from ``start_ms``; one coupling per grating."""
+
+    start_ms: float = 50.0
+    width_ms: float = 200.0
+    edge_ms: float = 5.0
+    coupling_microstrain_per_N: tuple = (2.0, 1.6)
+    duration_ms: float = 400.0
+    fs_hz: float = 1000.0
+    spread_force: float = 0.05
+
+
+def synthesize_pulse(spec: PulseSpec, rng: np.random.Generator,
+                     amplitude_N: float) -> tuple[np.ndarray, dict]:
+    """Strain ``(n_samples, n_gratings)`` of one force pulse of nominal ``amplitude_N``."""
+    n = int(round(spec.duration_ms * spec.fs_hz / 1000.0))
+    t = np.arange(n) * 1000.0 / spec.fs_hz
+    amp = _draw(rng, amplitude_N, spec.spread_force)
+    e = max(spec.edge_ms, 1e-9)
+    rise = np.clip((t - spec.start_ms) / e, 0.0, 1.0)
+    fall = np.clip((spec.start_ms + spec.width_ms - t) / e, 0.0, 1.0)
+    force = amp * np.minimum(rise, fall)
+    c = np.asarray(spec.coupling_microstrain_per_N, dtype=np.float64)
+    return force[:, None] * c[None, :] * 1e-6, {"amplitude_N": amp}
 
 
 # ------------------------------------------------------------------------------ effects

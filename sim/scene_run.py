@@ -24,8 +24,9 @@ import numpy as np
 from ..golden import izhikevich as golden
 from ..golden import metrics
 from ..golden.fbg import IIRFilter, design_bandpass
-from ..golden.tactile import (MATERIALS, GraspSpec, Material, Pad, SlideSpec, apply_effects,
-                              synthesize_grasp, synthesize_slide)
+from ..golden.tactile import (MATERIALS, GraspSpec, Material, Pad, PulseSpec, SlideSpec,
+                              apply_effects, synthesize_grasp, synthesize_pulse,
+                              synthesize_slide)
 from ..hdl.fixed import QFormat
 from .decode import decode, isi_samples, trial_features
 from .driver import AfferentEncoding, FbgDriver
@@ -108,6 +109,14 @@ def synthesize(scene: Scene):
                     spread_young=st["spread_young"], spread_coupling=st["spread_coupling"])
                 strain, info = synthesize_grasp(_material(st["materials"][c]), spec, rng,
                                                 sen["lambda_B_nm"])
+            elif st["kind"] == "pulses":
+                spec = PulseSpec(start_ms=st["pulse_start_ms"], width_ms=st["pulse_width_ms"],
+                                 edge_ms=st["pulse_edge_ms"],
+                                 coupling_microstrain_per_N=tuple(
+                                     st["coupling_microstrain_per_N"]),
+                                 duration_ms=sc["duration_ms"], fs_hz=fs,
+                                 spread_force=st["spread_force"])
+                strain, info = synthesize_pulse(spec, rng, st["pulse_amplitudes_N"][c])
             else:
                 spec = SlideSpec(speed_m_per_s=st["speed_mm_per_s"] * 1e-3,
                                  depth_microstrain=st["depth_microstrain"],

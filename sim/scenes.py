@@ -33,7 +33,7 @@ ENGINE_NAMES = ("golden", "fixed", "amaranth", "icarus", "verilator")
 MODELS = ("izhikevich", "lif", "cuneate")
 AVAILABLE_MODELS = ("izhikevich",)
 STIMULUS_KINDS = ("grasp", "slide", "pulses", "recorded")
-AVAILABLE_STIMULI = ("grasp", "slide", "recorded")
+AVAILABLE_STIMULI = STIMULUS_KINDS
 
 
 class SceneError(ValueError):
@@ -99,6 +99,10 @@ SCHEMA: dict = {
                  "spacing_mm": F(NUM, 2.0, lo=0, hi=1e3),
                  "spread_speed": F(NUM, 0.05, lo=0, hi=1),
                  "spread_force": F(NUM, 0.05, lo=0, hi=1),
+                 # pulses (classes: amplitudes)
+                 "pulse_amplitudes_N": F(list, [0.5, 1.0, 2.0], items=NUM),
+                 "pulse_start_ms": F(NUM, 50.0, lo=0), "pulse_width_ms": F(NUM, 200.0, lo=1e-3),
+                 "pulse_edge_ms": F(NUM, 5.0, lo=0),
                  # recorded
                  "file": F(str, ""), "time_key": F(str, "Time"),
                  "data_key": F(str, "DeltaBraggW"), "struct": F(str, ""),
@@ -235,6 +239,8 @@ class Scene:
             return [m if isinstance(m, str) else m["name"] for m in st["materials"]]
         if st["kind"] == "slide":
             return [f"{p:g} mm" for p in st["periods_mm"]]
+        if st["kind"] == "pulses":
+            return [f"{a:g} N" for a in st["pulse_amplitudes_N"]]
         return [st["label"]]
 
     def to_dict(self) -> dict:
@@ -376,6 +382,13 @@ def parse_scene(text: str, source: str = "<scene>", base_dir: Path | None = None
             V.err("stimulus.coupling_microstrain_per_N", "out of range: values must be > 0")
     if sections["frontend"]["window"] == "loading" and st["kind"] != "grasp":
         V.err("frontend.window", "'loading' needs a grasp stimulus (it has a loading phase)")
+    if st["kind"] == "pulses":
+        if not st["pulse_amplitudes_N"] or any(a <= 0 for a in st["pulse_amplitudes_N"]):
+            V.err("stimulus.pulse_amplitudes_N", "must list amplitudes > 0")
+        if len(st["coupling_microstrain_per_N"]) != sensor["channels"]:
+            V.err("stimulus.coupling_microstrain_per_N",
+                  f"needs one value per channel ({sensor['channels']}), got "
+                  f"{len(st['coupling_microstrain_per_N'])}")
     if st["kind"] == "slide" and (not st["periods_mm"] or any(p <= 0 for p in st["periods_mm"])):
         V.err("stimulus.periods_mm", "must list periods > 0")
     if st["kind"] == "recorded":

@@ -115,3 +115,25 @@ def test_published_gain_needs_ten_picometre_units():
     assert max(pm.values()) > 512                 # Δλ in pm: beyond the sQ10.8 format
     ten = _peak_currents(10.0)                    # Δλ in units of 10 pm: the spiking range
     assert all(4 * rheobase < v < 200 for v in ten.values()), ten
+
+
+def test_pulse_force_profile_by_hand():
+    spec = tactile.PulseSpec(start_ms=10, width_ms=20, edge_ms=4, coupling_microstrain_per_N=(
+        2.0,), duration_ms=40, spread_force=0.0)
+    strain, info = tactile.synthesize_pulse(spec, np.random.default_rng(0), 1.5)
+    f = strain[:, 0] / 2e-6
+    assert info["amplitude_N"] == 1.5
+    assert np.allclose(f[:11], 0) and f[12] == pytest.approx(0.75) and f[14] == pytest.approx(1.5)
+    assert np.allclose(f[14:27], 1.5) and f[28] == pytest.approx(0.75) and np.allclose(f[30:], 0)
+
+
+def test_slide_vibrates_at_speed_over_period_and_second_grating_lags():
+    spec = tactile.SlideSpec(spread_speed=0, spread_force=0, duration_ms=1000, ramp_ms=1)
+    strain, info = tactile.synthesize_slide(spec, np.random.default_rng(0), 2e-3)
+    assert info["vibration_hz"] == pytest.approx(10.0)
+    x = strain[200:, 0] - strain[200:, 0].mean()
+    spec_f = np.abs(np.fft.rfft(x))
+    freqs = np.fft.rfftfreq(x.size, 1e-3)
+    assert freqs[np.argmax(spec_f)] == pytest.approx(10.0, abs=1.5)
+    # grating 1 sits 2 mm behind: it sees the texture 100 ms later (one full period at 2 mm)
+    assert np.allclose(strain[300:900, 1], strain[200:800, 0], atol=1e-9)

@@ -101,12 +101,15 @@ def test_cli_run_writes_report_with_every_figure(tmp_path, capsys):
     assert set(summ["accuracy"]) == {"golden", "fixed"}
 
 
-def test_example_slide_scene_runs(tmp_path, capsys):
-    assert cli.main(["run", "examples/slide_texture.toml", "--out", str(tmp_path)]) == 0
+@pytest.mark.parametrize("name,front_end", [("slide_texture", ["FA", "SA"]),
+                                            ("pulse_amplitudes", ["SA"])])
+def test_example_scenes_run(name, front_end, tmp_path, capsys):
+    assert cli.main(["run", f"examples/{name}.toml", "--out", str(tmp_path)]) == 0
     summ = json.loads((tmp_path / "run.json").read_text())
-    assert summ["ran"]["front_end"] == ["FA", "SA"]
+    assert summ["ran"]["front_end"] == front_end
     assert summ["ran"]["effects"] == ["strain", "noise", "resolution"]
-    assert summ["accuracy"]["fixed"] > 1 / 3 + 0.2
+    assert summ["accuracy"]["fixed"] > 1 / 3 + 0.2          # three classes
+    assert summ["saturations"]["format_high"] == 0
 
 
 @pytest.mark.cocotb
