@@ -161,3 +161,12 @@ def test_default_scene_on_golden_fixed_and_verilator(tmp_path, capsys):
     assert summ["agreement"]["verilator vs fixed"]["identical_trains"] == 80
     assert summ["decode_agreement"]["fixed vs golden"]["within"]
     assert summ["accuracy"]["verilator"] == summ["accuracy"]["fixed"] > 0.6
+
+
+def test_scene_on_amaranth_simulator_equals_twin():
+    text = SMALL.replace("trials = 4", "trials = 1").replace("duration_ms = 700",
+                                                             "duration_ms = 150")
+    r = scene_run.run_scene(_scene(text, engines=("fixed", "amaranth")))
+    a = r.agreement["amaranth vs fixed"]
+    assert a["spikes_a"] > 0 and a["identical_trains"] == a["neurons"] == 8
+    assert r.counters["amaranth"]["writes"] == r.counters["fixed"]["writes"] > 0
