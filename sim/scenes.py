@@ -478,7 +478,16 @@ def parse_scene(text: str, source: str = "<scene>", base_dir: Path | None = None
     if projs:
         V.err("projection[0]", "projections (coincidence delays) are not available in this "
                                "build: they need the coincidence block")
-    return Scene(source, sections, pops, projs, base_dir)
+    scene = Scene(source, sections, pops, projs, base_dir)
+    n_trials = 1 if st["kind"] == "recorded" else sections["scene"]["trials"] * len(
+        scene.classes())
+    need = n_trials * sum(p["size"] for p in pops if p["model"] == "izhikevich")
+    capacity = int(hw["clock_hz"] // hw["update_hz"])
+    if need > capacity:
+        V.err("hardware.clock_hz", f"the scene needs {need} Izhikevich neurons ({n_trials} "
+                                   f"trials) but one core at {hw['clock_hz']:g} Hz / "
+                                   f"{hw['update_hz']:g} Hz holds {capacity}")
+    return scene
 
 
 def load_scene(path) -> Scene:

@@ -73,6 +73,9 @@ def _err(text_add, replace=None):
      "projection[0]: projections (coincidence delays) are not available in this build"),
     ("", ('preset = "RS"', 'preset = "XX"'), "population[0].preset:"),
     ("[weather]\nsun = 1\n", None, "s.toml: weather: unknown section"),
+    ("", ("trials = 10", "trials = 400"), "hardware.clock_hz: the scene needs 3200 Izhikevich "
+                                          "neurons (1600 trials) but one core at 4e+07 Hz / "
+                                          "16000 Hz holds 2500"),
     ("", ("filter_low_hz = 1", "filter_low_hz = 1\nfilter_b = [1.0]"),
      "frontend.filter_a: filter coefficients need both"),
 ])
