@@ -173,6 +173,8 @@ def write_report(run, out: Path) -> Path:
     cur_rows = [[r["class"], _f(r["peak_min"], 1), _f(r["peak_max"], 1), _f(r["min"], 1)]
                 for r in summ["current_per_class"]]
     s = run.saturations
+    n_sat = s.get("format_low", 0) + s.get("format_high", 0)
+    n_range = s.get("range_low", 0) + s.get("range_high", 0)
     ran = run.ran
     t = run.timing
     stage_rows = [["stimulus", _f(t["stimulus_s"], 2)], ["front end", _f(t["front_end_s"], 2)]]
@@ -188,7 +190,8 @@ def write_report(run, out: Path) -> Path:
                        f"current {b['current_format']}, dt {b['dt_ms']:g} ms)"
                        for b in ran["blocks"])
     page = f"""<!DOCTYPE html>
-<html lang="en"><head><meta charset="utf-8"><title>cuneate run: {html.escape(run.scene.name)}</title>
+<html lang="en"><head><meta charset="utf-8">
+<title>cuneate run: {html.escape(run.scene.name)}</title>
 <style>body{{font-family:sans-serif;max-width:1100px;margin:1em auto;}}
 table{{border-collapse:collapse;margin:.5em 0;}}td,th{{border:1px solid #bbb;padding:2px 8px;}}
 figure{{display:inline-block;margin:4px;}}img{{max-width:520px;}}</style></head><body>
@@ -206,9 +209,8 @@ classes, {len(run.neurons)} neurons, {run.n_ticks} ticks of {run.dt_ms:g} ms.</p
                    "max |count diff|", "mean VP (q=1/ms)", "within 1 tick"])}
 <h2>Currents per class (mV/ms) and saturation</h2>
 {_table(cur_rows, ["class", "lowest peak", "highest peak", "minimum"])}
-<p>Format {html.escape(str(s.get('format')))}: {s.get('format_low', 0) + s.get('format_high', 0)}
-of {s.get('values')} values saturated by the driver; {s.get('range_low', 0) + s.get('range_high', 0)}
-outside the accepted range; {s.get('gaps_held', 0)} missing samples held.</p>
+<p>Format {html.escape(str(s.get('format')))}: {n_sat} of {s.get('values')} values saturated by
+the driver; {n_range} outside the accepted range; {s.get('gaps_held', 0)} missing samples held.</p>
 <h2>What ran</h2>
 <ul><li>stimulus: {html.escape(ran['stimulus'])}</li>
 <li>effects: {html.escape(', '.join(ran['effects']) or 'none')}</li>
