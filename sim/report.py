@@ -214,7 +214,7 @@ the driver; {n_range} outside the accepted range; {s.get('gaps_held', 0)} missin
 <h2>What ran</h2>
 <ul><li>stimulus: {html.escape(ran['stimulus'])}</li>
 <li>effects: {html.escape(', '.join(ran['effects']) or 'none')}</li>
-<li>front end: {html.escape(', '.join(ran['front_end']))}</li>
+<li>front end: {html.escape('; '.join(ran.get('front_end_detail', ran['front_end'])))}</li>
 <li>blocks: {html.escape(blocks)}</li>
 <li>engines: {html.escape(', '.join(ran['engines']))}</li></ul>
 {_table(stage_rows, ["stage", "wall s"])}

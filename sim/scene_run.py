@@ -243,6 +243,23 @@ ENGINES = {"golden": run_golden, "fixed": _run_transport("fixed"),
            "verilator": _run_transport("verilator")}
 
 
+def _front_end_detail(scene: Scene, neurons: Neurons) -> list[str]:
+    fe, out = scene["frontend"], []
+    for e in dict.fromkeys(neurons.encoding):
+        if e.mode == "FA":
+            filt = (f"b = {fe['filter_b']}, a = {fe['filter_a']}" if fe["filter_b"] is not None
+                    else f"{fe['filter_kind']} band-pass {fe['filter_low_hz']:g}-"
+                         f"{fe['filter_high_hz']:g} Hz, order {fe['filter_order']}")
+            out.append(f"FA: {filt}; gain {e.gain:g} per {e.unit_pm:g} pm of shift; rectify "
+                       f"{e.rectify}; window {fe['window']}")
+        else:
+            out.append(f"SA: gain {e.gain:g} per {e.unit_pm:g} pm of shift above "
+                       f"{e.threshold_pm:g} pm")
+    hold = int(scene["hardware"]["update_hz"] // scene["sensor"]["sample_rate_hz"])
+    out.append(f"samples held {hold} ticks each, latency {fe['latency_ticks']} ticks")
+    return out
+
+
 def _agreement(a: list, b: list, dt_ms: float) -> dict:
     cnt_a = np.array([len(s) for s in a])
     cnt_b = np.array([len(s) for s in b])
@@ -348,6 +365,7 @@ def run_scene(scene: Scene, engines: list[str] | None = None, build_dir: Path | 
            ([] if scene["stimulus"]["kind"] == "recorded" else ["strain"]),
            "effect_counts": effect_counts, "blocks": blocks, "engines": list(spikes),
            "front_end": sorted({f"{e.mode}" for e in neurons.encoding}),
+           "front_end_detail": _front_end_detail(scene, neurons),
            "stimulus": scene["stimulus"]["kind"]}
     return SceneRun(scene, classes, trial_class, traces, infos, neurons, currents, sat, cfg,
                     cfg.dt_ms, n_ticks, spikes, counters, decoded, agreement, ran, timing,
