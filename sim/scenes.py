@@ -402,6 +402,14 @@ def parse_scene(text: str, source: str = "<scene>", base_dir: Path | None = None
     if (fe["filter_b"] is None) != (fe["filter_a"] is None):
         V.err("frontend.filter_a" if fe["filter_a"] is None else "frontend.filter_b",
               "filter coefficients need both filter_b and filter_a")
+    if fe["filter_b"] is not None:
+        from ..golden.fbg import IIRFilter
+        try:
+            rep = IIRFilter(b=fe["filter_b"], a=fe["filter_a"]).check()
+        except ValueError as exc:
+            V.err("frontend.filter_a", str(exc))
+        if not rep.stable:
+            V.err("frontend.filter_a", f"unstable filter: {rep.message}")
     fs = sensor["sample_rate_hz"]
     if fe["filter_b"] is None and not 0 < fe["filter_low_hz"] < fe["filter_high_hz"] < fs / 2:
         V.err("frontend.filter_high_hz", f"band edges must satisfy 0 < filter_low_hz < "

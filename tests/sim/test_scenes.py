@@ -76,6 +76,9 @@ def _err(text_add, replace=None):
     ("", ("trials = 10", "trials = 400"), "hardware.clock_hz: the scene needs 3200 Izhikevich "
                                           "neurons (1600 trials) but one core at 4e+07 Hz / "
                                           "16000 Hz holds 2500"),
+    ("", ("filter_low_hz = 1", "filter_low_hz = 1\nfilter_b = [0.045, 0, -0.045]\n"
+                               "filter_a = [1, -1.919, 0.91]"),
+     "frontend.filter_a: unstable filter: pole z = 1.06"),
     ("", ("filter_low_hz = 1", "filter_low_hz = 1\nfilter_b = [1.0]"),
      "frontend.filter_a: filter coefficients need both"),
 ])
