@@ -182,6 +182,9 @@ def write_report(run, out: Path) -> Path:
         sim_ms = run.counters.get(e, {}).get("simulate_ms")
         note = f" (simulation {sim_ms / 1000:.2f} s, rest generate + build)" if sim_ms else ""
         stage_rows.append([f"engine {e}{note}", _f(v, 2)])
+    if "engines_wall_s" in t:
+        stage_rows.append(["all engines (HDL simulators overlapped with the others)",
+                           _f(t["engines_wall_s"], 2)])
     stage_rows += [["decode", _f(t["decode_s"], 2)]]
     figs = "".join(f'<figure><img src="{n}" alt="{n}"><figcaption>{n}</figcaption></figure>'
                    for n in figure_names(run))

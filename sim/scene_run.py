@@ -237,6 +237,8 @@ def _run_transport(engine):
     return run
 
 
+#: Engines that run in a simulator process of their own (overlapped with the others).
+BACKGROUND_ENGINES = ("icarus", "verilator")
 #: Engine name -> runner. Only the scene's engines are looked up and called.
 ENGINES = {"golden": run_golden, "fixed": _run_transport("fixed"),
            "amaranth": _run_transport("amaranth"), "icarus": _run_transport("icarus"),
@@ -312,23 +314,55 @@ def run_scene(scene: Scene, engines: list[str] | None = None, build_dir: Path | 
     timing["front_end_s"] = time.perf_counter() - t0
     ctx = {"config": cfg, "driver": drv, "neurons": neurons, "currents": currents, "raw": raw,
            "n_ticks": n_ticks, "build_dir": build_dir}
-    spikes, counters, eng_t = {}, {}, {}
-    for e in (engines or scene.engines):
+    names = list(engines or scene.engines)
+    for e in names:
         if e not in ENGINES:
             raise ValueError(f"unknown engine {e!r}; known: {', '.join(ENGINES)}")
+    results: dict = {}
+
+    def one(e, position):
         t0 = time.perf_counter()
         bar = None
         if progress:
             from tqdm import tqdm
-            bar = tqdm(total=n_ticks, desc=e, unit="tick", leave=False)
-        ctx["progress"] = (lambda k, b=bar: b.update(k - b.n)) if bar else None
+            bar = tqdm(total=n_ticks, desc=e, unit="tick", leave=False, position=position)
+        c = dict(ctx, progress=(lambda k, b=bar: b.update(k - b.n)) if bar else None)
         try:
-            spikes[e], counters[e] = ENGINES[e](ctx)
+            sp, cnt = ENGINES[e](c)
         finally:
             if bar:
                 bar.close()
-        eng_t[e] = time.perf_counter() - t0
-        say(f"engine {e}: {sum(len(s) for s in spikes[e])} spikes ({eng_t[e]:.1f} s)")
+        results[e] = (sp, cnt, time.perf_counter() - t0)
+        say(f"engine {e}: {sum(len(x) for x in sp)} spikes ({results[e][2]:.1f} s)")
+
+    # HDL simulators run in their own processes: start them first, in the background (one at
+    # a time, the machine's other core serves the Python engines), and overlap them with the
+    # Python engines
+    background = [e for e in names if e in BACKGROUND_ENGINES]
+    t_all = time.perf_counter()
+    pool = None
+    if background:
+        from concurrent.futures import ThreadPoolExecutor
+
+        def hdl():
+            for i, e in enumerate(background):
+                one(e, 1 + i)
+        pool = ThreadPoolExecutor(max_workers=1)
+        fut = pool.submit(hdl)
+    try:
+        for e in names:
+            if e not in background:
+                one(e, 0)
+    finally:
+        if pool is not None:
+            try:
+                fut.result()
+            finally:
+                pool.shutdown()
+    timing["engines_wall_s"] = time.perf_counter() - t_all
+    spikes = {e: results[e][0] for e in names}
+    counters = {e: results[e][1] for e in names}
+    eng_t = {e: results[e][2] for e in names}
     timing["engines_s"] = eng_t
     t0 = time.perf_counter()
     dec = scene["decoder"]
