@@ -139,6 +139,7 @@ def summary_dict(run) -> dict:
         "current_per_class": class_currents(run), "ran": run.ran, "timing": run.timing,
         "counters": run.counters,
         "spike_counts": {e: int(sum(len(s) for s in sp)) for e, sp in run.spikes.items()},
+        "resolved_scene": run.scene.to_dict(),
     }
 
 
