@@ -77,6 +77,10 @@ def cmd_run(args) -> int:
         print(f"  accuracy {k}: differs by {100 * v['difference']:.1f} points (tolerance "
               f"{100 * v['tolerance']:.1f}): {'within' if v['within'] else 'OUTSIDE'}")
     s = run.saturations
+    for e, sp in run.spikes.items():
+        if not any(len(x) for x in sp):
+            print(f"  warning: {e}: no neuron spiked (currents peak at "
+                  f"{s['max_mV_per_ms']:.2f} mV/ms; an RS neuron needs about 3.8)")
     n_sat = s.get("format_low", 0) + s.get("format_high", 0)
     if n_sat:
         print(f"  warning: {n_sat} of {s['values']} currents saturated to {s['format']} "

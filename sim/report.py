@@ -98,7 +98,11 @@ def _fig_engine(run, e, out: Path, plt):
         if isi.size:
             ax.hist(isi, bins=bins, histtype="step", label=f"{c} ({isi.size})", color=colors[c])
     ax.set(xscale="log", xlabel="ISI (ms)", ylabel="count", title=f"ISI per class: {e}")
-    ax.legend(fontsize=7)
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend(fontsize=7)
+    else:
+        ax.text(0.5, 0.5, "no ISIs (fewer than two spikes per afferent)",
+                transform=ax.transAxes, ha="center")
     fig.tight_layout()
     fig.savefig(out / f"isi_{e}.png", dpi=90)
     plt.close(fig)

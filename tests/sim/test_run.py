@@ -170,3 +170,15 @@ def test_scene_on_amaranth_simulator_equals_twin():
     a = r.agreement["amaranth vs fixed"]
     assert a["spikes_a"] > 0 and a["identical_trains"] == a["neurons"] == 8
     assert r.counters["amaranth"]["writes"] == r.counters["fixed"]["writes"] > 0
+
+
+def test_a_silent_scene_reports_why_without_warnings(tmp_path, capsys, recwarn):
+    p = tmp_path / "s.toml"
+    p.write_text(SMALL.replace("gain_S = 180", "gain_S = 1"))
+    assert cli.main(["run", str(p), "--engines", "fixed", "--out", str(tmp_path / "o")]) == 0
+    out = capsys.readouterr()
+    assert "too few samples to cross-validate (0 samples" in out.out
+    assert re.search(r"warning: fixed: no neuron spiked \(currents peak at 0\.\d\d mV/ms",
+                     out.out)
+    assert out.err == "" and len(recwarn) == 0
+    assert (tmp_path / "o" / "isi_fixed.png").is_file()
