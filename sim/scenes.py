@@ -435,6 +435,9 @@ def parse_scene(text: str, source: str = "<scene>", base_dir: Path | None = None
         V.err("decoder.window_ms", "must be [start, end] with start < end")
     # populations and projections
     pops_raw = raw.get("population", [])
+    for key in ("population", "projection"):
+        if isinstance(raw.get(key), dict):
+            V.err(key, f"wrong type: write [[{key}]] (an array of tables), not [{key}]")
     if not isinstance(pops_raw, list) or not pops_raw:
         V.err("population", "at least one [[population]] table is required")
     pops = []

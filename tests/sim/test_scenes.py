@@ -73,6 +73,7 @@ def _err(text_add, replace=None):
      "projection[0]: projections (coincidence delays) are not available in this build"),
     ("", ('preset = "RS"', 'preset = "XX"'), "population[0].preset:"),
     ("[weather]\nsun = 1\n", None, "s.toml: weather: unknown section"),
+    ("", ("[[population]]", "[population]"), "population: wrong type: write [[population]]"),
     ("", ("trials = 10", "trials = 400"), "hardware.clock_hz: the scene needs 3200 Izhikevich "
                                           "neurons (1600 trials) but one core at 4e+07 Hz / "
                                           "16000 Hz holds 2500"),
