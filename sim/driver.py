@@ -33,12 +33,13 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+import scipy.signal
 
 from ..golden.encoders import sa_current
 from ..golden.fbg import FbgFrontEnd, IIRFilter
 from .transport import SpikeBatch, Transport, TransportError
 
-__all__ = ["AfferentEncoding", "FbgDriver", "DriverRun", "GapError"]
+__all__ = ["AfferentEncoding", "FbgDriver", "OnlineStream", "DriverRun", "GapError"]
 
 
 class GapError(ValueError):
@@ -79,6 +80,23 @@ class AfferentEncoding:
             return sa_current(x, gain_K=self.gain,
                               threshold=self.threshold_pm / self.unit_pm)
         y = FbgFrontEnd(self.filter, 1.0, self.fs_hz).currents(x) * self.gain
+        return self._rectify(y)
+
+    def currents_online(self, d_lambda_nm: np.ndarray, state):
+        """Like :meth:`currents` for one chunk ``(n, k)`` of a longer trace; ``state`` is the
+        filter state returned by the previous chunk (``None`` for the first). Returns
+        ``(currents, state)``; chunks fed in order give exactly :meth:`currents` of the whole."""
+        x = np.asarray(d_lambda_nm, dtype=np.float64) * (1000.0 / self.unit_pm)
+        if self.mode == "SA":
+            return self.currents(d_lambda_nm), None
+        f = self.filter
+        f.require_stable()
+        if state is None:
+            state = np.zeros((max(f.a.size, f.b.size) - 1, x.shape[1]))
+        y, state = scipy.signal.lfilter(f.b, f.a, x, axis=0, zi=state)
+        return self._rectify(y * self.gain), state
+
+    def _rectify(self, y):
         if self.rectify == "positive":
             y = np.maximum(y, 0.0)
         elif self.rectify == "abs":
@@ -142,7 +160,7 @@ class FbgDriver:
         self.on_gap = on_gap
 
     # ---------------------------------------------------------------- front end
-    def fill_gaps(self, d_lambda_nm) -> tuple[np.ndarray, int]:
+    def fill_gaps(self, d_lambda_nm, offset: int = 0) -> tuple[np.ndarray, int]:
         x = np.array(d_lambda_nm, dtype=np.float64)
         if x.ndim == 1:
             x = x[:, None]
@@ -154,7 +172,7 @@ class FbgDriver:
             return x, 0
         j, c = (int(v) for v in np.argwhere(bad)[0])
         if self.on_gap == "error" or bad[0].any():
-            raise GapError(f"sample {j} of channel {c} is missing ({x[j, c]!r}); "
+            raise GapError(f"sample {j + offset} of channel {c} is missing ({x[j, c]!r}); "
                            f"{int(bad.sum())} missing sample(s) in all")
         for j in np.flatnonzero(bad.any(axis=1)):
             x[j, bad[j]] = x[j - 1, bad[j]]
@@ -212,40 +230,19 @@ class FbgDriver:
     # ---------------------------------------------------------------- streaming
     def stream(self, transport: Transport, d_lambda_nm, n_ticks: int | None = None,
                raw: np.ndarray | None = None) -> DriverRun:
-        """Stream ``d_lambda`` (or precomputed ``raw`` currents) through ``transport`` (already
-        opened) and return the spikes of neurons ``first`` .. with loss checks applied."""
-        gaps = 0
-        sat: dict = {}
+        """Stream a whole ``d_lambda`` trace (or precomputed ``raw`` currents) through
+        ``transport`` (already opened) and return the spikes with loss checks applied."""
+        s = self.online(transport, n_ticks)
         if raw is None:
-            x, gaps = self.fill_gaps(d_lambda_nm)
-            raw, sat = self.quantize(self._currents(x))
-        raw = np.asarray(raw, dtype=np.int64)
-        n_s = raw.shape[0]
-        n_ticks = n_s * self.hold_ticks if n_ticks is None else int(n_ticks)
-        tick = 0
-        sent = words = past = 0
-        prev = np.zeros(raw.shape[1], dtype=np.int64)
-        for j in range(n_s):
-            t = int(self.tick_of_sample(j))
-            if t >= n_ticks:
-                past = n_s - j
-                break
-            changed = np.flatnonzero(raw[j] != prev)
-            if changed.size:
-                a, b = int(changed[0]), int(changed[-1]) + 1
-                if t > tick:
-                    transport.run(t - tick)
-                    tick = t
-                transport.write_currents(t, self.first + a, raw[j, a:b])
-                sent += 1
-                words += b - a
-                prev = raw[j]
-        if n_ticks > tick:
-            transport.run(n_ticks - tick)
-        spikes = transport.collect()
-        cnt = transport.counters()
-        self.check_counters(cnt, sent, len(spikes))
-        return DriverRun(spikes, n_ticks, sent, words, sat, cnt, past, gaps)
+            s.feed(d_lambda_nm)
+        else:
+            s.feed_raw(raw)
+        return s.finish(n_ticks)
+
+    def online(self, transport: Transport, n_ticks: int | None = None) -> "OnlineStream":
+        """A chunk-by-chunk stream for a live link (see :class:`OnlineStream`); ``n_ticks``
+        caps the run (default: every received sample's hold)."""
+        return OnlineStream(self, transport, n_ticks)
 
     @staticmethod
     def check_counters(cnt: dict, sent: int, received: int) -> None:
@@ -262,3 +259,107 @@ class FbgDriver:
         for k in ("overflow", "overrun", "late_writes", "dropped"):
             if cnt.get(k, 0):
                 raise TransportError(f"{k}: {cnt[k]} (nothing may be lost)")
+
+
+class OnlineStream:
+    """Chunk-by-chunk streaming (a live interrogator feeding a board): the front end's filter
+    state, the held value of a gap and the last written currents carry across chunks, so any
+    split of a trace gives exactly the writes and spikes of :meth:`FbgDriver.stream`.
+
+    Sample ``j``'s write (tick ``j R + L``) is sent once it is known to lie inside the run,
+    i.e. once ``(j R + L) < received * R``; :meth:`finish` counts the samples left beyond the
+    end (``samples_past_end``), runs the last ticks, collects and checks the counters.
+    """
+
+    def __init__(self, driver: FbgDriver, transport: Transport, n_ticks: int | None = None):
+        self.d, self.tr = driver, transport
+        self.limit = None if n_ticks is None else int(n_ticks)
+        self.states: dict = {}
+        self.last = None                   # last finite sample (for held gaps)
+        self.pending: list[np.ndarray] = []
+        self.received = 0                  # samples received
+        self.next_j = 0                    # next sample whose write is due
+        self.tick = 0
+        self.prev = np.zeros(len(driver.encodings), dtype=np.int64)
+        self.sent = self.words = self.gaps = 0
+        self.sat: dict = {}
+
+    def _count(self, sat: dict):
+        if not self.sat:
+            self.sat = dict(sat)
+            return
+        for k in ("format_low", "format_high", "range_low", "range_high", "values"):
+            self.sat[k] += sat[k]
+        self.sat["min_mV_per_ms"] = min(self.sat["min_mV_per_ms"], sat["min_mV_per_ms"])
+        self.sat["max_mV_per_ms"] = max(self.sat["max_mV_per_ms"], sat["max_mV_per_ms"])
+
+    def feed(self, d_lambda_nm) -> None:
+        """Front end, quantization and writes for the next chunk ``(n, neurons)`` of samples."""
+        x = np.array(d_lambda_nm, dtype=np.float64)
+        if x.ndim == 1:
+            x = x[:, None]
+        if self.last is not None and self.d.on_gap == "hold":
+            x, g = self.d.fill_gaps(np.concatenate([self.last[None, :], x]), self.received - 1)
+            x = x[1:]
+        else:
+            x, g = self.d.fill_gaps(x, self.received)
+        self.gaps += g
+        if x.shape[0] == 0:
+            return
+        self.last = x[-1].copy()
+        cur = np.empty_like(x)
+        groups: dict = {}
+        for i, e in enumerate(self.d.encodings):
+            groups.setdefault(e, []).append(i)
+        for e, cols in groups.items():
+            cur[:, cols], self.states[e] = e.currents_online(x[:, cols], self.states.get(e))
+        raw, sat = self.d.quantize(cur)
+        self._count(sat)
+        self.feed_raw(raw)
+
+    def feed_raw(self, raw) -> None:
+        """Writes for the next chunk of raw currents (already quantized)."""
+        raw = np.asarray(raw, dtype=np.int64)
+        if raw.ndim != 2 or raw.shape[1] != len(self.d.encodings):
+            raise ValueError(f"raw currents must have shape (n, {len(self.d.encodings)}), got "
+                             f"{raw.shape}")
+        self.pending.extend(raw)
+        self.received += raw.shape[0]
+        horizon = self.received * self.d.hold_ticks
+        self._send(horizon if self.limit is None else min(horizon, self.limit))
+
+    def _send(self, horizon: int) -> None:
+        d, tr = self.d, self.tr
+        while self.pending:
+            t = int(d.tick_of_sample(self.next_j))
+            if t >= horizon:
+                break
+            row = self.pending.pop(0)
+            self.next_j += 1
+            changed = np.flatnonzero(row != self.prev)
+            if not changed.size:
+                continue
+            a, b = int(changed[0]), int(changed[-1]) + 1
+            if t > self.tick:
+                tr.run(t - self.tick)
+                self.tick = t
+            tr.write_currents(t, d.first + a, row[a:b])
+            self.sent += 1
+            self.words += b - a
+            self.prev = row
+
+    def finish(self, n_ticks: int | None = None) -> DriverRun:
+        """Run to ``n_ticks`` (default: every received sample's hold), collect, check."""
+        if n_ticks is None:
+            n_ticks = self.limit
+        n_ticks = self.received * self.d.hold_ticks if n_ticks is None else int(n_ticks)
+        self._send(n_ticks)
+        past = len(self.pending)
+        if n_ticks > self.tick:
+            self.tr.run(n_ticks - self.tick)
+            self.tick = n_ticks
+        spikes = self.tr.collect()
+        cnt = self.tr.counters()
+        self.d.check_counters(cnt, self.sent, len(spikes))
+        return DriverRun(spikes, n_ticks, self.sent, self.words, self.sat, cnt, past,
+                         self.gaps)
