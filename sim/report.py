@@ -191,7 +191,9 @@ def write_report(run, out: Path) -> Path:
         stage_rows.append(["all engines (HDL simulators overlapped with the others)",
                            _f(t["engines_wall_s"], 2)])
     stage_rows += [["decode", _f(t["decode_s"], 2)]]
-    figs = "".join(f'<figure><img src="{n}" alt="{n}"><figcaption>{n}</figcaption></figure>'
+    # a figure that fails to load says so on the browser console
+    figs = "".join(f'<figure><img src="{n}" alt="{n}" onerror="console.error(\'missing figure: '
+                   f'\' + this.getAttribute(\'src\'))"><figcaption>{n}</figcaption></figure>'
                    for n in figure_names(run))
     blocks = "; ".join(f"{b['block']} ({b['neurons']} neurons on a core of "
                        f"{b['core_neurons']}, sets {', '.join(b['param_sets'])}, "

@@ -125,27 +125,34 @@ def test_scene_on_hdl_simulator_equals_twin(simulator, build_root):
         assert np.array_equal(x, y)
 
 
-def test_report_renders_in_headless_chromium_without_console_messages(tmp_path):
+def _chromium(page):
     import shutil
     import subprocess
     exe = shutil.which("chromium") or shutil.which("chromium-browser")
     if exe is None:
         pytest.fail("chromium is not installed (make setup installs it from apt)")
-    out = tmp_path / "rep"
-    assert cli.main(["run", "--engines", "golden,fixed", "--out", str(out)]) == 0
-    page = out / "index.html"
     proc = subprocess.run([exe, "--headless", "--no-sandbox", "--disable-gpu",
                            "--enable-logging=stderr", "--v=0", "--virtual-time-budget=3000",
                            "--dump-dom", page.as_uri()],
                           capture_output=True, text=True, timeout=120)
     assert proc.returncode == 0, proc.stderr[-2000:]
-    dom = proc.stdout
+    return proc.stdout, [ln for ln in proc.stderr.splitlines() if ":CONSOLE" in ln]
+
+
+def test_report_renders_in_headless_chromium_without_console_messages(tmp_path):
+    out = tmp_path / "rep"
+    assert cli.main(["run", "--engines", "golden,fixed", "--out", str(out)]) == 0
+    page = out / "index.html"
+    dom, console = _chromium(page)
     assert "<h1>four-material grasp</h1>" in dom
     assert dom.count("<img ") == len(re.findall(r"<img ", page.read_text())) >= 8
-    console = [ln for ln in proc.stderr.splitlines() if ":CONSOLE" in ln]
     assert console == [], console
     for link in re.findall(r'src="([^"]+)"', dom):
         assert (out / link).is_file(), link
+    # negative control: the same page with one figure gone is caught by the browser
+    (out / "isi_fixed.png").unlink()
+    _, console = _chromium(page)
+    assert len(console) == 1 and "missing figure: isi_fixed.png" in console[0]
 
 
 @pytest.mark.long
