@@ -271,8 +271,9 @@ class LifConfig:
         self.n_inputs = F = w.shape[1]
         wb = self.weight_bits
         if self.weight_frac_bits is None:
-            big = float(np.max(np.abs(w))) if w.size else 1.0
-            W = QFormat.for_range(-big, big, wb) if big > 0 else QFormat(1, wb - 1)
+            lo_w, hi_w = (float(w.min()), float(w.max())) if w.size else (0.0, 0.0)
+            W = QFormat.for_range(min(lo_w, 0.0), max(hi_w, 0.0), wb) if (lo_w or hi_w) \
+                else QFormat(1, wb - 1)
         else:
             W = QFormat(wb - self.weight_frac_bits, self.weight_frac_bits)
             if w.size and (w.min() < W.min_value - W.lsb / 2 or w.max() > W.max_value + W.lsb / 2):
@@ -330,7 +331,8 @@ class LifConfig:
         if self.decay == "multiply":
             big = max(ks)
             if big <= 0:
-                raise ConfigError("decay constant k = 1 - alpha is 0 (no leak) in every set")
+                raise ConfigError("every set's decay rounds to alpha = 1 (k = 1 - alpha = 0): the "
+                                  "neurons would not leak")
             ref = FixedConstant.normalized("k", big, ow)
             self.K = [FixedConstant.scaled(f"k[{i}]", k, ref.frac_bits, ow)
                       for i, k in enumerate(ks)]

@@ -1,0 +1,241 @@
+"""LIF core: refusals, twin against the float golden models, RTL against the twin (Amaranth
+simulator, every update of every sweep)."""
+
+import math
+
+import numpy as np
+import pytest
+from amaranth.sim import Simulator
+
+from cuneate.golden import lif as golden
+from cuneate.hdl.lif import (CLAMP_KINDS, PIPELINE_DEPTH, ConfigError, LifConfig, LifCore,
+                             LifTwin)
+
+
+# ---------------------------------------------------------------------------------- refusals
+@pytest.mark.parametrize("kw, match", [
+    ({"decay": "shift"}, "relative error"),                     # tau 20 ms: 2**-8 is 25 % off
+    ({"form": "discrete", "param_sets": [{"alpha": 1.0}]}, "rounds to alpha = 1"),
+    ({"form": "discrete", "param_sets": [{"alpha": 0.0}]}, "rounds to alpha = 0"),
+    ({"param_sets": [{}, {"tau_m_ms": 1e9}]}, "rounds to alpha = 1"),
+    ({"weights": np.full((8, 4), 3.0), "weight_frac_bits": 6}, "outside the weight format"),
+    ({"weights": np.full((8, 16), 1.0), "acc_bits": 8}, "fan-in sum would overflow"),
+    ({"weights": np.full((8, 16), 1.0), "input_limit": (-128, 130)}, "outside input_limit"),
+    ({"v_int_bits": 6}, "narrower than the proven state range"),
+    ({"v_int_bits": 4, "saturation": "flag"}, "cannot hold the thresholds"),
+    ({"param_sets": [{"v_reset": 20.0}]}, "below the threshold"),
+    ({"n_neurons": 4}, "n_neurons"),
+    ({"current_range": (-200.0, 10.0)}, "inside"),
+    ({"weights": np.ones((7, 2))}, "shape"),
+])
+def test_refusals(kw, match):
+    with pytest.raises(ConfigError, match=match):
+        LifConfig(**kw)
+
+
+def test_shift_decay_accepted_when_power_of_two_is_close():
+    cfg = LifConfig(decay="shift", param_sets=[{"tau_m_ms": 16.0}])   # dt/tau = 2**-8
+    assert cfg.k_shift == [8] and cfg.X is None
+    assert abs(cfg.k_q[0] - cfg.k_exact[0]) / cfg.k_exact[0] < 1e-2
+    assert cfg.to_dict()["multipliers"] == 0
+
+
+# ------------------------------------------------------------------------- twin vs golden
+def test_twin_matches_golden_spike_trains_continuous():
+    """Constant currents: every spike of the exact-integration golden model, at the same
+    update (quantization error stays far below one step of v near threshold)."""
+    cfg = LifConfig(n_neurons=8)
+    cur = np.linspace(20, 120, 8)
+    steps = 8000
+    got = LifTwin(cfg).run(cur, steps)
+    ref = golden.simulate_lif(np.tile(cur, (steps, 1)), cfg.dt_ms, n_neurons=8, record=False)
+    for a, b in zip(got, ref.spikes_ms):
+        assert len(a) == len(b) and len(a) > 0
+        assert np.max(np.abs(a - b)) <= cfg.dt_ms + 1e-12
+
+
+@pytest.mark.parametrize("form, decay, sets", [
+    ("continuous", "multiply", [{"tau_m_ms": 20.0, "t_ref_ms": 2.0},
+                                {"tau_m_ms": 10.0, "t_ref_ms": 1.0, "v_rest": -2.0}]),
+    ("continuous", "shift", [{"tau_m_ms": 16.0}, {"tau_m_ms": 8.0, "t_ref_ms": 0.5}]),
+    ("discrete", "multiply", [{"alpha": 0.389, "u_th": 0.65},
+                              {"alpha": 0.9, "u_th": 1.0, "refractory_steps": 2}]),
+])
+def test_one_step_bound_holds(form, decay, sets):
+    """One fixed update from random states and inputs stays within the derived bound of the
+    float golden update, for every update whose spike decision agrees."""
+    rng = np.random.default_rng(3)
+    n = 4000
+    cur_fmt = (8, 8) if form == "continuous" else (4, 12)
+    cfg = LifConfig(n_neurons=n, clock_hz=16e3 * n, form=form, decay=decay, param_sets=sets,
+                    neuron_sets=list(rng.integers(0, 2, n)), current_format=cur_fmt)
+    twin = LifTwin(cfg)
+    v = rng.integers(cfg.v_floor_raw, max(c.raw for c in cfg.TH), n)
+    ref = rng.integers(0, max(cfg.n_ref) + 1, n) * (rng.random(n) < 0.2)
+    I = rng.integers(cfg.I.min_raw, cfg.I.max_raw + 1, n)
+    sel = np.asarray(cfg.neuron_sets)
+    out = twin.update(v, ref, I, None, sel)
+    vf, Df = cfg.V.to_float(v), cfg.I.to_float(I)
+    gv, gspk, gpre = cfg.golden_step(vf, Df, ref, sel)
+    bound = cfg.one_step_bound(vf, Df, sel)
+    agree = gspk == out["spike"]
+    err = np.abs(cfg.V.to_float(out["v"]) - gv)[agree]
+    assert np.all(err <= bound[agree]), float((err / bound[agree]).max())
+    th = np.array([s.v_th for s in cfg.sets])[sel]
+    assert np.all(np.abs(gpre - th)[~agree] <= bound[~agree] + cfg.V.lsb)
+    assert agree.mean() > 0.99 and out["spike"].any() and not out["clamp"].any()
+
+
+def test_discrete_twin_matches_golden_with_quantized_weights():
+    """Weights exactly representable in 8 bits: the twin's spikes equal golden's."""
+    rng = np.random.default_rng(5)
+    w = rng.integers(-64, 128, (8, 10)) / 128.0
+    cfg = LifConfig(form="discrete", weights=w, weight_bits=8, current_format=(4, 12))
+    x = rng.random((200, 10)) < 0.3
+    got = LifTwin(cfg).run(0.0, 200, x)
+    ref = golden.simulate_discrete_lif(x.astype(float), w.T)
+    for n in range(8):
+        gk = np.flatnonzero(ref.spikes[:, n])
+        assert np.array_equal(np.round(got[n] / cfg.dt_ms - 1).astype(int), gk)
+    assert ref.spikes.sum() > 50
+
+
+# --------------------------------------------------------------------------- RTL vs twin
+def _run_rtl(cfg: LifConfig, currents, n_sweeps, inputs=None, sel_writes=None, period=None):
+    """Simulate the core with external ticks; return per-sweep (v, ref, i, acc, spike, clamp)
+    arrays as the ``upd_*`` probe reported them and the spike stream."""
+    dut = LifCore(cfg)
+    N, F = cfg.n_neurons, cfg.n_inputs
+    period = period or N
+    rec = {k: np.zeros((n_sweeps, N), dtype=np.int64)
+           for k in ("v", "ref", "i", "acc", "spike", "clamp")}
+    stream, done = [], []
+
+    async def bench(ctx):
+        ctx.set(dut.spike_ready, 1)
+        raw = cfg.I.to_raw(currents)
+        for n in range(N):
+            ctx.set(dut.i_wr_en, 1)
+            ctx.set(dut.i_wr_addr, n)
+            ctx.set(dut.i_wr_data, int(raw[n]))
+            await ctx.tick()
+        ctx.set(dut.i_wr_en, 0)
+        sweep = -1
+        total = n_sweeps * period + PIPELINE_DEPTH + 4
+        for c in range(total):
+            k = c // period
+            ctx.set(dut.tick, int(c % period == 0 and k < n_sweeps))
+            if F:
+                # spikes for sweep k + 1 arrive during tick k (mid-sweep)
+                src = None
+                if inputs is not None and c % period == 2 and k + 1 < n_sweeps:
+                    srcs = np.flatnonzero(inputs[k + 1])
+                    src = srcs
+                ctx.set(dut.in_valid, 0)
+            if sel_writes and c in sel_writes:
+                n, s = sel_writes[c]
+                ctx.set(dut.sel_wr_en, 1)
+                ctx.set(dut.sel_wr_addr, n)
+                ctx.set(dut.sel_wr_data, s)
+            else:
+                ctx.set(dut.sel_wr_en, 0)
+            await ctx.tick()
+            rec_sample(ctx)
+            if F and inputs is not None and c % period == 2 and k + 1 < n_sweeps:
+                ctx.set(dut.tick, 0)
+                for s_ in src:
+                    ctx.set(dut.in_valid, 1)
+                    ctx.set(dut.in_source, int(s_))
+                    await ctx.tick()
+                    rec_sample(ctx)
+                ctx.set(dut.in_valid, 0)
+
+    def rec_sample(ctx):
+        if ctx.get(dut.spike_valid):
+            stream.append((ctx.get(dut.spike_index), ctx.get(dut.spike_sweep)))
+        if ctx.get(dut.sweep_done):
+            done.append(ctx.get(dut.sweep_count))
+        if ctx.get(dut.upd_valid):
+            n = ctx.get(dut.upd_index)
+            s = state["sweep"] + (n == 0)
+            state["sweep"] = s
+            if s < n_sweeps:
+                for key, sig in (("v", dut.upd_v), ("ref", dut.upd_ref),
+                                 ("i", dut.upd_current), ("acc", dut.upd_acc),
+                                 ("spike", dut.upd_spike), ("clamp", dut.upd_clamp)):
+                    rec[key][s, n] = ctx.get(sig)
+
+    state = {"sweep": -1}
+    sim = Simulator(dut)
+    sim.add_clock(1e-6)
+    sim.add_testbench(bench)
+    sim.run()
+    return rec, stream, done
+
+
+def _twin_replay(cfg, rec, inputs):
+    """Advance the twin from the DUT's own previous state with the current it reports."""
+    twin = LifTwin(cfg)
+    v, ref = cfg.v_init_raw.copy(), np.zeros(cfg.n_neurons, dtype=np.int64)
+    mism = 0
+    for k in range(rec["v"].shape[0]):
+        out = twin.update(v, ref, rec["i"][k], None if inputs is None else inputs[k],
+                          twin.sel)
+        mism += int(np.sum((out["v"] != rec["v"][k]) | (out["ref"] != rec["ref"][k])
+                           | (out["spike"] != rec["spike"][k].astype(bool))
+                           | (out["clamp"] != rec["clamp"][k])
+                           | (out["acc"] != rec["acc"][k])))
+        v, ref = rec["v"][k], rec["ref"][k]
+    return mism
+
+
+@pytest.mark.parametrize("case", ["continuous_multiply", "continuous_shift", "discrete_weights",
+                                  "clamps"])
+def test_rtl_equals_twin_every_update(case):
+    rng = np.random.default_rng(7)
+    N = 12
+    base = {"n_neurons": N, "tick_source": "external", "spike_fifo_depth": 32}
+    inputs = None
+    if case == "continuous_multiply":
+        kw = {"param_sets": [{"tau_m_ms": 2.0, "t_ref_ms": 0.25},
+                             {"tau_m_ms": 1.0, "v_rest": -1.0}],
+              "neuron_sets": [i % 2 for i in range(N)]}
+        cur = np.linspace(5, 100, N)
+    elif case == "continuous_shift":
+        kw = {"decay": "shift", "param_sets": [{"tau_m_ms": 8.0, "t_ref_ms": 0.125},
+                                               {"tau_m_ms": 16.0}],
+              "neuron_sets": [i % 2 for i in range(N)]}
+        cur = np.linspace(60, 127, N)
+    elif case == "discrete_weights":
+        w = rng.integers(-8, 8, (N, 6)) / 8.0
+        kw = {"form": "discrete", "weights": w, "weight_bits": 4, "current_format": (4, 12),
+              "param_sets": [{"alpha": 0.389, "u_th": 0.65, "refractory_steps": 1}]}
+        cur = np.zeros(N)
+        inputs = rng.random((60, 6)) < 0.4
+    else:
+        # narrow state format and input limit: every clamp kind acts, flagged
+        w = np.full((N, 2), 100.0)
+        w[:N // 2] = 0.0
+        kw = {"weights": w, "input_limit": (-50.0, 150.0), "saturation": "flag",
+              "current_range": (-60.0, 100.0), "v_int_bits": 6,
+              "param_sets": [{"tau_m_ms": 0.5, "v_reset": -20.0}]}
+        cur = np.concatenate([np.full(N // 2, -128.0), np.full(N - N // 2, 120.0)])
+        inputs = np.zeros((60, 2), dtype=bool)
+        inputs[5::3, 0] = True
+    cfg = LifConfig(**base, **kw)
+    n_sweeps = 60
+    if inputs is not None:
+        inputs[0] = False          # the first sweep starts before any spike can arrive
+    rec, stream, done = _run_rtl(cfg, cur, n_sweeps, inputs, period=N + 6)
+    mism = _twin_replay(cfg, rec, inputs)
+    assert mism == 0
+    assert rec["spike"].sum() > 0
+    # spike stream and per-sweep counts agree with the updates
+    exp_stream = [(int(n), k) for k in range(n_sweeps) for n in np.flatnonzero(rec["spike"][k])]
+    assert stream[:len(exp_stream)] == exp_stream
+    assert done[:n_sweeps] == [int(x) for x in rec["spike"].sum(axis=1)]
+    if case == "clamps":
+        for b, k in enumerate(CLAMP_KINDS):
+            assert ((rec["clamp"] >> b) & 1).sum() > 0, k
+    else:
+        assert not rec["clamp"].any()
