@@ -43,7 +43,7 @@ from .lif_config import (CLAMP_KINDS, DECAYS, FORMS, PIPELINE_DEPTH, ConfigError
 
 __all__ = ["ConfigError", "LifConfig", "LifSet", "LifTwin", "LifCore", "PIPELINE_DEPTH",
            "CLAMP_KINDS", "FORMS", "DECAYS", "gather_input", "leak_operand", "leak_product",
-           "update_state"]
+           "update_state", "lif_verilog", "generate_lif"]
 
 
 def _lookup(table: Sequence[int], sel):
@@ -436,3 +436,31 @@ class LifCore(wiring.Component):
         with m.If(push & ~fifo.w_rdy):
             m.d.sync += self.spike_overflow.eq(1)
         return m
+
+
+# ----------------------------------------------------------------------------------------------
+def lif_verilog(config: LifConfig, name: str = "lif_core") -> str:
+    """Verilog text of the core (no source locations: the same config gives the same bytes)."""
+    from amaranth.back import verilog
+    return verilog.convert(LifCore(config), name=name, emit_src=False)
+
+
+def generate_lif(out, config: LifConfig, name: str = "lif_core") -> list:
+    """Write ``out/<name>.v`` and ``out/<name>.json`` (formats, constants and their errors,
+    latency, ports, resources hint); returns the paths."""
+    import json
+    from pathlib import Path
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    core = LifCore(config)
+    from amaranth.back import verilog
+    text = verilog.convert(core, name=name, emit_src=False)
+    desc = config.to_dict() | {"module": name}
+    desc["ports"] = {pname: {"direction": "in" if member.flow == In else "out",
+                             "width": len(getattr(core, pname)),
+                             "signed": bool(getattr(member.shape, "signed", False))}
+                     for pname, member in core.signature.members.items()}
+    vpath, jpath = out / f"{name}.v", out / f"{name}.json"
+    vpath.write_text(text)
+    jpath.write_text(json.dumps(desc, indent=2, sort_keys=True, default=float) + "\n")
+    return [vpath, jpath]
