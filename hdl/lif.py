@@ -102,11 +102,8 @@ def leak_operand(cfg: LifConfig, v, D, sel):
         x = v
     if cfg.X is None:
         return x
-    lo, hi = cfg.x_range
-    xb = (int(np.floor(lo * 2.0 ** cfg.X.frac_bits)) - 1,
-          int(np.ceil(hi * 2.0 ** cfg.X.frac_bits)) + 1)
-    return narrow(round_shift(x, cfg.V.frac_bits - cfg.X.frac_bits, cfg.rounding), cfg.X, xb,
-                  "leak operand")
+    return narrow(round_shift(x, cfg.V.frac_bits - cfg.X.frac_bits, cfg.rounding), cfg.X,
+                  cfg.x_bounds_raw, "leak operand")
 
 
 def leak_product(cfg: LifConfig, x, sel):

@@ -432,8 +432,15 @@ class LifConfig:
         if self.decay == "multiply":
             X = QFormat.for_range(x_lo - 2 * lsb, x_hi + 2 * lsb, self.operand_width)
             if X.frac_bits > fv:
-                X = QFormat(self.operand_width - fv, fv)
+                X = QFormat(X.int_bits, fv)
+
+            def bounds(fmt):
+                return (int(np.floor(x_lo * 2.0 ** fmt.frac_bits)) - 1,
+                        int(np.ceil(x_hi * 2.0 ** fmt.frac_bits)) + 1)
+            while not X.min_raw <= bounds(X)[0] <= bounds(X)[1] <= X.max_raw:
+                X = QFormat(X.int_bits + 1, X.frac_bits - 1)   # rounding reached the edge
             self.X = X
+            self.x_bounds_raw = bounds(X)
             self.product_shift = X.frac_bits + self.K[0].frac_bits - fv
         else:
             self.X = None
