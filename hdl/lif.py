@@ -38,6 +38,7 @@ from amaranth.lib.wiring import In, Out
 
 from .fixed import (QFormat, check_int64, clamp_flagged, is_hdl, narrow, round_shift, round_shift_select,
                     select)
+from .lif_synapses import TRACE_NAMES, trace_inputs, trace_products, trace_update
 from .lif_config import (CLAMP_KINDS, DECAYS, FORMS, PIPELINE_DEPTH, ConfigError, LifConfig,
                          LifSet)
 
@@ -66,31 +67,37 @@ def _false(like):
 # The datapath: stage 3 (gather_input, leak_operand), stage 4 (leak_product), stage 5
 # (update_state). NumPy int64 arrays (twin) and Amaranth values (RTL) alike.
 
-def gather_input(cfg: LifConfig, I, x: Sequence, w: Sequence):
-    """Total input ``D = clamp(I) + sum_i (x_i ? w_i : 0)`` in state fraction bits.
+def gather_input(cfg: LifConfig, I, x: Sequence, w: Sequence, traces=None):
+    """Total input ``D = clamp(I) + sum_i (x_i ? w_i : 0)`` in state fraction bits, or, with
+    synaptic traces, ``D = clamp(I) + I_syn`` (see :mod:`cuneate.hdl.lif_synapses`).
 
     ``x`` and ``w`` are per-source lists (spike bit and raw weight of the neuron for source
     ``i``). The sum cannot overflow its accumulator (width derived from the fan-in). Returns
-    ``D``, the accumulator and the ``current``/``input`` clamp flags."""
+    ``D``, the accumulator, the trace inputs ``ys`` and the ``current``/``input`` clamp flags."""
     fv = cfg.V.frac_bits
     if cfg.current_clamp:
         I, lo, hi = clamp_flagged(I, cfg.i_lo_raw, cfg.i_hi_raw, cfg.I)
         f_cur = lo | hi
     else:
         f_cur = _false(I)
-    acc = 0
-    for xi, wi in zip(x, w):
-        acc = acc + select(xi, wi, 0)
-    if not cfg.n_inputs:
-        acc = Const(0, 1) if is_hdl(I) else np.zeros(np.shape(I), dtype=np.int64)
-    D = (I << (fv - cfg.I.frac_bits)) + (acc << (fv - cfg.W.frac_bits))
+    ys = []
+    if cfg.synapses:
+        i_syn, ys, acc = trace_inputs(cfg, traces, x, w)
+        D = (I << (fv - cfg.I.frac_bits)) + i_syn
+    else:
+        acc = 0
+        for xi, wi in zip(x, w):
+            acc = acc + select(xi, wi, 0)
+        if not cfg.n_inputs:
+            acc = Const(0, 1) if is_hdl(I) else np.zeros(np.shape(I), dtype=np.int64)
+        D = (I << (fv - cfg.I.frac_bits)) + (acc << (fv - cfg.W.frac_bits))
     if cfg.input_clamp:
         width = max(abs(cfg.d_lo_raw), abs(cfg.d_hi_raw)).bit_length() + 1
         D, lo, hi = clamp_flagged(D, cfg.d_lo_raw, cfg.d_hi_raw, QFormat(width, 0))
         f_in = lo | hi
     else:
         f_in = _false(I)
-    return {"d": D, "acc": acc, "current": f_cur, "input": f_in}
+    return {"d": D, "acc": acc, "ys": ys, "current": f_cur, "input": f_in}
 
 
 def leak_operand(cfg: LifConfig, v, D, sel):
@@ -162,6 +169,7 @@ class LifTwin:
         self.v = cfg.v_init_raw.copy()
         self.ref = np.zeros(cfg.n_neurons, dtype=np.int64)
         self.I = np.zeros(cfg.n_neurons, dtype=np.int64)
+        self.traces = np.zeros((len(cfg.traces), cfg.n_neurons), dtype=np.int64)
         self.sweeps = 0
         self.clamp_sticky = 0
         self.clamp_counts = {k: 0 for k in CLAMP_KINDS}
@@ -175,21 +183,30 @@ class LifTwin:
             self.I[index] = raw
         return raw
 
-    def update(self, v, ref, I, x, sel):
+    def update(self, v, ref, I, x, sel, traces=None):
         """One update of every neuron given (raw arrays); ``x`` is the (n_inputs,) spike
-        vector of the tick. Returns the new state, spike, ``d``/``acc`` and clamp flags."""
+        vector of the tick, ``traces`` the (4, n) synaptic traces (with ``synapses``).
+        Returns the new state (``traces`` too), spike, ``d``/``acc`` and clamp flags."""
         cfg = self.cfg
         v, ref, I, sel = (np.asarray(a, dtype=np.int64) for a in (v, ref, I, sel))
         xs = np.zeros(cfg.n_inputs, dtype=bool) if x is None else np.asarray(x, dtype=bool)
         if xs.shape != (cfg.n_inputs,):
             raise ValueError(f"input spike vector must have {cfg.n_inputs} entries")
         W = cfg.weights_raw
-        g = gather_input(cfg, I, [bool(b) for b in xs], [W[:, i] for i in range(cfg.n_inputs)])
+        tr = None
+        if cfg.synapses:
+            tr = [np.asarray(t, dtype=np.int64) for t in (self.traces if traces is None
+                                                          else traces)]
+        g = gather_input(cfg, I, [bool(b) for b in xs], [W[:, i] for i in range(cfg.n_inputs)],
+                         tr)
         xop = leak_operand(cfg, v, g["d"], sel)
         d = leak_product(cfg, xop, sel)
         if self.check:
             check_int64("leak product", d)
         out = update_state(cfg, v, d, g["d"], ref, sel)
+        if cfg.synapses:
+            out["traces"] = np.array(trace_update(cfg, g["ys"], trace_products(cfg, g["ys"])),
+                                     dtype=np.int64)
         out["acc"] = np.broadcast_to(np.asarray(g["acc"], dtype=np.int64), v.shape)
         out["d"] = g["d"]
         out["current"] = np.broadcast_to(g["current"], v.shape)
@@ -202,6 +219,8 @@ class LifTwin:
         out = self.update(self.v, self.ref, self.I, x, self.sel)
         self.v = np.asarray(out["v"], dtype=np.int64)
         self.ref = np.asarray(out["ref"], dtype=np.int64)
+        if self.cfg.synapses:
+            self.traces = out["traces"]
         self.sweeps += 1
         for i, k in enumerate(CLAMP_KINDS):
             n = int(np.count_nonzero(out[k]))
@@ -275,6 +294,8 @@ class LifCore(wiring.Component):
             "sweep_done": Out(1), "sweep_count": Out(range(N + 1)),
             "sweep_number": Out(cfg.sweep_number_width), "overrun": Out(1), "busy": Out(1),
         }
+        for t in cfg.traces:
+            sig[f"upd_{t.name}"] = Out(t.T.shape())
         if F:
             sig["in_valid"] = In(1)
             sig["in_source"] = In(range(F))
@@ -305,6 +326,11 @@ class LifCore(wiring.Component):
             m.submodules.weight_mem = w_mem = Memory(shape=wb * F, depth=N, init=rows)
             w_rd = w_mem.read_port()
             rd_ports.append(w_rd)
+        TW = [t.T.width for t in cfg.traces]
+        if cfg.traces:
+            m.submodules.trace_mem = tr_mem = Memory(shape=sum(TW), depth=N, init=[])
+            tr_rd, tr_wr = tr_mem.read_port(), tr_mem.write_port()
+            rd_ports.append(tr_rd)
         m.d.comb += [
             cur_wr.addr.eq(self.i_wr_addr), cur_wr.data.eq(self.i_wr_data),
             cur_wr.en.eq(self.i_wr_en),
@@ -371,7 +397,12 @@ class LifCore(wiring.Component):
         w3 = reg("w", w_rd.data, 3) if F else None
         # --- stage 3: total input and leak operand -------------------------------------------
         ws = [w3[wb * i: wb * (i + 1)].as_signed() for i in range(F)]
-        g = gather_input(cfg, i3, [x3[i] for i in range(F)], ws)
+        tr3 = None
+        if cfg.traces:
+            offs = np.cumsum([0] + TW)
+            tr3 = [reg(f"tr_{t.name}", tr_rd.data[offs[j]:offs[j + 1]].as_signed(), 3)
+                   for j, t in enumerate(cfg.traces)]
+        g = gather_input(cfg, i3, [x3[i] for i in range(F)], ws, tr3)
         xop = leak_operand(cfg, v3, g["d"], sel3)
         v4, ref4, sel4, i4 = (reg(n, s, 4) for n, s in
                               (("v", v3), ("ref", ref3), ("sel", sel3), ("i", i3)))
@@ -383,6 +414,19 @@ class LifCore(wiring.Component):
                                         (("v", v4), ("ref", ref4), ("sel", sel4), ("i", i4),
                                          ("d", d4), ("acc", acc4)))
         p5 = reg("p", p, 5)
+        ys4 = [reg(f"y_{t.name}", y, 4) for t, y in zip(cfg.traces, g["ys"])]
+        # the trace products are formed in stage 4 from the registered ys
+        if cfg.traces:
+            tp5 = [reg(f"tp_{t.name}", q, 5) for t, q in zip(cfg.traces,
+                                                             trace_products(cfg, ys4))]
+            ys5 = [reg(f"y_{t.name}", y, 5) for t, y in zip(cfg.traces, ys4)]
+            tr_new = trace_update(cfg, ys5, tp5)
+            tr_out = [Signal(t.T.shape(), name=f"{t.name}_out") for t in cfg.traces]
+            m.d.comb += [o.eq(v) for o, v in zip(tr_out, tr_new)]
+            m.d.comb += [tr_wr.addr.eq(t5[1]), tr_wr.data.eq(Cat(*tr_out)),
+                         tr_wr.en.eq(t5[0])]
+            m.d.sync += [getattr(self, f"upd_{t.name}").eq(o)
+                         for t, o in zip(cfg.traces, tr_out)]
         fcur5, fin5 = reg("flag_current", fcur4, 5), reg("flag_input", fin4, 5)
         # --- stage 5: update, write back ------------------------------------------------------
         s5 = update_state(cfg, v5, p5, d5, ref5, sel5)

@@ -177,6 +177,10 @@ class LifConfig:
     sweep_number_width: int = 16
     v_init: Sequence[float] | None = None
     max_decay_error: float = 1e-2
+    synapses: bool = False
+    input_types: Sequence[str] | None = None
+    ampa: tuple[float, float] = (golden.AMPA.tau_rise_ms, golden.AMPA.tau_decay_ms)
+    gaba: tuple[float, float] = (golden.GABA.tau_rise_ms, golden.GABA.tau_decay_ms)
 
     def __post_init__(self):
         self._check_sizes()
@@ -269,6 +273,11 @@ class LifConfig:
             if not np.all(np.isfinite(w)):
                 raise ConfigError("weights must be finite")
         self.n_inputs = F = w.shape[1]
+        self.weights = w
+        self.input_exc = np.ones(F, dtype=bool)
+        if self.synapses:
+            from .lif_synapses import scale_weights
+            w, self.input_exc = scale_weights(self, w)     # the memory holds w / N_type
         wb = self.weight_bits
         if self.weight_frac_bits is None:
             lo_w, hi_w = (float(w.min()), float(w.max())) if w.size else (0.0, 0.0)
@@ -285,7 +294,6 @@ class LifConfig:
         self.W = W
         self.weights_raw = W.to_raw(w).astype(np.int64).reshape(self.n_neurons, F) if F else \
             np.zeros((self.n_neurons, 0), dtype=np.int64)
-        self.weights = w
         need = wb + max(0, (F - 1).bit_length()) if F else 1
         if self.acc_bits is None:
             self.acc_bits = need
@@ -298,12 +306,17 @@ class LifConfig:
                                                                                  np.int64)
         self.syn_hi_raw = np.where(wr > 0, wr, 0).sum(axis=1) if F else np.zeros(self.n_neurons,
                                                                                  np.int64)
-        # ---- total input D = I + sum w x, in state fraction bits
+        # ---- total input D = I + sum w x (or + I_syn), in state fraction bits
         fv = self.v_frac_bits
-        d_lo = (self.i_lo_raw << (fv - I.frac_bits)) + int(self.syn_lo_raw.min()
-                                                           << (fv - W.frac_bits))
-        d_hi = (self.i_hi_raw << (fv - I.frac_bits)) + int(self.syn_hi_raw.max()
-                                                           << (fv - W.frac_bits))
+        if self.synapses:
+            from .lif_synapses import derive_traces
+            self.traces, (s_lo, s_hi) = derive_traces(self)
+        else:
+            self.traces = []
+            s_lo = int(self.syn_lo_raw.min()) << (fv - W.frac_bits)
+            s_hi = int(self.syn_hi_raw.max()) << (fv - W.frac_bits)
+        d_lo = (self.i_lo_raw << (fv - I.frac_bits)) + s_lo
+        d_hi = (self.i_hi_raw << (fv - I.frac_bits)) + s_hi
         self.d_proven_raw = (int(d_lo), int(d_hi))
         if self.input_limit is None:
             self.d_lo_raw, self.d_hi_raw = self.d_proven_raw
@@ -512,14 +525,18 @@ class LifConfig:
               "saturation": self.saturation, "rounding": self.rounding,
               "tick_source": self.tick_source, "spike_fifo_depth": int(self.spike_fifo_depth),
               "sweep_number_width": int(self.sweep_number_width),
-              "v_init": list(self._v_init), "max_decay_error": float(self.max_decay_error)}
+              "v_init": list(self._v_init), "max_decay_error": float(self.max_decay_error),
+              "synapses": bool(self.synapses),
+              "input_types": (["exc" if e else "inh" for e in self.input_exc]
+                              if self.synapses else None),
+              "ampa": list(self.ampa), "gaba": list(self.gaba)}
         kw.update(override)
         return kw
 
     @classmethod
     def from_kwargs(cls, kw: dict) -> "LifConfig":
         kw = dict(kw)
-        for k in ("current_range", "input_limit"):
+        for k in ("current_range", "input_limit", "ampa", "gaba"):
             if kw.get(k) is not None:
                 kw[k] = tuple(kw[k])
         if isinstance(kw.get("current_format"), (list, tuple)):
@@ -548,7 +565,7 @@ class LifConfig:
             "latency_cycles": PIPELINE_DEPTH, "throughput": "one neuron update per cycle",
             "rounding": self.rounding, "tick_source": self.tick_source,
             "saturation": self.saturation,
-            "multipliers": 1 if self.decay == "multiply" else 0,
+            "multipliers": (1 if self.decay == "multiply" else 0) + len(self.traces),
             "formats": {"V": self.V.to_dict(), "I": self.I.to_dict(), "W": self.W.to_dict()}
             | ({"X": self.X.to_dict()} if self.X else {}),
             "n_inputs": self.n_inputs, "accumulator_bits": self.acc_bits,
@@ -562,7 +579,14 @@ class LifConfig:
             "clamps": {k: {"built": v} for k, v in self.clamp_can_act.items()},
             "one_step_bound_mid_range": [float(b) for b in bound],
             "state_word_bits": self.V.width + self.ref_bits,
-            "resources_hint": {"multipliers": 1 if self.decay == "multiply" else 0,
+            "synapses": ({"input_types": ["exc" if e else "inh" for e in self.input_exc],
+                          "weights_stored_as": "w / N (peak-normalized kernel)",
+                          "traces": {t.name: t.to_dict() for t in self.traces},
+                          "multipliers": len(self.traces)} if self.synapses else None),
+            "resources_hint": {"multipliers": (1 if self.decay == "multiply" else 0)
+                               + len(self.traces),
+                               "trace_ram_bits": self.n_neurons * sum(t.T.width
+                                                                      for t in self.traces),
                                "state_ram_bits": self.n_neurons * (self.V.width + self.ref_bits),
                                "current_ram_bits": self.n_neurons * self.I.width,
                                "weight_ram_bits": self.n_neurons * self.n_inputs

@@ -109,6 +109,7 @@ def _run_rtl(cfg: LifConfig, currents, n_sweeps, inputs=None, sel_writes=None, p
     period = period or N
     rec = {k: np.zeros((n_sweeps, N), dtype=np.int64)
            for k in ("v", "ref", "i", "acc", "spike", "clamp")}
+    rec["tr"] = np.zeros((n_sweeps, len(cfg.traces), N), dtype=np.int64)
     stream, done = [], []
 
     async def bench(ctx):
@@ -164,6 +165,8 @@ def _run_rtl(cfg: LifConfig, currents, n_sweeps, inputs=None, sel_writes=None, p
                                  ("i", dut.upd_current), ("acc", dut.upd_acc),
                                  ("spike", dut.upd_spike), ("clamp", dut.upd_clamp)):
                     rec[key][s, n] = ctx.get(sig)
+                for j, t in enumerate(cfg.traces):
+                    rec["tr"][s, j, n] = ctx.get(getattr(dut, f"upd_{t.name}"))
 
     state = {"sweep": -1}
     sim = Simulator(dut)
@@ -177,10 +180,14 @@ def _twin_replay(cfg, rec, inputs):
     """Advance the twin from the DUT's own previous state with the current it reports."""
     twin = LifTwin(cfg)
     v, ref = cfg.v_init_raw.copy(), np.zeros(cfg.n_neurons, dtype=np.int64)
+    tr = np.zeros((len(cfg.traces), cfg.n_neurons), dtype=np.int64)
     mism = 0
     for k in range(rec["v"].shape[0]):
         out = twin.update(v, ref, rec["i"][k], None if inputs is None else inputs[k],
-                          twin.sel)
+                          twin.sel, tr)
+        if cfg.traces:
+            mism += int(np.sum(out["traces"] != rec["tr"][k]))
+            tr = rec["tr"][k]
         mism += int(np.sum((out["v"] != rec["v"][k]) | (out["ref"] != rec["ref"][k])
                            | (out["spike"] != rec["spike"][k].astype(bool))
                            | (out["clamp"] != rec["clamp"][k])
@@ -190,7 +197,7 @@ def _twin_replay(cfg, rec, inputs):
 
 
 @pytest.mark.parametrize("case", ["continuous_multiply", "continuous_shift", "discrete_weights",
-                                  "clamps"])
+                                  "clamps", "synapses"])
 def test_rtl_equals_twin_every_update(case):
     rng = np.random.default_rng(7)
     N = 12
@@ -212,6 +219,12 @@ def test_rtl_equals_twin_every_update(case):
               "param_sets": [{"alpha": 0.389, "u_th": 0.65, "refractory_steps": 1}]}
         cur = np.zeros(N)
         inputs = rng.random((60, 6)) < 0.4
+    elif case == "synapses":
+        w = rng.uniform(0, 20, (N, 4))
+        kw = {"synapses": True, "weights": w, "input_types": ["exc", "exc", "inh", "exc"],
+              "update_hz": 2000.0, "param_sets": [{"tau_m_ms": 5.0, "t_ref_ms": 1.0}]}
+        cur = np.linspace(0, 15, N)
+        inputs = rng.random((60, 4)) < 0.3
     else:
         # narrow state format and input limit: every clamp kind acts, flagged
         w = np.full((N, 2), 100.0)
@@ -234,8 +247,53 @@ def test_rtl_equals_twin_every_update(case):
     exp_stream = [(int(n), k) for k in range(n_sweeps) for n in np.flatnonzero(rec["spike"][k])]
     assert stream[:len(exp_stream)] == exp_stream
     assert done[:n_sweeps] == [int(x) for x in rec["spike"].sum(axis=1)]
+    if case == "synapses":
+        assert (rec["tr"] > 0).any(axis=(0, 2)).all()      # every trace carried input
     if case == "clamps":
         for b, k in enumerate(CLAMP_KINDS):
             assert ((rec["clamp"] >> b) & 1).sum() > 0, k
     else:
         assert not rec["clamp"].any()
+
+
+def test_synaptic_traces_follow_the_golden_kernel():
+    """Input spikes through AMPA and GABA traces: the twin's I_syn equals the golden
+    difference-of-exponentials sum (with the stored weights) within the traces' rounding
+    margin, and it drives the membrane like golden's current does."""
+    rng = np.random.default_rng(2)
+    n_in, steps = 3, 3000
+    w = np.tile([[12.0, 9.0, 6.0]], (8, 1))
+    cfg = LifConfig(synapses=True, weights=w, input_types=["exc", "exc", "inh"])
+    x = rng.random((steps, n_in)) < 0.01
+    twin = LifTwin(cfg)
+    twin.set_currents(16.0)
+    isyn, spikes = np.zeros(steps), []
+    for k in range(steps):
+        tr = twin.traces[:, 0]
+        isyn[k] = cfg.V.to_float((tr[0] - tr[1]) - (tr[2] - tr[3]))
+        if twin.sweep(x[k])[0]:
+            spikes.append(k)
+    t = np.arange(steps) * cfg.dt_ms
+    from cuneate.golden import synapses as gs
+    w_eff = cfg.W.to_float(cfg.weights_raw[0]) * np.array(
+        [gs._norm_factor(*cfg.ampa, "peak")] * 2 + [gs._norm_factor(*cfg.gaba, "peak")])
+    pre = [np.flatnonzero(x[:, i]) * cfg.dt_ms for i in range(n_in)]
+    ref = (golden.synaptic_current(pre[:2], t, *cfg.ampa, latency_ms=0.0, weight=w_eff[:2])
+           - golden.synaptic_current(pre[2:], t, *cfg.gaba, latency_ms=0.0, weight=w_eff[2:]))
+    margin = sum((s.Y.lsb + 2 * cfg.V.lsb) / s.K.quantized for s in cfg.traces)
+    assert np.max(np.abs(isyn - ref)) <= margin
+    assert isyn.max() > 5 and isyn.min() < -3
+    g = golden.simulate_lif(16.0 + ref[:, None], cfg.dt_ms, n_neurons=1, record=False)
+    assert abs(len(g.spikes_ms[0]) - len(spikes)) <= 1 and len(spikes) > 3
+
+
+@pytest.mark.parametrize("kw, match", [
+    ({"synapses": True}, "needs weights"),
+    ({"synapses": True, "weights": -np.ones((8, 2))}, "must be >= 0"),
+    ({"synapses": True, "weights": np.ones((8, 2)), "input_types": ["exc"]}, "input_types"),
+    ({"synapses": True, "weights": np.ones((8, 2)), "form": "discrete"}, "continuous form"),
+    ({"synapses": True, "weights": np.ones((8, 2)), "ampa": (2.0, 0.4)}, "tau_rise"),
+])
+def test_synapse_refusals(kw, match):
+    with pytest.raises(ConfigError, match=match):
+        LifConfig(**kw)
