@@ -207,6 +207,7 @@ class LifTwin:
         if cfg.synapses:
             out["traces"] = np.array(trace_update(cfg, g["ys"], trace_products(cfg, g["ys"])),
                                      dtype=np.int64)
+            out["ys"] = np.array(g["ys"], dtype=np.int64)
         out["acc"] = np.broadcast_to(np.asarray(g["acc"], dtype=np.int64), v.shape)
         out["d"] = g["d"]
         out["current"] = np.broadcast_to(g["current"], v.shape)

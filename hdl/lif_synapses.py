@@ -28,7 +28,7 @@ from ..golden import synapses as gsyn
 from .fixed import FixedConstant, QFormat, narrow, round_shift
 
 __all__ = ["TRACE_NAMES", "TraceSpec", "derive_traces", "trace_inputs", "trace_products",
-           "trace_update"]
+           "trace_update", "trace_golden_check"]
 
 #: trace order everywhere (state word, probe ports, twin arrays)
 TRACE_NAMES = ("xd_ampa", "xr_ampa", "xd_gaba", "xr_gaba")
@@ -167,3 +167,19 @@ def trace_products(cfg, ys):
 def trace_update(cfg, ys, ps):
     """Stage 5: ``x' = y - k y`` for each trace, in its proven format (no clamp)."""
     return [narrow(y - p, s.T, s.t_bounds, s.name) for s, y, p in zip(cfg.traces, ys, ps)]
+
+
+def trace_golden_check(cfg, ys, traces_out):
+    """Float64 golden trace step ``exp(-dt/tau) y`` from the same ``y`` (raw, state fraction
+    bits) against the fixed result; returns ``(abs errors, bounds)`` arrays (4, n). The bound:
+    the represented ``k`` against the exact one, the rounding of the operand and the product."""
+    half = 0.5 if cfg.rounding == "nearest" else 1.0
+    lsb = cfg.V.lsb
+    errs, bounds = [], []
+    for s, y, t in zip(cfg.traces, ys, traces_out):
+        yf = np.asarray(y, dtype=np.float64) * lsb
+        gold = yf * math.exp(-cfg.dt_ms / s.tau_ms)
+        errs.append(np.abs(np.asarray(t, dtype=np.float64) * lsb - gold))
+        bounds.append(abs(s.K.quantized - s.k_exact) * np.abs(yf) + s.K.quantized * half * s.Y.lsb
+                      + half * lsb + 1e-12 * (1 + np.abs(yf)))
+    return np.array(errs), np.array(bounds)

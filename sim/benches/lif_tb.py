@@ -32,6 +32,7 @@ from cocotb.clock import Clock
 from cocotb.triggers import FallingEdge, RisingEdge
 
 from cuneate.hdl.lif import CLAMP_KINDS, PIPELINE_DEPTH, LifConfig, LifTwin
+from cuneate.hdl.lif_synapses import trace_golden_check
 
 
 def _load():
@@ -54,20 +55,29 @@ class LifSweepChecker:
         self.sel = np.asarray(cfg.neuron_sets, dtype=np.int64)
         self.prev_v = cfg.v_init_raw.copy()
         self.prev_ref = np.zeros(cfg.n_neurons, dtype=np.int64)
-        self.stats = {"sweeps_checked": 0, "updates_checked": 0, "twin_mismatches": 0,
+        self.prev_tr = np.zeros((len(cfg.traces), cfg.n_neurons), dtype=np.int64)
+        self.stats = {"trace_golden_max_ratio": 0.0, "trace_bound_violations": 0,"sweeps_checked": 0, "updates_checked": 0, "twin_mismatches": 0,
                       "golden_bound_violations": 0, "golden_max_ratio": 0.0,
                       "golden_max_err": 0.0, "spike_disagreements": 0,
                       "spike_disagreements_near_threshold": 0, "flagged_updates": 0,
                       "spikes": 0, "clamp_counts": {k: 0 for k in CLAMP_KINDS},
                       "clamp_sticky": 0, "first_mismatch": None}
 
-    def check(self, v, ref, i, acc, spike, clamp, x):
+    def check(self, v, ref, i, acc, spike, clamp, x, traces=None):
         cfg, st = self.cfg, self.stats
         v, ref, i, acc, clamp = (np.asarray(a, dtype=np.int64) for a in (v, ref, i, acc, clamp))
         spk = np.asarray(spike, dtype=bool)
-        out = self.twin.update(self.prev_v, self.prev_ref, i, x, self.sel)
+        out = self.twin.update(self.prev_v, self.prev_ref, i, x, self.sel, self.prev_tr)
         mism = ((out["v"] != v) | (out["ref"] != ref) | (out["spike"] != spk)
                 | (out["clamp"] != clamp) | (out["acc"] != acc))
+        if cfg.traces:
+            traces = np.asarray(traces, dtype=np.int64)
+            mism |= (out["traces"] != traces).any(axis=0)
+            err, bnd = trace_golden_check(cfg, out["ys"], traces)
+            st["trace_bound_violations"] += int((err > bnd).sum())
+            st["trace_golden_max_ratio"] = max(st["trace_golden_max_ratio"],
+                                               float((err / bnd).max()))
+            self.prev_tr = traces.copy()
         st["twin_mismatches"] += int(mism.sum())
         if mism.any() and st["first_mismatch"] is None:
             k = int(np.flatnonzero(mism)[0])
@@ -108,6 +118,9 @@ class LifSweepChecker:
         if st["twin_mismatches"]:
             out.append(f"RTL differs from the twin in {st['twin_mismatches']} updates "
                        f"({st['first_mismatch']})")
+        if st["trace_bound_violations"]:
+            out.append(f"{st['trace_bound_violations']} synaptic trace updates left the "
+                       f"golden bound")
         if st["golden_bound_violations"]:
             out.append(f"{st['golden_bound_violations']} unflagged updates left the golden bound")
         if st["spike_disagreements"]:
@@ -178,6 +191,8 @@ async def scoreboard(dut):
     x_of = [np.zeros(F, dtype=bool) for _ in range(n_sweeps + 2)]
     buf = {k: np.zeros(N, dtype=np.int64) for k in ("v", "ref", "i", "acc", "spike", "clamp",
                                                      "cycle")}
+    buf["tr"] = np.zeros((len(cfg.traces), N), dtype=np.int64)
+    tr_sigs = [getattr(dut, f"upd_{t.name}") for t in cfg.traces]
     extra = {"current_violations": 0, "count_mismatches": 0, "clamp_counter_mismatches": 0,
              "sticky_mismatches": 0}
     stream, expected_stream, done, expected_done = [], [], [], []
@@ -233,12 +248,14 @@ async def scoreboard(dut):
         buf["spike"][idx] = int(d.upd_spike.value)
         buf["clamp"][idx] = int(d.upd_clamp.value)
         buf["cycle"][idx] = tb.cycle
+        for j, sg in enumerate(tr_sigs):
+            buf["tr"][j, idx] = sg.value.to_signed()
         fill += 1
         if idx != N - 1:
             continue
         k = checker.stats["sweeps_checked"]
         checker.check(buf["v"], buf["ref"], buf["i"], buf["acc"], buf["spike"], buf["clamp"],
-                      x_of[k] if F else None)
+                      x_of[k] if F else None, buf["tr"])
         for n in range(N):
             if int(buf["i"][n]) not in tb.allowed_currents(n, int(buf["cycle"][n])
                                                            - PIPELINE_DEPTH):

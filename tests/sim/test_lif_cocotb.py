@@ -5,7 +5,8 @@ refractory counter, spike, accumulated input, clamp flags) and against the float
 from the DUT's own state (within the derived bound for every unflagged update), while the host
 rewrites currents during sweeps and input spikes arrive between ticks. Three cases: continuous
 with two parameter sets and a multiplier, continuous shift-and-subtract, discrete with 4-bit
-weights; a fourth narrows formats so that every clamp kind acts and is flagged and counted.
+weights; AMPA/GABA synaptic traces (each trace update also within its golden bound); and one
+that narrows formats so that every clamp kind acts and is flagged and counted.
 """
 
 import json
@@ -40,6 +41,12 @@ CASES = {
                                 {"alpha": 0.9, "u_th": 1.0, "refractory_steps": 2}],
                  "neuron_sets": [i % 2 for i in range(16)]},
         "sweeps": 150, "current_range": [-0.25, 0.25], "input_spike_p": 0.5},
+    "synapses": {
+        "core": {"n_neurons": 12, "tick_source": "external", "synapses": True,
+                 "weights": (np.abs(_W[:12, :4]) * 16).tolist(),
+                 "input_types": ["exc", "inh", "exc", "exc"], "update_hz": 4000.0,
+                 "param_sets": [{"tau_m_ms": 4.0, "t_ref_ms": 1.0}]},
+        "sweeps": 150, "current_range": [0.0, 20.0], "input_spike_p": 0.4},
     "clamps": {
         "core": {"n_neurons": 12, "tick_source": "external",
                  "weights": [[0.0, 0.0]] * 6 + [[100.0, 100.0]] * 6,
@@ -74,6 +81,8 @@ def test_scoreboard(simulator, case, build_root):
     assert r["sticky_mismatches"] == 0 and r["current_violations"] == 0
     if cfg.n_inputs:
         assert r["input_spikes"] > 0
+    if case == "synapses":
+        assert r["trace_bound_violations"] == 0 and 0 < r["trace_golden_max_ratio"] <= 1.0
     if case == "clamps":
         assert all(r["clamp_counts"][k] > 0 for k in CLAMP_KINDS), r["clamp_counts"]
     else:
