@@ -51,6 +51,11 @@ def add_lif_options(p, *, neurons_default: int) -> None:
     g.add_argument("--weights", default=None, metavar="CSV",
                    help="weights of the input spikes, one row per neuron (n_neurons x n_inputs)")
     g.add_argument("--weight-bits", type=positive_int, default=8)
+    g.add_argument("--synapses", action="store_true",
+                   help="AMPA/GABA difference-of-exponentials currents from the input spikes "
+                        "(continuous form; weights >= 0 are peak currents in mV)")
+    g.add_argument("--input-types", default=None, metavar="exc,inh,...",
+                   help="type of every input source with --synapses (default all exc)")
     g.add_argument("--saturation", choices=("refuse", "flag"), default="refuse")
     g.add_argument("--rounding", choices=("nearest", "truncate"), default="nearest")
     g.add_argument("--max-decay-error", type=positive_float, default=1e-2)
@@ -72,7 +77,9 @@ def lif_kwargs(args, n: int) -> dict:
           "v_int_bits": args.v_int_bits, "operand_width": args.operand_width,
           "current_format": tuple(cf), "weight_bits": args.weight_bits,
           "saturation": args.saturation, "rounding": args.rounding,
-          "max_decay_error": args.max_decay_error}
+          "max_decay_error": args.max_decay_error, "synapses": args.synapses}
+    if args.input_types:
+        kw["input_types"] = [t.strip() for t in args.input_types.split(",")]
     if args.clock_hz is not None:
         kw["clock_hz"] = args.clock_hz
     if args.weights:

@@ -142,7 +142,17 @@ def run_lif(engine: str, cfg: LifConfig, program: LifProgram, n: int | None = No
 def _run_golden(cfg: LifConfig, cur: np.ndarray, inputs) -> list[list[int]]:
     N = cfg.n_neurons
     drive = cur.copy()
-    if inputs is not None and cfg.n_inputs:
+    if inputs is not None and cfg.n_inputs and cfg.synapses:
+        # difference-of-exponentials currents: a spike of tick m adds w K((k - m) dt) at k
+        t = np.arange(cur.shape[0]) * cfg.dt_ms
+        pre = [np.flatnonzero(inputs[:, i]) * cfg.dt_ms for i in range(cfg.n_inputs)]
+        for typ, taus, sign in (("exc", cfg.ampa, 1.0), ("inh", cfg.gaba, -1.0)):
+            cols = np.flatnonzero(cfg.input_exc == (typ == "exc"))
+            if cols.size:
+                drive += sign * golden.synaptic_current([pre[i] for i in cols], t, *taus,
+                                                        latency_ms=0.0,
+                                                        weight=cfg.weights[:, cols].T)
+    elif inputs is not None and cfg.n_inputs:
         drive += np.asarray(inputs, dtype=np.float64) @ cfg.weights.T
     sel = np.asarray(cfg.neuron_sets)
     steps: list[list[int]] = [[] for _ in range(N)]
