@@ -20,6 +20,10 @@ one shared exponent) or a per-set shift ``s`` (shift mode, no multiplier). All a
 from :mod:`cuneate.hdl.fixed`; the three datapath steps below are used by the RTL (a pipeline
 register after each stage) and by the twin (composed directly).
 
+With ``synapses=True`` the weighted input spikes drive four per-neuron AMPA/GABA traces instead
+(:mod:`cuneate.hdl.lif_synapses`): ``D = clamp(I) + I_syn``, the traces in their own block RAM,
+their decays (one multiplier each) in stage 4 and their write-back in stage 5.
+
 Every clamp that can act is flagged and counted (:data:`CLAMP_KINDS`): ``current`` (host wrote
 outside ``current_range``), ``input`` (the total input left ``input_limit``; only built with
 ``saturation="flag"``) and ``v_low`` (state below a format narrower than proven).
