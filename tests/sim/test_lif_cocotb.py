@@ -47,6 +47,13 @@ CASES = {
                  "input_types": ["exc", "inh", "exc", "exc"], "update_hz": 4000.0,
                  "param_sets": [{"tau_m_ms": 4.0, "t_ref_ms": 1.0}]},
         "sweeps": 150, "current_range": [0.0, 20.0], "input_spike_p": 0.4},
+    # the default size: 2500 neurons at 40 MHz / 16 kHz, brief's excitatory cell
+    "n2500_default": {
+        "core": {"n_neurons": 2500, "clock_hz": 40e6, "tick_source": "external",
+                 "spike_fifo_depth": 2048,
+                 "v_init": np.random.default_rng(0).uniform(0.0, 18.0, 2500).tolist()},
+        "sweeps": 4, "current_range": [-128.0, 127.0], "writes_per_sweep": 20,
+        "period": 2504},
     "clamps": {
         "core": {"n_neurons": 12, "tick_source": "external",
                  "weights": [[0.0, 0.0]] * 6 + [[100.0, 100.0]] * 6,
