@@ -277,8 +277,8 @@ class LifCore(wiring.Component):
 
     Input spikes: ``in_valid``/``in_source`` set a source's bit in the pending vector; each
     tick moves the pending vector into the active one (used by every neuron of that sweep)
-    and clears it, so a spike arriving during tick t acts on the sweep of tick t + 1 (several
-    spikes of one source in one tick count once). Other ports are those of
+    and clears it, so a spike arriving during tick t acts on the sweep of tick t + 1. Several
+    spikes of one source in one tick count once and set the sticky ``in_merged`` flag. Other ports are those of
     :class:`cuneate.hdl.izhikevich.IzhikevichCore` (``i_wr_*``, ``sel_wr_*``, spike stream,
     ``upd_*`` probe with ``upd_ref``, ``upd_acc``, sweep counters, sticky clamp flags).
     """
@@ -304,6 +304,7 @@ class LifCore(wiring.Component):
         if F:
             sig["in_valid"] = In(1)
             sig["in_source"] = In(range(F))
+            sig["in_merged"] = Out(1)
         for k in CLAMP_KINDS:
             sig[f"sweep_clamps_{k}"] = Out(range(N + 1))
         if cfg.tick_source == "external":
@@ -379,6 +380,9 @@ class LifCore(wiring.Component):
                 m.d.sync += [active.eq(pending), pending.eq(event)]
             with m.Else():
                 m.d.sync += pending.eq(pending | event)
+                # a second spike of a source within one tick merges with the first: flagged
+                with m.If(self.in_valid & pending.bit_select(self.in_source, 1)):
+                    m.d.sync += self.in_merged.eq(1)
 
         # --- pipeline tags --------------------------------------------------------------------
         def tag(n):

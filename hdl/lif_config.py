@@ -360,8 +360,9 @@ class LifConfig:
                 self.K.append(FixedConstant(f"k[{i}]", k, 1, s, s + 2))
         self.k_q = [c.quantized for c in self.K]
         for i, (k, kq) in enumerate(zip(ks, self.k_q)):
-            what = (f"set {i}: decay alpha = {1 - k:.6g} (k = 1 - alpha = {k:.6g}) as "
-                    f"{'a multiplier constant' if self.decay == 'multiply' else f'2**-{self.k_shift[i] if self.k_shift else 0}'}")
+            form = ("a multiplier constant" if self.k_shift is None
+                    else f"2**-{self.k_shift[i]}")
+            what = f"set {i}: decay alpha = {1 - k:.6g} (k = 1 - alpha = {k:.6g}) as {form}"
             if kq <= 0:
                 raise ConfigError(f"{what} rounds to alpha = 1: the neuron would not leak")
             if kq >= 1:
@@ -376,7 +377,6 @@ class LifConfig:
     def _derive_state(self):
         fv, lsb = self.v_frac_bits, 2.0 ** -self.v_frac_bits
         cont = self.form == "continuous"
-        init = ([s.v_rest for s in self.sets] if self.v_init is None else None)
         if self.v_init is None:
             v_init = [self.sets[s].v_rest if cont else self.sets[s].v_reset
                       for s in self.neuron_sets]
@@ -384,7 +384,6 @@ class LifConfig:
             v_init = [float(x) for x in self.v_init]
             if len(v_init) != self.n_neurons or not all(map(math.isfinite, v_init)):
                 raise ConfigError(f"v_init needs {self.n_neurons} finite values")
-        del init
         self._v_init = v_init
         lo_all, hi_all, pre_hi_all = [], [], []
         for i, s in enumerate(self.sets):

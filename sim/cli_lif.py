@@ -144,6 +144,7 @@ def cmd_simulate(args) -> int:
            "scheme": "exact" if cfg.form == "continuous" else "discrete",
            "decay": cfg.decay, "duration_ms": n_sweeps * cfg.dt_ms, "neurons": n,
            "params": dict(cfg.param_sets[0]), "current": cur, "spikes_ms": run.spikes_ms,
+           "accepted_current_range": [cfg.i_lo, cfg.i_hi],
            "formats": {"V": str(cfg.V), "I": str(cfg.I), "W": str(cfg.W),
                        "X": str(cfg.X) if cfg.X else None},
            "saturation": None if args.engine == "golden" else

@@ -12,7 +12,8 @@ Configured by the JSON file named in ``CUNEATE_BENCH_CONFIG``; figures go to
     counter, the spike, the accumulated input and the clamp flags; (b) the float64 golden
     update from the same state within the derived one-step bound for every unflagged update.
     The current used must be one the host wrote; the spike stream, per-sweep spike and clamp
-    counters and sticky flags must agree with the updates.
+    counters and sticky flags must agree with the updates; ``in_merged`` must be set exactly
+    when a source spiked twice within one tick.
 ``engine``
     Runs the core like a host: per sweep, waits for the previous sweep to finish issuing,
     writes the currents that change, sends that sweep's input spikes, ticks; records the spike
@@ -202,6 +203,7 @@ async def scoreboard(dut):
     fill = 0
     t0 = time.perf_counter()
     phase = 0
+    merged_expected = False
     while checker.stats["sweeps_checked"] < n_sweeps:
         # drive this cycle's inputs (after the falling edge)
         tick = phase == 0 and tick_no < n_sweeps + 1
@@ -215,6 +217,7 @@ async def scoreboard(dut):
             s = rng.randrange(F)
             d.in_valid.value = 1
             d.in_source.value = s
+            merged_expected |= bool(x_of[tick_no][s])
             x_of[tick_no][s] = True            # lands in the sweep of the next tick
         elif not tick and rng.random() < writes_per_sweep / period:
             n = rng.randrange(N)
@@ -283,6 +286,8 @@ async def scoreboard(dut):
     extra["clamp_counter_mismatches"] = sum(a[2:] != b[2:] for a, b in zip(done, expected_done))
     extra["stream_matches"] = stream[:len(expected_stream)] == expected_stream
     extra["input_spikes"] = int(sum(x.sum() for x in x_of))
+    extra["merged_expected"] = merged_expected
+    extra["merged_flag"] = bool(int(d.in_merged.value)) if F else False
     stats = checker.stats | extra
     stats.update(overrun=int(d.overrun.value), spike_overflow=int(d.spike_overflow.value),
                  cycles=tb.cycle, wall_s=elapsed,
@@ -290,6 +295,7 @@ async def scoreboard(dut):
     _report(stats)
     assert not checker.failures(), "; ".join(checker.failures())
     assert stats["current_violations"] == 0
+    assert stats["merged_flag"] == stats["merged_expected"], "in_merged flag disagrees"
     assert stats["count_mismatches"] == 0 and stats["clamp_counter_mismatches"] == 0
     assert stats["sticky_mismatches"] == 0 and stats["stream_matches"]
     assert stats["overrun"] == 0 and stats["spike_overflow"] == 0

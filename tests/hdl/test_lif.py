@@ -297,3 +297,33 @@ def test_synaptic_traces_follow_the_golden_kernel():
 def test_synapse_refusals(kw, match):
     with pytest.raises(ConfigError, match=match):
         LifConfig(**kw)
+
+
+def test_second_spike_of_a_source_in_one_tick_is_flagged():
+    cfg = LifConfig(weights=np.full((8, 3), 0.5), tick_source="external")
+    dut = LifCore(cfg)
+    seen = []
+
+    async def bench(ctx):
+        async def spike(src):
+            ctx.set(dut.in_valid, 1)
+            ctx.set(dut.in_source, src)
+            await ctx.tick()
+            ctx.set(dut.in_valid, 0)
+        await spike(0)
+        await spike(1)                 # other sources in the same tick: no merge
+        await spike(2)
+        seen.append(ctx.get(dut.in_merged))
+        ctx.set(dut.tick, 1)
+        await ctx.tick()
+        ctx.set(dut.tick, 0)
+        await spike(0)                 # the next tick: source 0 again is a new spike
+        seen.append(ctx.get(dut.in_merged))
+        await spike(0)                 # twice within one tick: merged, flagged
+        seen.append(ctx.get(dut.in_merged))
+
+    sim = Simulator(dut)
+    sim.add_clock(1e-6)
+    sim.add_testbench(bench)
+    sim.run()
+    assert seen == [0, 0, 1]

@@ -87,7 +87,7 @@ def test_scoreboard(simulator, case, build_root):
     assert r["count_mismatches"] == 0 and r["clamp_counter_mismatches"] == 0
     assert r["sticky_mismatches"] == 0 and r["current_violations"] == 0
     if cfg.n_inputs:
-        assert r["input_spikes"] > 0
+        assert r["input_spikes"] > 0 and r["merged_flag"] == r["merged_expected"]
     if case == "synapses":
         assert r["trace_bound_violations"] == 0 and 0 < r["trace_golden_max_ratio"] <= 1.0
     if case == "clamps":
