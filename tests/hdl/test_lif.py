@@ -54,6 +54,7 @@ def test_twin_matches_golden_spike_trains_continuous():
         assert np.max(np.abs(a - b)) <= cfg.dt_ms + 1e-12
 
 
+@pytest.mark.parametrize("rounding", ["nearest", "truncate"])
 @pytest.mark.parametrize("form, decay, sets", [
     ("continuous", "multiply", [{"tau_m_ms": 20.0, "t_ref_ms": 2.0},
                                 {"tau_m_ms": 10.0, "t_ref_ms": 1.0, "v_rest": -2.0}]),
@@ -61,14 +62,15 @@ def test_twin_matches_golden_spike_trains_continuous():
     ("discrete", "multiply", [{"alpha": 0.389, "u_th": 0.65},
                               {"alpha": 0.9, "u_th": 1.0, "refractory_steps": 2}]),
 ])
-def test_one_step_bound_holds(form, decay, sets):
+def test_one_step_bound_holds(form, decay, sets, rounding):
     """One fixed update from random states and inputs stays within the derived bound of the
     float golden update, for every update whose spike decision agrees."""
     rng = np.random.default_rng(3)
     n = 4000
     cur_fmt = (8, 8) if form == "continuous" else (4, 12)
     cfg = LifConfig(n_neurons=n, clock_hz=16e3 * n, form=form, decay=decay, param_sets=sets,
-                    neuron_sets=list(rng.integers(0, 2, n)), current_format=cur_fmt)
+                    neuron_sets=list(rng.integers(0, 2, n)), current_format=cur_fmt,
+                    rounding=rounding)
     twin = LifTwin(cfg)
     v = rng.integers(cfg.v_floor_raw, max(c.raw for c in cfg.TH), n)
     ref = rng.integers(0, max(cfg.n_ref) + 1, n) * (rng.random(n) < 0.2)
@@ -197,7 +199,7 @@ def _twin_replay(cfg, rec, inputs):
 
 
 @pytest.mark.parametrize("case", ["continuous_multiply", "continuous_shift", "discrete_weights",
-                                  "clamps", "synapses"])
+                                  "discrete_truncate", "clamps", "synapses"])
 def test_rtl_equals_twin_every_update(case):
     rng = np.random.default_rng(7)
     N = 12
@@ -213,10 +215,11 @@ def test_rtl_equals_twin_every_update(case):
                                                {"tau_m_ms": 16.0}],
               "neuron_sets": [i % 2 for i in range(N)]}
         cur = np.linspace(60, 127, N)
-    elif case == "discrete_weights":
+    elif case in ("discrete_weights", "discrete_truncate"):
         w = rng.integers(-8, 8, (N, 6)) / 8.0
         kw = {"form": "discrete", "weights": w, "weight_bits": 4, "current_format": (4, 12),
-              "param_sets": [{"alpha": 0.389, "u_th": 0.65, "refractory_steps": 1}]}
+              "param_sets": [{"alpha": 0.389, "u_th": 0.65, "refractory_steps": 1}],
+              "rounding": "nearest" if case == "discrete_weights" else "truncate"}
         cur = np.zeros(N)
         inputs = rng.random((60, 6)) < 0.4
     elif case == "synapses":
