@@ -94,3 +94,30 @@ def test_scoreboard(simulator, case, build_root):
         assert all(r["clamp_counts"][k] > 0 for k in CLAMP_KINDS), r["clamp_counts"]
     else:
         assert r["flagged_updates"] == 0 and not any(r["clamp_counts"].values())
+
+
+@pytest.mark.long
+@pytest.mark.cocotb
+@pytest.mark.parametrize("simulator", SIMULATORS)
+def test_scoreboard_long(simulator, build_root):
+    """10000 sweeps of two parameter sets with input spikes and AMPA/GABA traces: steady
+    states, long refractory sequences and trace build-up stay bit-exact and within bounds."""
+    core = {"n_neurons": 12, "tick_source": "external", "synapses": True,
+            "weights": (np.abs(_W[:12, :4]) * 16).tolist(),
+            "input_types": ["exc", "inh", "exc", "exc"],
+            "param_sets": [{"tau_m_ms": 20.0, "t_ref_ms": 2.0},
+                           {"tau_m_ms": 10.0, "t_ref_ms": 1.0}],
+            "neuron_sets": [i % 2 for i in range(12)]}
+    spec = {"core": core, "sweeps": 10000, "current_range": [0.0, 30.0],
+            "input_spike_p": 0.05, "seed": 9}
+    cfg = LifConfig.from_kwargs(core)
+    build_dir = build_root / f"lif_long_{simulator}"
+    build_dir.mkdir(parents=True, exist_ok=True)
+    src = build_dir / "lif_core.v"
+    src.write_text(lif_verilog(cfg))
+    r = run_cocotb(simulator, [src], "lif_core", "cuneate.sim.benches.lif_tb", build_dir,
+                   config=spec | {"core": cfg.to_kwargs()}, testcase="scoreboard").report
+    print(f"\n{simulator} long: " + json.dumps(r))
+    assert r["sweeps_checked"] == 10000 and r["twin_mismatches"] == 0
+    assert r["golden_bound_violations"] == 0 and r["trace_bound_violations"] == 0
+    assert r["spike_disagreements"] == 0 and r["stream_matches"] and r["spikes"] > 100
