@@ -174,6 +174,7 @@ class LifTwin:
         self.ref = np.zeros(cfg.n_neurons, dtype=np.int64)
         self.I = np.zeros(cfg.n_neurons, dtype=np.int64)
         self.traces = np.zeros((len(cfg.traces), cfg.n_neurons), dtype=np.int64)
+        self.W = cfg.weights_raw.copy()
         self.sweeps = 0
         self.clamp_sticky = 0
         self.clamp_counts = {k: 0 for k in CLAMP_KINDS}
@@ -187,6 +188,24 @@ class LifTwin:
             self.I[index] = raw
         return raw
 
+    def set_weights(self, neuron: int, raw_row) -> None:
+        """Host write of a neuron's weight row (raw values of ``config.W``), as ``w_wr_*``;
+        only with ``weights_writable``."""
+        if not self.cfg.weights_writable:
+            raise ValueError("the core was generated with fixed weights (weights_writable)")
+        row = np.asarray(raw_row, dtype=np.int64)
+        W = self.cfg.W
+        if row.shape != (self.cfg.n_inputs,) or np.any(row < W.min_raw) or \
+                np.any(row > W.max_raw):
+            raise ValueError(f"a weight row is {self.cfg.n_inputs} raw values of {W}")
+        self.W[neuron] = row
+
+    @staticmethod
+    def pack_weights(cfg, raw_row) -> int:
+        """The ``w_wr_data`` word of a raw weight row (source 0 in the low bits)."""
+        wb = cfg.W.width
+        return sum((int(w) & ((1 << wb) - 1)) << (wb * i) for i, w in enumerate(raw_row))
+
     def update(self, v, ref, I, x, sel, traces=None):
         """One update of every neuron given (raw arrays); ``x`` is the (n_inputs,) spike
         vector of the tick, ``traces`` the (4, n) synaptic traces (with ``synapses``).
@@ -196,7 +215,7 @@ class LifTwin:
         xs = np.zeros(cfg.n_inputs, dtype=bool) if x is None else np.asarray(x, dtype=bool)
         if xs.shape != (cfg.n_inputs,):
             raise ValueError(f"input spike vector must have {cfg.n_inputs} entries")
-        W = cfg.weights_raw
+        W = self.W
         tr = None
         if cfg.synapses:
             tr = [np.asarray(t, dtype=np.int64) for t in (self.traces if traces is None
@@ -280,7 +299,10 @@ class LifCore(wiring.Component):
     and clears it, so a spike arriving during tick t acts on the sweep of tick t + 1. Several
     spikes of one source in one tick count once and set the sticky ``in_merged`` flag. Other ports are those of
     :class:`cuneate.hdl.izhikevich.IzhikevichCore` (``i_wr_*``, ``sel_wr_*``, spike stream,
-    ``upd_*`` probe with ``upd_ref``, ``upd_acc``, sweep counters, sticky clamp flags).
+    ``upd_*`` probe with ``upd_ref``, ``upd_acc``, sweep counters, sticky clamp flags). With
+    ``weights_writable``, ``w_wr_en/w_wr_addr/w_wr_data`` write a neuron's whole weight row
+    (same rules as the current writes; the accepted input range is then proven for any weights
+    of the format).
     """
 
     def __init__(self, config: LifConfig | None = None, **kwargs):
@@ -305,6 +327,10 @@ class LifCore(wiring.Component):
             sig["in_valid"] = In(1)
             sig["in_source"] = In(range(F))
             sig["in_merged"] = Out(1)
+            if cfg.weights_writable:
+                sig["w_wr_en"] = In(1)
+                sig["w_wr_addr"] = In(range(N))
+                sig["w_wr_data"] = In(F * cfg.W.width)
         for k in CLAMP_KINDS:
             sig[f"sweep_clamps_{k}"] = Out(range(N + 1))
         if cfg.tick_source == "external":
@@ -327,11 +353,14 @@ class LifCore(wiring.Component):
         rd_ports = [st_rd, cur_rd, sel_rd]
         wb = cfg.W.width
         if F:
-            rows = [sum((int(w) & ((1 << wb) - 1)) << (wb * i) for i, w in enumerate(row))
-                    for row in cfg.weights_raw]
+            rows = [LifTwin.pack_weights(cfg, row) for row in cfg.weights_raw]
             m.submodules.weight_mem = w_mem = Memory(shape=wb * F, depth=N, init=rows)
             w_rd = w_mem.read_port()
             rd_ports.append(w_rd)
+            if cfg.weights_writable:
+                w_wr = w_mem.write_port()
+                m.d.comb += [w_wr.addr.eq(self.w_wr_addr), w_wr.data.eq(self.w_wr_data),
+                             w_wr.en.eq(self.w_wr_en)]
         TW = [t.T.width for t in cfg.traces]
         if cfg.traces:
             m.submodules.trace_mem = tr_mem = Memory(shape=sum(TW), depth=N, init=[])

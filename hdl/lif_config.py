@@ -178,6 +178,7 @@ class LifConfig:
     v_init: Sequence[float] | None = None
     max_decay_error: float = 1e-2
     synapses: bool = False
+    weights_writable: bool = False
     input_types: Sequence[str] | None = None
     ampa: tuple[float, float] = (golden.AMPA.tau_rise_ms, golden.AMPA.tau_decay_ms)
     gaba: tuple[float, float] = (golden.GABA.tau_rise_ms, golden.GABA.tau_decay_ms)
@@ -302,10 +303,21 @@ class LifConfig:
                               f"{F} weights of {wb} bits (needs {need}): the fan-in sum would "
                               f"overflow")
         wr = self.weights_raw
+        if self.weights_writable:
+            if self.synapses:
+                raise ConfigError("host-writable weights are not available with synaptic "
+                                  "traces (their formats are proven from the given weights)")
+            if not F:
+                raise ConfigError("weights_writable needs weights (their shape fixes the "
+                                  "fan-in)")
         self.syn_lo_raw = np.where(wr < 0, wr, 0).sum(axis=1) if F else np.zeros(self.n_neurons,
                                                                                  np.int64)
         self.syn_hi_raw = np.where(wr > 0, wr, 0).sum(axis=1) if F else np.zeros(self.n_neurons,
                                                                                  np.int64)
+        if self.weights_writable:
+            # the host may write any value of the format: bound the fan-in by its extremes
+            self.syn_lo_raw = np.full(self.n_neurons, F * W.min_raw, dtype=np.int64)
+            self.syn_hi_raw = np.full(self.n_neurons, F * W.max_raw, dtype=np.int64)
         # ---- total input D = I + sum w x (or + I_syn), in state fraction bits
         fv = self.v_frac_bits
         if self.synapses:
@@ -525,7 +537,7 @@ class LifConfig:
               "tick_source": self.tick_source, "spike_fifo_depth": int(self.spike_fifo_depth),
               "sweep_number_width": int(self.sweep_number_width),
               "v_init": list(self._v_init), "max_decay_error": float(self.max_decay_error),
-              "synapses": bool(self.synapses),
+              "synapses": bool(self.synapses), "weights_writable": bool(self.weights_writable),
               "input_types": (["exc" if e else "inh" for e in self.input_exc]
                               if self.synapses else None),
               "ampa": list(self.ampa), "gaba": list(self.gaba)}

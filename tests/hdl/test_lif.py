@@ -296,6 +296,8 @@ def test_synaptic_traces_follow_the_golden_kernel():
     ({"synapses": True, "weights": np.ones((8, 2)), "input_types": ["exc"]}, "input_types"),
     ({"synapses": True, "weights": np.ones((8, 2)), "form": "discrete"}, "continuous form"),
     ({"synapses": True, "weights": np.ones((8, 2)), "ampa": (2.0, 0.4)}, "tau_rise"),
+    ({"synapses": True, "weights": np.ones((8, 2)), "weights_writable": True}, "host-writable"),
+    ({"weights_writable": True}, "weights_writable needs weights"),
 ])
 def test_synapse_refusals(kw, match):
     with pytest.raises(ConfigError, match=match):
@@ -330,3 +332,61 @@ def test_second_spike_of_a_source_in_one_tick_is_flagged():
     sim.add_testbench(bench)
     sim.run()
     assert seen == [0, 0, 1]
+
+
+def test_host_weight_writes():
+    """Weight rows written by the host between ticks: the RTL follows the twin given the same
+    writes, and the input range is proven for any weights of the format."""
+    rng = np.random.default_rng(8)
+    N, F, n_sweeps = 8, 3, 40
+    cfg = LifConfig(form="discrete", weights=np.full((N, F), 0.25), weights_writable=True,
+                    weight_bits=4, current_format=(4, 12), tick_source="external")
+    assert cfg.d_lo == cfg.i_lo + F * cfg.W.min_value
+    assert cfg.d_hi == cfg.i_hi + F * cfg.W.max_value
+    with pytest.raises(ValueError, match="raw values"):
+        LifTwin(cfg).set_weights(0, [100, 0, 0])
+    writes = {k: (int(rng.integers(N)), rng.integers(cfg.W.min_raw, cfg.W.max_raw + 1, F))
+              for k in range(0, n_sweeps, 3)}
+    x = rng.random((n_sweeps, F)) < 0.5
+    dut = LifCore(cfg)
+    got = np.zeros((n_sweeps, N), dtype=np.int64)
+
+    async def bench(ctx):
+        k = -1
+        for sweep in range(n_sweeps):
+            while ctx.get(dut.busy):
+                await ctx.tick()
+            if sweep in writes:
+                n, row = writes[sweep]
+                ctx.set(dut.w_wr_en, 1)
+                ctx.set(dut.w_wr_addr, n)
+                ctx.set(dut.w_wr_data, LifTwin.pack_weights(cfg, row))
+                await ctx.tick()
+                ctx.set(dut.w_wr_en, 0)
+            for s in np.flatnonzero(x[sweep]):
+                ctx.set(dut.in_valid, 1)
+                ctx.set(dut.in_source, int(s))
+                await ctx.tick()
+            ctx.set(dut.in_valid, 0)
+            ctx.set(dut.tick, 1)
+            await ctx.tick()
+            ctx.set(dut.tick, 0)
+            for _ in range(N + 6):
+                if ctx.get(dut.upd_valid):
+                    i = ctx.get(dut.upd_index)
+                    k += i == 0
+                    got[k, i] = ctx.get(dut.upd_acc)
+                await ctx.tick()
+
+    sim = Simulator(dut)
+    sim.add_clock(1e-6)
+    sim.add_testbench(bench)
+    sim.run()
+    twin = LifTwin(cfg)
+    for k in range(n_sweeps):
+        if k in writes:
+            twin.set_weights(*writes[k])
+        out = twin.update(twin.v, twin.ref, twin.I, x[k], twin.sel)
+        twin.sweep(x[k])
+        assert np.array_equal(out["acc"], got[k]), k
+    assert np.any(got < 0) and len(writes) > 5
