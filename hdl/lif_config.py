@@ -33,6 +33,7 @@ import numpy as np
 
 from ..golden import lif as golden
 from .fixed import FixedConstant, FixedPointError, QFormat
+from .lif_synapses import _int_bits as _int_bits_for
 
 __all__ = ["ConfigError", "LifConfig", "LifSet", "PIPELINE_DEPTH", "CLAMP_KINDS", "FORMS",
            "DECAYS", "SATURATION"]
@@ -47,13 +48,6 @@ _GRID_EPS = 1e-9
 
 class ConfigError(FixedPointError):
     """A LIF core configuration that cannot hold; raised at construction."""
-
-
-def _int_bits_for(lo: float, hi: float) -> int:
-    ib = 1
-    while not (-(2.0 ** (ib - 1)) <= lo and hi < 2.0 ** (ib - 1)):
-        ib += 1
-    return ib
 
 
 @dataclass(frozen=True)

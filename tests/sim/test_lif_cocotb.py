@@ -27,32 +27,32 @@ CASES = {
                                 {"tau_m_ms": 1.0, "v_rest": -2.0, "t_ref_ms": 0.0}],
                  "neuron_sets": [i % 2 for i in range(16)],
                  "weights": (np.abs(_W) * 8).tolist(), "weight_bits": 8},
-        "sweeps": 150, "current_range": [-20.0, 127.0]},
+        "sweeps": 100, "current_range": [-20.0, 127.0]},
     "continuous_shift": {
         "core": {"n_neurons": 12, "tick_source": "external", "decay": "shift",
                  "param_sets": [{"tau_m_ms": 1.0}, {"tau_m_ms": 0.5,
                                                               "t_ref_ms": 0.125}],
                  "neuron_sets": [i % 2 for i in range(12)], "max_decay_error": 0.07},
-        "sweeps": 150, "current_range": [0.0, 127.0]},
+        "sweeps": 100, "current_range": [0.0, 127.0]},
     "discrete_int4": {
         "core": {"n_neurons": 16, "tick_source": "external", "form": "discrete",
                  "weights": _W.tolist(), "weight_bits": 4, "current_format": [4, 12],
                  "param_sets": [{"alpha": 0.389, "u_th": 0.65},
                                 {"alpha": 0.9, "u_th": 1.0, "refractory_steps": 2}],
                  "neuron_sets": [i % 2 for i in range(16)]},
-        "sweeps": 150, "current_range": [-0.25, 0.25], "input_spike_p": 0.5},
+        "sweeps": 100, "current_range": [-0.25, 0.25], "input_spike_p": 0.5},
     "synapses": {
         "core": {"n_neurons": 12, "tick_source": "external", "synapses": True,
                  "weights": (np.abs(_W[:12, :4]) * 16).tolist(),
                  "input_types": ["exc", "inh", "exc", "exc"], "update_hz": 4000.0,
                  "param_sets": [{"tau_m_ms": 4.0, "t_ref_ms": 1.0}]},
-        "sweeps": 150, "current_range": [0.0, 20.0], "input_spike_p": 0.4},
+        "sweeps": 100, "current_range": [0.0, 20.0], "input_spike_p": 0.4},
     # the default size: 2500 neurons at 40 MHz / 16 kHz, brief's excitatory cell
     "n2500_default": {
         "core": {"n_neurons": 2500, "clock_hz": 40e6, "tick_source": "external",
                  "spike_fifo_depth": 2048,
                  "v_init": np.random.default_rng(0).uniform(0.0, 18.0, 2500).tolist()},
-        "sweeps": 4, "current_range": [-128.0, 127.0], "writes_per_sweep": 20,
+        "sweeps": 3, "current_range": [-128.0, 127.0], "writes_per_sweep": 20,
         "period": 2504},
     "clamps": {
         "core": {"n_neurons": 12, "tick_source": "external",
@@ -60,7 +60,7 @@ CASES = {
                  "input_limit": [-50.0, 150.0], "saturation": "flag",
                  "current_range": [-60.0, 100.0], "v_int_bits": 6,
                  "param_sets": [{"tau_m_ms": 0.5, "v_reset": -20.0}]},
-        "sweeps": 120, "current_range": [-128.0, 127.0], "writes_per_sweep": 4},
+        "sweeps": 100, "current_range": [-128.0, 127.0], "writes_per_sweep": 4},
 }
 
 
