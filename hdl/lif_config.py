@@ -3,9 +3,7 @@
 :class:`LifConfig` turns the user's parameters into everything the datapath needs, and refuses
 (:class:`ConfigError`, at construction) what the formats cannot hold:
 
-* decay constants that round to 0 or 1 (no leak, or no memory), or whose representation error
-  exceeds ``max_decay_error``; a shift-and-subtract decay whose power of two is too far from
-  ``1 - exp(-dt/tau)``;
+* decay constants that round to 0 or 1, or miss ``max_decay_error`` (also a shift's 2**-s);
 * weights outside their format (given ``weight_frac_bits``), thresholds, resets and rests that
   the state format cannot hold;
 * a fan-in whose weight sum can leave ``input_limit`` (refused, or clamped and flagged with
@@ -270,6 +268,8 @@ class LifConfig:
         self.n_inputs = F = w.shape[1]
         self.weights = w
         self.input_exc = np.ones(F, dtype=bool)
+        if self.input_types is not None and not self.synapses:
+            raise ConfigError("input_types (AMPA/GABA) only apply with synapses=True")
         if self.synapses:
             from .lif_synapses import scale_weights
             w, self.input_exc = scale_weights(self, w)     # the memory holds w / N_type

@@ -298,6 +298,7 @@ def test_synaptic_traces_follow_the_golden_kernel():
     ({"synapses": True, "weights": np.ones((8, 2)), "ampa": (2.0, 0.4)}, "tau_rise"),
     ({"synapses": True, "weights": np.ones((8, 2)), "weights_writable": True}, "host-writable"),
     ({"weights_writable": True}, "weights_writable needs weights"),
+    ({"weights": np.ones((8, 2)), "input_types": ["exc", "inh"]}, "only apply with synapses"),
 ])
 def test_synapse_refusals(kw, match):
     with pytest.raises(ConfigError, match=match):
