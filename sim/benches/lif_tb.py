@@ -13,7 +13,8 @@ Configured by the JSON file named in ``CUNEATE_BENCH_CONFIG``; figures go to
     update from the same state within the derived one-step bound for every unflagged update.
     The current used must be one the host wrote; the spike stream, per-sweep spike and clamp
     counters and sticky flags must agree with the updates; ``in_merged`` must be set exactly
-    when a source spiked twice within one tick.
+    when a source spiked twice within one tick. With ``weights_writable`` the host also
+    rewrites weight rows between sweeps; the twin follows the same writes.
 ``engine``
     Runs the core like a host: per sweep, waits for the previous sweep to finish issuing,
     writes the currents that change, sends that sweep's input spikes, ticks; records the spike
@@ -181,6 +182,8 @@ async def scoreboard(dut):
     rng = random.Random(cfgj.get("seed", 1))
     n_sweeps = cfgj["sweeps"]
     period = cfgj.get("period", N + 8)
+    if cfg.weights_writable:
+        assert period >= N + PIPELINE_DEPTH + 2, "period too short for weight writes"
     lo, hi = cfgj.get("current_range", [cfg.I.min_value, cfg.I.max_value])
     writes_per_sweep = cfgj.get("writes_per_sweep", 2)
     spike_p = cfgj.get("input_spike_p", 0.3)
@@ -204,6 +207,9 @@ async def scoreboard(dut):
     t0 = time.perf_counter()
     phase = 0
     merged_expected = False
+    # host weight-row writes land between sweeps (after the last write-back, before the tick)
+    w_writes = [[] for _ in range(n_sweeps + 2)]
+    wr_p = cfgj.get("weight_writes_per_sweep", 0.5) if cfg.weights_writable else 0.0
     while checker.stats["sweeps_checked"] < n_sweeps:
         # drive this cycle's inputs (after the falling edge)
         tick = phase == 0 and tick_no < n_sweeps + 1
@@ -213,7 +219,16 @@ async def scoreboard(dut):
         d.i_wr_en.value = 0
         if F:
             d.in_valid.value = 0
-        if not tick and F and rng.random() < spike_p:
+        if cfg.weights_writable:
+            d.w_wr_en.value = 0
+        if wr_p and phase >= N + PIPELINE_DEPTH + 1 and rng.random() < wr_p:
+            n = rng.randrange(N)
+            row = [rng.randint(cfg.W.min_raw, cfg.W.max_raw) for _ in range(F)]
+            d.w_wr_en.value = 1
+            d.w_wr_addr.value = n
+            d.w_wr_data.value = LifTwin.pack_weights(cfg, row)
+            w_writes[tick_no].append((n, row))
+        elif not tick and F and rng.random() < spike_p:
             s = rng.randrange(F)
             d.in_valid.value = 1
             d.in_source.value = s
@@ -257,6 +272,8 @@ async def scoreboard(dut):
         if idx != N - 1:
             continue
         k = checker.stats["sweeps_checked"]
+        for n, row in w_writes[k]:
+            checker.twin.set_weights(n, row)
         checker.check(buf["v"], buf["ref"], buf["i"], buf["acc"], buf["spike"], buf["clamp"],
                       x_of[k] if F else None, buf["tr"])
         for n in range(N):
@@ -287,6 +304,7 @@ async def scoreboard(dut):
     extra["stream_matches"] = stream[:len(expected_stream)] == expected_stream
     extra["input_spikes"] = int(sum(x.sum() for x in x_of))
     extra["merged_expected"] = merged_expected
+    extra["weight_writes"] = sum(len(w) for w in w_writes[:n_sweeps])
     extra["merged_flag"] = bool(int(d.in_merged.value)) if F else False
     stats = checker.stats | extra
     stats.update(overrun=int(d.overrun.value), spike_overflow=int(d.spike_overflow.value),

@@ -41,6 +41,12 @@ CASES = {
                                 {"alpha": 0.9, "u_th": 1.0, "refractory_steps": 2}],
                  "neuron_sets": [i % 2 for i in range(16)]},
         "sweeps": 100, "current_range": [-0.25, 0.25], "input_spike_p": 0.5},
+    "discrete_weight_writes": {
+        "core": {"n_neurons": 10, "tick_source": "external", "form": "discrete",
+                 "weights": _W[:10, :5].tolist(), "weight_bits": 4, "weights_writable": True,
+                 "current_format": [4, 12],
+                 "param_sets": [{"alpha": 0.5, "u_th": 0.65, "refractory_steps": 1}]},
+        "sweeps": 100, "current_range": [-0.25, 0.25], "input_spike_p": 0.5},
     "synapses": {
         "core": {"n_neurons": 12, "tick_source": "external", "synapses": True,
                  "weights": (np.abs(_W[:12, :4]) * 16).tolist(),
@@ -88,6 +94,8 @@ def test_scoreboard(simulator, case, build_root):
     assert r["sticky_mismatches"] == 0 and r["current_violations"] == 0
     if cfg.n_inputs:
         assert r["input_spikes"] > 0 and r["merged_flag"] == r["merged_expected"]
+    if case == "discrete_weight_writes":
+        assert r["weight_writes"] > 20
     if case == "synapses":
         assert r["trace_bound_violations"] == 0 and 0 < r["trace_golden_max_ratio"] <= 1.0
     if case == "clamps":
