@@ -21,6 +21,7 @@ __all__ = ["main", "build_parser", "COMMAND_MODULES", "CliError"]
 COMMAND_MODULES = [
     "cli_izhikevich",
     "cli_run",
+    "cli_lif",
 ]
 
 

@@ -1,0 +1,185 @@
+"""Two-exponential (AMPA / GABA) synaptic currents of the LIF core as per-neuron traces.
+
+With ``LifConfig(synapses=True)`` every input source is excitatory (AMPA) or inhibitory (GABA)
+(``input_types``), weights are non-negative peak currents in mV (the sign comes from the type,
+as in :func:`cuneate.golden.lif.simulate_lif_network`), and each neuron carries four traces, a
+decay and a rise trace per type. Per tick, with ``a_T = sum_{i of type T} (w_i / N_T) x_i``::
+
+    I_syn = (xd_A - xr_A) - (xd_G - xr_G)            (traces as fetched)
+    D     = clamp(I) + I_syn
+    x'    = y - k y,   y = x + a_T                   for each of the four traces,
+                       k = 1 - exp(-dt / tau)        (its rise or decay time constant)
+
+so an input spike of tick k contributes ``w K(j dt)`` to the current of tick ``k + j`` - the
+golden difference-of-exponentials kernel (peak-normalized by ``N_T``, the weight memory holds
+``w / N_T``) sampled on the grid, 0 at ``j = 0``; any conduction latency is the sender's. Each
+trace decay is one multiplier (18-bit operand of ``y`` rounded, 18-bit ``k``); the traces use
+the state's fraction bits and integer bits proven from the largest per-tick input of each type.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..golden import synapses as gsyn
+from .fixed import FixedConstant, QFormat, narrow, round_shift
+
+__all__ = ["TRACE_NAMES", "TraceSpec", "derive_traces", "trace_inputs", "trace_products",
+           "trace_update", "trace_golden_check"]
+
+#: trace order everywhere (state word, probe ports, twin arrays)
+TRACE_NAMES = ("xd_ampa", "xr_ampa", "xd_gaba", "xr_gaba")
+
+
+@dataclass
+class TraceSpec:
+    name: str
+    tau_ms: float
+    k_exact: float
+    K: FixedConstant
+    Y: QFormat                 # multiplier operand (y rounded)
+    y_bounds: tuple[int, int]  # raw, in Y
+    T: QFormat                 # stored trace
+    t_bounds: tuple[int, int]  # raw, in T
+    product_shift: int
+    y_max: float
+
+    def to_dict(self) -> dict:
+        return {"tau_ms": self.tau_ms, "k_exact": self.k_exact, "k": self.K.to_dict(),
+                "operand": str(self.Y), "trace": str(self.T), "y_max": self.y_max}
+
+
+def _int_bits(lo, hi):
+    ib = 1
+    while not (-(2.0 ** (ib - 1)) <= lo and hi < 2.0 ** (ib - 1)):
+        ib += 1
+    return ib
+
+
+def scale_weights(cfg, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Validate the typed weights; returns ``(w / N_type, is_exc mask)``."""
+    from .lif_config import ConfigError
+    if cfg.form != "continuous":
+        raise ConfigError("synaptic traces belong to the continuous form")
+    F = w.shape[1]
+    if F == 0:
+        raise ConfigError("synapses=True needs weights (n_neurons x n_inputs)")
+    if np.any(w < 0):
+        raise ConfigError("with synapses the weights must be >= 0 (the sign comes from the "
+                          "synapse type: AMPA adds, GABA subtracts)")
+    types = ["exc"] * F if cfg.input_types is None else list(cfg.input_types)
+    if len(types) != F or any(t not in ("exc", "inh") for t in types):
+        raise ConfigError(f"input_types needs {F} entries of 'exc' or 'inh'")
+    exc = np.array([t == "exc" for t in types])
+    try:
+        na = gsyn._norm_factor(*gsyn._check_taus(*cfg.ampa), "peak")
+        ng = gsyn._norm_factor(*gsyn._check_taus(*cfg.gaba), "peak")
+    except ValueError as exc_:
+        raise ConfigError(f"synapse time constants: {exc_}") from None
+    return w / np.where(exc, na, ng)[None, :], exc
+
+
+def derive_traces(cfg) -> tuple[list[TraceSpec], tuple[int, int]]:
+    """Trace formats and constants; returns the specs and the raw bounds of ``I_syn`` (in
+    state fraction bits)."""
+    from .lif_config import ConfigError
+    fv, ow, lsb = cfg.v_frac_bits, cfg.operand_width, 2.0 ** -cfg.v_frac_bits
+    wr = cfg.weights_raw
+    wsh = fv - cfg.W.frac_bits
+    acc_max = {"ampa": float((wr[:, cfg.input_exc].sum(axis=1).max() << wsh) * lsb)
+               if cfg.input_exc.any() else 0.0,
+               "gaba": float((wr[:, ~cfg.input_exc].sum(axis=1).max() << wsh) * lsb)
+               if (~cfg.input_exc).any() else 0.0}
+    specs = []
+    taus = {"xd_ampa": cfg.ampa[1], "xr_ampa": cfg.ampa[0], "xd_gaba": cfg.gaba[1],
+            "xr_gaba": cfg.gaba[0]}
+    for name in TRACE_NAMES:
+        tau = float(taus[name])
+        k = -math.expm1(-cfg.dt_ms / tau)
+        K = FixedConstant.normalized(f"k_{name}", k, ow)
+        if K.quantized >= 1 or K.quantized <= 0 or abs(K.rel_error) > cfg.max_decay_error:
+            raise ConfigError(f"trace {name}: decay k = {k:.6g} (tau {tau:g} ms at dt "
+                              f"{cfg.dt_ms:g} ms) is represented as {K.quantized:.6g}")
+        a = acc_max[name.split("_")[1]]
+        y_max = a / K.quantized + 8 * lsb
+        Y = QFormat.for_range(-4 * lsb, y_max, ow)
+        if Y.frac_bits > fv:
+            Y = QFormat(Y.int_bits, fv)
+        # the stored trace: y - round(k round(y)) can dip below 0 by the operand rounding
+        t_lo = -(Y.lsb + 2 * lsb) / K.quantized - 4 * lsb
+        t_hi = y_max + (Y.lsb + 2 * lsb) / K.quantized
+        T = QFormat(_int_bits(t_lo, t_hi), fv)
+        t_bounds = (int(math.floor(t_lo / lsb)), int(math.ceil(t_hi / lsb)))
+        y_lo_raw = int(math.floor((t_lo) / Y.lsb)) - 1
+        y_hi_raw = int(math.ceil((t_hi + a) / Y.lsb)) + 1
+        while not (Y.min_raw <= y_lo_raw and y_hi_raw <= Y.max_raw):
+            Y = QFormat(Y.int_bits + 1, Y.frac_bits - 1)
+            y_lo_raw = int(math.floor(t_lo / Y.lsb)) - 1
+            y_hi_raw = int(math.ceil((t_hi + a) / Y.lsb)) + 1
+        specs.append(TraceSpec(name, tau, k, K, Y, (y_lo_raw, y_hi_raw), T, t_bounds,
+                               Y.frac_bits + K.frac_bits - fv, y_max))
+    # I_syn = (xd - xr)_A - (xd - xr)_G: the difference of exponentials of the largest
+    # steady input, plus rounding margins
+    def diff(kd, kr, a):
+        return a * ((1 - kd) / kd - (1 - kr) / kr)
+    sa = diff(specs[0].K.quantized, specs[1].K.quantized, acc_max["ampa"])
+    sg = diff(specs[2].K.quantized, specs[3].K.quantized, acc_max["gaba"])
+    marg = sum((s.Y.lsb + 2 * lsb) / s.K.quantized for s in specs) + 8 * lsb
+    lo = -(max(0.0, sg) + marg)
+    hi = max(0.0, sa) + marg
+    return specs, (int(math.floor(lo / lsb)), int(math.ceil(hi / lsb)))
+
+
+# ----------------------------------------------------------------------------------------------
+# stage functions (twin and RTL)
+
+def trace_inputs(cfg, traces, x, w):
+    """Stage 3: ``I_syn`` from the fetched traces and ``y = x + a_T`` for each trace; returns
+    ``(I_syn, [y...], acc)`` with ``acc = a_A - a_G`` in weight LSBs."""
+    from .fixed import select
+    acc_a, acc_g = 0, 0
+    for i, (xi, wi) in enumerate(zip(x, w)):
+        term = select(xi, wi, 0)
+        if cfg.input_exc[i]:
+            acc_a = acc_a + term
+        else:
+            acc_g = acc_g + term
+    wsh = cfg.V.frac_bits - cfg.W.frac_bits
+    xd_a, xr_a, xd_g, xr_g = traces
+    i_syn = (xd_a - xr_a) - (xd_g - xr_g)
+    ys = [t + (a << wsh) for t, a in zip(traces, (acc_a, acc_a, acc_g, acc_g))]
+    return i_syn, ys, acc_a - acc_g
+
+
+def trace_products(cfg, ys):
+    """Stage 4: ``round(k round(y))`` for each trace (one multiplier each)."""
+    out = []
+    for s, y in zip(cfg.traces, ys):
+        yq = narrow(round_shift(y, cfg.V.frac_bits - s.Y.frac_bits, cfg.rounding), s.Y,
+                    s.y_bounds, f"{s.name} operand")
+        out.append(round_shift(yq * s.K.raw, s.product_shift, cfg.rounding))
+    return out
+
+
+def trace_update(cfg, ys, ps):
+    """Stage 5: ``x' = y - k y`` for each trace, in its proven format (no clamp)."""
+    return [narrow(y - p, s.T, s.t_bounds, s.name) for s, y, p in zip(cfg.traces, ys, ps)]
+
+
+def trace_golden_check(cfg, ys, traces_out):
+    """Float64 golden trace step ``exp(-dt/tau) y`` from the same ``y`` (raw, state fraction
+    bits) against the fixed result; returns ``(abs errors, bounds)`` arrays (4, n). The bound:
+    the represented ``k`` against the exact one, the rounding of the operand and the product."""
+    half = 0.5 if cfg.rounding == "nearest" else 1.0
+    lsb = cfg.V.lsb
+    errs, bounds = [], []
+    for s, y, t in zip(cfg.traces, ys, traces_out):
+        yf = np.asarray(y, dtype=np.float64) * lsb
+        gold = yf * math.exp(-cfg.dt_ms / s.tau_ms)
+        errs.append(np.abs(np.asarray(t, dtype=np.float64) * lsb - gold))
+        bounds.append(abs(s.K.quantized - s.k_exact) * np.abs(yf) + s.K.quantized * half * s.Y.lsb
+                      + half * lsb + 1e-12 * (1 + np.abs(yf)))
+    return np.array(errs), np.array(bounds)
