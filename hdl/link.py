@@ -51,6 +51,14 @@ from .uart import UartRx, UartTx
 __all__ = ["HostLink", "LinkedCore", "LinkConfig", "link_config"]
 
 
+def _pick(options, index):
+    """``options[index]`` as a chain of multiplexers (``index`` beyond the list: the last)."""
+    out = options[-1]
+    for i in range(len(options) - 2, -1, -1):
+        out = Mux(index == i, options[i], out)
+    return out
+
+
 class LinkConfig:
     """Link parameters checked against the core they serve."""
 
@@ -139,8 +147,9 @@ class HostLink(wiring.Component):
         m.d.comb += [urx.rx.eq(self.rx), self.tx.eq(utx.tx),
                      rxf.w_data.eq(urx.data), rxf.w_en.eq(urx.valid),
                      utx.data.eq(txf.r_data), utx.valid.eq(txf.r_rdy), txf.r_en.eq(utx.ready)]
-        with m.If(urx.valid & ~rxf.w_rdy):
-            m.d.comb += inc["rx_overflows"].eq(1)
+        m.d.comb += inc["rx_overflows"].eq(urx.valid & ~rxf.w_rdy)
+        cobs_error = Signal()
+        m.d.comb += inc["framing_errors"].eq(cobs_error + urx.frame_error)
 
         # --- tick generator ---------------------------------------------------------------
         free = Signal()
@@ -222,14 +231,14 @@ class HostLink(wiring.Component):
         m.d.comb += vrd.addr.eq(widx)
         m.d.sync += self.i_wr_en.eq(0)
 
-        with m.FSM(name="rx_fsm"):
+        with m.FSM(name="rx_fsm") as rx_fsm:
             with m.State("RECV"):
-                m.d.comb += rxf.r_en.eq(1)
-                b = rxf.r_data
+                # no undefined FIFO data reaches the decoder while the FIFO is empty
+                b = Mux(rxf.r_rdy, rxf.r_data, 0)
                 with m.If(rxf.r_rdy):
                     with m.If(b == 0):
                         with m.If(remain != 0):
-                            m.d.comb += inc["framing_errors"].eq(1)
+                            m.d.comb += cobs_error.eq(1)
                             m.d.sync += frame_reset()
                         with m.Elif(started):
                             m.next = "CHECK"
@@ -294,6 +303,9 @@ class HostLink(wiring.Component):
                              self.i_wr_data.eq(vrd.data), widx.eq(widx + 1)]
                 with m.If(widx == count):
                     m.next = "RECV"
+        # a continuous assignment (not a process of the FSM): simulators that start
+        # combinational processes only on an input change see it from time 0
+        m.d.comb += rxf.r_en.eq(rx_fsm.ongoing("RECV"))
         # the held tick may go once the last write is registered toward the core
         # (writing covers WAIT->WRITE and WRITE; the write lands one cycle later, before the
         # fetch of that neuron, which is at least one cycle after the tick)
@@ -363,21 +375,26 @@ class HostLink(wiring.Component):
         put = Signal()
         pbyte = Signal(8)
         with m.If(put):
-            m.d.comb += [twr.en.eq(1), twr.addr.eq(j), twr.data.eq(pbyte)]
             m.d.sync += [j.eq(j + 1), tcrc.eq(crc16_update(tcrc, pbyte))]
-        cur_tick = Mux(kind_spikes, half_tick[tx_half], S)
-        head = Array([Const(MSG_SPIKES, 8), tx_seq, cur_tick[0:8], cur_tick[8:16],
-                      cur_tick[16:24], cur_tick[24:32]])
-        head_spk = Array([half_drop[tx_half][0:8], half_drop[tx_half][8:16],
-                          half_sweeps[tx_half]])
-        ctr_bytes = Array(Cat(*[ctr[n] for n in COUNTER_NAMES]).word_select(i, 8)
-                          for i in range(4 * len(COUNTER_NAMES)))
+        # selections by explicit multiplexers (continuous assignments in the Verilog)
+        h_tick = Mux(tx_half, half_tick[1], half_tick[0])
+        h_count = Mux(tx_half, half_count[1], half_count[0])
+        h_drop = Mux(tx_half, half_drop[1], half_drop[0])
+        h_sweeps = Mux(tx_half, half_sweeps[1], half_sweeps[0])
+        cur_tick = Mux(kind_spikes, h_tick, S)
+        head = [Const(MSG_SPIKES, 8), tx_seq, cur_tick[0:8], cur_tick[8:16],
+                cur_tick[16:24], cur_tick[24:32]]
+        head_spk = [h_drop[0:8], h_drop[8:16], h_sweeps]
+        ctr_bytes = [ctr[n][8 * i:8 * i + 8] for n in COUNTER_NAMES for i in range(4)]
         m.d.comb += srd.addr.eq(Mux(tx_half, CAP, 0) + k)
         push = Signal()
-        m.d.comb += [txf.w_en.eq(push)]
-        m.d.comb += trd.addr.eq(p)
+        # room for a byte, registered (at most one byte is pushed per two cycles, so a margin
+        # of two entries covers the cycle of latency); the encoder waits on it
+        room = Signal()
+        m.d.sync += room.eq(txf.w_level < lc.tx_fifo_depth - 2)
+        m.d.comb += [txf.w_en.eq(push & room)]
 
-        with m.FSM(name="tx_fsm"):
+        with m.FSM(name="tx_fsm") as tx_fsm:
             with m.State("IDLE"):
                 m.d.sync += [j.eq(0), k.eq(0), tcrc.eq(0xFFFF)]
                 with m.If(half_pending.bit_select(tx_half, 1)):
@@ -389,20 +406,20 @@ class HostLink(wiring.Component):
             with m.State("HEAD"):
                 m.d.comb += [put.eq(1),
                              pbyte.eq(Mux(j == 0, Mux(kind_spikes, MSG_SPIKES, MSG_COUNTERS),
-                                          head[j[:3]]))]
+                                          _pick(head, j)))]
                 with m.If(j == HEADER_BYTES - 1):
                     m.next = "HEAD2"
             with m.State("HEAD2"):
                 with m.If(kind_spikes):
-                    m.d.comb += [put.eq(1), pbyte.eq(head_spk[(j - HEADER_BYTES)[:2]])]
+                    m.d.comb += [put.eq(1), pbyte.eq(_pick(head_spk, j - HEADER_BYTES))]
                     with m.If(j == HEADER_BYTES + SPIKE_HEADER - 1):
                         m.next = "SPK_READ"
                 with m.Else():
-                    m.d.comb += [put.eq(1), pbyte.eq(ctr_bytes[(j - HEADER_BYTES)[:6]])]
+                    m.d.comb += [put.eq(1), pbyte.eq(_pick(ctr_bytes, (j - HEADER_BYTES)[:6]))]
                     with m.If(j == HEADER_BYTES + 4 * len(COUNTER_NAMES) - 1):
                         m.next = "CRC_HI"
             with m.State("SPK_READ"):
-                with m.If(k == half_count[tx_half]):
+                with m.If(k == h_count):
                     m.next = "CRC_HI"
                 with m.Else():
                     m.next = "SPK0"
@@ -414,11 +431,9 @@ class HostLink(wiring.Component):
                 m.d.sync += k.eq(k + 1)
                 m.next = "SPK_READ"
             with m.State("CRC_HI"):
-                m.d.comb += [twr.en.eq(1), twr.addr.eq(j), twr.data.eq(tcrc[8:16])]
                 m.d.sync += j.eq(j + 1)
                 m.next = "CRC_LO"
             with m.State("CRC_LO"):
-                m.d.comb += [twr.en.eq(1), twr.addr.eq(j), twr.data.eq(tcrc[0:8])]
                 m.d.sync += [L.eq(j + 1), start.eq(0), p.eq(0)]
                 m.next = "SCAN"
             # COBS encoder: find the block [start, p), emit p - start + 1, then the block
@@ -434,10 +449,9 @@ class HostLink(wiring.Component):
                     m.next = "CODE"
             with m.State("CODE"):
                 m.d.comb += [push.eq(1), txf.w_data.eq(p - start + 1)]
-                with m.If(txf.w_rdy):
+                with m.If(room):
                     m.next = "EMIT_RD"
             with m.State("EMIT_RD"):
-                m.d.comb += trd.addr.eq(q)
                 with m.If(q == p):
                     with m.If(zero_end):
                         m.d.sync += [start.eq(p + 1), p.eq(p + 1)]
@@ -450,18 +464,25 @@ class HostLink(wiring.Component):
                 with m.Else():
                     m.next = "EMIT"
             with m.State("EMIT"):
-                m.d.comb += [trd.addr.eq(q), push.eq(1), txf.w_data.eq(trd.data)]
-                with m.If(txf.w_rdy):
+                m.d.comb += [push.eq(1), txf.w_data.eq(trd.data)]
+                with m.If(room):
                     m.d.sync += q.eq(q + 1)
                     m.next = "EMIT_RD"
             with m.State("DELIM"):
                 m.d.comb += [push.eq(1), txf.w_data.eq(0)]
-                with m.If(txf.w_rdy):
+                with m.If(room):
                     m.d.sync += tx_seq.eq(tx_seq + 1)
                     with m.If(kind_spikes):
                         m.d.sync += [half_pending.bit_select(tx_half, 1).eq(0),
                                      tx_half.eq(~tx_half)]
                     m.next = "IDLE"
+        # frame RAM ports as continuous assignments (see rx_fifo.r_en above)
+        crc_hi, crc_lo = tx_fsm.ongoing("CRC_HI"), tx_fsm.ongoing("CRC_LO")
+        m.d.comb += [
+            twr.en.eq(put | crc_hi | crc_lo), twr.addr.eq(j),
+            twr.data.eq(Mux(crc_hi, tcrc[8:16], Mux(crc_lo, tcrc[0:8], pbyte))),
+            trd.addr.eq(Mux(tx_fsm.ongoing("EMIT_RD") | tx_fsm.ongoing("EMIT"), q, p)),
+        ]
         return m
 
 

@@ -38,7 +38,8 @@ def run_link(chunks, total_cycles, lc):
                 for bit in [0] + [(b >> i) & 1 for i in range(8)] + [1]:
                     ctx.set(dut.rx, bit)
                     await ctx.tick().repeat(CPB)
-            await ctx.tick().repeat(gap)
+            if gap:
+                await ctx.tick().repeat(gap)
 
     async def monitor(ctx):
         while True:
