@@ -76,9 +76,9 @@ class LinkConfig:
         if not 1 <= batch_capacity <= max_spikes:
             raise ConfigError(f"batch_capacity must be 1..{max_spikes} (one frame), "
                               f"not {batch_capacity}")
-        if core.n_neurons < 8:
-            raise ConfigError("the link needs at least 8 neurons (a batch closes within "
-                              "8 cycles of its last sweep)")
+        if core.cycles_per_tick < 10:
+            raise ConfigError("the link needs sweeps at least 10 cycles apart (a spike batch "
+                              "closes within 9 cycles of its last sweep)")
         if core.sweep_number_width < 9:
             raise ConfigError("the link needs sweep numbers of at least 9 bits")
         self.core = core
@@ -325,15 +325,22 @@ class HostLink(wiring.Component):
         half_count = Array(Signal(range(CAP + 1), name=f"half_count{i}") for i in range(2))
         half_drop = Array(Signal(16, name=f"half_drop{i}") for i in range(2))
         half_sweeps = Array(Signal(8, name=f"half_sweeps{i}") for i in range(2))
+        # one register stage on the spike stream (the core's FIFO is a block RAM with a slow
+        # clock-to-out): the batch logic works on sv/si/ss
+        sv, si = Signal(), Signal(range(N))
+        ss = Signal(cfg.sweep_number_width)
         offset = Signal(cfg.sweep_number_width)
-        m.d.comb += offset.eq(self.spike_sweep - bt[:cfg.sweep_number_width])
+        m.d.comb += offset.eq(ss - bt[:cfg.sweep_number_width])
         next_batch = offset >= B
         last_of_batch = (in_batch == B - 1) | (~free & (steps == 0) & ~pending)
-        m.d.comb += self.spike_ready.eq(~next_batch)
-        with m.If(self.spike_valid & ~next_batch):
+        m.d.comb += self.spike_ready.eq(~sv | ~next_batch)
+        with m.If(self.spike_ready):
+            m.d.sync += [sv.eq(self.spike_valid), si.eq(self.spike_index),
+                         ss.eq(self.spike_sweep)]
+        with m.If(sv & ~next_batch):
             with m.If(scount < CAP):
                 m.d.comb += [swr.en.eq(1), swr.addr.eq(Mux(acc_half, CAP, 0) + scount),
-                             swr.data.eq(Cat(offset[:8], self.spike_index.as_unsigned()))]
+                             swr.data.eq(Cat(offset[:8], si.as_unsigned()))]
                 m.d.sync += scount.eq(scount + 1)
             with m.Else():
                 m.d.comb += inc["spikes_dropped"].eq(1)
@@ -341,10 +348,10 @@ class HostLink(wiring.Component):
         with m.If(self.sweep_done & ~closing):
             m.d.sync += in_batch.eq(in_batch + 1)
             with m.If(last_of_batch):
-                m.d.sync += [closing.eq(1), drain.eq(6)]
+                m.d.sync += [closing.eq(1), drain.eq(7)]
         with m.If(closing):
             m.d.sync += drain.eq(drain - 1)
-            done = (drain == 0) | (self.spike_valid & next_batch)
+            done = (drain == 0) | (sv & next_batch)
             with m.If(done):
                 m.d.sync += [closing.eq(0), in_batch.eq(0), scount.eq(0), sdrop.eq(0),
                              bt.eq(bt + in_batch)]
@@ -374,8 +381,14 @@ class HostLink(wiring.Component):
         zero_end = Signal()
         put = Signal()
         pbyte = Signal(8)
+        # the byte chosen in one cycle is written and added to the CRC in the next (a
+        # register stage between the byte multiplexers and the CRC tree)
+        put_r, pbyte_r, jw = Signal(), Signal(8), Signal(range(MAX_FRAME + 1))
+        m.d.sync += [put_r.eq(put), pbyte_r.eq(pbyte), jw.eq(j)]
         with m.If(put):
-            m.d.sync += [j.eq(j + 1), tcrc.eq(crc16_update(tcrc, pbyte))]
+            m.d.sync += j.eq(j + 1)
+        with m.If(put_r):
+            m.d.sync += tcrc.eq(crc16_update(tcrc, pbyte_r))
         # selections by explicit multiplexers (continuous assignments in the Verilog)
         h_tick = Mux(tx_half, half_tick[1], half_tick[0])
         h_count = Mux(tx_half, half_count[1], half_count[0])
@@ -385,7 +398,8 @@ class HostLink(wiring.Component):
         head = [Const(MSG_SPIKES, 8), tx_seq, cur_tick[0:8], cur_tick[8:16],
                 cur_tick[16:24], cur_tick[24:32]]
         head_spk = [h_drop[0:8], h_drop[8:16], h_sweeps]
-        ctr_bytes = [ctr[n][8 * i:8 * i + 8] for n in COUNTER_NAMES for i in range(4)]
+        ctr_all = Cat(*[ctr[n] for n in COUNTER_NAMES])
+        hi = Signal(range(4 * len(COUNTER_NAMES)))       # byte index after the header
         m.d.comb += srd.addr.eq(Mux(tx_half, CAP, 0) + k)
         push = Signal()
         # room for a byte, registered (at most one byte is pushed per two cycles, so a margin
@@ -396,7 +410,7 @@ class HostLink(wiring.Component):
 
         with m.FSM(name="tx_fsm") as tx_fsm:
             with m.State("IDLE"):
-                m.d.sync += [j.eq(0), k.eq(0), tcrc.eq(0xFFFF)]
+                m.d.sync += [j.eq(0), k.eq(0), tcrc.eq(0xFFFF), hi.eq(0)]
                 with m.If(half_pending.bit_select(tx_half, 1)):
                     m.d.sync += kind_spikes.eq(1)
                     m.next = "HEAD"
@@ -410,17 +424,18 @@ class HostLink(wiring.Component):
                 with m.If(j == HEADER_BYTES - 1):
                     m.next = "HEAD2"
             with m.State("HEAD2"):
+                m.d.sync += hi.eq(hi + 1)
                 with m.If(kind_spikes):
-                    m.d.comb += [put.eq(1), pbyte.eq(_pick(head_spk, j - HEADER_BYTES))]
+                    m.d.comb += [put.eq(1), pbyte.eq(_pick(head_spk, hi))]
                     with m.If(j == HEADER_BYTES + SPIKE_HEADER - 1):
                         m.next = "SPK_READ"
                 with m.Else():
-                    m.d.comb += [put.eq(1), pbyte.eq(_pick(ctr_bytes, (j - HEADER_BYTES)[:6]))]
+                    m.d.comb += [put.eq(1), pbyte.eq(ctr_all.word_select(hi, 8))]
                     with m.If(j == HEADER_BYTES + 4 * len(COUNTER_NAMES) - 1):
-                        m.next = "CRC_HI"
+                        m.next = "CRC_WAIT"
             with m.State("SPK_READ"):
                 with m.If(k == h_count):
-                    m.next = "CRC_HI"
+                    m.next = "CRC_WAIT"
                 with m.Else():
                     m.next = "SPK0"
             for n_, (lo, nxt) in enumerate([(0, "SPK1"), (8, "SPK2"), (16, "SPK_NEXT")]):
@@ -430,6 +445,8 @@ class HostLink(wiring.Component):
             with m.State("SPK_NEXT"):
                 m.d.sync += k.eq(k + 1)
                 m.next = "SPK_READ"
+            with m.State("CRC_WAIT"):
+                m.next = "CRC_HI"
             with m.State("CRC_HI"):
                 m.d.sync += j.eq(j + 1)
                 m.next = "CRC_LO"
@@ -479,8 +496,8 @@ class HostLink(wiring.Component):
         # frame RAM ports as continuous assignments (see rx_fifo.r_en above)
         crc_hi, crc_lo = tx_fsm.ongoing("CRC_HI"), tx_fsm.ongoing("CRC_LO")
         m.d.comb += [
-            twr.en.eq(put | crc_hi | crc_lo), twr.addr.eq(j),
-            twr.data.eq(Mux(crc_hi, tcrc[8:16], Mux(crc_lo, tcrc[0:8], pbyte))),
+            twr.en.eq(put_r | crc_hi | crc_lo), twr.addr.eq(Mux(crc_hi | crc_lo, j, jw)),
+            twr.data.eq(Mux(crc_hi, tcrc[8:16], Mux(crc_lo, tcrc[0:8], pbyte_r))),
             trd.addr.eq(Mux(tx_fsm.ongoing("EMIT_RD") | tx_fsm.ongoing("EMIT"), q, p)),
         ]
         return m

@@ -1,0 +1,9 @@
+"""The registry of board targets (one module per board)."""
+
+from __future__ import annotations
+
+from . import ulx3s
+
+__all__ = ["TARGETS"]
+
+TARGETS = {t["name"]: t for t in (ulx3s.TARGET,)}
