@@ -18,6 +18,8 @@ from .top import ClockPlan
 __all__ = ["size_core", "estimate"]
 
 MULTIPLIERS = 4
+#: idle cycles per sweep kept for host writes (the link writes between sweeps)
+LINK_IDLE_CYCLES = 16
 
 
 def _blocks(depth: int, width: int, target: dict) -> int:
@@ -56,8 +58,9 @@ def size_core(target: dict, n_neurons: int | None = None, clock_hz: float | None
                               f" MHz, not {clock_hz / 1e6:g} MHz")
     N = n_neurons or target["default_neurons"]
     cpt = plan.cycles_per_tick
-    if N > cpt:
-        raise ConfigError(f"{target['name']}: {N} neurons need {N} cycles per sweep, the "
+    if N + LINK_IDLE_CYCLES > cpt:
+        raise ConfigError(f"{target['name']}: {N} neurons need {N + LINK_IDLE_CYCLES} cycles "
+                          f"per sweep ({LINK_IDLE_CYCLES} idle for host writes), the "
                           f"{plan.clock_hz / 1e6:g} MHz clock gives {cpt} at "
                           f"{plan.update_hz / 1e3:g} kHz (cycles per tick limit)")
     kw = dict(target.get("core_defaults", {}))

@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 from . import ulx3s
+from .estimate_targets import ARTY, ATLYS, ICEBREAKER
 
 __all__ = ["TARGETS"]
 
-TARGETS = {t["name"]: t for t in (ulx3s.TARGET,)}
+TARGETS = {t["name"]: t for t in (ulx3s.TARGET, ICEBREAKER, ATLYS, ARTY)}

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from amaranth.lib import io
 from amaranth import ClockDomain, ClockSignal, Elaboratable, Module, ResetSignal, Signal
 
 from ..hdl.izhikevich_config import ConfigError
@@ -57,10 +58,15 @@ class BoardTop(Elaboratable):
         m.domains.sync = ClockDomain("sync")
         m.d.comb += [ClockSignal("sync").eq(clk), ResetSignal("sync").eq(~locked)]
         m.submodules.linked = linked = LinkedCore(self.lcfg)
-        uart = platform.request("uart", 0)
-        m.d.comb += [linked.rx.eq(uart.rx.i), uart.tx.o.eq(linked.tx)]
+        uart = platform.request("uart", 0, dir={"rx": "-", "tx": "-"})
+        m.submodules.uart_rx = rx = io.Buffer("i", uart.rx)
+        m.submodules.uart_tx = tx = io.Buffer("o", uart.tx)
+        m.d.comb += [linked.rx.eq(rx.i), tx.o.eq(linked.tx)]
         if self.uart_tx_enable:
-            m.d.comb += platform.request("uart_tx_enable", 0).o.eq(1)
-        leds = [platform.request("led", i) for i in range(2)]
-        m.d.comb += [leds[0].o.eq(linked.running), leds[1].o.eq(linked.overflow)]
+            m.submodules.uart_en = en = io.Buffer("o", platform.request("uart_tx_enable", 0,
+                                                                         dir="-"))
+            m.d.comb += en.o.eq(1)
+        for i, sig in enumerate((linked.running, linked.overflow)):
+            m.submodules[f"led{i}"] = led = io.Buffer("o", platform.request("led", i, dir="-"))
+            m.d.comb += led.o.eq(sig)
         return m

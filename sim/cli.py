@@ -20,6 +20,7 @@ __all__ = ["main", "build_parser", "COMMAND_MODULES", "CliError"]
 #: Command modules of this package; each adds its parsers through ``register(groups)``.
 COMMAND_MODULES = [
     "cli_izhikevich",
+    "cli_boards",
 ]
 
 
