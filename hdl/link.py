@@ -48,7 +48,7 @@ from .link_codec import (COUNTER_NAMES, MAX_FRAME, MIN_FRAME, MSG_CONTROL, MSG_C
                          HEADER_BYTES, crc16_update, current_bytes)
 from .uart import UartRx, UartTx
 
-__all__ = ["HostLink", "LinkedCore", "LinkConfig", "link_config"]
+__all__ = ["HostLink", "LinkedCore", "LinkConfig", "link_config", "link_verilog"]
 
 
 def _pick(options, index):
@@ -527,3 +527,18 @@ class LinkedCore(wiring.Component):
             link.sweep_done.eq(core.sweep_done),
         ]
         return m
+
+
+def link_verilog(lcfg: LinkConfig, name: str = "linked_core", lowered: bool = False) -> str:
+    """Verilog of :class:`LinkedCore`. With ``lowered``, yosys ``proc`` turns every process
+    into multiplexers and registers first (no ``always @*`` blocks): Icarus 11 does not
+    re-evaluate some of the combinational processes of the link's transmit FSM when an input
+    changes while the state holds, and simulates the lowered netlist correctly."""
+    from amaranth.back import rtlil, verilog
+    if not lowered:
+        return verilog.convert(LinkedCore(lcfg), name=name, emit_src=False)
+    from amaranth._toolchain.yosys import find_yosys
+    il = rtlil.convert(LinkedCore(lcfg), name=name, emit_src=False)
+    yosys = find_yosys(lambda ver: ver >= (0, 40))
+    return yosys.run(["-q", "-"], f"read_rtlil <<rtlil\n{il}\nrtlil\nproc\nopt_clean\n"
+                                  f"write_verilog -noattr\n")
