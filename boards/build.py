@@ -99,7 +99,8 @@ def build_target(board: str, out: Path, n_neurons: int | None = None,
         platform = target["platform"]()
         top = BoardTop(lcfg, target["pll"], target.get("uart_tx_enable", False))
         opts = f"--report {name}.nextpnr.json --timing-allow-fail --seed {seed}"
-        plan = platform.prepare(top, name=name, nextpnr_opts=opts)
+        plan = platform.prepare(top, name=name, nextpnr_opts=opts,
+                                **target.get("prepare_opts", {}))
         t0 = time.monotonic()
         try:
             plan.execute_local(out, env=yowasp_env(target["family"]))

@@ -1,5 +1,4 @@
-"""Targets sized here but not yet built by ``cuneate build`` with the open toolchain: the
-iCEBreaker (iCE40UP5K) and the Verilog-plus-estimate boards, Atlys (Spartan-6 LX45, the
+"""Verilog-plus-estimate targets: Atlys (Spartan-6 LX45, the
 reference device; ISE flow) and Arty A7-35T (Vivado). ``cuneate build`` writes their Verilog
 and the sizing estimate; the refusals name the limit the device sets."""
 
@@ -7,23 +6,7 @@ from __future__ import annotations
 
 from .top import ClockPlan
 
-__all__ = ["ICEBREAKER", "ATLYS", "ARTY"]
-
-ICEBREAKER = {
-    "name": "icebreaker",
-    "description": "iCEBreaker, Lattice iCE40UP5K: Verilog and estimate (bitstream flow not "
-                   "yet wired; the default core does not fit)",
-    "family": "ice40", "device": "iCE40UP5K-SG48",
-    # 12 MHz oscillator -> 24 MHz: 1500 cycles per 16 kHz sweep, 8 clocks per bit at 3 Mbaud
-    "clock_plan": ClockPlan(osc_hz=12e6, clock_hz=24e6, update_hz=16e3, baud=3e6),
-    "pll_clocks": [24e6],
-    "resources": {"LUT": 5280, "FF": 5280, "BRAM": 30, "DSP": 8},
-    "bram_shapes": [(256, 16), (512, 8), (1024, 4), (2048, 2)],
-    "lutram_bits": 0, "dsp_width": 16,
-    "default_neurons": 1000,
-    "core_defaults": {"operand_width": 16},
-    "bitstream": False,
-}
+__all__ = ["ATLYS", "ARTY"]
 
 ATLYS = {
     "name": "atlys",

@@ -70,7 +70,8 @@ def size_core(target: dict, n_neurons: int | None = None, clock_hz: float | None
     kw.setdefault("spike_fifo_depth", 256)
     core = IzhikevichConfig(**kw)
     lcfg = LinkConfig(core, clocks_per_bit=plan.clocks_per_bit,
-                      batch_sweeps=max(1, int(round(plan.update_hz / 1000))))
+                      batch_sweeps=max(1, int(round(plan.update_hz / 1000))),
+                      **target.get("link_defaults", {}))
     est = estimate(lcfg, target)
     res = target["resources"]
     if est["BRAM"] > res["BRAM"]:

@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
-from . import ulx3s
-from .estimate_targets import ARTY, ATLYS, ICEBREAKER
+from . import icebreaker, ulx3s
+from .estimate_targets import ARTY, ATLYS
 
 __all__ = ["TARGETS"]
 
-TARGETS = {t["name"]: t for t in (ulx3s.TARGET, ICEBREAKER, ATLYS, ARTY)}
+TARGETS = {t["name"]: t for t in (ulx3s.TARGET, icebreaker.TARGET, ATLYS, ARTY)}

@@ -58,7 +58,8 @@ class BoardTop(Elaboratable):
         m.domains.sync = ClockDomain("sync")
         m.d.comb += [ClockSignal("sync").eq(clk), ResetSignal("sync").eq(~locked)]
         m.submodules.linked = linked = LinkedCore(self.lcfg)
-        uart = platform.request("uart", 0, dir={"rx": "-", "tx": "-", "rts": "-", "dtr": "-"})
+        res = platform.lookup("uart", 0)
+        uart = platform.request("uart", 0, dir={sub.name: "-" for sub in res.ios})
         m.submodules.uart_rx = rx = io.Buffer("i", uart.rx)
         m.submodules.uart_tx = tx = io.Buffer("o", uart.tx)
         m.d.comb += [linked.rx.eq(rx.i), tx.o.eq(linked.tx)]

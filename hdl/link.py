@@ -63,7 +63,8 @@ class LinkConfig:
     """Link parameters checked against the core they serve."""
 
     def __init__(self, core: IzhikevichConfig, clocks_per_bit: int = 16, batch_sweeps: int = 16,
-                 batch_capacity: int = 80, rx_fifo_depth: int = 512, tx_fifo_depth: int = 16):
+                 batch_capacity: int = 80, rx_fifo_depth: int = 512, tx_fifo_depth: int = 16,
+                 counter_width: int = 32):
         if core.tick_source != "external":
             raise ConfigError("the host link drives the core's ticks: the core needs "
                               "tick_source='external'")
@@ -81,6 +82,9 @@ class LinkConfig:
                               "closes within 9 cycles of its last sweep)")
         if core.sweep_number_width < 9:
             raise ConfigError("the link needs sweep numbers of at least 9 bits")
+        if not 8 <= counter_width <= 32:
+            raise ConfigError(f"counter_width must be 8..32, not {counter_width}")
+        self.counter_width = int(counter_width)
         self.core = core
         self.clocks_per_bit = int(clocks_per_bit)
         self.batch_sweeps = int(batch_sweeps)
@@ -99,7 +103,8 @@ class LinkConfig:
         return {"clocks_per_bit": self.clocks_per_bit, "baud": self.baud,
                 "batch_sweeps": self.batch_sweeps, "batch_capacity": self.batch_capacity,
                 "rx_fifo_depth": self.rx_fifo_depth, "tx_fifo_depth": self.tx_fifo_depth,
-                "current_bytes": self.current_bytes, "max_currents": self.max_currents}
+                "current_bytes": self.current_bytes, "max_currents": self.max_currents,
+                "counter_width": self.counter_width}
 
 
 def link_config(core_kwargs: dict | None = None, **link_kwargs) -> LinkConfig:
@@ -132,12 +137,13 @@ class HostLink(wiring.Component):
         m = Module()
 
         # --- counters ---------------------------------------------------------------------
-        ctr = {name: Signal(32, name=f"ctr_{name}") for name in COUNTER_NAMES}
-        inc = {name: Signal(32, name=f"inc_{name}") for name in COUNTER_NAMES}
+        cw = lc.counter_width
+        ctr = {name: Signal(cw, name=f"ctr_{name}") for name in COUNTER_NAMES}
+        inc = {name: Signal(8, name=f"inc_{name}") for name in COUNTER_NAMES}
         clear = Signal()
         for name in COUNTER_NAMES:
             total = ctr[name] + inc[name]
-            m.d.sync += ctr[name].eq(Mux(clear, 0, Mux(total[32], 0xFFFFFFFF, total[:32])))
+            m.d.sync += ctr[name].eq(Mux(clear, 0, Mux(total[cw], (1 << cw) - 1, total[:cw])))
 
         # --- UART and receive FIFO --------------------------------------------------------
         m.submodules.uart_rx = urx = UartRx(lc.clocks_per_bit)
@@ -398,7 +404,7 @@ class HostLink(wiring.Component):
         head = [Const(MSG_SPIKES, 8), tx_seq, cur_tick[0:8], cur_tick[8:16],
                 cur_tick[16:24], cur_tick[24:32]]
         head_spk = [h_drop[0:8], h_drop[8:16], h_sweeps]
-        ctr_all = Cat(*[ctr[n] for n in COUNTER_NAMES])
+        ctr_all = Cat(*[Cat(ctr[n], Const(0, 32 - cw)) for n in COUNTER_NAMES])
         hi = Signal(range(4 * len(COUNTER_NAMES)))       # byte index after the header
         m.d.comb += srd.addr.eq(Mux(tx_half, CAP, 0) + k)
         push = Signal()

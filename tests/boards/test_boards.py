@@ -22,8 +22,9 @@ def test_clock_plans_have_integer_ratios():
 
 @pytest.mark.parametrize("board,kw,match", [
     ("ulx3s", dict(n_neurons=3800), "cycles per tick limit"),
-    ("icebreaker", dict(n_neurons=1000, operand_width=18), "DSP limit"),
-    ("icebreaker", dict(n_neurons=1480), "RAM limit"),
+    ("icebreaker", dict(n_neurons=500, operand_width=18), "DSP limit"),
+    ("icebreaker", dict(n_neurons=700, spike_fifo_depth=4096), "RAM limit"),
+    ("icebreaker", dict(n_neurons=1000), "cycles per tick limit"),
     ("ulx3s", dict(clock_hz=48e6), "PLL plans give 60 MHz"),
 ])
 def test_refusals_name_the_limit(board, kw, match):
@@ -71,3 +72,15 @@ def test_ulx3s_bitstream_meets_60mhz(tmp_path):
     assert pr["resources"]["BRAM"]["used"] <= r["estimate"]["BRAM"]
     assert pr["timing_met"], pr["fmax_mhz"]
     print("\n" + (tmp_path / "cuneate_ulx3s.report.txt").read_text())
+
+
+@pytest.mark.long
+def test_icebreaker_bitstream_fits_and_meets_12mhz(tmp_path):
+    r = build_target("icebreaker", tmp_path, bitstream=True, seed=1)
+    assert r["bitstream"] and (tmp_path / "cuneate_icebreaker.bin").exists()
+    pr = r["place_route"]
+    assert r["core"]["operand_width"] == 16 and r["core"]["n_neurons"] == 700
+    assert pr["resources"]["DSP"]["used"] == 4
+    assert pr["resources"]["BRAM"]["used"] <= 30 and pr["resources"]["LUT"]["used"] <= 5280
+    assert pr["timing_met"], pr["fmax_mhz"]
+    print("\n" + (tmp_path / "cuneate_icebreaker.report.txt").read_text())
