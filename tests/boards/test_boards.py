@@ -84,3 +84,13 @@ def test_icebreaker_bitstream_fits_and_meets_12mhz(tmp_path):
     assert pr["resources"]["BRAM"]["used"] <= 30 and pr["resources"]["LUT"]["used"] <= 5280
     assert pr["timing_met"], pr["fmax_mhz"]
     print("\n" + (tmp_path / "cuneate_icebreaker.report.txt").read_text())
+
+
+@pytest.mark.long
+@pytest.mark.parametrize("board", ["atlys", "arty"])
+def test_xilinx_targets_yosys_estimate(board, tmp_path):
+    r = build_target(board, tmp_path, n_neurons=2484)
+    ye = r["yosys_estimate"]
+    assert ye["DSP"]["used"] >= 4 and ye["BRAM"]["used"] > 0
+    assert ye["LUT"]["percent"] < 15
+    print("\n" + (tmp_path / f"cuneate_{board}.report.txt").read_text())
