@@ -61,6 +61,7 @@ TARGET = {
     "nextpnr_cells": {"LUT": "ICESTORM_LC", "FF": "ICESTORM_LC", "BRAM": "ICESTORM_RAM",
                       "DSP": "ICESTORM_DSP"},
     "bitstream": True,
+    "loader_board": "ice40_generic",
     "prepare_opts": {"synth_opts": "-dsp"},      # map the products to SB_MAC16
     "bitstream_ext": "bin",
 }

@@ -57,6 +57,7 @@ TARGET = {
     "pll": _pll(5, 12, 10, 60.0),
     "uart_tx_enable": True,
     "bitstream": True,
+    "loader_board": "ulx3s",
     # device resources for sizing and percentages (LFE5U-85F)
     "resources": {"LUT": 83640, "FF": 83640, "BRAM": 208, "DSP": 156},
     "bram_shapes": [(16384, 1), (8192, 2), (4096, 4), (2048, 9), (1024, 18), (512, 36)],

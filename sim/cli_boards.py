@@ -52,7 +52,40 @@ def cmd_build(args) -> int:
     return 0 if pr is None or pr["timing_met"] else 1
 
 
+def cmd_program(args) -> int:
+    import shutil
+    import subprocess
+    from pathlib import Path
+    from ..boards.targets import TARGETS
+    t = TARGETS.get(args.board)
+    if t is None or not t.get("loader_board"):
+        known = ", ".join(k for k, v in TARGETS.items() if v.get("loader_board"))
+        raise CliError(f"cuneate program: no bitstream flow for {args.board!r}; "
+                       f"programmable: {known}")
+    bit = Path(args.bitstream)
+    if not bit.is_file():
+        raise CliError(f"cuneate program: bitstream {str(bit)!r} not found (run cuneate build "
+                       f"{args.board} first)")
+    loader = shutil.which("openFPGALoader")
+    if loader is None:
+        raise CliError("cuneate program: openFPGALoader is not installed (apt install "
+                       "openfpgaloader, or program the bitstream with your own tool)")
+    r = subprocess.run([loader, "-b", t["loader_board"], str(bit)], capture_output=True,
+                       text=True)
+    if r.returncode != 0:
+        last = (r.stderr or r.stdout).strip().splitlines()[-1:] or ["no output"]
+        raise CliError(f"cuneate program: no {args.board} board programmed "
+                       f"(openFPGALoader: {last[0]})")
+    print(f"programmed {args.board} with {bit}")
+    return 0
+
+
 def register(groups: CommandGroups) -> None:
+    p = groups.root.add_parser("program", help="load a bitstream with openFPGALoader")
+    p.add_argument("board")
+    p.add_argument("bitstream")
+    p.set_defaults(func=cmd_program)
+
     b = groups.root.add_parser("boards", help="list the board targets and their limits")
     b.add_argument("--json", action="store_true")
     b.set_defaults(func=cmd_boards)

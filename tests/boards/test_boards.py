@@ -94,3 +94,16 @@ def test_xilinx_targets_yosys_estimate(board, tmp_path):
     assert ye["DSP"]["used"] >= 4 and ye["BRAM"]["used"] > 0
     assert ye["LUT"]["percent"] < 15
     print("\n" + (tmp_path / f"cuneate_{board}.report.txt").read_text())
+
+
+def test_program_refuses_clearly(capsys, tmp_path):
+    assert main(["program", "atlys", str(tmp_path / "x.bit")]) == 2
+    assert "no bitstream flow for 'atlys'" in capsys.readouterr().err
+    assert main(["program", "ulx3s", str(tmp_path / "x.bit")]) == 2
+    assert "not found" in capsys.readouterr().err
+    bit = tmp_path / "x.bit"
+    bit.write_bytes(b"\xff" * 16)
+    assert main(["program", "ulx3s", str(bit)]) == 2
+    err = capsys.readouterr().err
+    # without openFPGALoader, or with it and no board attached: one line saying so
+    assert err.count("\n") == 1 and ("not installed" in err or "no ulx3s board" in err)
