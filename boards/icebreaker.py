@@ -1,0 +1,67 @@
+"""iCEBreaker (Lattice iCE40UP5K): bitstream with yosys (``synth_ice40 -dsp``), nextpnr-ice40
+and icepack, for a core sized to the device: 16-bit multiplier operands (one SB_MAC16 per
+product), 16-bit saturating link counters, 700 neurons by default at 12 MHz straight from the
+oscillator (750 cycles per 16 kHz sweep; 8 clocks per bit at 1.5 Mbaud). The measured fmax of
+this datapath on the UP5K (about 15 MHz) rules out the 24 MHz PLL plan (``_pll``: DIVR 0,
+DIVF 63, DIVQ 5) that would allow 1484 neurons.
+"""
+
+from __future__ import annotations
+
+from amaranth import Const, Instance, Signal
+from amaranth.lib import io
+
+from .top import ClockPlan
+
+__all__ = ["TARGET"]
+
+
+def _pll(m, platform):
+    clk12 = platform.request(platform.default_clk, dir="-")
+    clk, locked = Signal(name="pll_clk"), Signal(name="pll_locked")
+    m.submodules.pll = Instance(
+        "SB_PLL40_PAD",
+        p_FEEDBACK_PATH="SIMPLE", p_DIVR=0, p_DIVF=63, p_DIVQ=5, p_FILTER_RANGE=1,
+        i_PACKAGEPIN=clk12.io, i_RESETB=1, i_BYPASS=0,
+        o_PLLOUTGLOBAL=clk, o_LOCK=locked)
+    platform.add_clock_constraint(clk, 24e6)
+    return clk, locked
+
+
+def _direct(m, platform):
+    clk12 = platform.request(platform.default_clk, dir="-")
+    m.submodules.clk_buf = buf = io.Buffer("i", clk12)
+    return buf.i, Const(1)
+
+
+def platform():
+    from amaranth_boards.icebreaker import ICEBreakerPlatform
+    return ICEBreakerPlatform()
+
+
+TARGET = {
+    "name": "icebreaker",
+    "description": "iCEBreaker, Lattice iCE40UP5K: bitstream (yosys, nextpnr-ice40, icepack), "
+                   "16-bit operands, 700 neurons at 12 MHz",
+    "family": "ice40", "device": "iCE40UP5K-SG48",
+    "platform": platform,
+    # the 16-bit datapath places at about 15 MHz on the UP5K: the 12 MHz oscillator clocks the
+    # core directly (750 cycles per 16 kHz sweep, 8 clocks per bit at 1.5 Mbaud); the 24 MHz
+    # PLL plan (_pll) stays available for a faster datapath
+    "clock_plan": ClockPlan(osc_hz=12e6, clock_hz=12e6, update_hz=16e3, baud=1.5e6),
+    "pll": _direct,
+    "pll_clocks": [12e6],
+    "resources": {"LUT": 5280, "FF": 5280, "BRAM": 30, "DSP": 8},
+    "bram_shapes": [(256, 16), (512, 8), (1024, 4), (2048, 2)],
+    "lutram_bits": 0, "dsp_width": 16,
+    "default_neurons": 700,
+    "core_defaults": {"operand_width": 16},
+    # 16-bit saturating error counters and a 256-byte receive FIFO: logic cells are the limit
+    "link_defaults": {"counter_width": 16, "rx_fifo_depth": 256},
+    "nextpnr_cells": {"LUT": "ICESTORM_LC", "FF": "ICESTORM_LC", "BRAM": "ICESTORM_RAM",
+                      "DSP": "ICESTORM_DSP"},
+    "bitstream": True,
+    "loader_board": "ice40_generic",
+    "prepare_opts": {"synth_opts": "-dsp"},      # map the products to SB_MAC16
+    "bitstream_ext": "bin",
+}

@@ -1,0 +1,73 @@
+"""Board top: PLL clock, the Izhikevich core behind the UART host link, status LEDs.
+
+A target (one file per board in this package) supplies the platform, its oscillator and a
+:class:`ClockPlan`: the PLL output frequency, chosen so that both the cycles per sweep
+(``clock_hz / update_hz``) and the UART divider (``clock_hz / baud``) are integers. The top
+holds the core in reset until the PLL locks.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from amaranth.lib import io
+from amaranth import ClockDomain, ClockSignal, Elaboratable, Module, ResetSignal, Signal
+
+from ..hdl.izhikevich_config import ConfigError
+from ..hdl.link import LinkConfig, LinkedCore
+
+__all__ = ["ClockPlan", "BoardTop"]
+
+
+@dataclass(frozen=True)
+class ClockPlan:
+    """Oscillator, PLL output and the integer ratios the design depends on."""
+
+    osc_hz: float
+    clock_hz: float
+    update_hz: float
+    baud: float
+
+    def __post_init__(self):
+        for what, ratio in (("cycles per sweep", self.clock_hz / self.update_hz),
+                            ("clocks per UART bit", self.clock_hz / self.baud)):
+            if abs(ratio - round(ratio)) > 1e-9:
+                raise ConfigError(f"{self.clock_hz / 1e6:g} MHz gives {ratio:g} {what}: "
+                                  f"not an integer")
+
+    @property
+    def cycles_per_tick(self) -> int:
+        return int(round(self.clock_hz / self.update_hz))
+
+    @property
+    def clocks_per_bit(self) -> int:
+        return int(round(self.clock_hz / self.baud))
+
+
+class BoardTop(Elaboratable):
+    """``pll(m, platform) -> (clk, locked)`` builds the board's PLL; the rest is common."""
+
+    def __init__(self, lcfg: LinkConfig, pll, uart_tx_enable: bool = False):
+        self.lcfg = lcfg
+        self.pll = pll
+        self.uart_tx_enable = uart_tx_enable
+
+    def elaborate(self, platform):
+        m = Module()
+        clk, locked = self.pll(m, platform)
+        m.domains.sync = ClockDomain("sync")
+        m.d.comb += [ClockSignal("sync").eq(clk), ResetSignal("sync").eq(~locked)]
+        m.submodules.linked = linked = LinkedCore(self.lcfg)
+        res = platform.lookup("uart", 0)
+        uart = platform.request("uart", 0, dir={sub.name: "-" for sub in res.ios})
+        m.submodules.uart_rx = rx = io.Buffer("i", uart.rx)
+        m.submodules.uart_tx = tx = io.Buffer("o", uart.tx)
+        m.d.comb += [linked.rx.eq(rx.i), tx.o.eq(linked.tx)]
+        if self.uart_tx_enable:
+            m.submodules.uart_en = en = io.Buffer("o", platform.request("uart_tx_enable", 0,
+                                                                         dir="-"))
+            m.d.comb += en.o.eq(1)
+        for i, sig in enumerate((linked.running, linked.overflow)):
+            m.submodules[f"led{i}"] = led = io.Buffer("o", platform.request("led", i, dir="-"))
+            m.d.comb += led.o.eq(sig)
+        return m

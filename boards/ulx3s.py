@@ -1,0 +1,70 @@
+"""ULX3S (Lattice ECP5, LFE5U-85F/25F, speed grade 6): the main target, bitstream with the
+open toolchain (yosys, nextpnr-ecp5, ecppack).
+
+Clock plan: the 25 MHz oscillator through an EHXPLLL to 60 MHz (25 / 5 * 12, VCO 600 MHz,
+phase detector at 5 MHz). 60 MHz is the nearest plan with integer ratios for both the sweep and
+a UART rate the FT231X can produce: 3750 cycles per 16 kHz sweep (up to 3750 neurons) and 20
+clocks per bit at 3 Mbaud. (48 MHz, which would give 3000 cycles and 16 clocks per bit, needs
+an input divider of 25, below the PLL's 3.125 MHz phase-detector minimum.)
+"""
+
+from __future__ import annotations
+
+from amaranth import Instance, Signal
+
+from .top import ClockPlan
+
+__all__ = ["TARGET"]
+
+
+def _pll(clki_div: int, clkfb_div: int, clkop_div: int, out_mhz: float):
+    def build(m, platform):
+        clk25 = platform.request(platform.default_clk, dir="-")
+        clk, locked = Signal(name="pll_clk"), Signal(name="pll_locked")
+        m.submodules.pll = Instance(
+            "EHXPLLL",
+            a_FREQUENCY_PIN_CLKI="25", a_FREQUENCY_PIN_CLKOP=f"{out_mhz:g}",
+            a_ICP_CURRENT="12", a_LPF_RESISTOR="8", a_MFG_ENABLE_FILTEROPAMP="1",
+            a_MFG_GMCREF_SEL="2",
+            p_PLLRST_ENA="DISABLED", p_INTFB_WAKE="DISABLED", p_STDBY_ENABLE="DISABLED",
+            p_DPHASE_SOURCE="DISABLED", p_OUTDIVIDER_MUXA="DIVA", p_OUTDIVIDER_MUXB="DIVB",
+            p_OUTDIVIDER_MUXC="DIVC", p_OUTDIVIDER_MUXD="DIVD",
+            p_CLKI_DIV=clki_div, p_CLKOP_ENABLE="ENABLED", p_CLKOP_DIV=clkop_div,
+            p_CLKOP_CPHASE=clkop_div // 2 - 1, p_CLKOP_FPHASE=0, p_FEEDBK_PATH="CLKOP",
+            p_CLKFB_DIV=clkfb_div,
+            i_RST=0, i_STDBY=0, i_CLKI=clk25.io, o_CLKOP=clk, i_CLKFB=clk,
+            i_PHASESEL0=0, i_PHASESEL1=0, i_PHASEDIR=1, i_PHASESTEP=1, i_PHASELOADREG=1,
+            i_PLLWAKESYNC=0, i_ENCLKOP=0, o_LOCK=locked)
+        platform.add_clock_constraint(clk, out_mhz * 1e6)
+        return clk, locked
+    return build
+
+
+def platform(device: str = "85F"):
+    from amaranth_boards import ulx3s
+    return {"12F": ulx3s.ULX3S_12F_Platform, "25F": ulx3s.ULX3S_25F_Platform,
+            "45F": ulx3s.ULX3S_45F_Platform, "85F": ulx3s.ULX3S_85F_Platform}[device]()
+
+
+TARGET = {
+    "name": "ulx3s",
+    "description": "ULX3S, Lattice ECP5 LFE5U-85F speed grade 6: bitstream (yosys, nextpnr-ecp5, "
+                   "ecppack)",
+    "family": "ecp5",
+    "device": "LFE5U-85F-6BG381C",
+    "platform": platform,
+    "clock_plan": ClockPlan(osc_hz=25e6, clock_hz=60e6, update_hz=16e3, baud=3e6),
+    "pll": _pll(5, 12, 10, 60.0),
+    "uart_tx_enable": True,
+    "bitstream": True,
+    "loader_board": "ulx3s",
+    # device resources for sizing and percentages (LFE5U-85F)
+    "resources": {"LUT": 83640, "FF": 83640, "BRAM": 208, "DSP": 156},
+    "bram_shapes": [(16384, 1), (8192, 2), (4096, 4), (2048, 9), (1024, 18), (512, 36)],
+    "lutram_bits": 512, "dsp_width": 18,
+    "default_neurons": 2500,
+    "pll_clocks": [60e6],
+    "nextpnr_cells": {"LUT": "TRELLIS_COMB", "FF": "TRELLIS_FF", "BRAM": "DP16KD",
+                      "DSP": "MULT18X18D"},
+    "bitstream_ext": "bit",
+}

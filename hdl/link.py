@@ -1,0 +1,550 @@
+"""UART host link gateware: framed current writes in, spike batches and counters out.
+
+:class:`HostLink` sits between a UART and an :class:`~cuneate.hdl.izhikevich.IzhikevichCore`
+configured with ``tick_source="external"``; :class:`LinkedCore` is the two wired together
+(the unit a board top instantiates and the cocotb bench drives through its ``rx``/``tx`` pins).
+The wire format is :mod:`cuneate.hdl.link_codec` (its functions are the model: the CRC step
+is the same function in RTL and host, the COBS encoder scans as the model does).
+
+Receive path
+    UART -> FIFO (``rx_fifo_depth`` bytes; a byte arriving when it is full is dropped and
+    counted ``rx_overflows``) -> streaming COBS decoder with running CRC; the header is kept in
+    registers and the currents are assembled into a value RAM as they arrive, so nothing acts
+    before the frame's CRC is checked. A good frame is then executed while the FIFO holds
+    further bytes (back-pressure). ``WRITE`` waits until the core is between sweep
+    ``tick - 1`` and sweep ``tick`` and writes one current per cycle; the tick generator holds
+    the next tick while a write is in progress (jitter of at most ``count + 1`` cycles, no
+    drift), so the currents are in effect exactly from sweep ``tick``. A write whose sweep has
+    started is refused (``late_writes``).
+Tick generator
+    Divider of ``cycles_per_tick``; runs freely (``OP_START``), for ``arg`` sweeps
+    (``OP_STEP``) or not at all (``OP_STOP``, the state after reset). A tick due while the
+    previous one is still waiting is lost and counted (``tick_overruns``).
+Transmit path
+    Spikes from the core's spike stream go into one of two batch buffers of
+    ``batch_capacity`` entries (ping-pong): one accumulates while the other is sent. A batch
+    closes after ``batch_sweeps`` sweeps (or when a step ends) and is sent as one ``SPIKES``
+    frame, empty or not; spikes that do not fit are counted in the frame and in
+    ``spikes_dropped``; a batch that closes while both buffers are busy is dropped whole and
+    counted ``batches_dropped`` (the host sees the gap in ticks). Frames are built into a byte
+    RAM with their CRC, then COBS-encoded by scanning, into a small FIFO feeding the UART.
+
+Counters (32 bits, saturating, never wrapping): :data:`~cuneate.hdl.link_codec.COUNTER_NAMES`.
+"""
+
+from __future__ import annotations
+
+from amaranth import Array, Cat, Const, Module, Mux, Signal
+from amaranth.lib import wiring
+from amaranth.lib.fifo import SyncFIFOBuffered
+from amaranth.lib.memory import Memory
+from amaranth.lib.wiring import In, Out
+
+from .izhikevich import IzhikevichCore
+from .izhikevich_config import ConfigError, IzhikevichConfig
+from .link_codec import (COUNTER_NAMES, MAX_FRAME, MIN_FRAME, MSG_CONTROL, MSG_COUNTERS,
+                         MSG_SPIKES, MSG_WRITE, OP_CLEAR_COUNTERS, OP_READ_COUNTERS,
+                         OP_START, OP_STEP, OP_STOP, SPIKE_HEADER, CONTROL_PAYLOAD,
+                         HEADER_BYTES, crc16_update, current_bytes)
+from .uart import UartRx, UartTx
+
+__all__ = ["HostLink", "LinkedCore", "LinkConfig", "link_config", "link_verilog"]
+
+
+def _pick(options, index):
+    """``options[index]`` as a chain of multiplexers (``index`` beyond the list: the last)."""
+    out = options[-1]
+    for i in range(len(options) - 2, -1, -1):
+        out = Mux(index == i, options[i], out)
+    return out
+
+
+class LinkConfig:
+    """Link parameters checked against the core they serve."""
+
+    def __init__(self, core: IzhikevichConfig, clocks_per_bit: int = 16, batch_sweeps: int = 16,
+                 batch_capacity: int = 80, rx_fifo_depth: int = 512, tx_fifo_depth: int = 16,
+                 counter_width: int = 32):
+        if core.tick_source != "external":
+            raise ConfigError("the host link drives the core's ticks: the core needs "
+                              "tick_source='external'")
+        if core.n_neurons > 1 << 16:
+            raise ConfigError(f"the link addresses at most 65536 neurons, "
+                              f"not {core.n_neurons}")
+        if not 1 <= batch_sweeps <= 255:
+            raise ConfigError(f"batch_sweeps must be 1..255, not {batch_sweeps}")
+        max_spikes = (MAX_FRAME - MIN_FRAME - SPIKE_HEADER) // 3
+        if not 1 <= batch_capacity <= max_spikes:
+            raise ConfigError(f"batch_capacity must be 1..{max_spikes} (one frame), "
+                              f"not {batch_capacity}")
+        if core.cycles_per_tick < 10:
+            raise ConfigError("the link needs sweeps at least 10 cycles apart (a spike batch "
+                              "closes within 9 cycles of its last sweep)")
+        if core.sweep_number_width < 9:
+            raise ConfigError("the link needs sweep numbers of at least 9 bits")
+        if not 8 <= counter_width <= 32:
+            raise ConfigError(f"counter_width must be 8..32, not {counter_width}")
+        self.counter_width = int(counter_width)
+        self.core = core
+        self.clocks_per_bit = int(clocks_per_bit)
+        self.batch_sweeps = int(batch_sweeps)
+        self.batch_capacity = int(batch_capacity)
+        self.rx_fifo_depth = int(rx_fifo_depth)
+        self.tx_fifo_depth = int(tx_fifo_depth)
+        self.current_width = core.I.width
+        self.current_bytes = current_bytes(core.I.width)
+        self.max_currents = (MAX_FRAME - MIN_FRAME - 2) // self.current_bytes
+
+    @property
+    def baud(self) -> float:
+        return self.core.clock_hz / self.clocks_per_bit
+
+    def to_dict(self) -> dict:
+        return {"clocks_per_bit": self.clocks_per_bit, "baud": self.baud,
+                "batch_sweeps": self.batch_sweeps, "batch_capacity": self.batch_capacity,
+                "rx_fifo_depth": self.rx_fifo_depth, "tx_fifo_depth": self.tx_fifo_depth,
+                "current_bytes": self.current_bytes, "max_currents": self.max_currents,
+                "counter_width": self.counter_width}
+
+
+def link_config(core_kwargs: dict | None = None, **link_kwargs) -> LinkConfig:
+    """A :class:`LinkConfig` for a core built from ``core_kwargs`` (external tick forced)."""
+    kw = dict(core_kwargs or {})
+    kw["tick_source"] = "external"
+    return LinkConfig(IzhikevichConfig(**kw), **link_kwargs)
+
+
+class HostLink(wiring.Component):
+    """The link proper; see the module docstring. Ports toward the core mirror its host port,
+    tick, busy flag, spike stream and ``sweep_done``."""
+
+    def __init__(self, lcfg: LinkConfig):
+        self.lcfg = lcfg
+        cfg = lcfg.core
+        N = cfg.n_neurons
+        super().__init__({
+            "rx": In(1, init=1), "tx": Out(1, init=1),
+            "i_wr_en": Out(1), "i_wr_addr": Out(range(N)), "i_wr_data": Out(cfg.I.width),
+            "tick": Out(1), "core_busy": In(1),
+            "spike_valid": In(1), "spike_ready": Out(1), "spike_index": In(range(N)),
+            "spike_sweep": In(cfg.sweep_number_width), "sweep_done": In(1),
+            "running": Out(1), "sweeps_started": Out(32),
+        })
+
+    def elaborate(self, platform):
+        lc, cfg = self.lcfg, self.lcfg.core
+        N, W, B, CAP = cfg.n_neurons, lc.current_bytes, lc.batch_sweeps, lc.batch_capacity
+        m = Module()
+
+        # --- counters ---------------------------------------------------------------------
+        cw = lc.counter_width
+        ctr = {name: Signal(cw, name=f"ctr_{name}") for name in COUNTER_NAMES}
+        inc = {name: Signal(8, name=f"inc_{name}") for name in COUNTER_NAMES}
+        clear = Signal()
+        for name in COUNTER_NAMES:
+            total = ctr[name] + inc[name]
+            m.d.sync += ctr[name].eq(Mux(clear, 0, Mux(total[cw], (1 << cw) - 1, total[:cw])))
+
+        # --- UART and receive FIFO --------------------------------------------------------
+        m.submodules.uart_rx = urx = UartRx(lc.clocks_per_bit)
+        m.submodules.uart_tx = utx = UartTx(lc.clocks_per_bit)
+        m.submodules.rx_fifo = rxf = SyncFIFOBuffered(width=8, depth=lc.rx_fifo_depth)
+        m.submodules.tx_fifo = txf = SyncFIFOBuffered(width=8, depth=lc.tx_fifo_depth)
+        m.d.comb += [urx.rx.eq(self.rx), self.tx.eq(utx.tx),
+                     rxf.w_data.eq(urx.data), rxf.w_en.eq(urx.valid),
+                     utx.data.eq(txf.r_data), utx.valid.eq(txf.r_rdy), txf.r_en.eq(utx.ready)]
+        m.d.comb += inc["rx_overflows"].eq(urx.valid & ~rxf.w_rdy)
+        cobs_error = Signal()
+        m.d.comb += inc["framing_errors"].eq(cobs_error + urx.frame_error)
+
+        # --- tick generator ---------------------------------------------------------------
+        free = Signal()
+        steps = Signal(32)
+        div = Signal(range(cfg.cycles_per_tick))
+        pending = Signal()
+        writing = Signal()
+        S = self.sweeps_started
+        active = free | (steps != 0)
+        m.d.comb += self.running.eq(active)
+        tick_out = Signal()
+        m.d.comb += [tick_out.eq(pending & ~self.core_busy & ~writing), self.tick.eq(tick_out)]
+        fire = active & (div == cfg.cycles_per_tick - 1)
+        with m.If(active):
+            m.d.sync += div.eq(Mux(div == cfg.cycles_per_tick - 1, 0, div + 1))
+        with m.If(tick_out):
+            m.d.sync += S.eq(S + 1)
+            with m.If(~free & (steps != 0)):
+                m.d.sync += steps.eq(steps - 1)
+        with m.If(fire):
+            m.d.sync += pending.eq(1)
+            with m.If(pending & ~tick_out):
+                m.d.comb += inc["tick_overruns"].eq(1)
+        with m.Elif(tick_out):
+            m.d.sync += pending.eq(0)
+
+        # --- receive: COBS decoder, CRC, header registers, value RAM -----------------------
+        max_vals = (MAX_FRAME - HEADER_BYTES - 2) // W + 1
+        m.submodules.vmem = vmem = Memory(shape=cfg.I.width, depth=max_vals, init=[])
+        vwr, vrd = vmem.write_port(), vmem.read_port()
+        flen = Signal(range(MAX_FRAME + 2))
+        remain = Signal(8)
+        zero_pending = Signal()
+        started = Signal()
+        overlong = Signal()
+        crc = Signal(16, init=0xFFFF)
+        hdr = Array(Signal(8, name=f"hdr{i}") for i in range(HEADER_BYTES + CONTROL_PAYLOAD))
+        acc = Signal(8 * W)
+        phase = Signal(range(W))
+        nvals = Signal(range(max_vals + 1))
+        typ, seq = hdr[0], hdr[1]
+        ftick = Cat(hdr[2], hdr[3], hdr[4], hdr[5])
+        first = Cat(hdr[6], hdr[7])
+        op = hdr[6]
+        arg = Cat(hdr[7], hdr[8], hdr[9], hdr[10])
+        exp_seq = Signal(8)
+
+        emit = Signal()
+        ebyte = Signal(8)
+        with m.If(emit):
+            m.d.sync += crc.eq(crc16_update(crc, ebyte))
+            with m.If(flen == MAX_FRAME):
+                m.d.sync += overlong.eq(1)
+            with m.Else():
+                m.d.sync += flen.eq(flen + 1)
+            with m.If(flen < len(hdr)):
+                m.d.sync += hdr[flen].eq(ebyte)
+            with m.If(flen >= HEADER_BYTES + 2):
+                new_acc = Cat(acc[8:], ebyte)
+                m.d.sync += acc.eq(new_acc)
+                with m.If(phase == W - 1):
+                    m.d.sync += [phase.eq(0), nvals.eq(nvals + 1)]
+                    with m.If(nvals < max_vals):
+                        m.d.comb += [vwr.en.eq(1), vwr.addr.eq(nvals),
+                                     vwr.data.eq(new_acc[:cfg.I.width])]
+                with m.Else():
+                    m.d.sync += phase.eq(phase + 1)
+
+        def frame_reset():
+            return [flen.eq(0), remain.eq(0), zero_pending.eq(0), started.eq(0),
+                    overlong.eq(0), crc.eq(0xFFFF), phase.eq(0), nvals.eq(0)]
+
+        count = Signal(range(max_vals + 1))
+        widx = Signal(range(max_vals + 1))
+        wvalid = Signal()
+        seq_gap = Signal(8)
+        m.d.comb += seq_gap.eq(seq - exp_seq)
+        counters_req = Signal()
+        m.d.comb += vrd.addr.eq(widx)
+        m.d.sync += self.i_wr_en.eq(0)
+
+        with m.FSM(name="rx_fsm") as rx_fsm:
+            with m.State("RECV"):
+                # no undefined FIFO data reaches the decoder while the FIFO is empty
+                b = Mux(rxf.r_rdy, rxf.r_data, 0)
+                with m.If(rxf.r_rdy):
+                    with m.If(b == 0):
+                        with m.If(remain != 0):
+                            m.d.comb += cobs_error.eq(1)
+                            m.d.sync += frame_reset()
+                        with m.Elif(started):
+                            m.next = "CHECK"
+                    with m.Elif(remain == 0):
+                        m.d.comb += [emit.eq(zero_pending), ebyte.eq(0)]
+                        m.d.sync += [remain.eq(b - 1), zero_pending.eq(b != 0xFF),
+                                     started.eq(1)]
+                    with m.Else():
+                        m.d.comb += [emit.eq(1), ebyte.eq(b)]
+                        m.d.sync += remain.eq(remain - 1)
+            with m.State("CHECK"):
+                m.d.sync += frame_reset()
+                m.next = "RECV"
+                values = nvals - (2 // W)
+                with m.If(overlong | (flen < MIN_FRAME)):
+                    m.d.comb += inc["length_errors"].eq(1)
+                with m.Elif(crc != 0):
+                    m.d.comb += inc["crc_errors"].eq(1)
+                with m.Else():
+                    m.d.comb += inc["seq_gaps"].eq(seq_gap)
+                    m.d.sync += exp_seq.eq(seq + 1)
+                    with m.If((typ == MSG_WRITE) & (flen >= MIN_FRAME + 2)
+                              & (phase == (2 % W))):
+                        with m.If(first + values > N):
+                            m.d.comb += inc["range_errors"].eq(1)
+                        with m.Else():
+                            m.d.comb += inc["frames_ok"].eq(1)
+                            m.d.sync += [count.eq(values), widx.eq(0)]
+                            m.next = "WAIT"
+                    with m.Elif((typ == MSG_CONTROL)
+                                & (flen == MIN_FRAME + CONTROL_PAYLOAD)
+                                & (op >= OP_START) & (op <= OP_CLEAR_COUNTERS)):
+                        m.d.comb += inc["frames_ok"].eq(1)
+                        with m.Switch(op):
+                            with m.Case(OP_START):
+                                m.d.sync += free.eq(1)
+                            with m.Case(OP_STOP):
+                                m.d.sync += [free.eq(0), steps.eq(0)]
+                            with m.Case(OP_STEP):
+                                m.d.sync += [free.eq(0), steps.eq(arg)]
+                            with m.Case(OP_READ_COUNTERS):
+                                m.d.sync += counters_req.eq(1)
+                            with m.Case(OP_CLEAR_COUNTERS):
+                                m.d.comb += clear.eq(1)
+                    with m.Else():
+                        m.d.comb += inc["length_errors"].eq(1)
+            with m.State("WAIT"):
+                with m.If(S > ftick):
+                    m.d.comb += inc["late_writes"].eq(1)
+                    m.next = "RECV"
+                with m.Elif((S == ftick) & ~self.core_busy & ~pending):
+                    with m.If(count == 0):
+                        m.next = "RECV"
+                    with m.Else():
+                        m.d.comb += writing.eq(1)
+                        m.d.sync += widx.eq(1)
+                        m.next = "WRITE"
+            with m.State("WRITE"):
+                # vrd.data holds value widx-1 (read in the previous cycle)
+                m.d.comb += writing.eq(1)
+                m.d.sync += [self.i_wr_en.eq(1), self.i_wr_addr.eq(first + widx - 1),
+                             self.i_wr_data.eq(vrd.data), widx.eq(widx + 1)]
+                with m.If(widx == count):
+                    m.next = "RECV"
+        # a continuous assignment (not a process of the FSM): simulators that start
+        # combinational processes only on an input change see it from time 0
+        m.d.comb += rxf.r_en.eq(rx_fsm.ongoing("RECV"))
+        # the held tick may go once the last write is registered toward the core
+        # (writing covers WAIT->WRITE and WRITE; the write lands one cycle later, before the
+        # fetch of that neuron, which is at least one cycle after the tick)
+
+        # --- spike batches ----------------------------------------------------------------
+        m.submodules.smem = smem = Memory(shape=24, depth=2 * CAP, init=[])
+        swr = smem.write_port()
+        acc_half = Signal()
+        scount = Signal(range(CAP + 1))
+        sdrop = Signal(16)
+        bt = Signal(32)                                    # first sweep of the current batch
+        in_batch = Signal(range(B + 1))                    # sweeps of the batch done
+        closing = Signal()
+        drain = Signal(range(8))
+        half_pending = Signal(2)
+        half_tick = Array(Signal(32, name=f"half_tick{i}") for i in range(2))
+        half_count = Array(Signal(range(CAP + 1), name=f"half_count{i}") for i in range(2))
+        half_drop = Array(Signal(16, name=f"half_drop{i}") for i in range(2))
+        half_sweeps = Array(Signal(8, name=f"half_sweeps{i}") for i in range(2))
+        # one register stage on the spike stream (the core's FIFO is a block RAM with a slow
+        # clock-to-out): the batch logic works on sv/si/ss
+        sv, si = Signal(), Signal(range(N))
+        ss = Signal(cfg.sweep_number_width)
+        offset = Signal(cfg.sweep_number_width)
+        m.d.comb += offset.eq(ss - bt[:cfg.sweep_number_width])
+        next_batch = offset >= B
+        last_of_batch = (in_batch == B - 1) | (~free & (steps == 0) & ~pending)
+        m.d.comb += self.spike_ready.eq(~sv | ~next_batch)
+        with m.If(self.spike_ready):
+            m.d.sync += [sv.eq(self.spike_valid), si.eq(self.spike_index),
+                         ss.eq(self.spike_sweep)]
+        with m.If(sv & ~next_batch):
+            with m.If(scount < CAP):
+                m.d.comb += [swr.en.eq(1), swr.addr.eq(Mux(acc_half, CAP, 0) + scount),
+                             swr.data.eq(Cat(offset[:8], si.as_unsigned()))]
+                m.d.sync += scount.eq(scount + 1)
+            with m.Else():
+                m.d.comb += inc["spikes_dropped"].eq(1)
+                m.d.sync += sdrop.eq(Mux(sdrop == 0xFFFF, sdrop, sdrop + 1))
+        with m.If(self.sweep_done & ~closing):
+            m.d.sync += in_batch.eq(in_batch + 1)
+            with m.If(last_of_batch):
+                m.d.sync += [closing.eq(1), drain.eq(7)]
+        with m.If(closing):
+            m.d.sync += drain.eq(drain - 1)
+            done = (drain == 0) | (sv & next_batch)
+            with m.If(done):
+                m.d.sync += [closing.eq(0), in_batch.eq(0), scount.eq(0), sdrop.eq(0),
+                             bt.eq(bt + in_batch)]
+                with m.If(~half_pending.bit_select(acc_half, 1)):
+                    m.d.sync += [half_pending.bit_select(acc_half, 1).eq(1),
+                                 half_tick[acc_half].eq(bt), half_count[acc_half].eq(scount),
+                                 half_drop[acc_half].eq(sdrop),
+                                 half_sweeps[acc_half].eq(in_batch),
+                                 acc_half.eq(~acc_half)]
+                with m.Else():
+                    m.d.comb += inc["batches_dropped"].eq(1)
+
+        # --- transmit: frame builder and COBS encoder -------------------------------------
+        m.submodules.tmem = tmem = Memory(shape=8, depth=MAX_FRAME, init=[])
+        twr, trd = tmem.write_port(), tmem.read_port()
+        srd = smem.read_port()
+        tx_half = Signal()
+        tx_seq = Signal(8)
+        kind_spikes = Signal()
+        j = Signal(range(MAX_FRAME + 1))                  # bytes built
+        k = Signal(range(CAP + 1))                        # spike index
+        tcrc = Signal(16)
+        L = Signal(range(MAX_FRAME + 1))
+        start = Signal(range(MAX_FRAME + 1))
+        p = Signal(range(MAX_FRAME + 1))
+        q = Signal(range(MAX_FRAME + 1))
+        zero_end = Signal()
+        put = Signal()
+        pbyte = Signal(8)
+        # the byte chosen in one cycle is written and added to the CRC in the next (a
+        # register stage between the byte multiplexers and the CRC tree)
+        put_r, pbyte_r, jw = Signal(), Signal(8), Signal(range(MAX_FRAME + 1))
+        m.d.sync += [put_r.eq(put), pbyte_r.eq(pbyte), jw.eq(j)]
+        with m.If(put):
+            m.d.sync += j.eq(j + 1)
+        with m.If(put_r):
+            m.d.sync += tcrc.eq(crc16_update(tcrc, pbyte_r))
+        # selections by explicit multiplexers (continuous assignments in the Verilog)
+        h_tick = Mux(tx_half, half_tick[1], half_tick[0])
+        h_count = Mux(tx_half, half_count[1], half_count[0])
+        h_drop = Mux(tx_half, half_drop[1], half_drop[0])
+        h_sweeps = Mux(tx_half, half_sweeps[1], half_sweeps[0])
+        cur_tick = Mux(kind_spikes, h_tick, S)
+        head = [Const(MSG_SPIKES, 8), tx_seq, cur_tick[0:8], cur_tick[8:16],
+                cur_tick[16:24], cur_tick[24:32]]
+        head_spk = [h_drop[0:8], h_drop[8:16], h_sweeps]
+        ctr_all = Cat(*[Cat(ctr[n], Const(0, 32 - cw)) for n in COUNTER_NAMES])
+        hi = Signal(range(4 * len(COUNTER_NAMES)))       # byte index after the header
+        m.d.comb += srd.addr.eq(Mux(tx_half, CAP, 0) + k)
+        push = Signal()
+        # room for a byte, registered (at most one byte is pushed per two cycles, so a margin
+        # of two entries covers the cycle of latency); the encoder waits on it
+        room = Signal()
+        m.d.sync += room.eq(txf.w_level < lc.tx_fifo_depth - 2)
+        m.d.comb += [txf.w_en.eq(push & room)]
+
+        with m.FSM(name="tx_fsm") as tx_fsm:
+            with m.State("IDLE"):
+                m.d.sync += [j.eq(0), k.eq(0), tcrc.eq(0xFFFF), hi.eq(0)]
+                with m.If(half_pending.bit_select(tx_half, 1)):
+                    m.d.sync += kind_spikes.eq(1)
+                    m.next = "HEAD"
+                with m.Elif(counters_req):
+                    m.d.sync += [kind_spikes.eq(0), counters_req.eq(0)]
+                    m.next = "HEAD"
+            with m.State("HEAD"):
+                m.d.comb += [put.eq(1),
+                             pbyte.eq(Mux(j == 0, Mux(kind_spikes, MSG_SPIKES, MSG_COUNTERS),
+                                          _pick(head, j)))]
+                with m.If(j == HEADER_BYTES - 1):
+                    m.next = "HEAD2"
+            with m.State("HEAD2"):
+                m.d.sync += hi.eq(hi + 1)
+                with m.If(kind_spikes):
+                    m.d.comb += [put.eq(1), pbyte.eq(_pick(head_spk, hi))]
+                    with m.If(j == HEADER_BYTES + SPIKE_HEADER - 1):
+                        m.next = "SPK_READ"
+                with m.Else():
+                    m.d.comb += [put.eq(1), pbyte.eq(ctr_all.word_select(hi, 8))]
+                    with m.If(j == HEADER_BYTES + 4 * len(COUNTER_NAMES) - 1):
+                        m.next = "CRC_WAIT"
+            with m.State("SPK_READ"):
+                with m.If(k == h_count):
+                    m.next = "CRC_WAIT"
+                with m.Else():
+                    m.next = "SPK0"
+            for n_, (lo, nxt) in enumerate([(0, "SPK1"), (8, "SPK2"), (16, "SPK_NEXT")]):
+                with m.State(f"SPK{n_}"):
+                    m.d.comb += [put.eq(1), pbyte.eq(srd.data[lo:lo + 8])]
+                    m.next = nxt
+            with m.State("SPK_NEXT"):
+                m.d.sync += k.eq(k + 1)
+                m.next = "SPK_READ"
+            with m.State("CRC_WAIT"):
+                m.next = "CRC_HI"
+            with m.State("CRC_HI"):
+                m.d.sync += j.eq(j + 1)
+                m.next = "CRC_LO"
+            with m.State("CRC_LO"):
+                m.d.sync += [L.eq(j + 1), start.eq(0), p.eq(0)]
+                m.next = "SCAN"
+            # COBS encoder: find the block [start, p), emit p - start + 1, then the block
+            with m.State("SCAN"):
+                m.next = "SCAN_CHK"
+            with m.State("SCAN_CHK"):
+                with m.If((p < L) & (trd.data != 0) & (p - start < 254)):
+                    m.d.sync += p.eq(p + 1)
+                    m.next = "SCAN"
+                with m.Else():
+                    m.d.sync += [zero_end.eq((p < L) & (trd.data == 0) & (p - start < 254)),
+                                 q.eq(start)]
+                    m.next = "CODE"
+            with m.State("CODE"):
+                m.d.comb += [push.eq(1), txf.w_data.eq(p - start + 1)]
+                with m.If(room):
+                    m.next = "EMIT_RD"
+            with m.State("EMIT_RD"):
+                with m.If(q == p):
+                    with m.If(zero_end):
+                        m.d.sync += [start.eq(p + 1), p.eq(p + 1)]
+                        m.next = "SCAN"
+                    with m.Elif(p < L):
+                        m.d.sync += start.eq(p)
+                        m.next = "SCAN"
+                    with m.Else():
+                        m.next = "DELIM"
+                with m.Else():
+                    m.next = "EMIT"
+            with m.State("EMIT"):
+                m.d.comb += [push.eq(1), txf.w_data.eq(trd.data)]
+                with m.If(room):
+                    m.d.sync += q.eq(q + 1)
+                    m.next = "EMIT_RD"
+            with m.State("DELIM"):
+                m.d.comb += [push.eq(1), txf.w_data.eq(0)]
+                with m.If(room):
+                    m.d.sync += tx_seq.eq(tx_seq + 1)
+                    with m.If(kind_spikes):
+                        m.d.sync += [half_pending.bit_select(tx_half, 1).eq(0),
+                                     tx_half.eq(~tx_half)]
+                    m.next = "IDLE"
+        # frame RAM ports as continuous assignments (see rx_fifo.r_en above)
+        crc_hi, crc_lo = tx_fsm.ongoing("CRC_HI"), tx_fsm.ongoing("CRC_LO")
+        m.d.comb += [
+            twr.en.eq(put_r | crc_hi | crc_lo), twr.addr.eq(Mux(crc_hi | crc_lo, j, jw)),
+            twr.data.eq(Mux(crc_hi, tcrc[8:16], Mux(crc_lo, tcrc[0:8], pbyte_r))),
+            trd.addr.eq(Mux(tx_fsm.ongoing("EMIT_RD") | tx_fsm.ongoing("EMIT"), q, p)),
+        ]
+        return m
+
+
+class LinkedCore(wiring.Component):
+    """An Izhikevich core behind a :class:`HostLink`: the pins are ``rx`` and ``tx``; status
+    outputs ``running`` and ``overflow`` (core spike FIFO or overrun flag) for LEDs."""
+
+    def __init__(self, lcfg: LinkConfig):
+        self.lcfg = lcfg
+        super().__init__({"rx": In(1, init=1), "tx": Out(1, init=1), "running": Out(1),
+                          "overflow": Out(1)})
+
+    def elaborate(self, platform):
+        m = Module()
+        m.submodules.core = core = IzhikevichCore(self.lcfg.core)
+        m.submodules.link = link = HostLink(self.lcfg)
+        m.d.comb += [
+            link.rx.eq(self.rx), self.tx.eq(link.tx), self.running.eq(link.running),
+            self.overflow.eq(core.spike_overflow | core.overrun),
+            core.i_wr_en.eq(link.i_wr_en), core.i_wr_addr.eq(link.i_wr_addr),
+            core.i_wr_data.eq(link.i_wr_data), core.tick.eq(link.tick),
+            link.core_busy.eq(core.busy),
+            link.spike_valid.eq(core.spike_valid), core.spike_ready.eq(link.spike_ready),
+            link.spike_index.eq(core.spike_index), link.spike_sweep.eq(core.spike_sweep),
+            link.sweep_done.eq(core.sweep_done),
+        ]
+        return m
+
+
+def link_verilog(lcfg: LinkConfig, name: str = "linked_core", lowered: bool = False) -> str:
+    """Verilog of :class:`LinkedCore`. With ``lowered``, yosys ``proc`` turns every process
+    into multiplexers and registers first (no ``always @*`` blocks): Icarus 11 does not
+    re-evaluate some of the combinational processes of the link's transmit FSM when an input
+    changes while the state holds, and simulates the lowered netlist correctly."""
+    from amaranth.back import rtlil, verilog
+    if not lowered:
+        return verilog.convert(LinkedCore(lcfg), name=name, emit_src=False)
+    from amaranth._toolchain.yosys import find_yosys
+    il = rtlil.convert(LinkedCore(lcfg), name=name, emit_src=False)
+    yosys = find_yosys(lambda ver: ver >= (0, 40))
+    return yosys.run(["-q", "-"], f"read_rtlil <<rtlil\n{il}\nrtlil\nproc\nopt_clean\n"
+                                  f"write_verilog -noattr\n")

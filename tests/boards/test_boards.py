@@ -1,0 +1,109 @@
+"""Board targets: sizing refusals, Verilog and board-top elaboration (default lane) and a real
+ULX3S place and route (long lane)."""
+
+import json
+
+import pytest
+
+from cuneate.boards.build import build_target
+from cuneate.boards.sizing import size_core
+from cuneate.boards.targets import TARGETS
+from cuneate.boards.top import BoardTop, ClockPlan
+from cuneate.hdl.izhikevich_config import ConfigError
+from cuneate.sim.cli import main
+
+
+def test_clock_plans_have_integer_ratios():
+    p = TARGETS["ulx3s"]["clock_plan"]
+    assert (p.cycles_per_tick, p.clocks_per_bit) == (3750, 20)
+    with pytest.raises(ConfigError, match="clocks per UART bit"):
+        ClockPlan(25e6, 50e6, 16e3, 3e6)
+
+
+@pytest.mark.parametrize("board,kw,match", [
+    ("ulx3s", dict(n_neurons=3800), "cycles per tick limit"),
+    ("icebreaker", dict(n_neurons=500, operand_width=18), "DSP limit"),
+    ("icebreaker", dict(n_neurons=700, spike_fifo_depth=4096), "RAM limit"),
+    ("icebreaker", dict(n_neurons=1000), "cycles per tick limit"),
+    ("ulx3s", dict(clock_hz=48e6), "PLL plans give 60 MHz"),
+])
+def test_refusals_name_the_limit(board, kw, match):
+    with pytest.raises(ConfigError, match=match):
+        size_core(TARGETS[board], **kw)
+
+
+def test_ulx3s_verilog_and_board_top_elaborate(tmp_path):
+    r = build_target("ulx3s", tmp_path, bitstream=False)
+    v = (tmp_path / "cuneate_ulx3s_core.v").read_text()
+    assert "module cuneate_ulx3s_core" in v and r["core"]["n_neurons"] == 2500
+    assert r["clock_plan"]["cycles_per_tick"] == 3750 and r["link"]["clocks_per_bit"] == 20
+    assert json.loads((tmp_path / "cuneate_ulx3s.report.json").read_text())["board"] == "ulx3s"
+    t = TARGETS["ulx3s"]
+    plan = t["platform"]().prepare(BoardTop(size_core(t, n_neurons=64)["link"], t["pll"],
+                                            True), name="top")
+    top_v = plan.files["top.il"]
+    top_v = top_v.decode() if isinstance(top_v, bytes) else top_v
+    assert "EHXPLLL" in top_v and "CLKFB_DIV" in top_v
+    lpf = plan.files["top.lpf"]
+    lpf = lpf.decode() if isinstance(lpf, bytes) else lpf
+    assert "FREQUENCY NET" in lpf and "60000000" in lpf.replace(".0", "")
+
+
+def test_cli_lists_boards_and_refuses_in_one_line(capsys, tmp_path):
+    assert main(["boards", "--json"]) == 0
+    rows = json.loads(capsys.readouterr().out)
+    assert {r["name"] for r in rows} == {"ulx3s", "icebreaker", "atlys", "arty"}
+    assert main(["build", "nosuch", "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "unknown board 'nosuch'" in err
+    assert main(["build", "ulx3s", "--neurons", "9000", "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "cycles per tick limit" in err
+    assert main(["build", "atlys", "--out", str(tmp_path), "--no-bitstream"]) == 0
+    assert (tmp_path / "cuneate_atlys_core.v").exists()
+
+
+@pytest.mark.long
+def test_ulx3s_bitstream_meets_60mhz(tmp_path):
+    r = build_target("ulx3s", tmp_path, bitstream=True, seed=1)
+    assert r["bitstream"] and (tmp_path / "cuneate_ulx3s.bit").stat().st_size > 100_000
+    pr = r["place_route"]
+    assert pr["resources"]["DSP"]["used"] == 4
+    assert pr["resources"]["BRAM"]["used"] <= r["estimate"]["BRAM"]
+    assert pr["timing_met"], pr["fmax_mhz"]
+    print("\n" + (tmp_path / "cuneate_ulx3s.report.txt").read_text())
+
+
+@pytest.mark.long
+def test_icebreaker_bitstream_fits_and_meets_12mhz(tmp_path):
+    r = build_target("icebreaker", tmp_path, bitstream=True, seed=1)
+    assert r["bitstream"] and (tmp_path / "cuneate_icebreaker.bin").exists()
+    pr = r["place_route"]
+    assert r["core"]["operand_width"] == 16 and r["core"]["n_neurons"] == 700
+    assert pr["resources"]["DSP"]["used"] == 4
+    assert pr["resources"]["BRAM"]["used"] <= 30 and pr["resources"]["LUT"]["used"] <= 5280
+    assert pr["timing_met"], pr["fmax_mhz"]
+    print("\n" + (tmp_path / "cuneate_icebreaker.report.txt").read_text())
+
+
+@pytest.mark.long
+@pytest.mark.parametrize("board", ["atlys", "arty"])
+def test_xilinx_targets_yosys_estimate(board, tmp_path):
+    r = build_target(board, tmp_path, n_neurons=2484)
+    ye = r["yosys_estimate"]
+    assert ye["DSP"]["used"] >= 4 and ye["BRAM"]["used"] > 0
+    assert ye["LUT"]["percent"] < 15
+    print("\n" + (tmp_path / f"cuneate_{board}.report.txt").read_text())
+
+
+def test_program_refuses_clearly(capsys, tmp_path):
+    assert main(["program", "atlys", str(tmp_path / "x.bit")]) == 2
+    assert "no bitstream flow for 'atlys'" in capsys.readouterr().err
+    assert main(["program", "ulx3s", str(tmp_path / "x.bit")]) == 2
+    assert "not found" in capsys.readouterr().err
+    bit = tmp_path / "x.bit"
+    bit.write_bytes(b"\xff" * 16)
+    assert main(["program", "ulx3s", str(bit)]) == 2
+    err = capsys.readouterr().err
+    # without openFPGALoader, or with it and no board attached: one line saying so
+    assert err.count("\n") == 1 and ("not installed" in err or "no ulx3s board" in err)

@@ -1,0 +1,101 @@
+"""UartTransport on the simulated serial path (the protocol model on the twin) and on a
+pyserial URL: lockstep spikes equal the twin's, and every loss or refusal raises."""
+
+import numpy as np
+import pytest
+
+from cuneate.boards.link import ModelSerial, UartTransport
+from cuneate.hdl.izhikevich import IzhikevichTwin
+from cuneate.hdl.link import link_config
+from cuneate.hdl.link_codec import MSG_WRITE, Message, encode_frame
+from cuneate.sim.transport import TransportError
+
+CORE = dict(n_neurons=100, clock_hz=16e3 * 128, update_hz=16e3)
+
+
+def make(corrupt=None, **kw):
+    lc = link_config(CORE, batch_sweeps=16, **kw)
+    t = UartTransport(ModelSerial(lc, corrupt=corrupt), timeout_s=0.2)
+    t.open(lc.core)
+    return lc, t
+
+
+def test_lockstep_spikes_equal_the_twin_with_writes_at_their_sweeps():
+    lc, t = make()
+    rng = np.random.default_rng(3)
+    I = lc.core.I
+    w = {0: (0, I.to_raw(rng.uniform(0, 40, 100))),
+         37: (10, I.to_raw(rng.uniform(20, 90, 60))),      # 60 currents: several frames
+         100: (50, I.to_raw(rng.uniform(0, 10, 50)))}
+    for k, (first, raw) in w.items():
+        t.write_currents(k, first, raw)
+    t.run(50)
+    a = t.collect()
+    t.run(90)
+    b = t.collect()
+    twin = IzhikevichTwin(lc.core)
+    ticks, neurons = [], []
+    for k in range(140):
+        if k in w:
+            first, raw = w[k]
+            twin.I[first:first + raw.size] = raw
+        s = np.flatnonzero(twin.sweep())
+        ticks += [k] * s.size
+        neurons += list(s)
+    assert np.all(a.tick < 50) and np.all(b.tick >= 50)
+    got = np.concatenate([a.tick, b.tick]), np.concatenate([a.neuron, b.neuron])
+    assert got[0].tolist() == ticks and got[1].tolist() == neurons and len(ticks) > 50
+    c = t.check()
+    assert c["spikes_received"] == len(ticks)
+    assert c["writes_sent"] == 4 and c["currents_sent"] == 210
+    assert c["device_frames_ok"] > 0 and c["device_late_writes"] == 0
+    t.close()
+
+
+def test_late_and_out_of_range_writes_are_refused():
+    lc, t = make()
+    t.run(10)
+    t.collect()
+    with pytest.raises(TransportError, match="sweep 5 .* run to sweep 10"):
+        t.write_currents(5, 0, [1, 2])
+    with pytest.raises(TransportError, match="outside the core's 100"):
+        t.write_currents(20, 99, [1, 2])
+
+
+def test_damaged_device_frame_raises():
+    def flip(data):
+        b = bytearray(data)
+        if len(b) > 6:
+            b[4] ^= 0x01 if b[4] != 1 else 0x02
+        return bytes(b)
+    lc, t = make(corrupt=flip)
+    t.run(16)
+    with pytest.raises(TransportError, match="damaged frames"):
+        t.collect()
+
+
+def test_dropped_spikes_raise():
+    lc, t = make(batch_capacity=2)
+    t.write_currents(0, 0, lc.core.I.to_raw(np.full(100, 60.0)))
+    t.run(64)
+    with pytest.raises(TransportError, match="spikes dropped"):
+        t.collect()
+
+
+def test_device_error_counters_raise():
+    lc, t = make()
+    t.port.write(encode_frame(Message(MSG_WRITE, 2, 0, b"\x00")))     # a runt write
+    with pytest.raises(TransportError, match="length_errors=1"):
+        t.check()
+
+
+def test_serial_url_opens_and_garbage_is_refused():
+    lc = link_config(CORE)
+    t = UartTransport("loop://", timeout_s=0.2)
+    t.open(lc.core)          # loop:// echoes the host's own frames back: not a device
+    t.run(1)
+    with pytest.raises(TransportError, match="unexpected frame type"):
+        t.collect()
+    t.close()
+    with pytest.raises(TransportError, match="cannot open"):
+        UartTransport("/dev/does-not-exist-cuneate").open(lc.core)

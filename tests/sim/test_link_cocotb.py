@@ -1,0 +1,142 @@
+"""The host link on Icarus and Verilator: frames in through a UART model, spikes out.
+
+The generated :class:`LinkedCore` Verilog receives host frames from cocotbext-uart. Checked:
+the spike frames equal the protocol model's byte for byte and the twin's spikes with a current
+change at its sweep; a corrupted, a truncated, a late, an out-of-range, a runt and an unknown
+frame and a missing sequence number are each counted in the right counter; and a burst that
+overruns the receive FIFO while a write waits for its sweep (back-pressure) is counted as
+dropped bytes, with every frame it damaged missing from the accepted count (no silent loss).
+Icarus 11 runs the yosys-lowered netlist of the same design (``link_verilog(lowered=True)``):
+it mis-schedules some combinational processes of the transmit FSM in the direct output.
+"""
+
+import json
+
+import numpy as np
+import pytest
+
+from cuneate.hdl.izhikevich import IzhikevichTwin
+from cuneate.hdl.link import link_config, link_verilog
+from cuneate.hdl.link_codec import (COUNTER_NAMES, MSG_COUNTERS, MSG_SPIKES, OP_READ_COUNTERS,
+                                    OP_STEP, FrameDecoder, LinkModel, Message, cobs_encode,
+                                    control_message, encode_frame, parse_counters,
+                                    parse_spikes, write_message)
+from cuneate.sim.runner import run_cocotb
+from cuneate.sim.toolchain import SIMULATORS
+
+
+CPB = 8
+CPT = 240     # cycles per sweep: a 16-sweep batch lasts 3840 cycles, 48 bytes at 8 clocks/bit
+CORE = dict(n_neurons=12, clock_hz=16e3 * CPT, update_hz=16e3, spike_fifo_depth=16)
+
+
+def build(lc, build_dir, simulator):
+    """Icarus 11 gets the yosys-lowered netlist (see :func:`link_verilog`)."""
+    build_dir.mkdir(parents=True, exist_ok=True)
+    src = build_dir / "linked_core.v"
+    src.write_text(link_verilog(lc, "linked_core", lowered=simulator == "icarus"))
+    return src
+
+
+def play(simulator, lc, chunks, total_cycles, build_dir):
+    src = build(lc, build_dir, simulator)
+    cfg = {"clocks_per_bit": CPB, "total_cycles": total_cycles,
+           "chunks": [[bytes(c).hex(), g] for c, g in chunks]}
+    run = run_cocotb(simulator, [src], "linked_core", "cuneate.sim.benches.link_tb",
+                     build_dir, config=cfg, testcase="play")
+    dec = FrameDecoder()
+    msgs = dec.feed(bytes.fromhex(run.report["received"]))
+    assert dec.errors == {"framing": 0, "crc": 0, "length": 0}
+    assert [m.seq for m in msgs] == list(range(len(msgs)))   # device sequence unbroken
+    return msgs, run.report
+
+
+@pytest.mark.cocotb
+@pytest.mark.parametrize("simulator", SIMULATORS)
+def test_link_round_trip_and_faults(simulator, build_root):
+    lc = link_config(CORE, clocks_per_bit=CPB, batch_sweeps=16, batch_capacity=60)
+    rng = np.random.default_rng(8)
+    W, N = lc.current_width, lc.core.n_neurons
+    cur0 = lc.core.I.to_raw(rng.uniform(5.0, 50.0, N))
+    cur1 = lc.core.I.to_raw(rng.uniform(0.0, 80.0, N))
+    good = [encode_frame(write_message(0, 0, 0, cur0, W)),
+            encode_frame(control_message(1, OP_STEP, 80)),
+            encode_frame(write_message(2, 40, 3, cur1[3:10], W))]
+    bad = bytearray(write_message(3, 500, 0, cur0, W).raw())
+    bad[12] ^= 0x04
+    faults = [cobs_encode(bytes(bad)) + b"\x00",                              # CRC
+              cobs_encode(write_message(4, 500, 0, cur0, W).raw())[:7] + b"\x00",  # truncated
+              encode_frame(write_message(6, 3, 0, cur0, W)),                  # gap 3, late
+              encode_frame(write_message(7, 90, 10, cur0[:3], W)),            # 10..12 of 12
+              encode_frame(Message(0x01, 8, 0, b"\x00")),                     # runt write
+              encode_frame(Message(0x7E, 9, 0, b"")),                         # unknown type
+              encode_frame(control_message(10, OP_READ_COUNTERS))]
+    chunks = [(good[0], 0), (good[1], 0), (good[2], 80 * CPT + 3000)] + \
+        [(f, 30) for f in faults]
+    msgs, rep = play(simulator, lc, chunks, 8000, build_root / f"link_{simulator}")
+
+    spikes = [m for m in msgs if m.type == MSG_SPIKES]
+    model = LinkModel(lc)
+    ref = model.feed(b"".join(good))
+    model.advance(80)
+    ref += model.feed(b"")
+    assert [(m.tick, m.payload) for m in spikes] == \
+        [(m.tick, m.payload) for m in FrameDecoder().feed(ref)]
+    twin = IzhikevichTwin(lc.core)
+    twin.I[:] = cur0
+    expect = []
+    for k in range(80):
+        if k == 40:
+            twin.I[3:10] = cur1[3:10]
+        expect += [(k, int(n)) for n in np.flatnonzero(twin.sweep())]
+    got = [s for m in spikes for s in parse_spikes(m)[2]]
+    assert got == expect and len(got) > 10
+    assert [parse_spikes(m)[1] for m in spikes] == [16] * 5
+
+    counters = [m for m in msgs if m.type == MSG_COUNTERS]
+    assert len(counters) == 1 and counters[0].tick == 80
+    c = parse_counters(counters[0])
+    # the truncated frame ends on a COBS block boundary or inside a block: a length or a
+    # framing error; the runt and the unknown type are length errors
+    assert c["framing_errors"] + c["length_errors"] == 3
+    assert c == dict({n: 0 for n in COUNTER_NAMES}, frames_ok=5, crc_errors=1,
+                     framing_errors=c["framing_errors"], length_errors=c["length_errors"],
+                     seq_gaps=3, late_writes=1, range_errors=1)
+    model.feed(b"".join(faults))
+    assert model.counters == c
+    assert rep["overflow_pin"] == 0 and rep["running_pin"] == 0
+
+
+@pytest.mark.cocotb
+@pytest.mark.parametrize("simulator", SIMULATORS)
+def test_link_receive_overflow_is_counted(simulator, build_root):
+    """A write waits for sweep 50 while the host keeps sending: the 32-byte receive FIFO
+    overflows; the dropped bytes are counted, the frames they broke are counted as framing,
+    CRC or length errors, every frame not accepted shows as a sequence gap, and the write
+    itself still lands at its sweep."""
+    lc = link_config(CORE, clocks_per_bit=CPB, batch_sweeps=16, batch_capacity=60,
+                     rx_fifo_depth=32)
+    W, N = lc.current_width, lc.core.n_neurons
+    cur = lc.core.I.to_raw(np.full(N, 30.0))
+    burst = [encode_frame(write_message(2 + i, 51 + i, 0, cur[:2], W)) for i in range(6)]
+    chunks = [(encode_frame(control_message(0, OP_STEP, 80)), 0),
+              (encode_frame(write_message(1, 50, 0, cur, W)), 0)] + \
+        [(b, 0) for b in burst[:-1]] + [(burst[-1], 80 * CPT)] + \
+        [(encode_frame(control_message(8, OP_READ_COUNTERS)), 0)]
+    sent_bytes = sum(len(c) for c, _ in chunks)
+    msgs, _ = play(simulator, lc, chunks, 8000, build_root / f"link_ovf_{simulator}")
+    c = parse_counters([m for m in msgs if m.type == MSG_COUNTERS][-1])
+    assert c["rx_overflows"] > 0
+    damaged = c["framing_errors"] + c["crc_errors"] + c["length_errors"]
+    assert damaged > 0 and c["frames_ok"] < 9
+    assert c["seq_gaps"] + c["frames_ok"] == 9       # nothing missing goes unseen
+    # spikes from sweep 30 on follow the written current, as the twin says
+    twin = IzhikevichTwin(lc.core)
+    expect = []
+    for k in range(80):
+        if k == 50:
+            twin.I[:] = cur
+        expect += [(k, int(n)) for n in np.flatnonzero(twin.sweep())]
+    got = [s for m in msgs if m.type == MSG_SPIKES for s in parse_spikes(m)[2]]
+    assert got == expect and len(got) > 0
+    print(f"\n{simulator}: sent {sent_bytes} bytes, counters {json.dumps(c)}")
