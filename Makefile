@@ -13,7 +13,7 @@ $(STAMP): pyproject.toml scripts/setup.sh
 	touch $(STAMP)
 
 demo: setup
-	$(VENV)/bin/cuneate demo --out out/demo
+	$(VENV)/bin/cuneate run --out out/demo
 
 # The default suite (both HDL simulators must pass cases); long builds and sweeps are left to
 # the long lane below, which CI runs after this one.
