@@ -1,12 +1,12 @@
 """The brief's LIF experiments (section 6) as functions a scene runner or the CLI can call.
 
-:func:`skin_3x3`
-    A 3x3 sensorized skin, one continuous LIF neuron per taxel, input ``I = k1 + k2 f(t)``.
-    One taxel is pressed with rectangular force pulses of growing width, then of growing
-    amplitude; its neighbours feel a fraction of the force (edge 0.5, diagonal 0.25 by
-    default). Spikes are counted per pulse and per taxel; the result says whether counts grow
-    monotonically with width and with amplitude, which taxel wins, and the row and column sums.
-    Runs on any engine of :mod:`cuneate.sim.lif_engines`.
+:func:`skin_grid`, :func:`skin_3x3`
+    A sensorized skin (3x3 in the brief, any grid in a scene), one continuous LIF neuron per
+    taxel, input ``I = k1 + k2 f(t)``. One taxel is pressed with rectangular force pulses of
+    growing width, then of growing amplitude; its neighbours feel a fraction of the force
+    (edge 0.5, diagonal 0.25 by default). Spikes are counted per pulse and per taxel; the
+    result says whether counts grow monotonically with width and with amplitude, which taxel
+    wins, and the row and column sums. Runs on any engine of :mod:`cuneate.sim.lif_engines`.
 :func:`quantization_table`
     A layer of discrete LIF neurons driven by random input spike trains through FP32 weights
     (golden float64) and through the same weights quantized to INT8 and INT4 in the core's
@@ -25,11 +25,9 @@ from ..golden.metrics import victor_purpura
 from ..hdl.lif import LifConfig, LifTwin
 from .lif_engines import LifProgram, engine_config, run_lif
 
-__all__ = ["SkinResult", "skin_protocol", "skin_3x3", "QuantRow", "quantization_table",
-           "format_skin", "format_quantization"]
+__all__ = ["SkinResult", "skin_protocol", "press_spread", "skin_grid", "skin_3x3", "QuantRow",
+           "quantization_table", "format_skin", "format_quantization"]
 
-#: spread of a press on the centre of the 3x3 grid to its neighbours
-SPREAD = np.array([[0.25, 0.5, 0.25], [0.5, 1.0, 0.5], [0.25, 0.5, 0.25]])
 
 
 @dataclass
@@ -45,6 +43,10 @@ class SkinResult:
     winner: int = -1
     row_sums: list[int] = field(default_factory=list)
     col_sums: list[int] = field(default_factory=list)
+    currents: np.ndarray | None = None          # (n_steps, taxels) mV, as driven
+    force: np.ndarray | None = None             # (n_steps,) on the pressed taxel
+    clamp_counts: dict = field(default_factory=dict)
+    wall_s: float = 0.0
 
     @property
     def pressed_wins(self) -> bool:
@@ -58,7 +60,7 @@ class SkinResult:
                 "counts": self.counts.tolist(), "row_sums": self.row_sums,
                 "col_sums": self.col_sums,
                 "pulses": [p | {"counts": list(map(int, p["counts"]))} for p in self.pulses],
-                "spikes_ms": self.spikes_ms}
+                "clamp_counts": self.clamp_counts, "spikes_ms": self.spikes_ms}
 
 
 def skin_protocol(widths_ms=(20.0, 40.0, 80.0), amplitudes=(1.0, 1.5, 2.0),
@@ -85,31 +87,57 @@ def skin_protocol(widths_ms=(20.0, 40.0, 80.0), amplitudes=(1.0, 1.5, 2.0),
     return force, pulses
 
 
-def skin_3x3(engine: str = "fixed", pressed: int = 4, k1: float = 5.0, k2: float = 20.0,
-             update_hz: float = 1000.0, protocol: dict | None = None, core: dict | None = None,
-             build_dir=None) -> SkinResult:
-    """Run the 3x3 skin on ``engine`` (see the module docstring).
+def press_spread(rows: int, cols: int, pressed: int, edge: float = 0.5,
+                 diagonal: float = 0.25) -> np.ndarray:
+    """Fraction of the pressed taxel's force felt by each taxel of a ``rows x cols`` grid
+    (row-major ``(rows * cols,)``): 1 on the pressed taxel, ``edge`` on its edge neighbours,
+    ``diagonal`` on its diagonal neighbours, 0 elsewhere."""
+    if not 0 <= pressed < rows * cols:
+        raise ValueError(f"pressed taxel must be in 0..{rows * cols - 1}, got {pressed}")
+    r, c = divmod(pressed, cols)
+    kernel = np.array([[diagonal, edge, diagonal], [edge, 1.0, edge], [diagonal, edge, diagonal]])
+    spread = np.zeros((rows, cols))
+    for i in range(max(0, r - 1), min(rows, r + 2)):
+        for j in range(max(0, c - 1), min(cols, c + 2)):
+            spread[i, j] = kernel[1 + i - r, 1 + j - c]
+    return spread.ravel()
+
+
+def skin_grid(engine: str = "fixed", rows: int = 3, cols: int = 3, pressed: int = 4,
+              k1: float = 5.0, k2: float = 20.0, update_hz: float = 1000.0,
+              protocol: dict | None = None, spread: tuple[float, float] = (0.5, 0.25),
+              core: dict | None = None, build_dir=None, sample_hz: float | None = None,
+              duration_ms: float | None = None) -> SkinResult:
+    """Run a ``rows x cols`` skin on ``engine`` (see the module docstring).
 
     ``k1`` (mV) and ``k2`` (mV per force unit) map force to current; ``pressed`` is the taxel
-    index (row-major); ``core`` adds constructor keywords of the LIF core (default: the
-    brief's excitatory cell, tau_m 20 ms, threshold 18 mV, reset 11 mV, refractory 2 ms).
+    index (row-major); ``spread`` is the fraction of the force on edge and diagonal neighbours;
+    ``core`` adds constructor keywords of the LIF core (default: the brief's excitatory cell,
+    tau_m 20 ms, threshold 18 mV, reset 11 mV, refractory 2 ms). ``sample_hz`` samples the
+    force at that rate and holds each sample for ``update_hz / sample_hz`` ticks (default: one
+    sample per tick); ``duration_ms`` extends the run with rest after the protocol.
     """
-    if not 0 <= pressed < 9:
-        raise ValueError(f"pressed taxel must be in 0..8, got {pressed}")
+    n = rows * cols
     dt = 1000.0 / update_hz
-    force, pulses = skin_protocol(dt_ms=dt, **(protocol or {}))
-    r, c = divmod(pressed, 3)
-    spread = np.zeros((3, 3))
-    for i in range(3):
-        for j in range(3):
-            di, dj = i - r, j - c
-            if abs(di) <= 1 and abs(dj) <= 1:
-                spread[i, j] = SPREAD[1 + di, 1 + dj]
-    f_taxel = force[:, None] * spread.ravel()[None, :]
+    hold = 1
+    if sample_hz is not None:
+        hold = int(round(update_hz / sample_hz))
+        if hold < 1 or abs(hold * sample_hz - update_hz) > 1e-9 * update_hz:
+            raise ValueError(f"update_hz {update_hz:g} is not a whole multiple of the sample "
+                             f"rate {sample_hz:g}")
+    force, pulses = skin_protocol(dt_ms=dt * hold, **(protocol or {}))
+    force = np.repeat(force, hold)
+    if duration_ms is not None:
+        n_steps = int(round(duration_ms / dt))
+        if n_steps < force.size:
+            raise ValueError(f"duration {duration_ms:g} ms is shorter than the press protocol "
+                             f"({force.size * dt:g} ms)")
+        force = np.concatenate([force, np.zeros(n_steps - force.size)])
+    f_taxel = force[:, None] * press_spread(rows, cols, pressed, *spread)[None, :]
     currents = golden.force_to_current(f_taxel, k1, k2)
-    cfg = engine_config({"update_hz": update_hz} | (core or {}), 9)
-    run = run_lif(engine, cfg, LifProgram(currents), n=9, build_dir=build_dir)
-    counts = np.array([len(s) for s in run.spikes_ms]).reshape(3, 3)
+    cfg = engine_config({"update_hz": update_hz} | (core or {}), n)
+    run = run_lif(engine, cfg, LifProgram(currents), n=n, build_dir=build_dir)
+    counts = np.array([len(s) for s in run.spikes_ms]).reshape(rows, cols)
     for p in pulses:
         t0, t1 = p["start_ms"], p["start_ms"] + p["width_ms"] + 0.5 * (pulses[1]["start_ms"]
                                                                      - pulses[0]["start_ms"]
@@ -120,17 +148,35 @@ def skin_3x3(engine: str = "fixed", pressed: int = 4, k1: float = 5.0, k2: float
     wk = [o for o, p in zip(own, pulses) if p["kind"] == "width"]
     ak = [o for o, p in zip(own, pulses) if p["kind"] == "amplitude"]
     res = SkinResult(engine, dt, pressed, pulses, counts, run.spikes_ms)
-    res.width_monotonic = bool(all(b >= a for a, b in zip(wk, wk[1:])) and wk[-1] > wk[0])
-    res.amplitude_monotonic = bool(all(b >= a for a, b in zip(ak, ak[1:])) and ak[-1] > ak[0])
+    res.width_monotonic = bool(len(wk) > 1 and all(b >= a for a, b in zip(wk, wk[1:]))
+                               and wk[-1] > wk[0])
+    res.amplitude_monotonic = bool(len(ak) > 1 and all(b >= a for a, b in zip(ak, ak[1:]))
+                                   and ak[-1] > ak[0])
     flat = counts.ravel()
     res.winner = int(np.argmax(flat)) if (flat == flat.max()).sum() == 1 else -1
     res.row_sums = [int(x) for x in counts.sum(axis=1)]
     res.col_sums = [int(x) for x in counts.sum(axis=0)]
+    res.currents = currents
+    res.force = force
+    res.clamp_counts = dict(run.clamp_counts)
+    res.wall_s = run.wall_s
     return res
 
 
+def skin_3x3(engine: str = "fixed", pressed: int = 4, k1: float = 5.0, k2: float = 20.0,
+             update_hz: float = 1000.0, protocol: dict | None = None, core: dict | None = None,
+             build_dir=None) -> SkinResult:
+    """The brief's 3x3 skin (:func:`skin_grid` with 3 rows and 3 columns)."""
+    if not 0 <= pressed < 9:
+        raise ValueError(f"pressed taxel must be in 0..8, got {pressed}")
+    return skin_grid(engine, 3, 3, pressed, k1, k2, update_hz, protocol, core=core,
+                     build_dir=build_dir)
+
+
 def format_skin(res: SkinResult) -> str:
-    lines = [f"3x3 skin on {res.engine} (dt = {res.dt_ms:g} ms), pressed taxel {res.pressed}"]
+    rows, cols = res.counts.shape
+    lines = [f"{rows}x{cols} skin on {res.engine} (dt = {res.dt_ms:g} ms), pressed taxel "
+             f"{res.pressed}"]
     for p in res.pulses:
         lines.append(f"  {p['kind']:9s} pulse {p['width_ms']:5g} ms x {p['amplitude']:g}: "
                      f"{int(p['counts'][res.pressed])} spikes on the pressed taxel, "

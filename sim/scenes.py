@@ -31,8 +31,8 @@ EFFECT_NAMES = ("strain", "temperature", "noise", "resolution", "saturation",
 ENGINE_NAMES = ("golden", "fixed", "amaranth", "icarus", "verilator")
 #: Neuron models a scene may name, and those this build can simulate.
 MODELS = ("izhikevich", "lif", "cuneate")
-AVAILABLE_MODELS = ("izhikevich",)
-STIMULUS_KINDS = ("grasp", "slide", "pulses", "recorded")
+AVAILABLE_MODELS = ("izhikevich", "lif")
+STIMULUS_KINDS = ("grasp", "slide", "pulses", "recorded", "press")
 AVAILABLE_STIMULI = STIMULUS_KINDS
 
 
@@ -68,7 +68,9 @@ SCHEMA: dict = {
     "scene": {"name": F(str, "scene"), "description": F(str, ""),
               "duration_ms": F(NUM, 700.0, lo=1, hi=600_000),
               "trials": F(int, 10, lo=1, hi=10_000), "seed": F(int, 1, lo=0)},
-    "sensor": {"kind": F(str, "fbg", choices=("fbg",)), "channels": F(int, 2, lo=1, hi=1024),
+    "sensor": {"kind": F(str, "fbg", choices=("fbg", "taxels")),
+               "channels": F(int, 2, lo=1, hi=1024),
+               "grid": F(list, None, items=int),
                "sample_rate_hz": F(NUM, 1000.0, lo=1, hi=1e6),
                "lambda_B_nm": F(NUM, 1550.0, lo=100, hi=5000),
                "effects": F(list, ["strain"], items=str),
@@ -108,7 +110,15 @@ SCHEMA: dict = {
                  "data_key": F(str, "DeltaBraggW"), "struct": F(str, ""),
                  "time_unit": F(str, "s", choices=("s", "ms")),
                  "shift_unit": F(str, "nm", choices=("nm", "pm")),
-                 "label": F(str, "recorded")},
+                 "label": F(str, "recorded"),
+                 # press (taxel skin): pulses of growing width, then of growing amplitude
+                 "press_taxel": F(int, 4, lo=0),
+                 "press_widths_ms": F(list, [20.0, 40.0, 80.0], items=NUM),
+                 "press_amplitudes_N": F(list, [1.0, 1.5, 2.0], items=NUM),
+                 "press_base_amplitude_N": F(NUM, 1.0, lo=1e-6, hi=1e4),
+                 "press_base_width_ms": F(NUM, 40.0, lo=1e-3, hi=1e5),
+                 "press_gap_ms": F(NUM, 60.0, lo=1e-3, hi=1e5),
+                 "press_spread": F(list, [0.5, 0.25], items=NUM)},
     "frontend": {"filter_low_hz": F(NUM, 1.0, lo=1e-6), "filter_high_hz": F(NUM, 16.0, lo=1e-6),
                  "filter_order": F(int, 1, lo=1, hi=8),
                  "filter_kind": F(str, "butter",
@@ -121,13 +131,16 @@ SCHEMA: dict = {
                  "sa_unit_pm": F(NUM, 1000.0, lo=1e-6, hi=1e9),
                  "fa_rectify": F(str, "positive", choices=("positive", "abs", "none")),
                  "latency_ticks": F(int, 0, lo=0, hi=1_000_000),
-                 "window": F(str, "none", choices=("none", "loading"))},
+                 "window": F(str, "none", choices=("none", "loading")),
+                 # force encoding of a taxel skin: I = offset + gain * force
+                 "force_offset_mV": F(NUM, 5.0, lo=-1e4, hi=1e4),
+                 "force_gain_mV_per_N": F(NUM, 20.0, lo=-1e4, hi=1e4)},
     "hardware": {"clock_hz": F(NUM, 40e6, lo=1e3, hi=1e9),
                  "update_hz": F(NUM, 16000.0, lo=1, hi=1e7),
                  "current_int_bits": F(int, 10, lo=1, hi=30),
                  "current_frac_bits": F(int, 8, lo=0, hi=30),
                  "rounding": F(str, "nearest", choices=("nearest", "truncate"))},
-    "decoder": {"kind": F(str, "tree", choices=("tree", "knn", "none")),
+    "decoder": {"kind": F(str, "tree", choices=("tree", "knn", "winner", "none")),
                 "target": F(str, "material"),
                 "features": F(str, "isi", choices=("isi", "trial")),
                 "cv_folds": F(int, 50, lo=2, hi=10_000), "max_depth": F(int, 3, lo=1, hi=64),
@@ -137,8 +150,8 @@ SCHEMA: dict = {
     "run": {"engines": F(list, ["golden", "fixed", "verilator"], items=str)},
 }
 POPULATION = {"name": F(str, required=True), "model": F(str, "izhikevich", choices=MODELS),
-              "preset": F(str, "RS"), "size": F(int, None, lo=1, hi=1_000_000),
-              "encoding": F(str, "FA", choices=("FA", "SA", "spikes")),
+              "preset": F(str, None), "size": F(int, None, lo=1, hi=1_000_000),
+              "encoding": F(str, None, choices=("FA", "SA", "force", "spikes")),
               "gratings": F(list, None, items=int),
               "inputs": F(list, [], items=str),
               "gain": F(NUM, None)}
@@ -151,7 +164,7 @@ for _sec, _keys in SCHEMA.items():
     for _k in _keys:
         for suffix in ("_ms", "_hz", "_nm", "_pm", "_mm", "_mm2", "_MPa", "_N", "_K",
                        "_mm_per_s", "_microstrain_per_N", "_microstrain", "_K_per_s",
-                       "_ticks"):
+                       "_ticks", "_mV", "_mV_per_N"):
             if _k.endswith(suffix):
                 _UNIT_KEYS.setdefault((_sec, _k[: -len(suffix)]), []).append(_k)
 
@@ -333,11 +346,20 @@ def parse_scene(text: str, source: str = "<scene>", base_dir: Path | None = None
     for sec, schema in SCHEMA.items():
         sections[sec] = V.table(sec, raw.get(sec, {}), schema, sec)
     sensor = sections["sensor"]
+    taxels = sensor["kind"] == "taxels"
+    if taxels:
+        # a taxel skin reads force directly: none of the optical effects of a grating apply
+        if raw.get("sensor", {}).get("effects"):
+            V.err("sensor.effects", "FBG effects do not apply to a taxel sensor (leave the list "
+                                    "empty or out)")
+        sensor["effects"] = []
+    elif sensor["grid"] is not None:
+        V.err("sensor.grid", "a grid needs sensor.kind = \"taxels\"")
     for i, e in enumerate(sensor["effects"]):
         if e not in EFFECT_NAMES:
             V.err(f"sensor.effects[{i}]", f"unknown effect {e!r} (known: "
                                           f"{', '.join(EFFECT_NAMES)})")
-    if "strain" not in sensor["effects"]:
+    if not taxels and "strain" not in sensor["effects"]:
         V.err("sensor.effects", "must include 'strain' (the mechanical term every trace has)")
     if len(set(sensor["effects"])) != len(sensor["effects"]):
         V.err("sensor.effects", "lists an effect twice")
@@ -411,7 +433,8 @@ def parse_scene(text: str, source: str = "<scene>", base_dir: Path | None = None
         if not rep.stable:
             V.err("frontend.filter_a", f"unstable filter: {rep.message}")
     fs = sensor["sample_rate_hz"]
-    if fe["filter_b"] is None and not 0 < fe["filter_low_hz"] < fe["filter_high_hz"] < fs / 2:
+    if not taxels and fe["filter_b"] is None and \
+            not 0 < fe["filter_low_hz"] < fe["filter_high_hz"] < fs / 2:
         V.err("frontend.filter_high_hz", f"band edges must satisfy 0 < filter_low_hz < "
                                          f"filter_high_hz < sample_rate_hz/2 = {fs / 2:g}")
     hw = sections["hardware"]
@@ -443,6 +466,20 @@ def parse_scene(text: str, source: str = "<scene>", base_dir: Path | None = None
     pops = []
     for i, p in enumerate(pops_raw):
         pops.append(V.table(f"population[{i}]", p, POPULATION))
+        if pops[-1]["preset"] is None and pops[-1]["model"] == "izhikevich":
+            pops[-1]["preset"] = "RS"
+    if taxels or st["kind"] == "press":
+        from .scene_skin import validate_skin
+        validate_skin(V, raw, sections, pops)
+    for i, p in enumerate(pops):
+        if p["encoding"] is None:
+            p["encoding"] = "FA"
+        if not taxels and p["model"] == "lif":
+            V.err(f"population[{i}].model", "LIF populations run on a taxel skin in this build "
+                                            "(sensor.kind = \"taxels\", stimulus.kind = "
+                                            "\"press\")")
+        if not taxels and p["encoding"] == "force":
+            V.err(f"population[{i}].encoding", "force encoding needs sensor.kind = \"taxels\"")
     names = [p["name"] for p in pops]
     for i, p in enumerate(pops):
         key = f"population[{i}]"

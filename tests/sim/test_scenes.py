@@ -62,7 +62,7 @@ def _err(text_add, replace=None):
      "inputs = [\"fa\"]\n", None,
      "population[1].model: 'cuneate' blocks are not available in this build"),
     ("[[population]]\nname = \"l\"\nmodel = \"lif\"\n", None,
-     "population[1].model: 'lif' blocks are not available in this build"),
+     "population[1].model: LIF populations run on a taxel skin in this build"),
     ("[[population]]\nname = \"l\"\nmodel = \"hodgkin\"\n", None,
      "population[1].model: must be one of izhikevich, lif, cuneate"),
     ("[[projection]]\nsource = \"fa\"\ntarget = \"nobody\"\n", None,
