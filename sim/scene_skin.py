@@ -309,8 +309,9 @@ def write_skin_report(run: SkinSceneRun, out: Path) -> Path:
                  _f(v["mean_abs_count_diff"]), v["max_abs_count_diff"],
                  _f(v["fraction_within_1_tick"])] for k, v in run.agreement.items()]
     b = run.block
-    fig_html = "".join(f'<figure><img src="{n}" alt="{n}"><figcaption>{n}</figcaption></figure>'
-                       for n in figs)
+    fig_html = "".join(f'<figure><img src="{n}" alt="{n}" onerror="console.error(\'missing '
+                       f'figure: \' + this.getAttribute(\'src\'))"><figcaption>{n}</figcaption>'
+                       f'</figure>' for n in figs)
     page = f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8">
 <title>cuneate run: {html.escape(run.scene.name)}</title>

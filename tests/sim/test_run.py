@@ -125,25 +125,11 @@ def test_scene_on_hdl_simulator_equals_twin(simulator, build_root):
         assert np.array_equal(x, y)
 
 
-def _chromium(page):
-    import shutil
-    import subprocess
-    exe = shutil.which("chromium") or shutil.which("chromium-browser")
-    if exe is None:
-        pytest.fail("chromium is not installed (make setup installs it from apt)")
-    proc = subprocess.run([exe, "--headless", "--no-sandbox", "--disable-gpu",
-                           "--enable-logging=stderr", "--v=0", "--virtual-time-budget=3000",
-                           "--dump-dom", page.as_uri()],
-                          capture_output=True, text=True, timeout=120)
-    assert proc.returncode == 0, proc.stderr[-2000:]
-    return proc.stdout, [ln for ln in proc.stderr.splitlines() if ":CONSOLE" in ln]
-
-
-def test_report_renders_in_headless_chromium_without_console_messages(tmp_path):
+def test_report_renders_in_headless_chromium_without_console_messages(tmp_path, chromium):
     out = tmp_path / "rep"
     assert cli.main(["run", "--engines", "golden,fixed", "--out", str(out)]) == 0
     page = out / "index.html"
-    dom, console = _chromium(page)
+    dom, console = chromium(page)
     assert "<h1>four-material grasp</h1>" in dom
     assert dom.count("<img ") == len(re.findall(r"<img ", page.read_text())) >= 8
     assert console == [], console
@@ -151,7 +137,7 @@ def test_report_renders_in_headless_chromium_without_console_messages(tmp_path):
         assert (out / link).is_file(), link
     # negative control: the same page with one figure gone is caught by the browser
     (out / "isi_fixed.png").unlink()
-    _, console = _chromium(page)
+    _, console = chromium(page)
     assert len(console) == 1 and "missing figure: isi_fixed.png" in console[0]
 
 

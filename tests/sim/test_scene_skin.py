@@ -144,6 +144,7 @@ def test_centre_press_is_symmetric():
         run.results["fixed"].col_sums
 
 
+@pytest.mark.cocotb
 @pytest.mark.parametrize("simulator", SIMULATORS)
 def test_skin_scene_on_hdl_simulator(simulator, tmp_path):
     run = scene_run.run_scene(_scene(), engines=["fixed", simulator], build_dir=tmp_path)
@@ -169,3 +170,15 @@ def test_cli_runs_the_skin_example(tmp_path, capsys):
     assert main(["run", "examples/skin_3x3", "--engines", "golden", "--json", "--out",
                  str(tmp_path / "j")]) == 0
     assert json.loads(capsys.readouterr().out)["engines"]["golden"]["winner"] == 4
+
+
+def test_skin_report_renders_in_headless_chromium(tmp_path, chromium):
+    out = tmp_path / "skin"
+    assert main(["run", "examples/skin_3x3", "--engines", "golden,fixed", "--out",
+                 str(out)]) == 0
+    dom, console = chromium(out / "index.html")
+    assert "<h1>3x3 LIF skin, centre taxel pressed</h1>" in dom and console == [], console
+    assert dom.count("<img ") == 3
+    (out / "skin_fixed.png").unlink()
+    _, console = chromium(out / "index.html")
+    assert len(console) == 1 and "missing figure: skin_fixed.png" in console[0]
