@@ -4,19 +4,34 @@ Each (simulator, design, parameters) case gets its own build directory. The benc
 imported inside the simulator by its dotted name (the benches live in ``cuneate.sim.benches``);
 configuration goes in through environment variables (a JSON file path), and results come back as
 JSON written by the bench, so the caller can print figures and assert on them.
+
+Verilator models are cached: a build is keyed by the Verilog's bytes, the top level, the build
+arguments, waves, and the Verilator and cocotb versions, and kept under
+``$CUNEATE_SIM_CACHE`` (default ``$XDG_CACHE_HOME/cuneate/sim`` or ``~/.cache/cuneate/sim``;
+``CUNEATE_SIM_CACHE=off`` builds in the case's own directory every time). The same design is
+compiled once and reused by every later run, whatever its build directory; concurrent runs
+serialize on a lock per entry, and the least recently used entries beyond
+:data:`CACHE_ENTRIES` are removed.
 """
 
 from __future__ import annotations
 
+import fcntl
+import hashlib
 import json
 import os
+import shutil
 import threading
+import time
 from dataclasses import dataclass
 from pathlib import Path
 
 from .toolchain import SIMULATORS, apply_simulator_env
 
-__all__ = ["CocotbRun", "run_cocotb", "SimulatorFailed"]
+__all__ = ["CocotbRun", "run_cocotb", "SimulatorFailed", "sim_cache_root", "CACHE_ENTRIES"]
+
+#: Verilator builds kept in the cache (least recently used removed first).
+CACHE_ENTRIES = 48
 
 
 class SimulatorFailed(RuntimeError):
@@ -67,9 +82,14 @@ def run_cocotb(simulator: str, sources: list[Path], toplevel: str, test_module: 
         args += ["-Wno-fatal", "-Wno-WIDTHEXPAND", "-Wno-WIDTHTRUNC", "-O3"]
     runner = get_runner(simulator)
     log = build_dir / "build.log" if quiet else None
-    runner.build(sources=[str(s) for s in sources], hdl_toplevel=toplevel, build_dir=build_dir,
-                 timescale=("1ns", "1ps"), build_args=args, always=True, waves=waves,
-                 log_file=log)
+    sim_dir = build_dir
+    cache = sim_cache_root() if simulator == "verilator" else None
+    if cache is not None:
+        sim_dir = _cached_build(runner, cache, sources, toplevel, args, waves, log)
+    else:
+        runner.build(sources=[str(s) for s in sources], hdl_toplevel=toplevel,
+                     build_dir=build_dir, timescale=("1ns", "1ps"), build_args=args,
+                     always=True, waves=waves, log_file=log)
     env = {"CUNEATE_BENCH_CONFIG": str(cfg_path), "CUNEATE_BENCH_REPORT": str(report_path),
            "COCOTB_LOG_LEVEL": os.environ.get("COCOTB_LOG_LEVEL", "WARNING")}
     stop = threading.Event()
@@ -89,7 +109,8 @@ def run_cocotb(simulator: str, sources: list[Path], toplevel: str, test_module: 
         poller.start()
     try:
         results = runner.test(test_module=test_module, hdl_toplevel=toplevel,
-                              build_dir=build_dir, test_dir=build_dir, extra_env=env,
+                              hdl_toplevel_lang="verilog",
+                              build_dir=sim_dir, test_dir=build_dir, extra_env=env,
                               testcase=testcase, waves=waves,
                               log_file=build_dir / "test.log" if quiet else None)
     finally:
@@ -107,3 +128,73 @@ def run_cocotb(simulator: str, sources: list[Path], toplevel: str, test_module: 
         raise SimulatorFailed(f"{simulator}: {n_failed} of {n_tests} cocotb tests failed "
                               f"(build dir {build_dir})\n{tail}")
     return run
+
+
+def sim_cache_root() -> Path | None:
+    """The Verilator build cache directory, or None when ``CUNEATE_SIM_CACHE=off``."""
+    env = os.environ.get("CUNEATE_SIM_CACHE", "")
+    if env.lower() in ("off", "0", "no"):
+        return None
+    if env:
+        return Path(env).expanduser().resolve()
+    base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
+    return Path(base) / "cuneate" / "sim"
+
+
+def _cache_key(sources, toplevel: str, args: list[str], waves: bool) -> str:
+    from importlib.metadata import PackageNotFoundError, version
+    h = hashlib.sha256()
+    for pkg in ("verilator", "cocotb"):
+        try:
+            h.update(f"{pkg}={version(pkg)};".encode())
+        except PackageNotFoundError:
+            h.update(f"{pkg}={shutil.which(pkg)};".encode())
+    h.update(json.dumps([toplevel, args, bool(waves), "1ns/1ps"]).encode())
+    for src in sources:
+        data = Path(src).read_bytes()
+        h.update(f"{Path(src).name}:{len(data)};".encode())
+        h.update(data)
+    return h.hexdigest()[:20]
+
+
+def _cached_build(runner, root: Path, sources, toplevel: str, args: list[str], waves: bool,
+                  log) -> Path:
+    """Build in (or reuse) the cache entry of this design; returns its directory."""
+    entry = root / f"verilator-{toplevel}-{_cache_key(sources, toplevel, args, waves)}"
+    stamp = entry / "built.json"
+    if not stamp.exists():
+        entry.mkdir(parents=True, exist_ok=True)
+        with open(entry / ".lock", "w") as lock:
+            fcntl.flock(lock, fcntl.LOCK_EX)
+            if not stamp.exists():
+                # fixed source paths inside the entry: the build does not depend on where the
+                # caller wrote its Verilog
+                src_dir = entry / "src"
+                src_dir.mkdir(exist_ok=True)
+                copies = []
+                for src in sources:
+                    dst = src_dir / Path(src).name
+                    shutil.copyfile(src, dst)
+                    copies.append(str(dst))
+                runner.build(sources=copies, hdl_toplevel=toplevel, build_dir=entry,
+                             timescale=("1ns", "1ps"), build_args=args, always=True,
+                             waves=waves, log_file=log)
+                stamp.write_text(json.dumps({"toplevel": toplevel, "args": args,
+                                             "sources": [Path(c).name for c in copies]}))
+                _prune(root, keep=entry)
+    os.utime(stamp)
+    return entry
+
+
+def _prune(root: Path, keep: Path) -> None:
+    entries = []
+    for d in root.glob("verilator-*"):
+        st = d / "built.json"
+        if d != keep and st.exists():
+            entries.append((st.stat().st_mtime, d))
+    entries.sort()
+    excess = len(entries) + 1 - CACHE_ENTRIES
+    now = time.time()
+    for mtime, d in entries[:max(0, excess)]:
+        if now - mtime > 600:            # never remove an entry a run may still be using
+            shutil.rmtree(d, ignore_errors=True)
