@@ -85,6 +85,11 @@ def run_cocotb(simulator: str, sources: list[Path], toplevel: str, test_module: 
     sim_dir = build_dir
     cache = sim_cache_root() if simulator == "verilator" else None
     if cache is not None:
+        try:
+            cache.mkdir(parents=True, exist_ok=True)
+        except OSError:
+            cache = None                 # an unwritable cache: build in the case's directory
+    if cache is not None:
         sim_dir = _cached_build(runner, cache, sources, toplevel, args, waves, log)
     else:
         runner.build(sources=[str(s) for s in sources], hdl_toplevel=toplevel,
