@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["write_report", "summary_dict", "figure_names"]
+__all__ = ["write_report", "summary_dict", "figure_names", "page_head", "figures_html"]
 
 
 def _plt():
@@ -154,6 +154,24 @@ def _table(rows, head) -> str:
     return f"<table><tr>{h}</tr>{body}</table>"
 
 
+def page_head(name: str) -> str:
+    """The start of a report page (doctype, title, style) up to and including its ``<h1>``."""
+    return f"""<!DOCTYPE html>
+<html lang="en"><head><meta charset="utf-8">
+<title>cuneate run: {html.escape(name)}</title>
+<style>body{{font-family:sans-serif;max-width:1100px;margin:1em auto;}}
+table{{border-collapse:collapse;margin:.5em 0;}}td,th{{border:1px solid #bbb;padding:2px 8px;}}
+figure{{display:inline-block;margin:4px;}}img{{max-width:520px;}}</style></head><body>
+<h1>{html.escape(name)}</h1>"""
+
+
+def figures_html(names) -> str:
+    """Linked figures; one that fails to load says so on the browser console."""
+    return "".join(f'<figure><img src="{n}" alt="{n}" onerror="console.error(\'missing figure: '
+                   f'\' + this.getAttribute(\'src\'))"><figcaption>{n}</figcaption></figure>'
+                   for n in names)
+
+
 def _f(x, nd=3):
     return "-" if x is None else (f"{x:.{nd}f}" if isinstance(x, float) else str(x))
 
@@ -191,21 +209,12 @@ def write_report(run, out: Path) -> Path:
         stage_rows.append(["all engines (HDL simulators overlapped with the others)",
                            _f(t["engines_wall_s"], 2)])
     stage_rows += [["decode", _f(t["decode_s"], 2)]]
-    # a figure that fails to load says so on the browser console
-    figs = "".join(f'<figure><img src="{n}" alt="{n}" onerror="console.error(\'missing figure: '
-                   f'\' + this.getAttribute(\'src\'))"><figcaption>{n}</figcaption></figure>'
-                   for n in figure_names(run))
+    figs = figures_html(figure_names(run))
     blocks = "; ".join(f"{b['block']} ({b['neurons']} neurons on a core of "
                        f"{b['core_neurons']}, sets {', '.join(b['param_sets'])}, "
                        f"current {b['current_format']}, dt {b['dt_ms']:g} ms)"
                        for b in ran["blocks"])
-    page = f"""<!DOCTYPE html>
-<html lang="en"><head><meta charset="utf-8">
-<title>cuneate run: {html.escape(run.scene.name)}</title>
-<style>body{{font-family:sans-serif;max-width:1100px;margin:1em auto;}}
-table{{border-collapse:collapse;margin:.5em 0;}}td,th{{border:1px solid #bbb;padding:2px 8px;}}
-figure{{display:inline-block;margin:4px;}}img{{max-width:520px;}}</style></head><body>
-<h1>{html.escape(run.scene.name)}</h1>
+    page = f"""{page_head(run.scene.name)}
 <p>Scene: {html.escape(run.scene.source)}. {len(run.trial_class)} trials of {len(run.classes)}
 classes, {len(run.neurons)} neurons, {run.n_ticks} ticks of {run.dt_ms:g} ms.</p>
 <h2>Decoding accuracy (cross-validated)</h2>

@@ -287,7 +287,7 @@ def _figures(run: SkinSceneRun, out: Path) -> list[str]:
 
 def write_skin_report(run: SkinSceneRun, out: Path) -> Path:
     """Write ``index.html``, ``run.json`` and figures into ``out``; returns the HTML path."""
-    from .report import _f, _table
+    from .report import _f, _table, figures_html, page_head
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     (out / "run.json").write_text(json.dumps(skin_summary(run), indent=2, default=float))
@@ -309,16 +309,7 @@ def write_skin_report(run: SkinSceneRun, out: Path) -> Path:
                  _f(v["mean_abs_count_diff"]), v["max_abs_count_diff"],
                  _f(v["fraction_within_1_tick"])] for k, v in run.agreement.items()]
     b = run.block
-    fig_html = "".join(f'<figure><img src="{n}" alt="{n}" onerror="console.error(\'missing '
-                       f'figure: \' + this.getAttribute(\'src\'))"><figcaption>{n}</figcaption>'
-                       f'</figure>' for n in figs)
-    page = f"""<!DOCTYPE html>
-<html lang="en"><head><meta charset="utf-8">
-<title>cuneate run: {html.escape(run.scene.name)}</title>
-<style>body{{font-family:sans-serif;max-width:1100px;margin:1em auto;}}
-table{{border-collapse:collapse;margin:.5em 0;}}td,th{{border:1px solid #bbb;padding:2px 8px;}}
-figure{{display:inline-block;margin:4px;}}img{{max-width:520px;}}</style></head><body>
-<h1>{html.escape(run.scene.name)}</h1>
+    page = f"""{page_head(run.scene.name)}
 <p>Scene: {html.escape(run.scene.source)}. A {rows}x{cols} taxel skin, one LIF neuron per
 taxel; taxel {pressed} (row-major) is pressed.</p>
 <h2>Per engine</h2>
@@ -340,7 +331,7 @@ taxel; taxel {pressed} (row-major) is pressed.</p>
                          f"{b['decay']}, dt {b['dt_ms']:g} ms)")}</li>
 <li>engines: {html.escape(', '.join(run.engines))}</li></ul>
 <h2>Figures</h2>
-{fig_html}
+{figures_html(figs)}
 </body></html>
 """
     path = out / "index.html"
