@@ -536,15 +536,11 @@ class LinkedCore(wiring.Component):
 
 
 def link_verilog(lcfg: LinkConfig, name: str = "linked_core", lowered: bool = False) -> str:
-    """Verilog of :class:`LinkedCore`. With ``lowered``, yosys ``proc`` turns every process
-    into multiplexers and registers first (no ``always @*`` blocks): Icarus 11 does not
-    re-evaluate some of the combinational processes of the link's transmit FSM when an input
-    changes while the state holds, and simulates the lowered netlist correctly."""
-    from amaranth.back import rtlil, verilog
+    """Verilog of :class:`LinkedCore`; ``lowered`` gives the yosys-lowered netlist for Icarus 11
+    (see :func:`cuneate.hdl.generate.lowered_verilog`: it mis-schedules some combinational
+    processes of the link's transmit FSM in the direct output)."""
+    from amaranth.back import verilog
     if not lowered:
         return verilog.convert(LinkedCore(lcfg), name=name, emit_src=False)
-    from amaranth._toolchain.yosys import find_yosys
-    il = rtlil.convert(LinkedCore(lcfg), name=name, emit_src=False)
-    yosys = find_yosys(lambda ver: ver >= (0, 40))
-    return yosys.run(["-q", "-"], f"read_rtlil <<rtlil\n{il}\nrtlil\nproc\nopt_clean\n"
-                                  f"write_verilog -noattr\n")
+    from .generate import lowered_verilog
+    return lowered_verilog(LinkedCore(lcfg), name)
