@@ -364,11 +364,11 @@ def clamp_bits_hdl(flags: dict):
 
 
 def coincidence_verilog(cfg: CoincidenceConfig, name: str = "coincidence_detector",
-                        lowered: bool = False) -> str:
+                        lowered: bool = False, top: CoincidenceDetector | None = None) -> str:
     """Verilog of the detector (deterministic bytes); ``lowered`` gives the yosys-lowered
     netlist that Icarus 11 simulates correctly (see
-    :func:`cuneate.hdl.generate.lowered_verilog`)."""
-    top = CoincidenceDetector(cfg)
+    :func:`cuneate.hdl.generate.lowered_verilog`). ``top``: an instance to convert."""
+    top = top or CoincidenceDetector(cfg)
     if lowered:
         from .generate import lowered_verilog
         return lowered_verilog(top, name)

@@ -75,7 +75,7 @@ class CoincidenceConfig:
         ``(n_targets, n_sources)`` PSP amplitudes ``J w`` in mV/ms (>= 0; 0 disconnects).
         Default: ``J`` = 8 mV/ms for every pair (the brief).
     max_delay_ticks
-        Depth of the spike history (default 512: 32 ms at 16 kHz).
+        Depth of the spike history (default 513: delays up to 32 ms at 16 kHz).
     tau_rise_ms, tau_decay_ms
         PSP time constants (0.5 and 2 ms).
     param_sets, target_sets
@@ -94,7 +94,7 @@ class CoincidenceConfig:
     n_targets: int = 3
     delays_ticks: object = None
     weights: object = None
-    max_delay_ticks: int = 512
+    max_delay_ticks: int = 513
     tau_rise_ms: float = gcun.TAU_RISE_MS
     tau_decay_ms: float = gcun.TAU_DECAY_MS
     param_sets: Sequence = ("RS",)

@@ -22,6 +22,7 @@ COMMAND_MODULES = [
     "cli_izhikevich",
     "cli_run",
     "cli_lif",
+    "cli_cuneate",
     "cli_boards",
 ]
 

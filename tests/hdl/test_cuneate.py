@@ -49,7 +49,8 @@ def test_from_ms_refuses_a_delay_between_ticks():
 
 def test_derived_formats_hold_the_worst_case_input():
     c = CoincidenceConfig()                      # brief: J = 8, 4 afferents, 32 ms history
-    assert c.max_delay_ticks == 512 and c.history_addr_bits == 9
+    assert c.max_delay_ticks == 513 and c.history_addr_bits == 10
+    assert (c.max_delay_ticks - 1) * c.dt_ms == 32.0
     # every source spiking every tick: xd - xr reaches J S (e_d/(1-e_d) - e_r/(1-e_r))
     ed, er = np.exp(-c.dt_ms / 2.0), np.exp(-c.dt_ms / 0.5)
     top = 8 * 4 * (ed / (1 - ed) - er / (1 - er))
