@@ -62,6 +62,15 @@ def cmd_run(args) -> int:
         raise CliError(f"cuneate run: {exc}") from None
     except ValueError as exc:
         raise CliError(f"cuneate run: {scene.source}: {exc}") from None
+    if getattr(run, "kind", None) == "ridge":
+        from .scene_ridge import format_ridge_run, ridge_summary, write_ridge_report
+        page = write_ridge_report(run, out)
+        if args.json:
+            print(json.dumps(ridge_summary(run), default=float))
+            return 0
+        print(format_ridge_run(run))
+        print(f"report: {page}")
+        return 0
     if getattr(run, "kind", None) == "skin":
         from .scene_skin import format_skin_run, skin_summary, write_skin_report
         page = write_skin_report(run, out)

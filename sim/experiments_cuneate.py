@@ -58,6 +58,8 @@ class RidgeSpec:
     jitter_ms: float = 0.3
     seed: int = 1
     update_hz: float = 16e3
+    weight_fa: float | None = None   # J w of the FA afferents (default: ``weight``)
+    delays_ticks: list | None = None  # (targets, 4) delays; default: tuned to the angles
 
 
 @dataclass
@@ -87,13 +89,17 @@ def detector_config(spec: RidgeSpec) -> CoincidenceConfig:
     """Three cuneate neurons, each tuned to one angle's crossing lag; sources (SA top, FA top,
     SA bottom, FA bottom)."""
     dt = 1000.0 / spec.update_hz
-    delays = []
-    for a in spec.angles_deg:
-        lag = _lags_ms(spec, spec.speed_mm_per_s, a)
-        top, bot = int(round(max(0.0, lag) / dt)), int(round(max(0.0, -lag) / dt))
-        delays.append([top, top, bot, bot])
-    return CoincidenceConfig(n_sources=4, n_targets=len(spec.angles_deg), delays_ticks=delays,
-                             weights=np.full((len(spec.angles_deg), 4), spec.weight),
+    delays = spec.delays_ticks
+    if delays is None:
+        delays = []
+        for a in spec.angles_deg:
+            lag = _lags_ms(spec, spec.speed_mm_per_s, a)
+            top, bot = int(round(max(0.0, lag) / dt)), int(round(max(0.0, -lag) / dt))
+            delays.append([top, top, bot, bot])
+    wf = spec.weight if spec.weight_fa is None else spec.weight_fa
+    return CoincidenceConfig(n_sources=4, n_targets=len(delays), delays_ticks=delays,
+                             weights=np.tile([spec.weight, wf, spec.weight, wf],
+                                             (len(delays), 1)),
                              update_hz=spec.update_hz)
 
 

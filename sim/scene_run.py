@@ -279,10 +279,14 @@ def _agreement(a: list, b: list, dt_ms: float) -> dict:
 def run_scene(scene: Scene, engines: list[str] | None = None, build_dir: Path | None = None,
               progress: bool = False, log=None) -> SceneRun:
     """Run ``scene`` (its engines, or ``engines``). A taxel-skin scene runs through
-    :func:`cuneate.sim.scene_skin.run_skin_scene` and returns its ``SkinSceneRun``."""
+    :func:`cuneate.sim.scene_skin.run_skin_scene` (a ``SkinSceneRun``), a ridge scene through
+    :func:`cuneate.sim.scene_ridge.run_ridge_scene` (a ``RidgeSceneRun``)."""
     if scene["stimulus"]["kind"] == "press":
         from .scene_skin import run_skin_scene
         return run_skin_scene(scene, engines, build_dir, progress, log)
+    if scene["stimulus"]["kind"] == "ridges":
+        from .scene_ridge import run_ridge_scene
+        return run_ridge_scene(scene, engines, build_dir, progress, log)
     timing: dict = {}
     say = log or (lambda msg: None)
     t0 = time.perf_counter()

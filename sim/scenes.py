@@ -31,8 +31,8 @@ EFFECT_NAMES = ("strain", "temperature", "noise", "resolution", "saturation",
 ENGINE_NAMES = ("golden", "fixed", "amaranth", "icarus", "verilator")
 #: Neuron models a scene may name, and those this build can simulate.
 MODELS = ("izhikevich", "lif", "cuneate")
-AVAILABLE_MODELS = ("izhikevich", "lif")
-STIMULUS_KINDS = ("grasp", "slide", "pulses", "recorded", "press")
+AVAILABLE_MODELS = ("izhikevich", "lif", "cuneate")
+STIMULUS_KINDS = ("grasp", "slide", "pulses", "recorded", "press", "ridges")
 AVAILABLE_STIMULI = STIMULUS_KINDS
 
 
@@ -118,7 +118,14 @@ SCHEMA: dict = {
                  "press_base_amplitude_N": F(NUM, 1.0, lo=1e-6, hi=1e4),
                  "press_base_width_ms": F(NUM, 40.0, lo=1e-3, hi=1e5),
                  "press_gap_ms": F(NUM, 60.0, lo=1e-3, hi=1e5),
-                 "press_spread": F(list, [0.5, 0.25], items=NUM)},
+                 "press_spread": F(list, [0.5, 0.25], items=NUM),
+                 # ridges (two stacked sensors, cuneate neurons)
+                 "ridge_angles_deg": F(list, [-45.0, 0.0, 45.0], items=NUM),
+                 "ridge_width_mm": F(NUM, 0.2, lo=1e-3, hi=100),
+                 "sensor_spacing_mm": F(NUM, 0.25, lo=1e-3, hi=100),
+                 "jitter_ms": F(NUM, 0.3, lo=0, hi=100),
+                 "trial_ms": F(NUM, 120.0, lo=1, hi=1e4),
+                 "onset_ms": F(NUM, 30.0, lo=0, hi=1e4)},
     "frontend": {"filter_low_hz": F(NUM, 1.0, lo=1e-6), "filter_high_hz": F(NUM, 16.0, lo=1e-6),
                  "filter_order": F(int, 1, lo=1, hi=8),
                  "filter_kind": F(str, "butter",
@@ -140,7 +147,7 @@ SCHEMA: dict = {
                  "current_int_bits": F(int, 10, lo=1, hi=30),
                  "current_frac_bits": F(int, 8, lo=0, hi=30),
                  "rounding": F(str, "nearest", choices=("nearest", "truncate"))},
-    "decoder": {"kind": F(str, "tree", choices=("tree", "knn", "winner", "none")),
+    "decoder": {"kind": F(str, "tree", choices=("tree", "knn", "winner", "pattern", "none")),
                 "target": F(str, "material"),
                 "features": F(str, "isi", choices=("isi", "trial")),
                 "cv_folds": F(int, 50, lo=2, hi=10_000), "max_depth": F(int, 3, lo=1, hi=64),
@@ -254,6 +261,10 @@ class Scene:
             return [f"{p:g} mm" for p in st["periods_mm"]]
         if st["kind"] == "pulses":
             return [f"{a:g} N" for a in st["pulse_amplitudes_N"]]
+        if st["kind"] == "ridges":
+            return [f"{a:+g} deg" for a in st["ridge_angles_deg"]]
+        if st["kind"] == "press":
+            return [f"taxel {st['press_taxel']}"]
         return [st["label"]]
 
     def to_dict(self) -> dict:
@@ -468,7 +479,13 @@ def parse_scene(text: str, source: str = "<scene>", base_dir: Path | None = None
         pops.append(V.table(f"population[{i}]", p, POPULATION))
         if pops[-1]["preset"] is None and pops[-1]["model"] == "izhikevich":
             pops[-1]["preset"] = "RS"
-    if taxels or st["kind"] == "press":
+    ridges = st["kind"] == "ridges"
+    projs = []
+    if ridges:
+        from .scene_ridge import validate_ridge
+        projs = _projections(V, raw, [p["name"] for p in pops])
+        validate_ridge(V, raw, sections, pops, projs)
+    elif taxels or st["kind"] == "press":
         from .scene_skin import validate_skin
         validate_skin(V, raw, sections, pops)
     for i, p in enumerate(pops):
@@ -509,23 +526,19 @@ def parse_scene(text: str, source: str = "<scene>", base_dir: Path | None = None
             p["size"] = len(g)
         elif p["size"] is None:
             V.err(f"{key}.size", "missing required key for a spike-driven population")
-    projs = []
-    for i, pr in enumerate(raw.get("projection", [])):
-        q = V.table(f"projection[{i}]", pr, PROJECTION)
-        for end in ("source", "target"):
-            if q[end] not in names:
-                V.err(f"projection[{i}].{end}", f"unknown population {q[end]!r}")
-        if any(d < 0 for d in q["delays_ms"]):
-            V.err(f"projection[{i}].delays_ms", "out of range: delays must be >= 0")
-        projs.append(q)
+    if not ridges:
+        projs = _projections(V, raw, names)
     # only what this build can simulate
     for i, p in enumerate(pops):
+        if p["model"] == "cuneate" and not ridges:
+            V.err(f"population[{i}].model", "cuneate populations run in ridge scenes in this "
+                                            "build (stimulus.kind = \"ridges\")")
         if p["model"] not in AVAILABLE_MODELS:
             V.err(f"population[{i}].model", f"{p['model']!r} blocks are not available in this "
                                             f"build (available: {', '.join(AVAILABLE_MODELS)})")
-    if projs:
-        V.err("projection[0]", "projections (coincidence delays) are not available in this "
-                               "build: they need the coincidence block")
+    if projs and not ridges:
+        V.err("projection[0]", "projections (coincidence delays) run in ridge scenes in this "
+                               "build (stimulus.kind = \"ridges\")")
     scene = Scene(source, sections, pops, projs, base_dir)
     n_trials = 1 if st["kind"] == "recorded" else sections["scene"]["trials"] * len(
         scene.classes())
@@ -536,6 +549,19 @@ def parse_scene(text: str, source: str = "<scene>", base_dir: Path | None = None
                                    f"trials) but one core at {hw['clock_hz']:g} Hz / "
                                    f"{hw['update_hz']:g} Hz holds {capacity}")
     return scene
+
+
+def _projections(V, raw: dict, names: list) -> list:
+    projs = []
+    for i, pr in enumerate(raw.get("projection", [])):
+        q = V.table(f"projection[{i}]", pr, PROJECTION)
+        for end in ("source", "target"):
+            if q[end] not in names:
+                V.err(f"projection[{i}].{end}", f"unknown population {q[end]!r}")
+        if any(d < 0 for d in q["delays_ms"]):
+            V.err(f"projection[{i}].delays_ms", "out of range: delays must be >= 0")
+        projs.append(q)
+    return projs
 
 
 def load_scene(path) -> Scene:
