@@ -219,8 +219,10 @@ def write_ridge_report(run: RidgeSceneRun, out: Path) -> Path:
                          for a in r.angles])
         fig, ax = plt.subplots(figsize=(5, 3.4))
         ax.imshow(mean, cmap="Greens", aspect="auto")
+        top = max(1e-9, float(mean.max()))
         for (i, j), c in np.ndenumerate(mean):
-            ax.text(j, i, f"{c:.1f}", ha="center", va="center", fontsize=8)
+            ax.text(j, i, f"{c:.1f}", ha="center", va="center", fontsize=9,
+                    color="white" if c > top / 2 else "black")
         ax.set(xticks=range(mean.shape[1]), xticklabels=[f"CN{j}" for j in
                                                          range(mean.shape[1])],
                yticks=range(len(r.angles)), yticklabels=[f"{a:+g} deg" for a in r.angles],
