@@ -23,6 +23,7 @@ COMMAND_MODULES = [
     "cli_run",
     "cli_lif",
     "cli_cuneate",
+    "cli_sweep",
     "cli_boards",
 ]
 

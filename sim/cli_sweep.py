@@ -1,0 +1,90 @@
+"""``cuneate sweep``: what accuracy costs, over update rate, operand width, state fraction bits,
+rounding and the golden model's scheme (see :mod:`cuneate.sim.sweep`)."""
+
+from __future__ import annotations
+
+import sys
+
+from .cliutil import CliError, output_dir, positive_float, positive_int
+
+__all__ = ["register", "cmd_sweep"]
+
+
+def _list(text: str, conv, what: str) -> list:
+    try:
+        out = [conv(x) for x in text.split(",") if x.strip()]
+    except ValueError:
+        raise CliError(f"{what}: expected a comma-separated list, got {text!r}") from None
+    if not out:
+        raise CliError(f"{what}: empty list")
+    return out
+
+
+def _frac(text: str) -> tuple[int, int]:
+    v, _, u = text.partition(":")
+    return int(v), int(u or v)
+
+
+def cmd_sweep(args) -> int:
+    from .sweep import BATTERIES, SweepSpec, grid, run_sweep, write_sweep
+    if args.battery not in BATTERIES:
+        raise CliError(f"--battery: unknown battery {args.battery!r} (known: "
+                       f"{', '.join(BATTERIES)})")
+    rates = _list(args.update_hz, float, "--update-hz")
+    if any(r <= 0 for r in rates):
+        raise CliError("--update-hz: rates must be > 0")
+    widths = _list(args.operand_width, int, "--operand-width")
+    if any(not 8 <= w <= 32 for w in widths):
+        raise CliError("--operand-width: widths must lie in 8..32")
+    fracs = _list(args.frac_bits, _frac, "--frac-bits")
+    rnd = _list(args.rounding, str, "--rounding")
+    if set(rnd) - {"nearest", "truncate"}:
+        raise CliError("--rounding: nearest and/or truncate")
+    schemes = _list(args.schemes, str, "--schemes")
+    if set(schemes) - {"euler", "izhikevich", "rk4"}:
+        raise CliError("--schemes: euler, izhikevich and/or rk4")
+    floats = [] if args.no_float else ["float64", "float32"]
+    spec = SweepSpec(battery=args.battery, duration_ms=args.duration_ms,
+                     reference_hz=args.reference_hz, clock_hz=args.clock_hz, synth=args.synth)
+    pts = grid(rates, widths, fracs, rnd, schemes, floats)
+    out = output_dir(args.out)
+    rows = run_sweep(pts, spec, out / "cache", scheduler=args.scheduler, workers=args.workers,
+                     progress=sys.stderr.isatty(), log=lambda m: print(m, file=sys.stderr))
+    page = write_sweep(rows, spec, out)
+    for r in rows:
+        acc = r.get("fraction_within_tick")
+        ve = r.get("vs_euler_fraction_within_tick")
+        print(f"  {r['label']:44s} "
+              + (f"within 1 tick {acc:.4f}" if acc is not None else r.get("reason", "")[:70])
+              + (f", of Euler at its dt {ve:.4f}" if ve is not None else "")
+              + (f", {r['host_s_per_bio_s']:.2f} s/bio s" if r.get("host_s_per_bio_s")
+                 else ""))
+    print(f"report: {page}")
+    return 0
+
+
+def register(groups) -> None:
+    p = groups.root.add_parser("sweep", help="accuracy against cost over the core's knobs")
+    p.add_argument("--out", default="out/sweep", help="output directory (cache inside)")
+    p.add_argument("--battery", default="yardstick",
+                   help="yardstick (16 trains), wide (60) or long (48, use --duration-ms)")
+    p.add_argument("--duration-ms", type=positive_float, default=1000.0)
+    p.add_argument("--update-hz", default="16000",
+                   help="comma-separated update rates (e.g. 4000,8000,16000,20000,32000,64000)")
+    p.add_argument("--operand-width", default="18", help="comma-separated (e.g. 16,18,20,25)")
+    p.add_argument("--frac-bits", default="18:20",
+                   help="comma-separated V:U state fraction bits (e.g. 16:18,18:20,20:22)")
+    p.add_argument("--rounding", default="nearest", help="nearest,truncate")
+    p.add_argument("--schemes", default="euler", help="golden schemes: euler,izhikevich,rk4")
+    p.add_argument("--no-float", action="store_true", help="skip the float64/float32 points")
+    p.add_argument("--reference-hz", type=positive_float, default=256e3,
+                   help="rate of the float64 RK4 reference (default 256e3)")
+    p.add_argument("--clock-hz", type=positive_float, default=40e6,
+                   help="clock for neurons per core (default 40e6)")
+    p.add_argument("--synth", action="store_true",
+                   help="yosys synth_ecp5 per fixed point (slow: a core per point)")
+    p.add_argument("--scheduler", default=None,
+                   help="dask.distributed address; 'sync' runs in this process (default: a "
+                        "local cluster)")
+    p.add_argument("--workers", type=positive_int, default=2)
+    p.set_defaults(func=cmd_sweep)

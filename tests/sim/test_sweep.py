@@ -1,0 +1,89 @@
+"""The accuracy-versus-cost sweep: Dask, per-point cache and resume, outputs, refusals."""
+
+import csv
+import json
+
+import pytest
+
+from cuneate.sim.cli import main
+from cuneate.sim.sweep import SweepSpec, grid, pareto_front, run_sweep
+
+
+def test_small_sweep_on_a_local_dask_cluster(tmp_path, capsys):
+    out = tmp_path / "s"
+    assert main(["sweep", "--out", str(out), "--update-hz", "16000", "--operand-width", "18,14",
+                 "--rounding", "nearest,truncate", "--duration-ms", "300",
+                 "--workers", "1"]) == 0
+    text = capsys.readouterr().out
+    rows = {r["label"]: r for r in json.loads((out / "sweep.json").read_text())["rows"]}
+    assert len(rows) == 6 and "report:" in text
+    fx = rows["fixed 16 kHz w18 v.18 u.20 nearest"]
+    tr = rows["fixed 16 kHz w18 v.18 u.20 truncate"]
+    f64, f32 = rows["float64 euler 16 kHz"], rows["float32 euler 16 kHz"]
+    assert fx["status"] == "ok" and fx["neurons_per_core"] == 2500 and fx["multipliers"] == 4
+    # the arithmetic against float64 Euler at the same dt: the core close to float32, and
+    # truncation clearly worse than rounding to nearest
+    assert fx["vs_euler_fraction_within_tick"] > 0.95 and f32["vs_euler_counts_equal"]
+    assert tr["vs_euler_fraction_within_tick"] < fx["vs_euler_fraction_within_tick"]
+    # against the fine-step reference the scheme's own error dominates: float64 Euler at
+    # 16 kHz is no closer to RK4 than the core
+    assert abs(f64["fraction_within_tick"] - fx["fraction_within_tick"]) < 0.05
+    # a configuration the core refuses is a row with its reason, not a crash
+    w14 = rows["fixed 16 kHz w14 v.18 u.20 nearest"]
+    assert w14["status"] == "refused" and "fraction bits" in w14["reason"]
+    with open(out / "sweep.csv") as f:
+        assert len(list(csv.DictReader(f))) == 6
+    assert (out / "pareto.png").stat().st_size > 5000
+    assert "Pareto" in (out / "index.html").read_text()
+
+
+def test_interrupted_sweep_resumes_from_its_cache(tmp_path):
+    spec = SweepSpec(duration_ms=100.0)
+    pts = grid(update_hz=(16e3,), operand_width=(18,), floats=("float32",))
+    logs = []
+    first = run_sweep(pts, spec, tmp_path, scheduler="sync", log=logs.append)
+    assert logs[-1] == "sweep: 2 points, 0 cached, 2 to run"
+    # one result lost (an interrupted run): only that point runs again
+    (tmp_path / f"{pts[1].key(spec)}.json").unlink()
+    again = run_sweep(pts, spec, tmp_path, scheduler="sync", log=logs.append)
+    assert logs[-1] == "sweep: 2 points, 1 cached, 1 to run"
+    assert [r["fraction_within_tick"] for r in again] == \
+        [r["fraction_within_tick"] for r in first]
+    # another battery or duration is another key
+    assert pts[0].key(SweepSpec(duration_ms=200.0)) != pts[0].key(spec)
+
+
+def test_pareto_front_by_hand():
+    rows = [{"key": k, "status": "ok", "fraction_within_tick": a, "cost": c}
+            for k, a, c in (("a", 0.9, 1.0), ("b", 0.95, 2.0), ("c", 0.9, 3.0),
+                            ("d", 0.99, 10.0), ("e", 0.5, 0.5))]
+    rows.append({"key": "f", "status": "refused"})
+    assert sorted(pareto_front(rows, "cost")) == ["a", "b", "d", "e"]
+
+
+@pytest.mark.parametrize("argv,expect", [
+    (["--update-hz", "x"], "--update-hz: expected a comma-separated list"),
+    (["--update-hz", "-5"], "--update-hz: rates must be > 0"),
+    (["--operand-width", "40"], "--operand-width: widths must lie in 8..32"),
+    (["--rounding", "up"], "--rounding: nearest and/or truncate"),
+    (["--schemes", "heun"], "--schemes: euler, izhikevich and/or rk4"),
+    (["--battery", "nope"], "--battery: unknown battery 'nope'"),
+])
+def test_refusals(argv, expect, tmp_path, capsys):
+    assert main(["sweep", "--out", str(tmp_path), *argv]) == 2
+    err = capsys.readouterr().err.strip()
+    assert expect in err and "\n" not in err
+
+
+@pytest.mark.long
+def test_sweep_with_synthesis_and_update_rates(tmp_path):
+    """A real instance of the long kind: update rates (powers of two and not) x widths, with
+    yosys synth_ecp5 of each fixed core sized for 40 MHz."""
+    spec = SweepSpec(duration_ms=1000.0, synth=True)
+    pts = grid(update_hz=(8e3, 16e3, 20e3), operand_width=(18, 20), schemes=("euler", "rk4"))
+    rows = {r["label"]: r for r in run_sweep(pts, spec, tmp_path, workers=2)}
+    a, b = rows["fixed 16 kHz w18 v.18 u.20 nearest"], rows["fixed 8 kHz w18 v.18 u.20 nearest"]
+    assert a["neurons_per_core"] == 2500 and b["neurons_per_core"] == 5000
+    assert a["MULT18X18D"] >= 4 and b["DP16KD"] > a["DP16KD"]
+    assert rows["fixed 20 kHz w18 v.18 u.20 nearest"]["multipliers"] == 5
+    assert all(r["status"] == "ok" for r in rows.values())
