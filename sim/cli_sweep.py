@@ -1,5 +1,6 @@
 """``cuneate sweep``: what accuracy costs, over update rate, operand width, state fraction bits,
-rounding and the golden model's scheme (see :mod:`cuneate.sim.sweep`)."""
+rounding and the golden model's scheme (see :mod:`cuneate.sim.sweep`); and
+``cuneate hardcases summary``: the hard-case suite's record (:mod:`cuneate.sim.hardcases`)."""
 
 from __future__ import annotations
 
@@ -63,7 +64,22 @@ def cmd_sweep(args) -> int:
     return 0
 
 
+def cmd_hardcases(args) -> int:
+    from .hardcases import format_summary, summary
+    try:
+        rows = summary(args.dir)
+    except FileNotFoundError as exc:
+        raise CliError(f"cuneate hardcases: {exc}") from None
+    print(format_summary(rows))
+    return 1 if any(r["mismatches"] for r in rows) else 0
+
+
 def register(groups) -> None:
+    h = groups.root.add_parser("hardcases", help="the hard-case suite's record")
+    hs = h.add_subparsers(dest="hardcases_command", required=True, parser_class=type(h))
+    s = hs.add_parser("summary", help="cases tried, updates checked and mismatches per case")
+    s.add_argument("--dir", default=None, help="records (default build/hardcases)")
+    s.set_defaults(func=cmd_hardcases)
     p = groups.root.add_parser("sweep", help="accuracy against cost over the core's knobs")
     p.add_argument("--out", default="out/sweep", help="output directory (cache inside)")
     p.add_argument("--battery", default="yardstick",

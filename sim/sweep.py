@@ -287,8 +287,8 @@ COLUMNS = ("label", "engine", "update_hz", "operand_width", "v_frac_bits", "u_fr
            "rounding", "scheme", "status", "counts_equal", "count_error",
            "fraction_within_tick", "mean_abs_error_ms", "mean_vp",
            "first_spike_latency_error_ms", "vs_euler_fraction_within_tick",
-           "vs_euler_counts_equal", "vs_euler_mean_vp", "neurons_per_core", "multipliers", "state_bits",
-           "host_s_per_bio_s", "LUT4", "CCU2C", "TRELLIS_FF", "DP16KD", "MULT18X18D",
+           "vs_euler_counts_equal", "vs_euler_mean_vp", "neurons_per_core", "multipliers",
+           "state_bits", "host_s_per_bio_s", "LUT4", "CCU2C", "TRELLIS_FF", "DP16KD", "MULT18X18D",
            "reason")
 
 

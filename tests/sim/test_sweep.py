@@ -87,3 +87,16 @@ def test_sweep_with_synthesis_and_update_rates(tmp_path):
     assert a["MULT18X18D"] >= 4 and b["DP16KD"] > a["DP16KD"]
     assert rows["fixed 20 kHz w18 v.18 u.20 nearest"]["multipliers"] == 5
     assert all(r["status"] == "ok" for r in rows.values())
+
+
+def test_hardcases_summary_prints_the_records(tmp_path, capsys):
+    from cuneate.sim.hardcases import record
+    record("a_case", 3, 3000, 0, "three", path=tmp_path)
+    record("b_case", 1, 10, 0, path=tmp_path)
+    assert main(["hardcases", "summary", "--dir", str(tmp_path)]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert out[1].split()[:4] == ["a_case", "3", "3000", "0"]
+    assert out[-1].split() == ["total", "4", "3010", "0"]
+    record("c_case", 1, 10, 2, path=tmp_path)            # a mismatch makes it fail
+    assert main(["hardcases", "summary", "--dir", str(tmp_path)]) == 1
+    assert main(["hardcases", "summary", "--dir", str(tmp_path / "none")]) == 2
