@@ -44,7 +44,10 @@ PARALLEL_MIN_NEURONS = 50_000
 (S_NEAR, S_ICLAMP, S_ILO, S_IHI, S_SV, S_SVQ, S_POW2, S_SIU, S_SUX, S_SDTI, S_SU, S_KDT, S_SDX,
  S_SHB, S_SHY, S_YCLAMP, S_YLO, S_YHI, S_SHQ, S_SHP, S_HALFP, S_VTHSH, S_VFLSH, S_ULO, S_UHI,
  S_VFLOOR, S_B_VLOW, S_B_UHIGH, S_B_ULOW, S_B_CUR, S_B_Y) = range(31)
-N_SCALARS = 31
+# rounding shifts, each as 4 slots (left shift, right shift, rounding-bit shift, bit mask)
+R_SV, R_SVQ, R_SDTI, R_SU, R_SIU, R_SUX, R_SDX, R_SHQ = (31 + 4 * j for j in range(8))
+N_SCALARS = 31 + 4 * 8
+_INT64_MIN, _INT64_MAX = -(1 << 63), (1 << 63) - 1
 
 
 def available() -> bool:
@@ -97,6 +100,15 @@ def gather_constants(cfg: IzhikevichConfig) -> tuple[np.ndarray, np.ndarray]:
     sc[S_VFLSH] = cfg.v_floor_raw << cfg.shift_p
     sc[S_ULO], sc[S_UHI] = cfg.u_lo_raw, cfg.u_hi_raw
     sc[S_VFLOOR] = cfg.v_floor_raw
+    if not sc[S_ICLAMP]:                  # no clamp: levels no int64 can pass
+        sc[S_ILO], sc[S_IHI] = _INT64_MIN, _INT64_MAX
+    if not sc[S_YCLAMP]:
+        sc[S_YLO], sc[S_YHI] = _INT64_MIN, _INT64_MAX
+    for slot, shift in ((R_SV, S_SV), (R_SVQ, S_SVQ), (R_SDTI, S_SDTI), (R_SU, S_SU),
+                        (R_SIU, S_SIU), (R_SUX, S_SUX), (R_SDX, S_SDX), (R_SHQ, S_SHQ)):
+        x = int(sc[shift])
+        rs = max(x, 0)
+        sc[slot:slot + 4] = [max(-x, 0), rs, max(rs - 1, 0), int(near and rs > 0)]
     for slot, kind in zip((S_B_VLOW, S_B_UHIGH, S_B_ULOW, S_B_CUR, S_B_Y),
                           ("v_low", "u_high", "u_low", "current", "y")):
         sc[slot] = CLAMP_KINDS.index(kind)
@@ -120,42 +132,33 @@ if numba is not None:
         return r
 
     @njit(inline="always", **_jit)
+    def _rq(x, sc, j):
+        """round_shift(x, shift) without branches: ``(x << ls) >> rs`` plus, when rounding
+        to nearest and rs > 0, the first dropped bit (slots j .. j+3 of ``sc``)."""
+        y = x << sc[j]
+        return (y >> sc[j + 1]) + ((y >> sc[j + 2]) & sc[j + 3])
+
+    @njit(inline="always", **_jit)
     def _neuron(v, u, I, s, tab, sc):
-        """One update of one neuron: returns (v', u', spike, clamp bits, v_pre)."""
-        near = sc[S_NEAR] != 0
-        clamp = 0
-        # --- operands
-        if sc[S_ICLAMP] != 0:
-            if I < sc[S_ILO]:
-                I = sc[S_ILO]
-                clamp |= 1 << sc[S_B_CUR]
-            elif I > sc[S_IHI]:
-                I = sc[S_IHI]
-                clamp |= 1 << sc[S_B_CUR]
-        wq = _rs(v + tab[T_WOFF][s], sc[S_SV], near)
-        vq = _rs(v, sc[S_SVQ], near)
+        """One update of one neuron: returns (v', u', spike, clamp bits, v_pre). Written
+        without branches (selects, min/max) so that a loop over neurons can vectorize."""
+        # --- operands (a clamp that is not built has levels no int64 passes)
+        i_lo, i_hi = I < sc[S_ILO], I > sc[S_IHI]
+        I = min(max(I, sc[S_ILO]), sc[S_IHI])
+        wq = _rq(v + tab[T_WOFF][s], sc, R_SV)
+        vq = _rq(v, sc, R_SVQ)
         # --- multiply 1
         q = wq * tab[T_KA][s]
         bvp = vq * tab[T_BETA][s]
-        if tab[T_LEAK][s] != 0:
-            uy = (u << sc[S_SHB]) + tab[T_ESH][s]
-        else:
-            uy = tab[T_ESH][s]
-        if sc[S_POW2] != 0:
-            dx = _rs(I, sc[S_SDTI], near) - _rs(u, sc[S_SU], near)
-        else:
-            x = _rs(_rs(I, sc[S_SIU], near) - u, sc[S_SUX], near)
-            dx = _rs(x * sc[S_KDT], sc[S_SDX], near)
+        uy = ((u << sc[S_SHB]) & -tab[T_LEAK][s]) + tab[T_ESH][s]
+        dx_pow2 = _rq(I, sc, R_SDTI) - _rq(u, sc, R_SU)
+        dx_mul = _rq(_rq(_rq(I, sc, R_SIU) - u, sc, R_SUX) * sc[S_KDT], sc, R_SDX)
+        dx = dx_pow2 if sc[S_POW2] != 0 else dx_mul
         # --- multiply 2
-        qq = _rs(q, sc[S_SHQ], near)
-        y = (bvp - uy) >> sc[S_SHY]
-        if sc[S_YCLAMP] != 0:
-            if y < sc[S_YLO]:
-                y = sc[S_YLO]
-                clamp |= 1 << sc[S_B_Y]
-            elif y > sc[S_YHI]:
-                y = sc[S_YHI]
-                clamp |= 1 << sc[S_B_Y]
+        qq = _rq(q, sc, R_SHQ)
+        y_full = (bvp - uy) >> sc[S_SHY]
+        y_lo, y_hi = y_full < sc[S_YLO], y_full > sc[S_YHI]
+        y = min(max(y_full, sc[S_YLO]), sc[S_YHI])
         vb_sh = ((v + dx + tab[T_K0][s]) << sc[S_SHP]) + sc[S_HALFP]
         sa = tab[T_SA][s]
         p = qq * wq
@@ -164,24 +167,16 @@ if numba is not None:
         v_pre = (vb_sh + p) >> sc[S_SHP]
         spike = vb_sh - sc[S_VTHSH] + p >= 0
         under = vb_sh - sc[S_VFLSH] + p < 0
-        if spike:
-            u_sum = ((u + tab[T_D][s]) << sa) + tab[T_HA][s] + m
-        else:
-            u_sum = (u << sa) + tab[T_HA][s] + m
-        u_new = u_sum >> sa
-        if u_new < sc[S_ULO]:
-            u_new = sc[S_ULO]
-            clamp |= 1 << sc[S_B_ULOW]
-        elif u_new > sc[S_UHI]:
-            u_new = sc[S_UHI]
-            clamp |= 1 << sc[S_B_UHIGH]
-        if spike:
-            v_new = tab[T_C][s]
-        elif under:
-            v_new = sc[S_VFLOOR]
-            clamp |= 1 << sc[S_B_VLOW]
-        else:
-            v_new = v_pre
+        u_base = u + tab[T_D][s] if spike else u
+        u_pre = ((u_base << sa) + tab[T_HA][s] + m) >> sa
+        u_low, u_high = u_pre < sc[S_ULO], u_pre > sc[S_UHI]
+        u_new = min(max(u_pre, sc[S_ULO]), sc[S_UHI])
+        v_low = under and not spike
+        v_new = tab[T_C][s] if spike else (sc[S_VFLOOR] if under else v_pre)
+        clamp = ((np.int64(v_low) << sc[S_B_VLOW]) | (np.int64(u_high) << sc[S_B_UHIGH])
+                 | (np.int64(u_low) << sc[S_B_ULOW])
+                 | (np.int64(i_lo | i_hi) << sc[S_B_CUR])
+                 | (np.int64(y_lo | y_hi) << sc[S_B_Y]))
         return v_new, u_new, spike, clamp, v_pre
 
     @njit(**_jit)
@@ -211,7 +206,45 @@ if numba is not None:
         return n_spk
 
     @njit(**_jit)
-    def _run_const(v, u, I, sel, tab, sc, n_sweeps, k0, spk_k, spk_n, n_spk, totals, last):
+    def _sweep_core(v, u, I, sel, tab, sc, flags, totals, uniform):
+        """One sweep in place without stores under branches (so the loop can vectorize):
+        spikes go to ``flags``, clamp counts per kind are added to ``totals`` (kept as
+        scalar reductions here). Returns the number of spikes."""
+        n_spk = 0
+        c0 = c1 = c2 = c3 = c4 = 0
+        for i in range(v.shape[0]):
+            a, b, c, d, _ = _neuron(v[i], u[i], I[i], 0 if uniform else sel[i], tab, sc)
+            v[i] = a
+            u[i] = b
+            flags[i] = c
+            n_spk += c
+            c0 += d & 1
+            c1 += (d >> 1) & 1
+            c2 += (d >> 2) & 1
+            c3 += (d >> 3) & 1
+            c4 += (d >> 4) & 1
+        totals[0] = c0
+        totals[1] = c1
+        totals[2] = c2
+        totals[3] = c3
+        totals[4] = c4
+        return n_spk
+
+    @njit(**_jit)
+    def _record(flags, fwords, k, spk_k, spk_n, n_spk):
+        """Append the flagged neurons (skipping flag words that are all zero)."""
+        for w in range(fwords.shape[0]):
+            if fwords[w]:
+                for i in range(8 * w, 8 * w + 8):
+                    if flags[i]:
+                        spk_k[n_spk] = k
+                        spk_n[n_spk] = i
+                        n_spk += 1
+        return n_spk
+
+    @njit(**_jit)
+    def _run_const(v, u, I, sel, tab, sc, n_sweeps, k0, spk_k, spk_n, n_spk, totals, last,
+                   flags, fwords):
         """Up to ``n_sweeps`` sweeps with constant currents, in place. Spikes are appended to
         (spk_k, spk_n) from ``n_spk``; stops early (before a sweep) when the buffer could
         overflow. Returns (sweeps done, spikes recorded)."""
@@ -220,18 +253,9 @@ if numba is not None:
         for j in range(n_sweeps):
             if cap - n_spk < N:
                 return j, n_spk
-            last[:] = 0
-            for i in range(N):
-                a, b, c, d, _ = _neuron(v[i], u[i], I[i], sel[i], tab, sc)
-                v[i] = a
-                u[i] = b
-                if c:
-                    spk_k[n_spk] = k0 + j
-                    spk_n[n_spk] = i
-                    n_spk += 1
-                if d:
-                    for k in range(last.shape[0]):
-                        last[k] += (d >> k) & 1
+            hits = _sweep_core(v, u, I, sel, tab, sc, flags, last, len(tab[0]) == 1)
+            if hits:
+                n_spk = _record(flags, fwords, k0 + j, spk_k, spk_n, n_spk)
             for k in range(last.shape[0]):
                 totals[k] += last[k]
         return n_sweeps, n_spk
@@ -275,10 +299,12 @@ def run_sweeps(cfg_consts, v, u, I, sel, n_sweeps: int, k0: int = 0,
         cap = max(4 * n, 1024)
         spk_k, spk_n = np.empty(cap, np.int64), np.empty(cap, np.int64)
         totals, last = np.zeros(nk, np.int64), np.zeros(nk, np.int64)
+        flags = np.zeros((n + 7) // 8 * 8, np.bool_)
         done, n_spk = 0, 0
         while done < n_sweeps:
             d, n_spk = _run_const(vv, uu, II, ss, tab, sc, n_sweeps - done, k0 + done,
-                                  spk_k, spk_n, n_spk, totals, last)
+                                  spk_k, spk_n, n_spk, totals, last, flags,
+                                  flags.view(np.uint64))
             done += d
             if done < n_sweeps:        # buffer full: grow and go on
                 cap *= 2
