@@ -190,22 +190,6 @@ if numba is not None:
             v_pre[i] = e
 
     @njit(**_jit)
-    def _sweep_inplace(v, u, I, sel, tab, sc, spike, counts):
-        """One sweep in place; ``counts[k]`` = updates of this sweep with clamp bit k."""
-        counts[:] = 0
-        n_spk = 0
-        for i in range(v.shape[0]):
-            a, b, c, d, _ = _neuron(v[i], u[i], I[i], sel[i], tab, sc)
-            v[i] = a
-            u[i] = b
-            spike[i] = c
-            n_spk += c
-            if d:
-                for k in range(counts.shape[0]):
-                    counts[k] += (d >> k) & 1
-        return n_spk
-
-    @njit(**_jit)
     def _sweep_core(v, u, I, sel, tab, sc, flags, totals, uniform):
         """One sweep in place without stores under branches (so the loop can vectorize):
         spikes go to ``flags``, clamp counts per kind are added to ``totals`` (kept as
@@ -276,7 +260,7 @@ def sweep_inplace(cfg_consts, v, u, I, sel, spike, counts) -> int:
     """One sweep of every neuron in place; ``spike`` (bool) and ``counts`` (per clamp kind)
     are filled. Returns the number of spikes."""
     tab, sc = cfg_consts
-    return int(_sweep_inplace(v, u, I, sel, tab, sc, spike, counts))
+    return int(_sweep_core(v, u, I, sel, tab, sc, spike, counts, len(tab[0]) == 1))
 
 
 def run_sweeps(cfg_consts, v, u, I, sel, n_sweeps: int, k0: int = 0,
