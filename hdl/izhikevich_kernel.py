@@ -1,0 +1,309 @@
+"""Compiled (numba) kernel of the Izhikevich core's twin: the hot loop, fused per neuron.
+
+The arithmetic is defined once by the stage functions of :mod:`cuneate.hdl.izhikevich`
+(``operands``, ``multiply1``, ``multiply2``, ``update_state``); this module restates the same
+integer operations per neuron, in the same order, for a compiled loop without temporaries.
+It is proven bit-exact against the stage-function twin by property tests (randomized states,
+currents and set indices over every rounding and parameter-set mix, saturating currents, every
+clamp kind) and long runs (``tests/hdl/test_izhikevich_kernel.py``).
+
+Constants are gathered once per configuration by :func:`gather_constants` into an int64 table
+(one column per parameter set; a constant shared by the sets is simply repeated) and an int64
+vector of scalars, so one compiled kernel serves every configuration. Overflow of the int64
+intermediates is excluded once, at configuration time (``IzhikevichConfig._check_int64``
+bounds the widest sum from the formats); the kernel does not test it per update.
+
+All kernels release the GIL, so :func:`run_sweeps` splits large populations over threads
+(neurons are independent within a sweep and between sweeps given their currents).
+"""
+
+from __future__ import annotations
+
+import os
+from concurrent.futures import ThreadPoolExecutor
+
+import numpy as np
+
+from .izhikevich_config import CLAMP_KINDS, IzhikevichConfig
+
+__all__ = ["available", "gather_constants", "update_arrays", "run_sweeps", "default_threads",
+           "PARALLEL_MIN_NEURONS"]
+
+try:                                   # numba is a project dependency; keep the twin usable
+    import numba                       # without it (stage-function path)
+    from numba import njit
+except ImportError:                    # pragma: no cover
+    numba = None
+
+#: Below this many neurons a sweep is too short for threads to pay (measured on 2 cores).
+PARALLEL_MIN_NEURONS = 50_000
+
+# table rows (per parameter set)
+(T_WOFF, T_KA, T_BETA, T_ESH, T_LEAK, T_K0, T_D, T_SA, T_HA, T_ALPHA, T_C) = range(11)
+# scalar slots
+(S_NEAR, S_ICLAMP, S_ILO, S_IHI, S_SV, S_SVQ, S_POW2, S_SIU, S_SUX, S_SDTI, S_SU, S_KDT, S_SDX,
+ S_SHB, S_SHY, S_YCLAMP, S_YLO, S_YHI, S_SHQ, S_SHP, S_HALFP, S_VTHSH, S_VFLSH, S_ULO, S_UHI,
+ S_VFLOOR, S_B_VLOW, S_B_UHIGH, S_B_ULOW, S_B_CUR, S_B_Y) = range(31)
+# rounding shifts, each as 4 slots (left shift, right shift, rounding-bit shift, bit mask)
+R_SV, R_SVQ, R_SDTI, R_SU, R_SIU, R_SUX, R_SDX, R_SHQ = (31 + 4 * j for j in range(8))
+N_SCALARS = 31 + 4 * 8
+_INT64_MIN, _INT64_MAX = -(1 << 63), (1 << 63) - 1
+
+
+def available() -> bool:
+    """True when numba is importable (the compiled kernel can be used)."""
+    return numba is not None
+
+
+def default_threads(n_neurons: int) -> int:
+    """Threads :func:`run_sweeps` uses by default: all cores for large populations, else 1."""
+    if n_neurons < PARALLEL_MIN_NEURONS:
+        return 1
+    return max(1, min(os.cpu_count() or 1, n_neurons // (PARALLEL_MIN_NEURONS // 2)))
+
+
+def gather_constants(cfg: IzhikevichConfig) -> tuple[np.ndarray, np.ndarray]:
+    """The configuration's constants as ``(table, scalars)`` for the kernel (int64)."""
+    near = cfg.rounding == "nearest"
+    n_sets = len(cfg.params)
+    half_y = (1 << (cfg.shift_y - 1)) if near else 0
+    tab = np.zeros((11, n_sets), dtype=np.int64)
+    for s in range(n_sets):
+        sa = cfg.shift_a[s]
+        tab[:, s] = [cfg.woff[s].raw, cfg.KA[s].raw, cfg.beta[s].raw,
+                     (cfg.E[s].raw << cfg.shift_b) - half_y, cfg.u_leak[s], cfg.K0[s].raw,
+                     cfg.d[s].raw, sa, (1 << (sa - 1)) if near else 0, cfg.alpha[s].raw,
+                     cfg.c[s].raw]
+    sc = np.zeros(N_SCALARS, dtype=np.int64)
+    sc[S_NEAR] = int(near)
+    sc[S_ICLAMP] = int(cfg.current_clamp)
+    sc[S_ILO], sc[S_IHI] = cfg.i_lo_raw, cfg.i_hi_raw
+    sc[S_SV] = cfg.V.frac_bits - cfg.W.frac_bits
+    sc[S_SVQ] = cfg.V.frac_bits - cfg.VQ.frac_bits
+    if cfg.dt_shift is not None:
+        s = cfg.dt_shift
+        sc[S_POW2] = 1
+        sc[S_SDTI] = cfg.I.frac_bits + s - cfg.V.frac_bits
+        sc[S_SU] = cfg.U.frac_bits + s - cfg.V.frac_bits
+    else:
+        sc[S_SIU] = cfg.I.frac_bits - cfg.U.frac_bits
+        sc[S_SUX] = cfg.U.frac_bits - cfg.X.frac_bits
+        sc[S_KDT] = cfg.KDT.raw
+        sc[S_SDX] = cfg.X.frac_bits + cfg.KDT.frac_bits - cfg.V.frac_bits
+    sc[S_SHB], sc[S_SHY] = cfg.shift_b, cfg.shift_y
+    Y, by = cfg.Y, cfg.bounds_y
+    sc[S_YCLAMP] = int(not (Y.min_raw <= by[0] <= by[1] <= Y.max_raw))
+    sc[S_YLO], sc[S_YHI] = Y.min_raw, Y.max_raw
+    sc[S_SHQ], sc[S_SHP] = cfg.shift_q, cfg.shift_p
+    sc[S_HALFP] = (1 << (cfg.shift_p - 1)) if near else 0
+    sc[S_VTHSH] = cfg.VTH.raw << cfg.shift_p
+    sc[S_VFLSH] = cfg.v_floor_raw << cfg.shift_p
+    sc[S_ULO], sc[S_UHI] = cfg.u_lo_raw, cfg.u_hi_raw
+    sc[S_VFLOOR] = cfg.v_floor_raw
+    if not sc[S_ICLAMP]:                  # no clamp: levels no int64 can pass
+        sc[S_ILO], sc[S_IHI] = _INT64_MIN, _INT64_MAX
+    if not sc[S_YCLAMP]:
+        sc[S_YLO], sc[S_YHI] = _INT64_MIN, _INT64_MAX
+    for slot, shift in ((R_SV, S_SV), (R_SVQ, S_SVQ), (R_SDTI, S_SDTI), (R_SU, S_SU),
+                        (R_SIU, S_SIU), (R_SUX, S_SUX), (R_SDX, S_SDX), (R_SHQ, S_SHQ)):
+        x = int(sc[shift])
+        rs = max(x, 0)
+        sc[slot:slot + 4] = [max(-x, 0), rs, max(rs - 1, 0), int(near and rs > 0)]
+    for slot, kind in zip((S_B_VLOW, S_B_UHIGH, S_B_ULOW, S_B_CUR, S_B_Y),
+                          ("v_low", "u_high", "u_low", "current", "y")):
+        sc[slot] = CLAMP_KINDS.index(kind)
+    return (tuple(tuple(int(x) for x in row) for row in tab), tuple(int(x) for x in sc))
+
+
+# ----------------------------------------------------------------------------------------------
+# the kernels (compiled on first use, cached on disk)
+
+if numba is not None:
+    _jit = dict(nogil=True, cache=True, error_model="numpy")
+
+    @njit(inline="always", **_jit)
+    def _rs(x, s, near):
+        """round_shift(x, s): rounding to nearest (ties up) or truncation; s <= 0 shifts left."""
+        if s <= 0:
+            return x << (-s)
+        r = x >> s
+        if near:
+            r += (x >> (s - 1)) & 1
+        return r
+
+    @njit(inline="always", **_jit)
+    def _rq(x, sc, j):
+        """round_shift(x, shift) without branches: ``(x << ls) >> rs`` plus, when rounding
+        to nearest and rs > 0, the first dropped bit (slots j .. j+3 of ``sc``)."""
+        y = x << sc[j]
+        return (y >> sc[j + 1]) + ((y >> sc[j + 2]) & sc[j + 3])
+
+    @njit(inline="always", **_jit)
+    def _neuron(v, u, I, s, tab, sc):
+        """One update of one neuron: returns (v', u', spike, clamp bits, v_pre). Written
+        without branches (selects, min/max) so that a loop over neurons can vectorize."""
+        # --- operands (a clamp that is not built has levels no int64 passes)
+        i_lo, i_hi = I < sc[S_ILO], I > sc[S_IHI]
+        I = min(max(I, sc[S_ILO]), sc[S_IHI])
+        wq = _rq(v + tab[T_WOFF][s], sc, R_SV)
+        vq = _rq(v, sc, R_SVQ)
+        # --- multiply 1
+        q = wq * tab[T_KA][s]
+        bvp = vq * tab[T_BETA][s]
+        uy = ((u << sc[S_SHB]) & -tab[T_LEAK][s]) + tab[T_ESH][s]
+        dx_pow2 = _rq(I, sc, R_SDTI) - _rq(u, sc, R_SU)
+        dx_mul = _rq(_rq(_rq(I, sc, R_SIU) - u, sc, R_SUX) * sc[S_KDT], sc, R_SDX)
+        dx = dx_pow2 if sc[S_POW2] != 0 else dx_mul
+        # --- multiply 2
+        qq = _rq(q, sc, R_SHQ)
+        y_full = (bvp - uy) >> sc[S_SHY]
+        y_lo, y_hi = y_full < sc[S_YLO], y_full > sc[S_YHI]
+        y = min(max(y_full, sc[S_YLO]), sc[S_YHI])
+        vb_sh = ((v + dx + tab[T_K0][s]) << sc[S_SHP]) + sc[S_HALFP]
+        sa = tab[T_SA][s]
+        p = qq * wq
+        m = y * tab[T_ALPHA][s]
+        # --- update
+        v_pre = (vb_sh + p) >> sc[S_SHP]
+        spike = vb_sh - sc[S_VTHSH] + p >= 0
+        under = vb_sh - sc[S_VFLSH] + p < 0
+        u_base = u + tab[T_D][s] if spike else u
+        u_pre = ((u_base << sa) + tab[T_HA][s] + m) >> sa
+        u_low, u_high = u_pre < sc[S_ULO], u_pre > sc[S_UHI]
+        u_new = min(max(u_pre, sc[S_ULO]), sc[S_UHI])
+        v_low = under and not spike
+        v_new = tab[T_C][s] if spike else (sc[S_VFLOOR] if under else v_pre)
+        clamp = ((np.int64(v_low) << sc[S_B_VLOW]) | (np.int64(u_high) << sc[S_B_UHIGH])
+                 | (np.int64(u_low) << sc[S_B_ULOW])
+                 | (np.int64(i_lo | i_hi) << sc[S_B_CUR])
+                 | (np.int64(y_lo | y_hi) << sc[S_B_Y]))
+        return v_new, u_new, spike, clamp, v_pre
+
+    @njit(**_jit)
+    def _update_arrays(v, u, I, sel, tab, sc, v_out, u_out, spike, clamp, v_pre):
+        for i in range(v.shape[0]):
+            a, b, c, d, e = _neuron(v[i], u[i], I[i], sel[i], tab, sc)
+            v_out[i] = a
+            u_out[i] = b
+            spike[i] = c
+            clamp[i] = d
+            v_pre[i] = e
+
+    @njit(**_jit)
+    def _sweep_core(v, u, I, sel, tab, sc, flags, totals, uniform):
+        """One sweep in place without stores under branches (so the loop can vectorize):
+        spikes go to ``flags``, clamp counts per kind are added to ``totals`` (kept as
+        scalar reductions here). Returns the number of spikes."""
+        n_spk = 0
+        c0 = c1 = c2 = c3 = c4 = 0
+        for i in range(v.shape[0]):
+            a, b, c, d, _ = _neuron(v[i], u[i], I[i], 0 if uniform else sel[i], tab, sc)
+            v[i] = a
+            u[i] = b
+            flags[i] = c
+            n_spk += c
+            c0 += d & 1
+            c1 += (d >> 1) & 1
+            c2 += (d >> 2) & 1
+            c3 += (d >> 3) & 1
+            c4 += (d >> 4) & 1
+        totals[0] = c0
+        totals[1] = c1
+        totals[2] = c2
+        totals[3] = c3
+        totals[4] = c4
+        return n_spk
+
+    @njit(**_jit)
+    def _record(flags, fwords, k, spk_k, spk_n, n_spk):
+        """Append the flagged neurons (skipping flag words that are all zero)."""
+        for w in range(fwords.shape[0]):
+            if fwords[w]:
+                for i in range(8 * w, 8 * w + 8):
+                    if flags[i]:
+                        spk_k[n_spk] = k
+                        spk_n[n_spk] = i
+                        n_spk += 1
+        return n_spk
+
+    @njit(**_jit)
+    def _run_const(v, u, I, sel, tab, sc, n_sweeps, k0, spk_k, spk_n, n_spk, totals, last,
+                   flags, fwords):
+        """Up to ``n_sweeps`` sweeps with constant currents, in place. Spikes are appended to
+        (spk_k, spk_n) from ``n_spk``; stops early (before a sweep) when the buffer could
+        overflow. Returns (sweeps done, spikes recorded)."""
+        N = v.shape[0]
+        cap = spk_k.shape[0]
+        for j in range(n_sweeps):
+            if cap - n_spk < N:
+                return j, n_spk
+            hits = _sweep_core(v, u, I, sel, tab, sc, flags, last, len(tab[0]) == 1)
+            if hits:
+                n_spk = _record(flags, fwords, k0 + j, spk_k, spk_n, n_spk)
+            for k in range(last.shape[0]):
+                totals[k] += last[k]
+        return n_sweeps, n_spk
+
+
+def update_arrays(cfg_consts, v, u, I, sel):
+    """One update of the given neurons (1-D int64 arrays of equal length), by the kernel.
+    Returns ``(v, u, spike, clamp_bits, v_pre)``."""
+    tab, sc = cfg_consts
+    n = v.shape[0]
+    v_out, u_out = np.empty(n, np.int64), np.empty(n, np.int64)
+    spike, clamp, v_pre = np.empty(n, np.bool_), np.empty(n, np.int64), np.empty(n, np.int64)
+    _update_arrays(v, u, I, sel, tab, sc, v_out, u_out, spike, clamp, v_pre)
+    return v_out, u_out, spike, clamp, v_pre
+
+
+def sweep_inplace(cfg_consts, v, u, I, sel, spike, counts) -> int:
+    """One sweep of every neuron in place; ``spike`` (bool) and ``counts`` (per clamp kind)
+    are filled. Returns the number of spikes."""
+    tab, sc = cfg_consts
+    return int(_sweep_core(v, u, I, sel, tab, sc, spike, counts, len(tab[0]) == 1))
+
+
+def run_sweeps(cfg_consts, v, u, I, sel, n_sweeps: int, k0: int = 0,
+               threads: int | None = None):
+    """``n_sweeps`` sweeps with constant currents ``I``, in place on ``v``, ``u``.
+
+    Returns ``(spike_sweeps, spike_neurons, totals, last)``: every spike as (sweep index from
+    ``k0``, neuron), the clamp counts per kind over the run and in its last sweep. Populations
+    of at least :data:`PARALLEL_MIN_NEURONS` are split over ``threads`` (default
+    :func:`default_threads`) contiguous chunks, each run by the GIL-free kernel.
+    """
+    tab, sc = cfg_consts
+    N = v.shape[0]
+    nk = len(CLAMP_KINDS)
+    threads = default_threads(N) if threads is None else max(1, min(int(threads), N))
+
+    def chunk(lo, hi):
+        vv, uu, II, ss = v[lo:hi], u[lo:hi], I[lo:hi], sel[lo:hi]
+        n = hi - lo
+        cap = max(4 * n, 1024)
+        spk_k, spk_n = np.empty(cap, np.int64), np.empty(cap, np.int64)
+        totals, last = np.zeros(nk, np.int64), np.zeros(nk, np.int64)
+        flags = np.zeros((n + 7) // 8 * 8, np.bool_)
+        done, n_spk = 0, 0
+        while done < n_sweeps:
+            d, n_spk = _run_const(vv, uu, II, ss, tab, sc, n_sweeps - done, k0 + done,
+                                  spk_k, spk_n, n_spk, totals, last, flags,
+                                  flags.view(np.uint64))
+            done += d
+            if done < n_sweeps:        # buffer full: grow and go on
+                cap *= 2
+                spk_k = np.resize(spk_k, cap)
+                spk_n = np.resize(spk_n, cap)
+        return spk_k[:n_spk], spk_n[:n_spk] + lo, totals, last
+
+    if threads == 1 or n_sweeps == 0:
+        parts = [chunk(0, N)]
+    else:
+        edges = np.linspace(0, N, threads + 1).astype(int)
+        with ThreadPoolExecutor(threads) as pool:
+            parts = list(pool.map(chunk, edges[:-1], edges[1:]))
+    ks = np.concatenate([p[0] for p in parts])
+    ns = np.concatenate([p[1] for p in parts])
+    totals = sum(p[2] for p in parts)
+    last = sum(p[3] for p in parts)
+    return ks, ns, totals, last
