@@ -23,6 +23,7 @@ COMMAND_MODULES = [
     "cli_run",
     "cli_lif",
     "cli_boards",
+    "cli_cuneate",
 ]
 
 
