@@ -242,22 +242,27 @@ def cmd_generate(args) -> int:
 
 
 def cmd_ridge(args) -> int:
-    from .experiments_cuneate import RidgeSpec, format_ridge, ridge_experiment
+    from .experiments_cuneate import RidgeSpec, format_comparison, ridge_comparison
+    if args.jitter_ms < 0 or args.speed_spread < 0:
+        raise CliError("cuneate coincidence ridge: --jitter-ms and --speed-spread must be >= 0")
     spec = RidgeSpec(trials_per_angle=args.trials, jitter_ms=args.jitter_ms,
                      spread_speed=args.speed_spread, seed=args.seed,
                      speed_mm_per_s=args.speed)
-    results = []
+    build_dir = str(output_dir(args.build_dir, "--build-dir")) if args.build_dir else None
     try:
-        for e in args.engine:
-            results.append(ridge_experiment(e, spec))
+        cmp = ridge_comparison(spec, hdl_engines=tuple(args.hdl_engine),
+                               hdl_trials_per_angle=args.hdl_trials, build_dir=build_dir)
     except ValueError as exc:
         raise CliError(f"cuneate coincidence ridge: {exc}") from None
     if args.json:
-        print(json.dumps([r.to_dict() for r in results]))
+        print(json.dumps({"results": [r.to_dict() for r in cmp["results"]],
+                          "golden_fixed_same": cmp["golden_fixed_same"],
+                          "hdl_fixed_same": cmp["hdl_fixed_same"],
+                          "hdl_trials": cmp["hdl_trials"]}))
     else:
-        for r in results:
-            print(format_ridge(r))
-    return 0
+        print(format_comparison(cmp))
+    same = cmp["golden_fixed_same"] and all(cmp["hdl_fixed_same"].values())
+    return 0 if same else 1
 
 
 def register(groups: CommandGroups) -> None:
@@ -288,7 +293,12 @@ def register(groups: CommandGroups) -> None:
     sub = c.add_subparsers(dest="coincidence_command", required=True, parser_class=type(c))
     r = sub.add_parser("ridge", help="ridge angle (-45, 0, +45 deg) from two sensors' SA/FA "
                                      "afferents through three cuneate neurons")
-    r.add_argument("--engine", choices=ENGINES, nargs="+", default=["golden", "fixed"])
+    r.add_argument("--hdl-engine", choices=ENGINES[2:], nargs="*", default=["verilator"],
+                   help="HDL engines run on a few trials beside golden and fixed (default "
+                        "verilator; none: give the option without a value)")
+    r.add_argument("--hdl-trials", type=positive_int, default=1,
+                   help="trials per angle on the HDL engines (default 1)")
+    r.add_argument("--build-dir", default=None, help="HDL simulator build directory")
     r.add_argument("--trials", type=positive_int, default=10, help="trials per angle")
     r.add_argument("--jitter-ms", type=finite_float, default=0.3)
     r.add_argument("--speed", type=positive_float, default=20.0, help="mm/s")
