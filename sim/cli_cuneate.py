@@ -228,13 +228,33 @@ def cmd_simulate(args) -> int:
     return 0
 
 
+def _resources(args, cfg, json_path) -> None:
+    """With ``--resources``: yosys synth_ecp5 and synth_xilinx (xc6s) figures, printed and
+    added to the JSON description under ``resources``."""
+    if not args.resources:
+        return
+    from ..hdl.cuneate_synth import format_resources, synth_resources
+    try:
+        res = synth_resources(cfg)
+    except RuntimeError as exc:
+        raise CliError(f"cuneate generate: {exc}") from None
+    desc = json.loads(json_path.read_text())
+    desc["resources"] = {f: {"flow": r["flow"], "summary": r["summary"], "cells": r["cells"]}
+                         for f, r in res.items()}
+    json_path.write_text(json.dumps(desc, indent=2, sort_keys=True) + "\n")
+    print("resources (yosys, synthesis only):")
+    print(format_resources(res))
+
+
 def cmd_generate(args) -> int:
     from ..hdl.cuneate import generate_coincidence
     kw = coincidence_kwargs(args) | {"tick_source": args.tick_source}
     kw.setdefault("clock_hz", 40e6)
     cfg = coincidence_from_args(kw)
-    for f in generate_coincidence(output_dir(args.out), cfg, name=args.name):
+    files = generate_coincidence(output_dir(args.out), cfg, name=args.name)
+    for f in files:
         print(f)
+    _resources(args, cfg, files[1])
     print(f"coincidence detector: {cfg.n_sources} sources -> {cfg.n_targets} targets, "
           f"{cfg.clock_hz / 1e6:g} MHz, dt = {cfg.dt_ms:g} ms, {cfg.cycles_needed} of "
           f"{cfg.cycles_per_tick} cycles per tick; history {cfg.max_delay_ticks} x "
@@ -324,8 +344,10 @@ def cmd_simulate_network(args) -> int:
 def cmd_generate_network(args) -> int:
     from ..hdl.network import generate_network
     cfg = _network_from_args(args, clock_default=40e6)
-    for f in generate_network(output_dir(args.out), cfg, name=args.name):
+    files = generate_network(output_dir(args.out), cfg, name=args.name)
+    for f in files:
         print(f)
+    _resources(args, cfg, files[1])
     print(f"afferent -> cuneate network: {cfg.n_afferents} afferents, {cfg.n_sources} sources "
           f"-> {cfg.n_targets} cuneate neurons, {cfg.clock_hz / 1e6:g} MHz, "
           f"{cfg.cycles_needed} of {cfg.cycles_per_tick} cycles per tick; latency: "
@@ -389,6 +411,8 @@ def register(groups: CommandGroups) -> None:
     add_coincidence_options(g)
     g.add_argument("--tick-source", choices=("internal", "external"), default="internal")
     g.add_argument("--name", default="coincidence_detector", help="Verilog module name")
+    g.add_argument("--resources", action="store_true",
+                   help="also run yosys synth_ecp5 and synth_xilinx -family xc6s (~10 s)")
     g.add_argument("--out", required=True)
     g.set_defaults(func=cmd_generate)
 
@@ -406,6 +430,8 @@ def register(groups: CommandGroups) -> None:
     _add_network_options(gn)
     gn.add_argument("--tick-source", choices=("internal", "external"), default="internal")
     gn.add_argument("--name", default="afferent_cuneate_network", help="Verilog module name")
+    gn.add_argument("--resources", action="store_true",
+                    help="also run yosys synth_ecp5 and synth_xilinx -family xc6s (~15 s)")
     gn.add_argument("--out", required=True)
     gn.set_defaults(func=cmd_generate_network)
 
