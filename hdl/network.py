@@ -311,11 +311,17 @@ class AfferentCuneateNetwork(wiring.Component):
 
 def network_verilog(cfg: NetworkConfig, name: str = "afferent_cuneate_network",
                     lowered: bool = False) -> str:
-    """Verilog of the network; ``lowered`` gives the yosys-lowered netlist for Icarus 11."""
+    """Verilog of the network; ``lowered`` gives the yosys-lowered netlist for Icarus 11 (see
+    :func:`cuneate.hdl.generate.lowered_verilog`), here without ``opt_clean`` so the blocks'
+    internal update outputs (``core.upd_*``, ``det.upd_*``) stay visible to a scoreboard."""
     top = AfferentCuneateNetwork(cfg)
     if lowered:
-        from .generate import lowered_verilog
-        return lowered_verilog(top, name)
+        from amaranth._toolchain.yosys import find_yosys
+        from amaranth.back import rtlil
+        il = rtlil.convert(top, name=name, emit_src=False)
+        yosys = find_yosys(lambda ver: ver >= (0, 40))
+        return yosys.run(["-q", "-"], f"read_rtlil <<rtlil\n{il}\nrtlil\nproc\n"
+                                      f"write_verilog -noattr\n")
     from amaranth.back import verilog
     return verilog.convert(top, name=name, emit_src=False)
 
