@@ -377,7 +377,8 @@ def cmd_ridge(args) -> int:
     build_dir = str(output_dir(args.build_dir, "--build-dir")) if args.build_dir else None
     try:
         cmp = ridge_comparison(spec, hdl_engines=tuple(args.hdl_engine),
-                               hdl_trials_per_angle=args.hdl_trials, build_dir=build_dir)
+                               hdl_trials_per_angle=args.hdl_trials, build_dir=build_dir,
+                               on_chip=args.on_chip)
     except ValueError as exc:
         raise CliError(f"cuneate coincidence ridge: {exc}") from None
     if args.json:
@@ -446,6 +447,9 @@ def register(groups: CommandGroups) -> None:
     r.add_argument("--hdl-trials", type=positive_int, default=1,
                    help="trials per angle on the HDL engines (default 1)")
     r.add_argument("--build-dir", default=None, help="HDL simulator build directory")
+    r.add_argument("--on-chip", action="store_true",
+                   help="the HDL engines run the on-chip afferent -> cuneate network (afferents "
+                        "on the Izhikevich core) instead of the detector alone")
     r.add_argument("--trials", type=positive_int, default=10, help="trials per angle")
     r.add_argument("--jitter-ms", type=finite_float, default=0.3)
     r.add_argument("--speed", type=positive_float, default=20.0, help="mm/s")

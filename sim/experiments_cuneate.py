@@ -39,10 +39,10 @@ from ..golden import encoders
 from ..golden import izhikevich as giz
 from ..hdl.cuneate import CoincidenceConfig
 from ..hdl.izhikevich import IzhikevichConfig, IzhikevichTwin
-from .cuneate_engines import run_coincidence
+from .cuneate_engines import run_coincidence, run_network
 
 __all__ = ["RidgeSpec", "RidgeResult", "ridge_experiment", "ridge_comparison", "format_ridge",
-           "format_comparison", "detector_config", "afferent_currents", "afferent_spikes",
+           "format_comparison", "detector_config", "network_config", "afferent_currents", "afferent_spikes",
            "decode"]
 
 
@@ -108,6 +108,18 @@ def detector_config(spec: RidgeSpec) -> CoincidenceConfig:
                              update_hz=spec.update_hz)
 
 
+def network_config(spec: RidgeSpec):
+    """The on-chip network of the experiment: 5 afferents (the core's minimum; the fifth idle),
+    sources 0 .. 3 = (SA top, FA top, SA bottom, FA bottom), the detector of
+    :func:`detector_config`."""
+    from ..hdl.network import NetworkConfig
+    det = detector_config(spec).to_kwargs()
+    for k in ("clock_hz", "update_hz", "tick_source"):
+        det.pop(k)
+    return NetworkConfig(n_afferents=5, detector=det, clock_hz=spec.update_hz * 64,
+                         update_hz=spec.update_hz, tick_source="external")
+
+
 def afferent_currents(spec: RidgeSpec):
     """Currents (n_ticks, 4) of all trials in sequence and the angle of each trial."""
     rng = np.random.default_rng(spec.seed)
@@ -166,12 +178,15 @@ def decode(patterns, angles, train_mask) -> tuple[dict, float]:
 
 def ridge_experiment(engine: str = "fixed", spec: RidgeSpec | None = None,
                      build_dir=None, table: dict | None = None,
-                     trials=None) -> RidgeResult:
+                     trials=None, on_chip: bool = False) -> RidgeResult:
     """Run the ridge experiment on ``engine`` (see the module docstring).
 
     Without ``table`` the lookup table is learnt from every other trial of each angle and
     tested on the rest; with ``table`` (learnt on another engine) every trial is tested.
     ``trials`` (indices into the trial sequence) runs only those trials, one after another.
+    ``on_chip`` runs afferents and detector as the on-chip network
+    (:mod:`cuneate.hdl.network`, :func:`network_config`): the afferent currents are written by
+    the host before each tick and the afferent spikes reach the detector over the chip's link.
     """
     spec = spec or RidgeSpec()
     cfg = detector_config(spec)
@@ -182,9 +197,17 @@ def ridge_experiment(engine: str = "fixed", spec: RidgeSpec | None = None,
             raise ValueError(f"trials must be indices in 0 .. {len(angles) - 1}, got {trials}")
         angles = [angles[i] for i in idx]
         cur = np.concatenate([cur[i * per:(i + 1) * per] for i in idx])
-    ins = afferent_spikes(spec, cur, fixed=engine != "golden")
     n = cur.shape[0]
-    run = run_coincidence(engine, cfg, ins, n, build_dir=build_dir)
+    if on_chip:
+        ncfg = network_config(spec)
+        pad = np.zeros((n, ncfg.n_afferents))
+        pad[:, :4] = cur
+        run = run_network(engine, ncfg, pad, build_dir=build_dir)
+        run.spikes_ms = run.cuneate_ms
+        engine = f"{engine} (on-chip network)"
+    else:
+        ins = afferent_spikes(spec, cur, fixed=engine != "golden")
+        run = run_coincidence(engine, cfg, ins, n, build_dir=build_dir)
     counts = np.zeros((len(angles), cfg.n_targets), dtype=np.int64)
     dt = cfg.dt_ms
     for t, sp in enumerate(run.spikes_ms):
@@ -208,12 +231,14 @@ def ridge_experiment(engine: str = "fixed", spec: RidgeSpec | None = None,
 
 
 def ridge_comparison(spec: RidgeSpec | None = None, hdl_engines=("verilator",),
-                     hdl_trials_per_angle: int = 1, build_dir=None) -> dict:
+                     hdl_trials_per_angle: int = 1, build_dir=None,
+                     on_chip: bool = False) -> dict:
     """Golden and fixed on every trial; each HDL engine on the first ``hdl_trials_per_angle``
     trials of each angle, decoded with the table the fixed engine learnt, and compared with
     the fixed engine run on the same trials. Returns ``{"results": [...],
     "golden_fixed_same": bool, "hdl_fixed_same": {engine: bool}, "hdl_trials": [...]}``
-    (same = identical active neurons and decoded angle on every trial)."""
+    (same = identical active neurons and decoded angle on every trial). With ``on_chip`` the
+    HDL engines run the on-chip afferent -> cuneate network instead of the detector alone."""
     spec = spec or RidgeSpec()
     g = ridge_experiment("golden", spec)
     f = ridge_experiment("fixed", spec)
@@ -228,7 +253,8 @@ def ridge_comparison(spec: RidgeSpec | None = None, hdl_engines=("verilator",),
     f_sub = ridge_experiment("fixed", spec, table=f.table, trials=pick) if hdl_engines else None
     for e in hdl_engines:
         bd = None if build_dir is None else f"{build_dir}/{e}"
-        r = ridge_experiment(e, spec, build_dir=bd, table=f.table, trials=pick)
+        r = ridge_experiment(e, spec, build_dir=bd, table=f.table, trials=pick,
+                             on_chip=on_chip)
         out["results"].append(r)
         out["hdl_fixed_same"][e] = r.decoded == f_sub.decoded and r.patterns == f_sub.patterns
     return out

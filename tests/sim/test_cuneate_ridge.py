@@ -56,6 +56,26 @@ def test_timing_jitter_costs_accuracy():
     assert r.accuracy < 0.9
 
 
+def test_on_chip_network_decodes_like_the_blocks():
+    """The afferents on the chip's Izhikevich core, their spikes over the on-chip link: the
+    same active neurons on every trial as the afferent twin feeding the detector twin."""
+    spec = RidgeSpec(trials_per_angle=2)
+    f = ridge_experiment("fixed", spec)
+    n = ridge_experiment("fixed", spec, on_chip=True)
+    assert n.engine == "fixed (on-chip network)"
+    assert n.patterns == f.patterns and n.decoded == f.decoded and n.accuracy == 1.0
+    assert np.array_equal(n.counts, f.counts)
+
+
+@pytest.mark.long
+@pytest.mark.cocotb
+@pytest.mark.parametrize("simulator", SIMULATORS)
+def test_ridge_on_chip_network_on_hdl_simulator(simulator, tmp_path):
+    cmp = ridge_comparison(RidgeSpec(trials_per_angle=2), hdl_engines=(simulator,),
+                           build_dir=str(tmp_path), on_chip=True)
+    assert cmp["hdl_fixed_same"] == {simulator: True} and cmp["results"][2].accuracy == 1.0
+
+
 @pytest.mark.cocotb
 @pytest.mark.parametrize("simulator", SIMULATORS)
 def test_ridge_on_hdl_simulator_decodes_like_fixed(simulator, tmp_path):
