@@ -42,8 +42,8 @@ from ..hdl.izhikevich import IzhikevichConfig, IzhikevichTwin
 from .cuneate_engines import run_coincidence, run_network
 
 __all__ = ["RidgeSpec", "RidgeResult", "ridge_experiment", "ridge_comparison", "format_ridge",
-           "format_comparison", "detector_config", "network_config", "afferent_currents", "afferent_spikes",
-           "decode"]
+           "format_comparison", "detector_config", "network_config", "afferent_currents",
+           "afferent_spikes", "decode"]
 
 
 @dataclass

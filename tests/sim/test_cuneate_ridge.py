@@ -31,7 +31,7 @@ def test_stimulus_and_tuning_follow_the_geometry():
 
 
 def test_golden_and_fixed_decode_every_angle_the_same():
-    spec = RidgeSpec(trials_per_angle=4)
+    spec = RidgeSpec(trials_per_angle=3)
     g, f = ridge_experiment("golden", spec), ridge_experiment("fixed", spec)
     for r in (g, f):
         assert r.accuracy == 1.0
@@ -39,7 +39,7 @@ def test_golden_and_fixed_decode_every_angle_the_same():
         for j, a in enumerate(spec.angles_deg):
             assert {p for p, x in zip(r.patterns, r.trial_angle) if x == a} == {(j,)}
     assert g.decoded == f.decoded and g.patterns == f.patterns
-    assert g.counts.shape == (12, 3)
+    assert g.counts.shape == (9, 3)
 
 
 def test_without_the_delays_the_angle_cannot_be_decoded():
