@@ -107,11 +107,12 @@ def test_ridge_command_refuses_negative_jitter(capsys):
 @pytest.mark.cocotb
 def test_ridge_default_experiment_all_engines(capsys, tmp_path):
     """The command's default: 10 trials per angle (jitter 0.3 ms, 5 % speed spread) on golden
-    and fixed, one per angle on Icarus and Verilator."""
-    rc = main(["coincidence", "ridge", "--hdl-engine", "icarus", "verilator", "--build-dir",
-               str(tmp_path), "--json"])
+    and fixed, one per angle on the Amaranth simulator, Icarus and Verilator."""
+    rc = main(["coincidence", "ridge", "--hdl-engine", "amaranth", "icarus", "verilator",
+               "--build-dir", str(tmp_path), "--json"])
     out = capsys.readouterr()
     assert rc == 0, out.err
     d = json.loads(out.out)
-    assert d["golden_fixed_same"] and d["hdl_fixed_same"] == {"icarus": True, "verilator": True}
+    assert d["golden_fixed_same"]
+    assert d["hdl_fixed_same"] == {"amaranth": True, "icarus": True, "verilator": True}
     assert all(r["accuracy"] == 1.0 for r in d["results"])
