@@ -145,7 +145,9 @@ def spec_of(scene):
                      speed_mm_per_s=st["speed_mm_per_s"], force_N=st["normal_force_N"],
                      spacing_mm=st["sensor_spacing_mm"], ridge_width_mm=st["ridge_width_mm"],
                      sa_gain=gain["SA"] if gain["SA"] is not None else RidgeSpec.sa_gain,
-                     fa_gain=gain["FA"] if gain["FA"] is not None else RidgeSpec.fa_gain,
+                     # the scene's FA gain is per N/s, the experiment's per N/ms
+                     fa_gain=gain["FA"] * 1000.0 if gain["FA"] is not None
+                     else RidgeSpec.fa_gain,
                      weight=proj["SA"]["weight"], weight_fa=proj["FA"]["weight"],
                      trial_ms=st["trial_ms"], onset_ms=st["onset_ms"],
                      trials_per_angle=sc["trials"], spread_speed=st["spread_speed"],

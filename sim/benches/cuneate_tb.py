@@ -195,7 +195,7 @@ async def engine(dut):
     n_ticks = spec["ticks"]
     by_tick = {int(k): v for k, v in spec["events"].items()}
     await _start(dut)
-    stream = []
+    stream, clamp_words = [], []
     t0 = time.perf_counter()
     for k in range(n_ticks):
         for s in by_tick.get(k, []):
@@ -210,8 +210,10 @@ async def engine(dut):
             await FallingEdge(dut.clk)
             if int(dut.spike_valid.value):
                 stream.append((int(dut.spike_tick.value), int(dut.spike_target.value)))
+            if int(dut.upd_valid.value) and int(dut.upd_clamp.value):
+                clamp_words.append(int(dut.upd_clamp.value))
             if not int(dut.busy.value) and not int(dut.upd_valid.value):
                 break
     _report({"spikes": stream, "ticks": int(dut.tick_count.value),
              "merged": int(dut.merged_count.value), "wall_s": time.perf_counter() - t0,
-             "clamp_flags": int(dut.clamp_flags.value)})
+             "clamp_flags": int(dut.clamp_flags.value), "clamp_words": clamp_words})
