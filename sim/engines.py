@@ -9,6 +9,9 @@ spike produced by update k is at (k+1) dt ms), so their outputs are directly com
     The Amaranth simulator on the core.
 ``icarus``, ``verilator``
     cocotb on the generated Verilog.
+``verilator-fast``
+    The generated Verilog compiled by Verilator with a C++ harness
+    (:mod:`cuneate.sim.verilator_harness`): no Python per cycle, same spikes and clamp counters.
 
 A core is described by its constructor keywords (``core``, as for
 :class:`~cuneate.hdl.izhikevich.IzhikevichConfig`); :func:`engine_core` turns them into the
@@ -32,7 +35,7 @@ from ..hdl.izhikevich import CLAMP_KINDS, PIPELINE_DEPTH, IzhikevichConfig, Izhi
 __all__ = ["HARDWARE_ENGINES", "EngineRun", "engine_core", "run_engine", "engine_config",
            "run_hardware_engine", "run_cocotb_engine", "MIN_NEURONS"]
 
-HARDWARE_ENGINES = ("fixed", "amaranth", "icarus", "verilator")
+HARDWARE_ENGINES = ("fixed", "amaranth", "icarus", "verilator", "verilator-fast")
 MIN_NEURONS = 8
 
 
@@ -106,6 +109,15 @@ def run_engine(engine: str, core: dict, currents, duration_ms: float,
         spikes = [s.tolist() for s in twin.run(cur, n_sweeps, progress=progress)[:n]]
         rep = twin.clamp_report()
         return EngineRun(engine, cfg.dt_ms, n_sweeps, spikes, rep["counts"], rep["sticky"],
+                         time.perf_counter() - t0)
+    if engine == "verilator-fast":
+        from .verilator_harness import run_harness
+        run = run_harness(cfg, cur, n_sweeps, build_root=build_dir)
+        if progress is not None:
+            progress(n_sweeps)
+        ks = run.spikes_per_neuron(n)
+        return EngineRun(engine, cfg.dt_ms, n_sweeps, [((k + 1) * cfg.dt_ms).tolist() for k in ks],
+                         dict(run.summary["clamp_counts"]), run.clamp_sticky(),
                          time.perf_counter() - t0)
     if engine == "amaranth":
         sweeps, counts, sticky = _run_amaranth(cfg, cur, n_sweeps, progress)

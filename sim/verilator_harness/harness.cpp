@@ -1,0 +1,232 @@
+// Compiled run of the generated Izhikevich core: no Python per cycle.
+//
+// Built by Verilator together with the core's Verilog (top module `izhikevich_core`, class
+// Vizhikevich_core). Usage:
+//
+//     harness <schedule.bin> <out_dir> [--dump] [--raw CYCLES]
+//
+// schedule.bin (little-endian int64): N, n_sweeps, n_segments, v_width, u_width, i_width,
+// then per segment: start_sweep followed by N raw currents. Before the first sweep of each
+// segment the pipeline is drained and every current that changed is written by the host port
+// (one per cycle), so each sweep sees exactly the currents of its segment - the twin's
+// set_currents() before sweep(). Ticks come every N cycles (one update per clock).
+//
+// Outputs in out_dir:
+//   spikes.bin   int64 pairs (sweep, neuron) from the update port, in update order
+//   updates.bin  (--dump) per update: int64 v, u, current, spike, clamp bits
+//   summary.json cycles, wall time, cycles/s, spike and stream counts, clamp counters summed
+//                over sweep_done, sticky flags, overrun and spike_overflow
+// --raw CYCLES: only reset and run the core free for CYCLES cycles with ticks (Verilator's
+// raw cycle rate for this design, nothing recorded) and write summary.json.
+#include <chrono>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "Vizhikevich_core.h"
+#include "verilated.h"
+
+static const int PIPELINE_DEPTH = 5;
+
+static int64_t sext(uint64_t x, int width) {
+    uint64_t m = 1ULL << (width - 1);
+    x &= (width == 64) ? ~0ULL : ((1ULL << width) - 1);
+    return (int64_t)((x ^ m) - m);
+}
+
+static void die(const char* msg) {
+    std::fprintf(stderr, "harness: %s\n", msg);
+    std::exit(2);
+}
+
+int main(int argc, char** argv) {
+    if (argc < 3) die("usage: harness <schedule.bin> <out_dir> [--dump] [--raw CYCLES]");
+    std::string sched_path = argv[1], out_dir = argv[2];
+    bool dump = false;
+    long long raw_cycles = -1;
+    for (int a = 3; a < argc; ++a) {
+        if (!std::strcmp(argv[a], "--dump")) dump = true;
+        else if (!std::strcmp(argv[a], "--raw") && a + 1 < argc) raw_cycles = std::atoll(argv[++a]);
+        else die("unknown argument");
+    }
+    FILE* f = std::fopen(sched_path.c_str(), "rb");
+    if (!f) die("cannot open the schedule");
+    int64_t hdr[6];
+    if (std::fread(hdr, sizeof(int64_t), 6, f) != 6) die("short schedule header");
+    const int64_t N = hdr[0], n_sweeps = hdr[1], n_seg = hdr[2];
+    const int vw = (int)hdr[3], uw = (int)hdr[4], iw = (int)hdr[5];
+    if (N < 1 || n_sweeps < 0 || n_seg < 0 || vw < 1 || vw > 64 || uw < 1 || uw > 64 || iw < 1 ||
+        iw > 64)
+        die("bad schedule header");
+    std::vector<int64_t> seg_start(n_seg);
+    std::vector<int64_t> seg_cur(n_seg * N);
+    for (int64_t s = 0; s < n_seg; ++s) {
+        if (std::fread(&seg_start[s], sizeof(int64_t), 1, f) != 1 ||
+            std::fread(&seg_cur[s * N], sizeof(int64_t), N, f) != (size_t)N)
+            die("short schedule");
+    }
+    std::fclose(f);
+
+    auto ctx = std::make_unique<VerilatedContext>();
+    ctx->commandArgs(1, argv);
+    auto top = std::make_unique<Vizhikevich_core>(ctx.get());
+    const uint64_t imask = (iw == 64) ? ~0ULL : ((1ULL << iw) - 1);
+
+    long long cycles = 0;
+    auto cycle = [&]() {
+        top->clk = 0;
+        top->eval();
+        top->clk = 1;
+        top->eval();
+        ++cycles;
+    };
+    // reset
+    top->rst = 1;
+    top->i_wr_en = 0;
+    top->sel_wr_en = 0;
+    top->clamp_clear = 0;
+    top->tick = 0;
+    top->spike_ready = 1;
+    cycle();
+    cycle();
+    top->rst = 0;
+    cycles = 0;
+
+    FILE* fs = nullptr;
+    FILE* fu = nullptr;
+    if (raw_cycles < 0) {
+        fs = std::fopen((out_dir + "/spikes.bin").c_str(), "wb");
+        if (!fs) die("cannot write spikes.bin");
+        if (dump) {
+            fu = std::fopen((out_dir + "/updates.bin").c_str(), "wb");
+            if (!fu) die("cannot write updates.bin");
+        }
+    }
+    std::vector<int64_t> spk;
+    spk.reserve(1 << 16);
+    std::vector<int64_t> upd;
+    if (dump) upd.reserve(5 * 65536);
+    long long n_spikes = 0, stream_spikes = 0, updates = 0, sweeps_done = 0;
+    long long clamp_counts[5] = {0, 0, 0, 0, 0};
+    int64_t upd_sweep = 0;   // sweep of the next update leaving the pipeline
+
+    auto monitor = [&]() {
+        if (top->upd_valid) {
+            int64_t idx = (int64_t)top->upd_index;
+            if (top->upd_spike) {
+                spk.push_back(upd_sweep);
+                spk.push_back(idx);
+                ++n_spikes;
+                if (spk.size() >= (1u << 16)) {
+                    std::fwrite(spk.data(), sizeof(int64_t), spk.size(), fs);
+                    spk.clear();
+                }
+            }
+            if (dump) {
+                upd.push_back(sext(top->upd_v, vw));
+                upd.push_back(sext(top->upd_u, uw));
+                upd.push_back(sext(top->upd_current, iw));
+                upd.push_back(top->upd_spike);
+                upd.push_back(top->upd_clamp);
+                if (upd.size() >= 5 * 65536) {
+                    std::fwrite(upd.data(), sizeof(int64_t), upd.size(), fu);
+                    upd.clear();
+                }
+            }
+            ++updates;
+            if (idx == N - 1) ++upd_sweep;
+        }
+        if (top->sweep_done) {
+            ++sweeps_done;
+            clamp_counts[0] += top->sweep_clamps_v_low;
+            clamp_counts[1] += top->sweep_clamps_u_high;
+            clamp_counts[2] += top->sweep_clamps_u_low;
+            clamp_counts[3] += top->sweep_clamps_current;
+            clamp_counts[4] += top->sweep_clamps_y;
+        }
+        if (top->spike_valid) ++stream_spikes;
+    };
+
+    auto t0 = std::chrono::steady_clock::now();
+    if (raw_cycles >= 0) {
+        for (long long c = 0; c < raw_cycles; ++c) {
+            top->tick = (c % N) == 0;
+            cycle();
+        }
+    } else {
+        std::vector<int64_t> cur(N, 0);   // the current RAM starts at zero
+        int64_t sweep = 0;
+        int64_t seg = 0;
+        while (sweep < n_sweeps || seg < n_seg) {
+            if (seg < n_seg && seg_start[seg] <= sweep) {
+                // drain the pipeline, then write the currents that change
+                top->tick = 0;
+                for (int k = 0; k < PIPELINE_DEPTH + 2; ++k) {
+                    cycle();
+                    monitor();
+                }
+                for (int64_t n = 0; n < N; ++n) {
+                    int64_t x = seg_cur[seg * N + n];
+                    if (x == cur[n]) continue;
+                    cur[n] = x;
+                    top->i_wr_en = 1;
+                    top->i_wr_addr = n;
+                    top->i_wr_data = (uint64_t)x & imask;
+                    cycle();
+                    monitor();
+                }
+                top->i_wr_en = 0;
+                ++seg;
+                continue;
+            }
+            if (sweep >= n_sweeps) break;
+            // run sweeps up to the next segment
+            int64_t end = (seg < n_seg) ? std::min<int64_t>(seg_start[seg], n_sweeps) : n_sweeps;
+            for (; sweep < end; ++sweep) {
+                top->tick = 1;
+                cycle();
+                monitor();
+                top->tick = 0;
+                for (int64_t c = 1; c < N; ++c) {
+                    cycle();
+                    monitor();
+                }
+            }
+        }
+        top->tick = 0;
+        for (int k = 0; k < PIPELINE_DEPTH + 4; ++k) {
+            cycle();
+            monitor();
+        }
+    }
+    auto t1 = std::chrono::steady_clock::now();
+    double wall = std::chrono::duration<double>(t1 - t0).count();
+    if (fs) {
+        std::fwrite(spk.data(), sizeof(int64_t), spk.size(), fs);
+        std::fclose(fs);
+    }
+    if (fu) {
+        std::fwrite(upd.data(), sizeof(int64_t), upd.size(), fu);
+        std::fclose(fu);
+    }
+    unsigned sticky = top->clamp_flags;
+    FILE* fj = std::fopen((out_dir + "/summary.json").c_str(), "w");
+    if (!fj) die("cannot write summary.json");
+    std::fprintf(fj,
+                 "{\"cycles\": %lld, \"wall_s\": %.9f, \"cycles_per_s\": %.3f, \"updates\": %lld, "
+                 "\"sweeps_done\": %lld, \"spikes\": %lld, \"stream_spikes\": %lld, "
+                 "\"clamp_counts\": {\"v_low\": %lld, \"u_high\": %lld, \"u_low\": %lld, "
+                 "\"current\": %lld, \"y\": %lld}, \"clamp_sticky_bits\": %u, \"overrun\": %d, "
+                 "\"spike_overflow\": %d, \"raw\": %s}\n",
+                 cycles, wall, wall > 0 ? cycles / wall : 0.0, updates, sweeps_done, n_spikes,
+                 stream_spikes, clamp_counts[0], clamp_counts[1], clamp_counts[2], clamp_counts[3],
+                 clamp_counts[4], sticky, (int)top->overrun, (int)top->spike_overflow,
+                 raw_cycles >= 0 ? "true" : "false");
+    std::fclose(fj);
+    top->final();
+    return 0;
+}
