@@ -205,3 +205,93 @@ def test_amaranth_simulator(bench):
     for r in rows:
         assert r["cycles_per_s"] > 0, r
     assert rows[1]["spikes"] > 0
+
+
+# ----------------------------------------------------------------------------------------------
+# Brian2 as the peer: the same work in one run (RS, currents 0..20, dt 1/16 ms, 1 s, Euler)
+
+PEER_SIZES = (2500, 10000, 100000)
+PEER_TARGETS = ("numpy", "cython", "cpp_standalone")
+
+
+def _brian2_python(bench_build: Path) -> tuple[str | None, str]:
+    """Brian2 in its own environment (it needs numpy < 2.3): ``build/bench/brian2-venv``,
+    created on first use. Returns (python, reason if unavailable)."""
+    import subprocess
+    import sys
+    venv = bench_build / "brian2-venv"
+    py = venv / "bin" / "python"
+    if not py.exists():
+        r = subprocess.run([sys.executable, "-m", "venv", str(venv)], capture_output=True,
+                           text=True)
+        if r.returncode:
+            return None, f"venv failed: {r.stderr.strip()[-200:]}"
+        r = subprocess.run([str(py), "-m", "pip", "install", "-q", "brian2", "numpy<2.3"],
+                           capture_output=True, text=True)
+        if r.returncode:
+            return None, f"pip install brian2 failed: {r.stderr.strip()[-300:]}"
+    return str(py), ""
+
+
+def _peer(py: str, target: str, n: int) -> dict:
+    import json
+    import subprocess
+    script = Path(__file__).with_name("brian2_peer.py")
+    # the first run of a target compiles (cython: cached on disk; standalone: every run);
+    # the cython figure is the second run's
+    for _ in range(2 if target == "cython" else 1):
+        r = subprocess.run([py, str(script), target, str(n), "1000"], capture_output=True,
+                           text=True, timeout=3600)
+    if r.returncode:
+        return {"target": target, "neurons": n, "error": r.stderr.strip()[-200:]}
+    return json.loads(r.stdout.strip().splitlines()[-1])
+
+
+def _ours(n: int) -> list[dict]:
+    cur = np.linspace(0.0, 20.0, n)
+    cfg = IzhikevichConfig(n_neurons=n, clock_hz=UPDATE_HZ * n, update_hz=UPDATE_HZ)
+    twin = IzhikevichTwin(cfg)
+    twin.run(cur, 16)                                   # compile the kernel
+    t0 = time.perf_counter()
+    tsp = IzhikevichTwin(cfg).run(cur, 16000)
+    tt = time.perf_counter() - t0
+    golden.simulate("RS", lambda t: cur, n_neurons=n, duration_ms=1.0)
+    t0 = time.perf_counter()
+    g = golden.simulate("RS", lambda t: cur, n_neurons=n, duration_ms=1000.0)
+    tg = time.perf_counter() - t0
+    return [{"target": "cuneate golden (float64)", "neurons": n, "run_s": tg,
+             "updates_per_s": n * 16000 / tg, "spikes": int(sum(map(len, g.spikes_ms)))},
+            {"target": "cuneate twin (fixed point)", "neurons": n, "run_s": tt,
+             "updates_per_s": n * 16000 / tt, "spikes": int(sum(map(len, tsp)))}]
+
+
+def test_against_brian2(bench, bench_build):
+    """cuneate's golden and twin against Brian2's numpy, cython and cpp_standalone targets on
+    the same work, in one run; ratios and spike-count agreement; the bandwidth bound."""
+    py, why = _brian2_python(Path(bench_build))
+    rows = []
+    for n in PEER_SIZES:
+        ours = _ours(n)
+        peers = [_peer(py, t, n) for t in PEER_TARGETS] if py else []
+        for o in ours:
+            for p in peers:
+                if "updates_per_s" in p:
+                    o[f"x {p['target']}"] = o["updates_per_s"] / p["updates_per_s"]
+            if peers and "spikes" in peers[0]:
+                o["brian2 spikes"] = peers[0]["spikes"]
+        rows += ours + peers
+    # bandwidth bound of the twin: bytes touched per update (v, u, I, set: 4 x 8 B read, 2 x 8 B
+    # written) against a measured copy bandwidth
+    a = np.ones(50_000_000 // 8)
+    t0 = time.perf_counter()
+    for _ in range(5):
+        b = a.copy()
+    bw = 5 * 2 * a.nbytes / (time.perf_counter() - t0)
+    del b
+    rows.append({"target": "copy bandwidth bound (48 B per update)", "neurons": None,
+                 "updates_per_s": bw / 48})
+    title = "RS, currents 0..20 mV/ms, dt 1/16 ms, 1 s, Euler: updates per second"
+    if not py:
+        title += f" (Brian2 unavailable: {why})"
+    bench.report("speed_brian2", title, rows)
+    assert all(r["updates_per_s"] > 0 for r in rows if "updates_per_s" in r)
