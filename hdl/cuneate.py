@@ -380,18 +380,5 @@ def generate_coincidence(out, config: CoincidenceConfig,
                          name: str = "coincidence_detector") -> list:
     """Write ``out/<name>.v`` and ``out/<name>.json`` (formats, constants and their errors,
     latency, ports, resources hint: multipliers and memories); returns the paths."""
-    import json
-    from pathlib import Path
-
-    from amaranth.back import verilog
-
-    from .generate import port_table
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
-    top = CoincidenceDetector(config)
-    text = verilog.convert(top, name=name, emit_src=False)
-    desc = config.to_dict() | {"module": name, "ports": port_table(top)}
-    vpath, jpath = out / f"{name}.v", out / f"{name}.json"
-    vpath.write_text(text)
-    jpath.write_text(json.dumps(desc, indent=2, sort_keys=True, default=float) + "\n")
-    return [vpath, jpath]
+    from .generate import write_block
+    return write_block(out, CoincidenceDetector(config), config.to_dict(), name)

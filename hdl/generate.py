@@ -10,7 +10,8 @@ from amaranth.lib.wiring import In
 
 from .izhikevich import IzhikevichConfig, IzhikevichCore
 
-__all__ = ["izhikevich_verilog", "generate_izhikevich", "lowered_verilog", "port_table"]
+__all__ = ["izhikevich_verilog", "generate_izhikevich", "lowered_verilog", "port_table",
+           "write_block"]
 
 
 def lowered_verilog(top, name: str) -> str:
@@ -55,4 +56,17 @@ def generate_izhikevich(out: Path, n_neurons: int = 2500, clock_hz: float = 40e6
     vpath, jpath = out / f"{name}.v", out / f"{name}.json"
     vpath.write_text(text)
     jpath.write_text(json.dumps(desc, indent=2, sort_keys=True) + "\n")
+    return [vpath, jpath]
+
+
+def write_block(out, top, description: dict, name: str) -> list[Path]:
+    """Write ``out/<name>.v`` (deterministic bytes) and ``out/<name>.json`` (``description``
+    plus the module name and the port table) for the component ``top``; returns the paths."""
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    text = verilog.convert(top, name=name, emit_src=False)
+    desc = description | {"module": name, "ports": port_table(top)}
+    vpath, jpath = out / f"{name}.v", out / f"{name}.json"
+    vpath.write_text(text)
+    jpath.write_text(json.dumps(desc, indent=2, sort_keys=True, default=float) + "\n")
     return [vpath, jpath]

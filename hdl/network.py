@@ -328,18 +328,5 @@ def network_verilog(cfg: NetworkConfig, name: str = "afferent_cuneate_network",
 
 def generate_network(out, cfg: NetworkConfig, name: str = "afferent_cuneate_network") -> list:
     """Write ``out/<name>.v`` and ``out/<name>.json``; returns the paths."""
-    import json
-    from pathlib import Path
-
-    from amaranth.back import verilog
-
-    from .generate import port_table
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
-    top = AfferentCuneateNetwork(cfg)
-    text = verilog.convert(top, name=name, emit_src=False)
-    desc = cfg.to_dict() | {"module": name, "ports": port_table(top)}
-    vpath, jpath = out / f"{name}.v", out / f"{name}.json"
-    vpath.write_text(text)
-    jpath.write_text(json.dumps(desc, indent=2, sort_keys=True, default=float) + "\n")
-    return [vpath, jpath]
+    from .generate import write_block
+    return write_block(out, AfferentCuneateNetwork(cfg), cfg.to_dict(), name)

@@ -62,22 +62,20 @@ def cmd_run(args) -> int:
         raise CliError(f"cuneate run: {exc}") from None
     except ValueError as exc:
         raise CliError(f"cuneate run: {scene.source}: {exc}") from None
-    if getattr(run, "kind", None) == "ridge":
-        from .scene_ridge import format_ridge_run, ridge_summary, write_ridge_report
-        page = write_ridge_report(run, out)
+    kind = getattr(run, "kind", None)
+    if kind in ("ridge", "skin"):
+        # scenes of their own kind: their report, summary and printout
+        from . import scene_ridge, scene_skin
+        write, summary, fmt = {
+            "ridge": (scene_ridge.write_ridge_report, scene_ridge.ridge_summary,
+                      scene_ridge.format_ridge_run),
+            "skin": (scene_skin.write_skin_report, scene_skin.skin_summary,
+                     scene_skin.format_skin_run)}[kind]
+        page = write(run, out)
         if args.json:
-            print(json.dumps(ridge_summary(run), default=float))
+            print(json.dumps(summary(run), default=float))
             return 0
-        print(format_ridge_run(run))
-        print(f"report: {page}")
-        return 0
-    if getattr(run, "kind", None) == "skin":
-        from .scene_skin import format_skin_run, skin_summary, write_skin_report
-        page = write_skin_report(run, out)
-        if args.json:
-            print(json.dumps(skin_summary(run), default=float))
-            return 0
-        print(format_skin_run(run))
+        print(fmt(run))
         print(f"report: {page}")
         return 0
     page = write_report(run, out)
