@@ -112,9 +112,12 @@ def _fig_engine(run, e, out: Path, plt):
         ax.imshow(d.confusion, cmap="Blues")
         ax.set_xticks(range(len(d.classes)), d.classes, rotation=45, ha="right", fontsize=7)
         ax.set_yticks(range(len(d.classes)), d.classes, fontsize=7)
+        top = max(1, int(np.max(d.confusion)))
         for i in range(len(d.classes)):
             for j in range(len(d.classes)):
-                ax.text(j, i, int(d.confusion[i, j]), ha="center", va="center", fontsize=7)
+                c = int(d.confusion[i, j])
+                ax.text(j, i, c, ha="center", va="center", fontsize=7,
+                        color="white" if c > top / 2 else "black")
         ax.set(xlabel="predicted", ylabel="true", title=f"{e}: {100 * d.accuracy:.1f} %")
         fig.tight_layout()
         fig.savefig(out / f"confusion_{e}.png", dpi=90)
