@@ -393,7 +393,7 @@ def simulate(params="RS", current=10.0, *, duration_ms: float | None = None,
         :func:`step` per update (the reference). Default: ``"numba"`` where it applies.
     threads
         Threads for the compiled loop (neurons are independent); default all cores from
-        50 000 neurons on, else one.
+        50 000 neurons on, else one (per-step thread dispatch does not pay below that).
 
     Raises
     ------

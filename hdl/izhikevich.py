@@ -233,7 +233,7 @@ class IzhikevichTwin:
         long runs. The default whenever numba is available and ``check`` is off.
 
     ``threads`` (compiled kernel, :meth:`run` with constant currents) splits the population
-    over threads; default: all cores from 50 000 neurons on, else one.
+    over threads; default: all cores from 2000 neurons on, else one.
     """
 
     KERNELS = ("stages", "numba")
