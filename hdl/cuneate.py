@@ -48,6 +48,7 @@ from .fixed import narrow, round_shift, select
 from .izhikevich import (CLAMP_KINDS, IzhikevichTwin, _lookup, multiply1, multiply2,
                          operands, update_state)
 from .lif_synapses import trace_products, trace_update
+from .tick import tick_strobe
 
 __all__ = ["CoincidenceConfig", "ConfigError", "CoincidenceTwin", "CoincidenceDetector",
            "accumulate", "psp_current", "coincidence_verilog", "generate_coincidence"]
@@ -225,13 +226,7 @@ class CoincidenceDetector(wiring.Component):
         st_rd, st_wr = st_mem.read_port(), st_mem.write_port()
 
         # ---- tick source
-        tick = Signal()
-        if cfg.tick_source == "internal":
-            div = Signal(range(cfg.cycles_per_tick))
-            m.d.sync += div.eq(Mux(div == cfg.cycles_per_tick - 1, 0, div + 1))
-            m.d.comb += tick.eq(div == 0)
-        else:
-            m.d.comb += tick.eq(self.tick)
+        tick = tick_strobe(m, cfg, getattr(self, "tick", None))
 
         # ---- pending input spikes
         pending = Signal(S)

@@ -41,6 +41,7 @@ from .fixed import (check_int64, clamp_flagged, is_hdl, narrow, round_shift, rou
                     select)
 from .izhikevich_config import (CLAMP_KINDS, PIPELINE_DEPTH, SATURATION, ConfigError,
                                 IzhikevichConfig)
+from .tick import tick_strobe
 
 __all__ = ["ConfigError", "IzhikevichConfig", "IzhikevichTwin", "IzhikevichCore",
            "PIPELINE_DEPTH", "CLAMP_KINDS", "SATURATION", "operands", "multiply1",
@@ -486,13 +487,7 @@ class IzhikevichCore(wiring.Component):
         ]
 
         # --- sweep control ------------------------------------------------------------------
-        tick = Signal()
-        if cfg.tick_source == "internal":
-            div = Signal(range(cfg.cycles_per_tick))
-            m.d.comb += tick.eq(div == 0)
-            m.d.sync += div.eq(Mux(div == cfg.cycles_per_tick - 1, 0, div + 1))
-        else:
-            m.d.comb += tick.eq(self.tick)
+        tick = tick_strobe(m, cfg, getattr(self, "tick", None))
         issuing = Signal()
         addr = Signal(range(N))
         sweep_no = Signal(cfg.sweep_number_width)

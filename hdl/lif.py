@@ -45,6 +45,7 @@ from .fixed import (QFormat, check_int64, clamp_flagged, is_hdl, narrow, round_s
 from .lif_synapses import TRACE_NAMES, trace_inputs, trace_products, trace_update
 from .lif_config import (CLAMP_KINDS, DECAYS, FORMS, PIPELINE_DEPTH, ConfigError, LifConfig,
                          LifSet)
+from .tick import tick_strobe
 
 __all__ = ["ConfigError", "LifConfig", "LifSet", "LifTwin", "LifCore", "PIPELINE_DEPTH",
            "CLAMP_KINDS", "FORMS", "DECAYS", "gather_input", "leak_operand", "leak_product",
@@ -374,13 +375,7 @@ class LifCore(wiring.Component):
         ]
 
         # --- sweep control ------------------------------------------------------------------
-        tick = Signal()
-        if cfg.tick_source == "internal":
-            div = Signal(range(cfg.cycles_per_tick))
-            m.d.comb += tick.eq(div == 0)
-            m.d.sync += div.eq(Mux(div == cfg.cycles_per_tick - 1, 0, div + 1))
-        else:
-            m.d.comb += tick.eq(self.tick)
+        tick = tick_strobe(m, cfg, getattr(self, "tick", None))
         issuing = Signal()
         addr = Signal(range(N))
         sweep_no = Signal(cfg.sweep_number_width)

@@ -44,6 +44,7 @@ from amaranth.lib.wiring import In, Out
 from .cuneate import CoincidenceConfig, CoincidenceDetector, CoincidenceTwin
 from .izhikevich import IzhikevichConfig, IzhikevichCore, IzhikevichTwin
 from .izhikevich_config import PIPELINE_DEPTH, ConfigError
+from .tick import tick_strobe
 
 __all__ = ["NetworkConfig", "NetworkTwin", "AfferentCuneateNetwork", "ConfigError",
            "network_verilog", "generate_network", "POPULATIONS"]
@@ -249,13 +250,7 @@ class AfferentCuneateNetwork(wiring.Component):
                      det.clamp_clear.eq(0), core.clamp_clear.eq(0)]
 
         # ---- tick: held until the previous sweep is complete and the detector idle
-        tick = Signal()
-        if cfg.tick_source == "internal":
-            div = Signal(range(cfg.cycles_per_tick))
-            m.d.sync += div.eq(Mux(div == cfg.cycles_per_tick - 1, 0, div + 1))
-            m.d.comb += tick.eq(div == 0)
-        else:
-            m.d.comb += tick.eq(self.tick)
+        tick = tick_strobe(m, cfg, getattr(self, "tick", None))
         pending = Signal()
         inflight = Signal()            # a core sweep started and its sweep_done not yet seen
         go = Signal()
