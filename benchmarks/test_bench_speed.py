@@ -90,6 +90,86 @@ def test_numpy_engines(bench):
 
 
 # ----------------------------------------------------------------------------------------------
+# LIF and coincidence-detector twins: stage functions against the compiled kernel
+
+def _lif_program(n: int, sweeps: int, n_inputs: int = 8):
+    from cuneate.hdl.lif import LifConfig
+    rng = np.random.default_rng(0)
+    cfg = LifConfig(n_neurons=n, clock_hz=UPDATE_HZ * n, update_hz=UPDATE_HZ,
+                    weights=rng.uniform(-10, 40, (n, n_inputs)),
+                    param_sets=[{"tau_m_ms": 10.0, "t_ref_ms": 1.0}])
+    cur = np.asarray(cfg.I.to_raw(np.linspace(0.0, 30.0, n)), dtype=np.int64)
+    return cfg, cur, rng.random((sweeps, n_inputs)) < 0.1
+
+
+def lif_rates(n: int, sweeps: int = 400) -> list[dict]:
+    from cuneate.hdl.lif import LifTwin
+    cfg, cur, x = _lif_program(n, sweeps)
+    rows, spikes = [], {}
+    for kernel in ("stages", "numba"):
+        LifTwin(cfg, kernel=kernel).run_raw(cur, 2, x[:2])             # warm-up / compile
+        out = {}
+
+        def run():
+            twin = LifTwin(cfg, kernel=kernel)
+            out["k"] = twin.run_raw(cur, sweeps, x)[0].size
+
+        t, times = _median_time(run)
+        spikes[kernel] = out["k"]
+        rows.append({"engine": f"LIF twin ({kernel})", "neurons": n, "updates": n * sweeps,
+                     "median_s": t, "updates_per_s": n * sweeps / t, "spikes": out["k"],
+                     "times_s": times})
+    for r in rows:
+        r["speedup_vs_stages"] = rows[0]["median_s"] / r["median_s"]
+        r["spikes_equal"] = spikes["stages"] == spikes["numba"]
+    return rows
+
+
+def coincidence_rates(targets: int, ticks: int = 400, sources: int = 8) -> list[dict]:
+    from cuneate.hdl.cuneate import CoincidenceConfig, CoincidenceTwin
+    rng = np.random.default_rng(1)
+    cfg = CoincidenceConfig(n_sources=sources, n_targets=targets,
+                            delays_ticks=rng.integers(0, 64, (targets, sources)),
+                            weights=rng.uniform(0.5, 4.0, (targets, sources)),
+                            max_delay_ticks=64, clock_hz=UPDATE_HZ * targets * (sources + 8)
+                            + 2 * UPDATE_HZ)
+    ins = [np.sort(rng.integers(0, ticks, ticks // 8)) for _ in range(sources)]
+    rows, spikes = [], {}
+    for kernel in ("stages", "numba"):
+        CoincidenceTwin(cfg, kernel=kernel).run(ins, 2)                 # warm-up / compile
+        out = {}
+
+        def run():
+            out["n"] = sum(map(len, CoincidenceTwin(cfg, kernel=kernel).run(ins, ticks)))
+
+        t, times = _median_time(run)
+        spikes[kernel] = out["n"]
+        rows.append({"engine": f"coincidence twin ({kernel})", "neurons": targets,
+                     "updates": targets * ticks, "median_s": t,
+                     "updates_per_s": targets * ticks / t, "spikes": out["n"],
+                     "times_s": times})
+    for r in rows:
+        r["speedup_vs_stages"] = rows[0]["median_s"] / r["median_s"]
+        r["spikes_equal"] = spikes["stages"] == spikes["numba"]
+    return rows
+
+
+def test_lif_and_coincidence_twins(bench):
+    rows = []
+    for n in SIZES:
+        rows += lif_rates(n)
+    for m in (256, 2048):
+        rows += coincidence_rates(m)
+    bench.report("speed_lif_coincidence", "LIF (8 weighted inputs, 10 % active) and coincidence "
+                 "(8 delayed afferents) twins: stage functions vs compiled kernel, median of "
+                 f"{REPEATS}", rows,
+                 columns=["engine", "neurons", "updates", "median_s", "updates_per_s",
+                          "speedup_vs_stages", "spikes", "spikes_equal"])
+    for r in rows:
+        assert r["updates_per_s"] > 0 and r["spikes"] > 0 and r["spikes_equal"], r
+
+
+# ----------------------------------------------------------------------------------------------
 # cocotb on the generated Verilog
 
 def _scoreboard_cases() -> dict:

@@ -43,6 +43,7 @@ from amaranth.lib import wiring
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
+from ..golden.izhikevich import group_spikes
 from .cuneate_config import CoincidenceConfig, ConfigError
 from .fixed import narrow, round_shift, select
 from .izhikevich import (CLAMP_KINDS, IzhikevichTwin, _lookup, multiply1, multiply2,
@@ -75,12 +76,30 @@ def psp_current(cfg: CoincidenceConfig, xd, xr, a):
 
 # ----------------------------------------------------------------------------------------------
 class CoincidenceTwin:
-    """Bit-exact NumPy model of :class:`CoincidenceDetector` (int64, vectorized over targets)."""
+    """Bit-exact NumPy model of :class:`CoincidenceDetector` (int64, vectorized over targets).
 
-    def __init__(self, config: CoincidenceConfig | None = None, **kwargs):
+    Two implementations of :meth:`tick` and :meth:`run` compute the same bits: ``kernel=
+    "stages"`` (the stage functions over NumPy arrays, the Izhikevich step included) and
+    ``kernel="numba"`` (the compiled loop of :mod:`cuneate.hdl.cuneate_kernel`, proven
+    bit-exact against the stages by property tests and long runs; the default whenever numba
+    is available). :meth:`update` always runs the stage functions.
+    """
+
+    KERNELS = ("stages", "numba")
+
+    def __init__(self, config: CoincidenceConfig | None = None, kernel: str | None = None,
+                 **kwargs):
+        from . import cuneate_kernel as _k
         self.cfg = cfg = config or CoincidenceConfig(**kwargs)
         M, S, D = cfg.n_targets, cfg.n_sources, cfg.max_delay_ticks
-        self.iz = IzhikevichTwin(cfg.iz)
+        if kernel is not None and kernel not in self.KERNELS:
+            raise ValueError(f"unknown twin kernel {kernel!r}; known: {', '.join(self.KERNELS)}")
+        if kernel == "numba" and not _k.available():
+            raise ValueError("twin kernel 'numba' needs numba installed")
+        self.kernel = kernel or ("numba" if _k.available() else "stages")
+        self._k = _k
+        self._consts = _k.gather_constants(cfg) if self.kernel == "numba" else None
+        self.iz = IzhikevichTwin(cfg.iz, kernel="stages" if self.kernel == "stages" else None)
         self.sel = np.asarray(cfg.target_sets_, dtype=np.int64)
         self.v = np.asarray(cfg.iz.v_init_raw, dtype=np.int64)[:M].copy()
         self.u = np.asarray(cfg.iz.u_init_raw, dtype=np.int64)[:M].copy()
@@ -135,8 +154,49 @@ class CoincidenceTwin:
         self.pending = np.zeros(self.cfg.n_sources, dtype=bool)
         return self.inputs()
 
+    def _account(self, counts) -> None:
+        for b, k in enumerate(CLAMP_KINDS):
+            n = int(counts[b])
+            self.clamp_counts[k] += n
+            if n:
+                self.clamp_sticky |= 1 << b
+
+    def run_pending(self, pending) -> tuple[np.ndarray, np.ndarray]:
+        """Run ``len(pending)`` ticks, tick ``k`` stamping the sources set in ``pending[k]``
+        (``(n_ticks, n_sources)`` bool; spikes already pending join the first tick). Returns
+        every output spike as ``(ticks, targets)``, ticks counted from 0 at this call."""
+        cfg = self.cfg
+        pend = np.array(pending, dtype=bool, order="C")
+        if pend.ndim != 2 or pend.shape[1] != cfg.n_sources:
+            raise ValueError(f"pending spikes must have shape (n_ticks, {cfg.n_sources})")
+        if len(pend):
+            pend[0] |= self.pending
+            self.pending = np.zeros(cfg.n_sources, dtype=bool)
+        if self.kernel == "numba":
+            ks, ns, totals = self._k.run_ticks(self._consts, self.v, self.u, self.xd, self.xr,
+                                               self.sel, self.history, pend, self.ticks)
+            self.ticks += len(pend)
+            self._account(totals)
+            return ks, ns
+        hits_k, hits_n = [], []
+        for k, row in enumerate(pend):
+            self.pending = row.copy()
+            idx = np.flatnonzero(self.tick())
+            hits_k.append(np.full(idx.size, k, dtype=np.int64))
+            hits_n.append(idx)
+        if not hits_k:
+            return np.zeros(0, np.int64), np.zeros(0, np.int64)
+        return np.concatenate(hits_k), np.concatenate(hits_n)
+
     def tick(self) -> np.ndarray:
         """Stamp the pending spikes, update every target once; returns the spike vector."""
+        if self.kernel == "numba":
+            pend = self.pending.reshape(1, -1).copy()
+            self.pending = np.zeros(self.cfg.n_sources, dtype=bool)
+            _, ns = self.run_pending(pend)
+            spk = np.zeros(self.cfg.n_targets, dtype=bool)
+            spk[ns] = True
+            return spk
         out = self.update(self.v, self.u, self.xd, self.xr, self.stamp())
         self.v, self.u = out["v"].astype(np.int64), out["u"].astype(np.int64)
         self.xd, self.xr = out["xd"], out["xr"]
@@ -151,17 +211,21 @@ class CoincidenceTwin:
     def run(self, input_ticks, n_ticks: int) -> list[np.ndarray]:
         """Run ``n_ticks`` with input spikes given per source as arrays of the tick each is
         stamped with; returns spike times (ms) per target ((T + 1) dt for tick T)."""
-        by_tick: dict = {}
+        S = self.cfg.n_sources
+        if len(input_ticks) > S:
+            raise ValueError(f"spike source {len(input_ticks) - 1} is outside 0 .. {S - 1}")
+        counts = np.zeros((n_ticks, S), dtype=np.int64)
         for s, ts in enumerate(input_ticks):
-            for t in np.asarray(ts, dtype=np.int64):
-                by_tick.setdefault(int(t), []).append(s)
-        hits = [[] for _ in range(self.cfg.n_targets)]
-        for k in range(n_ticks):
-            if k in by_tick:
-                self.spike_in(by_tick[k])
-            for t in np.flatnonzero(self.tick()):
-                hits[t].append((k + 1) * self.cfg.dt_ms)
-        return [np.asarray(h) for h in hits]
+            ts = np.asarray(ts, dtype=np.int64)
+            ts = ts[(ts >= 0) & (ts < n_ticks)]          # events of later ticks are not sent
+            np.add.at(counts[:, s], ts, 1)
+        self.events += int(counts.sum())
+        self.merged += int(np.maximum(counts - 1, 0).sum())
+        if n_ticks:
+            self.merged += int(np.count_nonzero(self.pending & (counts[0] > 0)))
+        ks, ns = self.run_pending(counts > 0)
+        steps = group_spikes([ks], [ns], self.cfg.n_targets)
+        return [(np.asarray(h, dtype=np.float64) + 1) * self.cfg.dt_ms for h in steps]
 
 
 # ----------------------------------------------------------------------------------------------

@@ -26,7 +26,7 @@ import numpy as np
 
 from .izhikevich_config import CLAMP_KINDS, IzhikevichConfig
 
-__all__ = ["available", "gather_constants", "update_arrays", "run_sweeps", "default_threads",
+__all__ = ["available", "rounding_slots", "gather_constants", "update_arrays", "run_sweeps", "default_threads",
            "PARALLEL_MIN_NEURONS"]
 
 try:                                   # numba is a project dependency; keep the twin usable
@@ -61,6 +61,14 @@ def default_threads(n_neurons: int) -> int:
     if n_neurons < PARALLEL_MIN_NEURONS:
         return 1
     return max(1, min(os.cpu_count() or 1, n_neurons // (PARALLEL_MIN_NEURONS // 2)))
+
+
+def rounding_slots(shift: int, near: bool) -> list[int]:
+    """The four kernel slots of ``round_shift(x, shift)`` (see ``_rq``): left shift, right
+    shift, the shift that brings the first dropped bit to bit 0, and its mask (0 when
+    truncating or not shifting right)."""
+    rs = max(shift, 0)
+    return [max(-shift, 0), rs, max(rs - 1, 0), int(near and rs > 0)]
 
 
 def gather_constants(cfg: IzhikevichConfig) -> tuple[np.ndarray, np.ndarray]:
@@ -107,9 +115,7 @@ def gather_constants(cfg: IzhikevichConfig) -> tuple[np.ndarray, np.ndarray]:
         sc[S_YLO], sc[S_YHI] = _INT64_MIN, _INT64_MAX
     for slot, shift in ((R_SV, S_SV), (R_SVQ, S_SVQ), (R_SDTI, S_SDTI), (R_SU, S_SU),
                         (R_SIU, S_SIU), (R_SUX, S_SUX), (R_SDX, S_SDX), (R_SHQ, S_SHQ)):
-        x = int(sc[shift])
-        rs = max(x, 0)
-        sc[slot:slot + 4] = [max(-x, 0), rs, max(rs - 1, 0), int(near and rs > 0)]
+        sc[slot:slot + 4] = rounding_slots(int(sc[shift]), near)
     for slot, kind in zip((S_B_VLOW, S_B_UHIGH, S_B_ULOW, S_B_CUR, S_B_Y),
                           ("v_low", "u_high", "u_low", "current", "y")):
         sc[slot] = CLAMP_KINDS.index(kind)

@@ -40,6 +40,7 @@ from amaranth.lib.fifo import SyncFIFOBuffered
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
+from ..golden.izhikevich import group_spikes
 from .fixed import (QFormat, check_int64, clamp_flagged, is_hdl, narrow, round_shift, round_shift_select,
                     select)
 from .lif_synapses import TRACE_NAMES, trace_inputs, trace_products, trace_update
@@ -163,13 +164,38 @@ class LifTwin:
     """Bit-exact NumPy (int64) model of :class:`LifCore`, vectorized over neurons.
 
     :meth:`sweep` performs one tick (every neuron once) with the input spikes ``x`` of that
-    tick; :meth:`update` computes updates from any given state (used by scoreboards). Clamp
-    flags, sticky bits and counters follow the RTL's (:meth:`clamp_report`).
+    tick; :meth:`run` a whole program; :meth:`update` computes updates from any given state
+    (used by scoreboards, always by the stage functions). Clamp flags, sticky bits and counters
+    follow the RTL's (:meth:`clamp_report`).
+
+    Two implementations of :meth:`sweep` and :meth:`run` compute the same bits: ``kernel=
+    "stages"`` (the stage functions over NumPy arrays; with ``check=True`` the leak product is
+    also tested against the int64 range) and ``kernel="numba"`` (the compiled loop of
+    :mod:`cuneate.hdl.lif_kernel`, proven bit-exact against the stages by property tests and
+    long runs; the default whenever numba is available, ``check`` is off and the configuration
+    is covered).
     """
 
-    def __init__(self, config: LifConfig | None = None, check: bool = False, **kwargs):
+    KERNELS = ("stages", "numba")
+
+    def __init__(self, config: LifConfig | None = None, check: bool = False,
+                 kernel: str | None = None, **kwargs):
+        from . import lif_kernel as _k
         self.cfg = cfg = config or LifConfig(**kwargs)
         self.check = check
+        if kernel is not None and kernel not in self.KERNELS:
+            raise ValueError(f"unknown twin kernel {kernel!r}; known: {', '.join(self.KERNELS)}")
+        self._consts = None
+        if kernel != "stages" and _k.available() and not (check and kernel is None):
+            try:
+                self._consts = _k.gather_constants(cfg)
+            except ValueError:
+                if kernel == "numba":
+                    raise
+        elif kernel == "numba":
+            raise ValueError("twin kernel 'numba' needs numba installed")
+        self.kernel = "numba" if self._consts is not None else "stages"
+        self._k = _k
         self.sel = np.asarray(cfg.neuron_sets, dtype=np.int64)
         self.v = cfg.v_init_raw.copy()
         self.ref = np.zeros(cfg.n_neurons, dtype=np.int64)
@@ -239,8 +265,68 @@ class LifTwin:
         out["clamp"] = clamp_bits(out)
         return out
 
+    def _account(self, counts) -> None:
+        for i, k in enumerate(CLAMP_KINDS):
+            n = int(counts[i])
+            self.clamp_counts[k] += n
+            if n:
+                self.clamp_sticky |= 1 << i
+
+    def _traces_arg(self):
+        return self.traces if self.cfg.synapses else np.zeros((1, self.cfg.n_neurons),
+                                                              dtype=np.int64)
+
+    def run_raw(self, currents_raw, n_sweeps: int, inputs=None):
+        """``n_sweeps`` ticks from raw currents, (n,) for the whole run or (n_sweeps, n) per
+        tick (already in the current format), and optional (n_sweeps, n_inputs) input spikes.
+        Returns every spike as ``(sweep indices, neuron indices)``, sweeps counted from 0 at
+        this call; the final state, clamp counts and sticky flags are kept."""
+        cfg = self.cfg
+        I = np.ascontiguousarray(currents_raw, dtype=np.int64)
+        if I.shape not in ((cfg.n_neurons,), (n_sweeps, cfg.n_neurons)):
+            raise ValueError(f"currents must have shape ({cfg.n_neurons},) or ({n_sweeps}, "
+                             f"{cfg.n_neurons})")
+        if inputs is not None:
+            inputs = np.ascontiguousarray(inputs, dtype=bool)
+            if inputs.shape != (n_sweeps, cfg.n_inputs):
+                raise ValueError(f"input spikes must have shape ({n_sweeps}, {cfg.n_inputs})")
+        if self.kernel == "numba":
+            tr = self._traces_arg()
+            ks, ns, totals, _ = self._k.run_program(self._consts, self.v, self.ref, tr, I,
+                                                    self.sel, self.W, inputs, n_sweeps)
+            if cfg.synapses:
+                self.traces = tr
+            self.sweeps += n_sweeps
+            self._account(totals)
+            if n_sweeps:
+                self.I[:] = I if I.ndim == 1 else I[-1]
+            return ks, ns
+        hits_k, hits_n = [], []
+        for k in range(n_sweeps):
+            self.I[:] = I if I.ndim == 1 else I[k]
+            idx = np.flatnonzero(self.sweep(None if inputs is None else inputs[k]))
+            hits_k.append(np.full(idx.size, k, dtype=np.int64))
+            hits_n.append(idx)
+        if not hits_k:
+            return np.zeros(0, np.int64), np.zeros(0, np.int64)
+        return np.concatenate(hits_k), np.concatenate(hits_n)
+
     def sweep(self, x=None) -> np.ndarray:
         """One tick with input spike vector ``x``; returns the boolean spike vector."""
+        if self.kernel == "numba":
+            xs = None if x is None else np.asarray(x, dtype=bool).reshape(1, -1)
+            if xs is not None and xs.shape[1] != self.cfg.n_inputs:
+                raise ValueError(f"input spike vector must have {self.cfg.n_inputs} entries")
+            tr = self._traces_arg()
+            _, ns, totals, _ = self._k.run_program(self._consts, self.v, self.ref, tr, self.I,
+                                                   self.sel, self.W, xs, 1)
+            if self.cfg.synapses:
+                self.traces = tr
+            self.sweeps += 1
+            self._account(totals)
+            spk = np.zeros(self.cfg.n_neurons, dtype=bool)
+            spk[ns] = True
+            return spk
         out = self.update(self.v, self.ref, self.I, x, self.sel)
         self.v = np.asarray(out["v"], dtype=np.int64)
         self.ref = np.asarray(out["ref"], dtype=np.int64)
@@ -260,7 +346,10 @@ class LifTwin:
         per neuron, update k -> (k+1) dt."""
         hits: list[list[int]] = [[] for _ in range(self.cfg.n_neurons)]
         if not callable(currents):
-            self.set_currents(np.broadcast_to(currents, (self.cfg.n_neurons,)))
+            raw = self.set_currents(np.broadcast_to(currents, (self.cfg.n_neurons,)))
+            ks, ns = self.run_raw(np.asarray(raw, dtype=np.int64), n_sweeps, inputs)
+            steps = group_spikes([ks], [ns], self.cfg.n_neurons)
+            return [(np.asarray(s, dtype=np.float64) + 1) * self.cfg.dt_ms for s in steps]
         for k in range(n_sweeps):
             if callable(currents):
                 self.set_currents(np.broadcast_to(currents(k * self.cfg.dt_ms),

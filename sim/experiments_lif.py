@@ -234,7 +234,10 @@ def quantization_table(n_inputs: int = 64, n_neurons: int = 32, n_steps: int = 1
                         weight_bits=b, current_format=(4, 12),
                         param_sets=[{"alpha": alpha, "u_th": u_th}])
         twin = LifTwin(cfg)
-        spk = np.array([twin.sweep(x[k]) for k in range(n_steps)])[:, :n_neurons]
+        ks, ns = twin.run_raw(np.zeros(cfg.n_neurons, dtype=np.int64), n_steps, x)
+        spk = np.zeros((n_steps, cfg.n_neurons), dtype=bool)
+        spk[ks, ns] = True
+        spk = spk[:, :n_neurons]
         trains = [np.flatnonzero(spk[:, n]).astype(float) for n in range(n_neurons)]
         n_q = np.array([len(t) for t in trains])
         wq = cfg.W.to_float(cfg.weights_raw[:n_neurons]).T

@@ -119,12 +119,11 @@ def run_lif(engine: str, cfg: LifConfig, program: LifProgram, n: int | None = No
         steps = _run_golden(cfg, cur, program.inputs)
     elif engine == "fixed":
         twin = LifTwin(cfg)
+        ks, ns = twin.run_raw(np.asarray(cfg.I.to_raw(cur), dtype=np.int64), program.n_sweeps,
+                              program.inputs)
         steps = [[] for _ in range(N)]
-        for k in range(program.n_sweeps):
-            twin.set_currents(cur[k])
-            spk = twin.sweep(None if program.inputs is None else program.inputs[k])
-            for i in np.flatnonzero(spk):
-                steps[i].append(k)
+        for k, i in zip(ks.tolist(), ns.tolist()):
+            steps[i].append(k)
         rep = twin.clamp_report()
         counts, sticky = rep["counts"], rep["sticky"]
     else:

@@ -1,0 +1,292 @@
+"""Compiled (numba) kernel of the LIF core's twin, and the synaptic-trace step it shares with
+the coincidence detector's kernel.
+
+The arithmetic is defined once by the stage functions of :mod:`cuneate.hdl.lif` (``gather_input``,
+``leak_operand``, ``leak_product``, ``update_state``) and :mod:`cuneate.hdl.lif_synapses`
+(``trace_inputs``, ``trace_products``, ``trace_update``); this module restates the same integer
+operations per neuron, in the same order, as one compiled loop over a whole program of sweeps
+(currents and input spikes per sweep) without temporaries. It is proven bit-exact against the
+stage-function twin by property tests (random states, currents over the whole current format,
+input-spike vectors, set indices, every form, decay, rounding, clamp and synapse option) and by
+long runs (``tests/hdl/test_lif_kernel.py``).
+
+Constants are gathered once per configuration (:func:`gather_constants`): a per-set int64 table,
+a vector of scalars, a per-trace table and the weight matrix. A narrowing of the stage functions
+(``narrow``) is proven at construction never to act and is the identity on the twin; the kernel
+leaves it out. Overflow of int64 is excluded by the formats (every intermediate is a few bits
+wider than the state).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .izhikevich_kernel import available, rounding_slots
+from .lif_config import CLAMP_KINDS, LifConfig
+
+__all__ = ["available", "LifConstants", "gather_constants", "trace_table", "update_arrays",
+           "run_program"]
+
+try:
+    import numba                                           # noqa: F401
+    from numba import njit
+except ImportError:                                        # pragma: no cover
+    numba = None
+
+# per-set table rows
+(T_REST, T_K, T_KSH, T_TH, T_RESET, T_NREF) = range(6)
+# scalars
+(S_NEAR, S_ICLAMP, S_ILO, S_IHI, S_ISH, S_WSH, S_SYN, S_DCLAMP, S_DLO, S_DHI, S_CONT, S_KSHIFT,
+ S_VCLAMP, S_VMIN, S_VMAX, S_REF, S_B_CUR, S_B_IN, S_B_VLOW) = range(19)
+R_X = 19                                  # rounding slots of the leak operand (4)
+R_P = 23                                  # rounding slots of the leak product (4)
+N_SCALARS = 27
+# trace table columns: operand rounding (4), k, product rounding (4)
+TR_Y, TR_K, TR_P = 0, 4, 5
+N_TRACE_COLS = 9
+_INT64_MIN, _INT64_MAX = -(1 << 63), (1 << 63) - 1
+
+
+@dataclass(frozen=True)
+class LifConstants:
+    """Everything the kernel needs of one :class:`LifConfig` (int64 arrays)."""
+    tab: np.ndarray          # (6, n_sets)
+    sc: np.ndarray           # (N_SCALARS,)
+    ttab: np.ndarray         # (n_traces, N_TRACE_COLS); one dummy row without synapses
+    exc: np.ndarray          # (n_inputs,) bool: source adds to the AMPA traces
+
+
+def trace_table(specs, v_frac_bits: int, near: bool) -> np.ndarray:
+    """Kernel table of synaptic traces (:class:`cuneate.hdl.lif_synapses.TraceSpec`)."""
+    rows = [rounding_slots(v_frac_bits - s.Y.frac_bits, near) + [s.K.raw]
+            + rounding_slots(s.product_shift, near) for s in specs]
+    return np.array(rows or [[0] * N_TRACE_COLS], dtype=np.int64)
+
+
+def gather_constants(cfg: LifConfig) -> LifConstants:
+    """The configuration's constants for the kernel. Raises ``ValueError`` for a configuration
+    the kernel does not cover (a current or weight format with more fraction bits than the
+    state), which then runs on the stage functions."""
+    near = cfg.rounding == "nearest"
+    fv = cfg.V.frac_bits
+    ish, wsh = fv - cfg.I.frac_bits, fv - cfg.W.frac_bits
+    if ish < 0 or wsh < 0:
+        raise ValueError("the compiled LIF kernel needs current and weight formats with at "
+                         "most the state's fraction bits")
+    n_sets = len(cfg.sets)
+    tab = np.zeros((6, n_sets), dtype=np.int64)
+    for s in range(n_sets):
+        tab[T_REST, s] = cfg.REST[s].raw
+        tab[T_K, s] = cfg.K[s].raw if cfg.k_shift is None else 0
+        tab[T_KSH, s] = cfg.k_shift[s] if cfg.k_shift is not None else 0
+        tab[T_TH, s] = cfg.th_cmp_raw[s]
+        tab[T_RESET, s] = cfg.RESET[s].raw
+        tab[T_NREF, s] = cfg.n_ref[s]
+    sc = np.zeros(N_SCALARS, dtype=np.int64)
+    sc[S_NEAR] = int(near)
+    sc[S_ICLAMP] = int(cfg.current_clamp)
+    sc[S_ILO], sc[S_IHI] = ((cfg.i_lo_raw, cfg.i_hi_raw) if cfg.current_clamp
+                            else (_INT64_MIN, _INT64_MAX))
+    sc[S_ISH], sc[S_WSH] = ish, wsh
+    sc[S_SYN] = int(cfg.synapses)
+    sc[S_DCLAMP] = int(cfg.input_clamp)
+    sc[S_DLO], sc[S_DHI] = ((cfg.d_lo_raw, cfg.d_hi_raw) if cfg.input_clamp
+                            else (_INT64_MIN, _INT64_MAX))
+    sc[S_CONT] = int(cfg.form == "continuous")
+    sc[S_KSHIFT] = int(cfg.k_shift is not None)
+    sc[S_VCLAMP] = int(cfg.v_clamp)
+    sc[S_VMIN], sc[S_VMAX] = ((cfg.V.min_raw, cfg.V.max_raw) if cfg.v_clamp
+                              else (_INT64_MIN, _INT64_MAX))
+    sc[S_REF] = int(cfg.ref_bits > 0)
+    for slot, kind in ((S_B_CUR, "current"), (S_B_IN, "input"), (S_B_VLOW, "v_low")):
+        sc[slot] = CLAMP_KINDS.index(kind)
+    if cfg.X is not None:
+        sc[R_X:R_X + 4] = rounding_slots(fv - cfg.X.frac_bits, near)
+    if cfg.k_shift is None:
+        sc[R_P:R_P + 4] = rounding_slots(cfg.product_shift, near)
+    exc = np.asarray(cfg.input_exc, dtype=np.bool_) if cfg.n_inputs else np.zeros(0, np.bool_)
+    return LifConstants(tab, sc, trace_table(cfg.traces, fv, near), exc)
+
+
+# ----------------------------------------------------------------------------------------------
+if numba is not None:
+    from .izhikevich_kernel import _rq, _rs
+
+    _jit = dict(nogil=True, cache=True, error_model="numpy")
+
+    @njit(inline="always", **_jit)
+    def trace_step(y, ttab, j):
+        """``y - round(k round(y))`` of trace ``j`` (``trace_products`` + ``trace_update``)."""
+        yq = _rq(y, ttab[j], TR_Y)
+        return y - _rq(yq * ttab[j, TR_K], ttab[j], TR_P)
+
+    @njit(inline="always", **_jit)
+    def _neuron(v, ref, I, s, acc_a, acc_g, tr, i, tab, sc, ttab):
+        """One update of neuron ``i`` (traces ``tr[:, i]`` updated in place). ``acc_a`` /
+        ``acc_g``: summed raw weights of the active excitatory / inhibitory sources (without
+        synapses every source counts in ``acc_a``). Returns (v', ref', spike, clamp bits,
+        v_pre, D, acc)."""
+        # --- stage 3: input (clamps that are not built have levels no int64 passes)
+        f_cur = I < sc[S_ILO] or I > sc[S_IHI]
+        I = min(max(I, sc[S_ILO]), sc[S_IHI])
+        if sc[S_SYN]:
+            wsh = sc[S_WSH]
+            i_syn = (tr[0, i] - tr[1, i]) - (tr[2, i] - tr[3, i])
+            D = (I << sc[S_ISH]) + i_syn
+            acc = acc_a - acc_g
+            for j in range(4):
+                y = tr[j, i] + ((acc_a if j < 2 else acc_g) << wsh)
+                tr[j, i] = trace_step(y, ttab, j)
+        else:
+            acc = acc_a
+            D = (I << sc[S_ISH]) + (acc << sc[S_WSH])
+        f_in = D < sc[S_DLO] or D > sc[S_DHI]
+        D = min(max(D, sc[S_DLO]), sc[S_DHI])
+        # --- stage 3: leak operand; stage 4: leak product
+        x = v - tab[T_REST, s] - D if sc[S_CONT] else v
+        x = _rq(x, sc, R_X)
+        if sc[S_KSHIFT]:
+            d = _rs(x, tab[T_KSH, s], sc[S_NEAR])
+        else:
+            d = _rq(x * tab[T_K, s], sc, R_P)
+        # --- stage 5: update
+        v_pre = v - d if sc[S_CONT] else v - d + D
+        frozen = sc[S_REF] != 0 and ref != 0
+        spike = v_pre >= tab[T_TH, s] and not frozen
+        below = v_pre < sc[S_VMIN]
+        kept = min(max(v_pre, sc[S_VMIN]), sc[S_VMAX])
+        v_low = below and not spike and not frozen
+        v_new = tab[T_RESET, s] if (frozen or spike) else kept
+        if sc[S_REF]:
+            ref_new = ref - 1 if frozen else (tab[T_NREF, s] if spike else 0)
+        else:
+            ref_new = ref
+        clamp = ((np.int64(f_cur) << sc[S_B_CUR]) | (np.int64(f_in) << sc[S_B_IN])
+                 | (np.int64(v_low) << sc[S_B_VLOW]))
+        return v_new, ref_new, spike, clamp, v_pre, D, acc
+
+    @njit(**_jit)
+    def _update_arrays(v, ref, I, sel, x, W, exc, tr, tab, sc, ttab,
+                       v_out, ref_out, spike, clamp, v_pre, d_out, acc_out):
+        F = W.shape[1]
+        for i in range(v.shape[0]):
+            acc_a = 0
+            acc_g = 0
+            for f in range(F):
+                if x[f]:
+                    if exc[f] or not sc[S_SYN]:
+                        acc_a += W[i, f]
+                    else:
+                        acc_g += W[i, f]
+            a, b, c, d, e, g, h = _neuron(v[i], ref[i], I[i], sel[i], acc_a, acc_g, tr, i,
+                                          tab, sc, ttab)
+            v_out[i] = a
+            ref_out[i] = b
+            spike[i] = c
+            clamp[i] = d
+            v_pre[i] = e
+            d_out[i] = g
+            acc_out[i] = h
+
+    @njit(**_jit)
+    def _run(v, ref, tr, I, per_sweep, sel, W, exc, X, has_x, tab, sc, ttab, k0, n_sweeps,
+             spk_k, spk_n, n_spk, totals, last):
+        """Sweeps ``k0 .. n_sweeps - 1`` of a program, in place. ``I`` is (n_sweeps, N) when
+        ``per_sweep`` else (1, N); ``X`` (n_sweeps, F) input spikes when ``has_x``. Spikes are
+        appended to (spk_k, spk_n) from ``n_spk``; stops early (before a sweep) when the buffer
+        could overflow. Returns (next sweep, spikes recorded)."""
+        N = v.shape[0]
+        F = W.shape[1]
+        act_a = np.empty(F, np.int64)
+        act_g = np.empty(F, np.int64)
+        cap = spk_k.shape[0]
+        syn = sc[S_SYN] != 0
+        for k in range(k0, n_sweeps):
+            if cap - n_spk < N:
+                return k, n_spk
+            na = 0
+            ng = 0
+            if has_x:
+                for f in range(F):
+                    if X[k, f]:
+                        if exc[f] or not syn:
+                            act_a[na] = f
+                            na += 1
+                        else:
+                            act_g[ng] = f
+                            ng += 1
+            row = k if per_sweep else 0
+            c0 = c1 = c2 = 0
+            for i in range(N):
+                acc_a = 0
+                for j in range(na):
+                    acc_a += W[i, act_a[j]]
+                acc_g = 0
+                for j in range(ng):
+                    acc_g += W[i, act_g[j]]
+                a, b, spk, cl, _, _, _ = _neuron(v[i], ref[i], I[row, i], sel[i], acc_a,
+                                                 acc_g, tr, i, tab, sc, ttab)
+                v[i] = a
+                ref[i] = b
+                if spk:
+                    spk_k[n_spk] = k
+                    spk_n[n_spk] = i
+                    n_spk += 1
+                c0 += cl & 1
+                c1 += (cl >> 1) & 1
+                c2 += (cl >> 2) & 1
+            last[0] = c0
+            last[1] = c1
+            last[2] = c2
+            totals[0] += c0
+            totals[1] += c1
+            totals[2] += c2
+        return n_sweeps, n_spk
+
+
+def update_arrays(consts: LifConstants, v, ref, I, sel, x, W, traces):
+    """One update of the given neurons by the kernel (1-D int64 arrays; ``x`` the tick's
+    input-spike vector, ``W`` the (n, n_inputs) raw weights, ``traces`` (4, n) or None).
+    Returns a dict like :meth:`cuneate.hdl.lif.LifTwin.update` (``v``, ``ref``, ``spike``,
+    ``clamp``, ``v_pre``, ``d``, ``acc`` and ``traces`` with synapses)."""
+    n = v.shape[0]
+    tr = (np.zeros((1, n), np.int64) if traces is None
+          else np.array(traces, dtype=np.int64, order="C"))
+    out = {k: np.empty(n, np.int64) for k in ("v", "ref", "clamp", "v_pre", "d", "acc")}
+    out["spike"] = np.empty(n, np.bool_)
+    xs = np.zeros(W.shape[1], np.bool_) if x is None else np.asarray(x, dtype=np.bool_)
+    _update_arrays(v, ref, I, sel, xs, W, consts.exc, tr, consts.tab, consts.sc, consts.ttab,
+                   out["v"], out["ref"], out["spike"], out["clamp"], out["v_pre"], out["d"],
+                   out["acc"])
+    if traces is not None:
+        out["traces"] = tr
+    return out
+
+
+def run_program(consts: LifConstants, v, ref, traces, I, sel, W, inputs, n_sweeps: int):
+    """``n_sweeps`` sweeps in place on ``v``, ``ref``, ``traces`` (int64; ``traces`` (4, n) or
+    a dummy (1, n)). ``I``: raw currents, (n,) for the whole run or (n_sweeps, n) per sweep;
+    ``inputs``: (n_sweeps, n_inputs) input spikes or None.
+
+    Returns ``(spike_sweeps, spike_neurons, totals, last)``: every spike as (sweep, neuron),
+    clamp counts per kind over the run and in its last sweep."""
+    N = v.shape[0]
+    per_sweep = I.ndim == 2
+    I2 = I if per_sweep else I.reshape(1, N)
+    has_x = inputs is not None
+    X = np.asarray(inputs, dtype=np.bool_) if has_x else np.zeros((1, 1), np.bool_)
+    totals = np.zeros(len(CLAMP_KINDS), np.int64)
+    last = np.zeros(len(CLAMP_KINDS), np.int64)
+    cap = max(4 * N, 1024)
+    spk_k, spk_n = np.empty(cap, np.int64), np.empty(cap, np.int64)
+    k, n_spk = 0, 0
+    while k < n_sweeps:
+        k, n_spk = _run(v, ref, traces, I2, per_sweep, sel, W, consts.exc, X, has_x,
+                        consts.tab, consts.sc, consts.ttab, k, n_sweeps, spk_k, spk_n, n_spk,
+                        totals, last)
+        if k < n_sweeps:                       # buffer full: grow and go on
+            cap *= 2
+            spk_k, spk_n = np.resize(spk_k, cap), np.resize(spk_n, cap)
+    return spk_k[:n_spk], spk_n[:n_spk], totals, last
