@@ -102,7 +102,7 @@ def _lif_program(n: int, sweeps: int, n_inputs: int = 8):
     return cfg, cur, rng.random((sweeps, n_inputs)) < 0.1
 
 
-def lif_rates(n: int, sweeps: int = 400) -> list[dict]:
+def lif_rates(n: int, sweeps: int = 2000) -> list[dict]:
     from cuneate.hdl.lif import LifTwin
     cfg, cur, x = _lif_program(n, sweeps)
     rows, spikes = [], {}
@@ -125,7 +125,7 @@ def lif_rates(n: int, sweeps: int = 400) -> list[dict]:
     return rows
 
 
-def coincidence_rates(targets: int, ticks: int = 400, sources: int = 8) -> list[dict]:
+def coincidence_rates(targets: int, ticks: int = 2000, sources: int = 8) -> list[dict]:
     from cuneate.hdl.cuneate import CoincidenceConfig, CoincidenceTwin
     rng = np.random.default_rng(1)
     cfg = CoincidenceConfig(n_sources=sources, n_targets=targets,

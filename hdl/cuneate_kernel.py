@@ -20,7 +20,9 @@ import numpy as np
 from . import izhikevich_kernel as izk
 from .izhikevich_config import CLAMP_KINDS
 from .izhikevich_kernel import available, rounding_slots
-from .lif_kernel import trace_table
+from .lif_kernel import _tuples, trace_table
+
+assert len(CLAMP_KINDS) == 5                       # the run loop counts five kinds
 
 __all__ = ["available", "CoincidenceConstants", "gather_constants", "update_arrays",
            "run_ticks"]
@@ -39,8 +41,8 @@ N_SCALARS = 5
 @dataclass(frozen=True)
 class CoincidenceConstants:
     """Everything the kernel needs of one :class:`CoincidenceConfig`."""
-    sc: np.ndarray          # (N_SCALARS,) int64
-    ttab: np.ndarray        # (2, N_TRACE_COLS) int64: decay (xd) and rise (xr) traces
+    sc: tuple               # N_SCALARS ints
+    ttab: tuple             # 2 rows of N_TRACE_COLS ints: decay (xd) and rise (xr) traces
     iz: tuple               # the Izhikevich kernel's (table, scalars)
     delays: np.ndarray      # (n_targets, n_sources) int64
     weights: np.ndarray     # (n_targets, n_sources) int64, raw
@@ -56,7 +58,7 @@ def gather_constants(cfg) -> CoincidenceConstants:
         raise ValueError("the compiled coincidence kernel needs weights with at most the "
                          "traces' fraction bits")
     return CoincidenceConstants(
-        sc, trace_table(cfg.tview.traces, cfg.tview.V.frac_bits, near),
+        _tuples(sc), _tuples(trace_table(cfg.tview.traces, cfg.tview.V.frac_bits, near)),
         izk.gather_constants(cfg.iz), np.ascontiguousarray(cfg.delays, dtype=np.int64),
         np.ascontiguousarray(cfg.weights_raw, dtype=np.int64))
 
@@ -102,30 +104,56 @@ if numba is not None:
         M, S = W.shape
         D = history.shape[0]
         cap = spk_k.shape[0]
+        acc = np.zeros(M, np.int64)
+        flags = np.zeros(M, np.bool_)
+        uniform = len(iztab[0]) == 1          # one parameter set: no per-target gather
+        c0 = c1 = c2 = c3 = c4 = 0
         for k in range(k0, n_ticks):
             if cap - n_spk < M:
+                totals[0] += c0
+                totals[1] += c1
+                totals[2] += c2
+                totals[3] += c3
+                totals[4] += c4
                 return k, n_spk
+            hits = 0
             T = tick0 + k
             slot = T % D
             for s in range(S):
                 history[slot, s] = pend[k, s]
-            for t in range(M):
+            for t in range(M):                   # the tick's input sums first
                 a = 0
                 for s in range(S):
-                    if history[(T - delays[t, s]) % D, s]:
+                    h = slot - delays[t, s]           # (T - delay) mod D, 0 <= delay < D
+                    if history[h + D if h < 0 else h, s]:
                         a += W[t, s]
-                r = _target(v[t], u[t], xd[t], xr[t], a, sel[t], sc, ttab, iztab, izsc)
+                acc[t] = a
+            for t in range(M):
+                r = _target(v[t], u[t], xd[t], xr[t], acc[t], 0 if uniform else sel[t], sc,
+                            ttab, iztab, izsc)
                 v[t] = r[0]
                 u[t] = r[1]
                 xd[t] = r[2]
                 xr[t] = r[3]
-                if r[4]:
-                    spk_k[n_spk] = k
-                    spk_n[n_spk] = t
-                    n_spk += 1
+                flags[t] = r[4]
+                hits += r[4]
                 cl = r[5]
-                for b in range(totals.shape[0]):
-                    totals[b] += (cl >> b) & 1
+                c0 += cl & 1
+                c1 += (cl >> 1) & 1
+                c2 += (cl >> 2) & 1
+                c3 += (cl >> 3) & 1
+                c4 += (cl >> 4) & 1
+            if hits:
+                for t in range(M):
+                    if flags[t]:
+                        spk_k[n_spk] = k
+                        spk_n[n_spk] = t
+                        n_spk += 1
+        totals[0] += c0
+        totals[1] += c1
+        totals[2] += c2
+        totals[3] += c3
+        totals[4] += c4
         return n_ticks, n_spk
 
 

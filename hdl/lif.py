@@ -173,16 +173,18 @@ class LifTwin:
     also tested against the int64 range) and ``kernel="numba"`` (the compiled loop of
     :mod:`cuneate.hdl.lif_kernel`, proven bit-exact against the stages by property tests and
     long runs; the default whenever numba is available, ``check`` is off and the configuration
-    is covered).
+    is covered). ``threads`` (compiled kernel, :meth:`run_raw` / :meth:`run`) splits the
+    population over threads; default: all cores from 2000 neurons on, else one.
     """
 
     KERNELS = ("stages", "numba")
 
     def __init__(self, config: LifConfig | None = None, check: bool = False,
-                 kernel: str | None = None, **kwargs):
+                 kernel: str | None = None, threads: int | None = None, **kwargs):
         from . import lif_kernel as _k
         self.cfg = cfg = config or LifConfig(**kwargs)
         self.check = check
+        self.threads = threads
         if kernel is not None and kernel not in self.KERNELS:
             raise ValueError(f"unknown twin kernel {kernel!r}; known: {', '.join(self.KERNELS)}")
         self._consts = None
@@ -293,7 +295,8 @@ class LifTwin:
         if self.kernel == "numba":
             tr = self._traces_arg()
             ks, ns, totals, _ = self._k.run_program(self._consts, self.v, self.ref, tr, I,
-                                                    self.sel, self.W, inputs, n_sweeps)
+                                                    self.sel, self.W, inputs, n_sweeps,
+                                                    self.threads)
             if cfg.synapses:
                 self.traces = tr
             self.sweeps += n_sweeps
@@ -319,7 +322,7 @@ class LifTwin:
                 raise ValueError(f"input spike vector must have {self.cfg.n_inputs} entries")
             tr = self._traces_arg()
             _, ns, totals, _ = self._k.run_program(self._consts, self.v, self.ref, tr, self.I,
-                                                   self.sel, self.W, xs, 1)
+                                                   self.sel, self.W, xs, 1, threads=1)
             if self.cfg.synapses:
                 self.traces = tr
             self.sweeps += 1

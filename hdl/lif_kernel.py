@@ -19,11 +19,12 @@ wider than the state).
 
 from __future__ import annotations
 
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
 
-from .izhikevich_kernel import available, rounding_slots
+from .izhikevich_kernel import available, default_threads, rounding_slots
 from .lif_config import CLAMP_KINDS, LifConfig
 
 __all__ = ["available", "LifConstants", "gather_constants", "trace_table", "update_arrays",
@@ -47,15 +48,17 @@ N_SCALARS = 27
 TR_Y, TR_K, TR_P = 0, 4, 5
 N_TRACE_COLS = 9
 _INT64_MIN, _INT64_MAX = -(1 << 63), (1 << 63) - 1
+assert CLAMP_KINDS == ("current", "input", "v_low")    # the run loop counts in this order
 
 
 @dataclass(frozen=True)
 class LifConstants:
-    """Everything the kernel needs of one :class:`LifConfig` (int64 arrays)."""
-    tab: np.ndarray          # (6, n_sets)
-    sc: np.ndarray           # (N_SCALARS,)
-    ttab: np.ndarray         # (n_traces, N_TRACE_COLS); one dummy row without synapses
+    """Everything the kernel needs of one :class:`LifConfig` (ints as nested tuples)."""
+    tab: tuple               # 6 rows of n_sets
+    sc: tuple                # N_SCALARS
+    ttab: tuple              # n_traces rows of N_TRACE_COLS; one dummy row without synapses
     exc: np.ndarray          # (n_inputs,) bool: source adds to the AMPA traces
+    tab_array: np.ndarray    # ``tab`` as an int64 array (per-neuron gathers vectorize)
 
 
 def trace_table(specs, v_frac_bits: int, near: bool) -> np.ndarray:
@@ -107,7 +110,16 @@ def gather_constants(cfg: LifConfig) -> LifConstants:
     if cfg.k_shift is None:
         sc[R_P:R_P + 4] = rounding_slots(cfg.product_shift, near)
     exc = np.asarray(cfg.input_exc, dtype=np.bool_) if cfg.n_inputs else np.zeros(0, np.bool_)
-    return LifConstants(tab, sc, trace_table(cfg.traces, fv, near), exc)
+    return LifConstants(_tuples(tab), _tuples(sc), _tuples(trace_table(cfg.traces, fv, near)),
+                        exc, tab)
+
+
+def _tuples(a: np.ndarray) -> tuple:
+    """Constants as (nested) tuples of ints: the compiled loop keeps them in registers (an
+    array could alias the state being written, so its loads would stay in the loop)."""
+    if a.ndim == 1:
+        return tuple(int(x) for x in a)
+    return tuple(_tuples(row) for row in a)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -120,79 +132,115 @@ if numba is not None:
     def trace_step(y, ttab, j):
         """``y - round(k round(y))`` of trace ``j`` (``trace_products`` + ``trace_update``)."""
         yq = _rq(y, ttab[j], TR_Y)
-        return y - _rq(yq * ttab[j, TR_K], ttab[j], TR_P)
+        return y - _rq(yq * ttab[j][TR_K], ttab[j], TR_P)
 
     @njit(inline="always", **_jit)
-    def _neuron(v, ref, I, s, acc_a, acc_g, tr, i, tab, sc, ttab):
-        """One update of neuron ``i`` (traces ``tr[:, i]`` updated in place). ``acc_a`` /
-        ``acc_g``: summed raw weights of the active excitatory / inhibitory sources (without
-        synapses every source counts in ``acc_a``). Returns (v', ref', spike, clamp bits,
-        v_pre, D, acc)."""
-        # --- stage 3: input (clamps that are not built have levels no int64 passes)
-        f_cur = I < sc[S_ILO] or I > sc[S_IHI]
+    def _input(I, acc_a, acc_g, i_syn, sc):
+        """Stage 3, ``gather_input``: the clamped current plus the input (the summed weights
+        ``acc_a`` of the active sources, or with synapses the trace current ``i_syn``), clamped
+        where an input limit is built. Clamps that are not built have levels no int64 passes.
+        Returns (D, current flag, input flag)."""
+        f_cur = (I < sc[S_ILO]) | (I > sc[S_IHI])
         I = min(max(I, sc[S_ILO]), sc[S_IHI])
         if sc[S_SYN]:
-            wsh = sc[S_WSH]
-            i_syn = (tr[0, i] - tr[1, i]) - (tr[2, i] - tr[3, i])
             D = (I << sc[S_ISH]) + i_syn
-            acc = acc_a - acc_g
-            for j in range(4):
-                y = tr[j, i] + ((acc_a if j < 2 else acc_g) << wsh)
-                tr[j, i] = trace_step(y, ttab, j)
         else:
-            acc = acc_a
-            D = (I << sc[S_ISH]) + (acc << sc[S_WSH])
-        f_in = D < sc[S_DLO] or D > sc[S_DHI]
-        D = min(max(D, sc[S_DLO]), sc[S_DHI])
-        # --- stage 3: leak operand; stage 4: leak product
-        x = v - tab[T_REST, s] - D if sc[S_CONT] else v
+            D = (I << sc[S_ISH]) + (acc_a << sc[S_WSH])
+        f_in = (D < sc[S_DLO]) | (D > sc[S_DHI])
+        return min(max(D, sc[S_DLO]), sc[S_DHI]), f_cur, f_in
+
+    @njit(inline="always", **_jit)
+    def _set_consts(tab, s):
+        """The constants of parameter set ``s`` (rows of ``tab``, in ``T_*`` order)."""
+        return (tab[T_REST][s], tab[T_K][s], tab[T_KSH][s], tab[T_TH][s], tab[T_RESET][s],
+                tab[T_NREF][s])
+
+    @njit(inline="always", **_jit)
+    def _neuron_consts(pn, i):
+        """Neuron ``i``'s set constants from the per-neuron table ``pn`` (6, n)."""
+        return (pn[T_REST, i], pn[T_K, i], pn[T_KSH, i], pn[T_TH, i], pn[T_RESET, i],
+                pn[T_NREF, i])
+
+    @njit(inline="always", **_jit)
+    def _leak_update(v, ref, D, pc, sc):
+        """Stages 3-5: ``leak_operand``, ``leak_product``, ``update_state``; ``pc`` holds the
+        neuron's set constants (:func:`_set_consts`). Returns (v', ref', spike, v_low,
+        v_pre)."""
+        x = v - pc[T_REST] - D if sc[S_CONT] else v
         x = _rq(x, sc, R_X)
-        if sc[S_KSHIFT]:
-            d = _rs(x, tab[T_KSH, s], sc[S_NEAR])
+        if sc[S_KSHIFT]:                   # a per-set shift >= 1
+            sh = pc[T_KSH]
+            d = (x >> sh) + ((x >> (sh - 1)) & sc[S_NEAR])
         else:
-            d = _rq(x * tab[T_K, s], sc, R_P)
-        # --- stage 5: update
+            d = _rq(x * pc[T_K], sc, R_P)
         v_pre = v - d if sc[S_CONT] else v - d + D
-        frozen = sc[S_REF] != 0 and ref != 0
-        spike = v_pre >= tab[T_TH, s] and not frozen
-        below = v_pre < sc[S_VMIN]
+        frozen = (ref != 0) & (sc[S_REF] != 0)
+        spike = (v_pre >= pc[T_TH]) & ~frozen
+        v_low = (v_pre < sc[S_VMIN]) & ~spike & ~frozen
         kept = min(max(v_pre, sc[S_VMIN]), sc[S_VMAX])
-        v_low = below and not spike and not frozen
-        v_new = tab[T_RESET, s] if (frozen or spike) else kept
+        v_new = pc[T_RESET] if (frozen | spike) else kept
         if sc[S_REF]:
-            ref_new = ref - 1 if frozen else (tab[T_NREF, s] if spike else 0)
+            ref_new = ref - 1 if frozen else (pc[T_NREF] if spike else 0)
         else:
             ref_new = ref
-        clamp = ((np.int64(f_cur) << sc[S_B_CUR]) | (np.int64(f_in) << sc[S_B_IN])
-                 | (np.int64(v_low) << sc[S_B_VLOW]))
-        return v_new, ref_new, spike, clamp, v_pre, D, acc
+        return v_new, ref_new, spike, v_low, v_pre
+
+    @njit(inline="always", **_jit)
+    def _clamp_bits(f_cur, f_in, v_low, sc):
+        return ((np.int64(f_cur) << sc[S_B_CUR]) | (np.int64(f_in) << sc[S_B_IN])
+                | (np.int64(v_low) << sc[S_B_VLOW]))
+
+    @njit(inline="always", **_jit)
+    def _traces(tr, sum_a, sum_g, i_syn, sc, ttab):
+        """Every neuron's trace current ``I_syn`` (traces as fetched) into ``i_syn``, and its
+        four traces decayed in place (``trace_inputs`` .. ``trace_update``)."""
+        wsh = sc[S_WSH]
+        for i in range(tr.shape[1]):
+            t0, t1, t2, t3 = tr[0, i], tr[1, i], tr[2, i], tr[3, i]
+            i_syn[i] = (t0 - t1) - (t2 - t3)
+            a_sh, g_sh = sum_a[i] << wsh, sum_g[i] << wsh
+            tr[0, i] = trace_step(t0 + a_sh, ttab, 0)
+            tr[1, i] = trace_step(t1 + a_sh, ttab, 1)
+            tr[2, i] = trace_step(t2 + g_sh, ttab, 2)
+            tr[3, i] = trace_step(t3 + g_sh, ttab, 3)
 
     @njit(**_jit)
     def _update_arrays(v, ref, I, sel, x, W, exc, tr, tab, sc, ttab,
                        v_out, ref_out, spike, clamp, v_pre, d_out, acc_out):
-        F = W.shape[1]
-        for i in range(v.shape[0]):
-            acc_a = 0
-            acc_g = 0
+        n, F = W.shape
+        sum_a, sum_g, i_syn = np.zeros(n, np.int64), np.zeros(n, np.int64), np.zeros(n, np.int64)
+        for i in range(n):
             for f in range(F):
                 if x[f]:
                     if exc[f] or not sc[S_SYN]:
-                        acc_a += W[i, f]
+                        sum_a[i] += W[i, f]
                     else:
-                        acc_g += W[i, f]
-            a, b, c, d, e, g, h = _neuron(v[i], ref[i], I[i], sel[i], acc_a, acc_g, tr, i,
-                                          tab, sc, ttab)
+                        sum_g[i] += W[i, f]
+        if sc[S_SYN]:
+            _traces(tr, sum_a, sum_g, i_syn, sc, ttab)
+        for i in range(n):
+            D, f_cur, f_in = _input(I[i], sum_a[i], sum_g[i], i_syn[i], sc)
+            a, b, c, v_low, e = _leak_update(v[i], ref[i], D, _set_consts(tab, sel[i]), sc)
             v_out[i] = a
             ref_out[i] = b
             spike[i] = c
-            clamp[i] = d
+            clamp[i] = _clamp_bits(f_cur, f_in, v_low, sc)
             v_pre[i] = e
-            d_out[i] = g
-            acc_out[i] = h
+            d_out[i] = D
+            acc_out[i] = sum_a[i] - sum_g[i]
+
+    @njit(inline="always", **_jit)
+    def _input_sums(W, act, n_act, out):
+        """``out[i] = sum_j W[i, act[j]]`` over the ``n_act`` active sources."""
+        for i in range(out.shape[0]):
+            t = 0
+            for j in range(n_act):
+                t += W[i, act[j]]
+            out[i] = t
 
     @njit(**_jit)
-    def _run(v, ref, tr, I, per_sweep, sel, W, exc, X, has_x, tab, sc, ttab, k0, n_sweeps,
-             spk_k, spk_n, n_spk, totals, last):
+    def _run(v, ref, tr, I, per_sweep, sel, W, exc, X, has_x, tab, tab_a, sc, ttab, k0, n_sweeps,
+             spk_k, spk_n, n_spk, totals, last, flags):
         """Sweeps ``k0 .. n_sweeps - 1`` of a program, in place. ``I`` is (n_sweeps, N) when
         ``per_sweep`` else (1, N); ``X`` (n_sweeps, F) input spikes when ``has_x``. Spikes are
         appended to (spk_k, spk_n) from ``n_spk``; stops early (before a sweep) when the buffer
@@ -201,8 +249,18 @@ if numba is not None:
         F = W.shape[1]
         act_a = np.empty(F, np.int64)
         act_g = np.empty(F, np.int64)
+        sum_a = np.zeros(N, np.int64)
+        sum_g = np.zeros(N, np.int64)
+        held_a = held_g = False           # the sums hold a previous tick's inputs
+        i_syn = np.zeros(N, np.int64)
         cap = spk_k.shape[0]
         syn = sc[S_SYN] != 0
+        uniform = len(tab[0]) == 1        # one parameter set: constants, no per-neuron gather
+        pn = np.empty((6, N if not uniform else 0), np.int64)
+        if not uniform:                   # else each neuron's set constants, gathered once
+            for r in range(6):
+                for i in range(N):
+                    pn[r, i] = tab_a[r, sel[i]]
         for k in range(k0, n_sweeps):
             if cap - n_spk < N:
                 return k, n_spk
@@ -218,25 +276,34 @@ if numba is not None:
                             act_g[ng] = f
                             ng += 1
             row = k if per_sweep else 0
+            # the tick's input sums first (a separate loop keeps the update loop simple)
+            if na or held_a:
+                _input_sums(W, act_a, na, sum_a)
+                held_a = na != 0
+            if ng or held_g:
+                _input_sums(W, act_g, ng, sum_g)
+                held_g = ng != 0
             c0 = c1 = c2 = 0
+            hits = 0
+            if syn:                        # the traces first: I_syn of this tick, decays
+                _traces(tr, sum_a, sum_g, i_syn, sc, ttab)
             for i in range(N):
-                acc_a = 0
-                for j in range(na):
-                    acc_a += W[i, act_a[j]]
-                acc_g = 0
-                for j in range(ng):
-                    acc_g += W[i, act_g[j]]
-                a, b, spk, cl, _, _, _ = _neuron(v[i], ref[i], I[row, i], sel[i], acc_a,
-                                                 acc_g, tr, i, tab, sc, ttab)
+                D, f_cur, f_in = _input(I[row, i], sum_a[i], sum_g[i], i_syn[i], sc)
+                pc = _set_consts(tab, 0) if uniform else _neuron_consts(pn, i)
+                a, b, spk, v_low, _ = _leak_update(v[i], ref[i], D, pc, sc)
                 v[i] = a
                 ref[i] = b
-                if spk:
-                    spk_k[n_spk] = k
-                    spk_n[n_spk] = i
-                    n_spk += 1
-                c0 += cl & 1
-                c1 += (cl >> 1) & 1
-                c2 += (cl >> 2) & 1
+                flags[i] = spk
+                hits += spk
+                c0 += f_cur
+                c1 += f_in
+                c2 += v_low
+            if hits:
+                for i in range(N):
+                    if flags[i]:
+                        spk_k[n_spk] = k
+                        spk_n[n_spk] = i
+                        n_spk += 1
             last[0] = c0
             last[1] = c1
             last[2] = c2
@@ -265,10 +332,14 @@ def update_arrays(consts: LifConstants, v, ref, I, sel, x, W, traces):
     return out
 
 
-def run_program(consts: LifConstants, v, ref, traces, I, sel, W, inputs, n_sweeps: int):
+def run_program(consts: LifConstants, v, ref, traces, I, sel, W, inputs, n_sweeps: int,
+                threads: int | None = None):
     """``n_sweeps`` sweeps in place on ``v``, ``ref``, ``traces`` (int64; ``traces`` (4, n) or
     a dummy (1, n)). ``I``: raw currents, (n,) for the whole run or (n_sweeps, n) per sweep;
-    ``inputs``: (n_sweeps, n_inputs) input spikes or None.
+    ``inputs``: (n_sweeps, n_inputs) input spikes or None. Populations of at least
+    :data:`~cuneate.hdl.izhikevich_kernel.PARALLEL_MIN_NEURONS` are split over ``threads``
+    (default: all cores) contiguous chunks, each run by the GIL-free kernel (neurons are
+    independent given their currents and input spikes).
 
     Returns ``(spike_sweeps, spike_neurons, totals, last)``: every spike as (sweep, neuron),
     clamp counts per kind over the run and in its last sweep."""
@@ -277,16 +348,33 @@ def run_program(consts: LifConstants, v, ref, traces, I, sel, W, inputs, n_sweep
     I2 = I if per_sweep else I.reshape(1, N)
     has_x = inputs is not None
     X = np.asarray(inputs, dtype=np.bool_) if has_x else np.zeros((1, 1), np.bool_)
-    totals = np.zeros(len(CLAMP_KINDS), np.int64)
-    last = np.zeros(len(CLAMP_KINDS), np.int64)
-    cap = max(4 * N, 1024)
-    spk_k, spk_n = np.empty(cap, np.int64), np.empty(cap, np.int64)
-    k, n_spk = 0, 0
-    while k < n_sweeps:
-        k, n_spk = _run(v, ref, traces, I2, per_sweep, sel, W, consts.exc, X, has_x,
-                        consts.tab, consts.sc, consts.ttab, k, n_sweeps, spk_k, spk_n, n_spk,
-                        totals, last)
-        if k < n_sweeps:                       # buffer full: grow and go on
-            cap *= 2
-            spk_k, spk_n = np.resize(spk_k, cap), np.resize(spk_n, cap)
-    return spk_k[:n_spk], spk_n[:n_spk], totals, last
+    threads = default_threads(N) if threads is None else max(1, min(int(threads), N))
+    syn = bool(consts.sc[S_SYN])
+
+    def chunk(lo, hi):
+        n = hi - lo
+        vv, rr, ss, ww = v[lo:hi], ref[lo:hi], sel[lo:hi], W[lo:hi]
+        tt = traces[:, lo:hi] if syn else traces[:1, lo:hi]
+        totals = np.zeros(len(CLAMP_KINDS), np.int64)
+        last = np.zeros(len(CLAMP_KINDS), np.int64)
+        cap = max(4 * n, 1024)
+        spk_k, spk_n = np.empty(cap, np.int64), np.empty(cap, np.int64)
+        flags = np.zeros(n, np.bool_)
+        k, n_spk = 0, 0
+        while k < n_sweeps:
+            k, n_spk = _run(vv, rr, tt, I2[:, lo:hi], per_sweep, ss, ww, consts.exc, X, has_x,
+                            consts.tab, consts.tab_array, consts.sc, consts.ttab, k, n_sweeps,
+                            spk_k, spk_n, n_spk, totals, last, flags)
+            if k < n_sweeps:                   # buffer full: grow and go on
+                cap *= 2
+                spk_k, spk_n = np.resize(spk_k, cap), np.resize(spk_n, cap)
+        return spk_k[:n_spk], spk_n[:n_spk] + lo, totals, last
+
+    if threads == 1 or n_sweeps == 0:
+        parts = [chunk(0, N)]
+    else:
+        edges = np.linspace(0, N, threads + 1).astype(int)
+        with ThreadPoolExecutor(threads) as pool:
+            parts = list(pool.map(chunk, edges[:-1], edges[1:]))
+    return (np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts]),
+            sum(p[2] for p in parts), sum(p[3] for p in parts))

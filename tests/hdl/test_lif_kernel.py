@@ -195,6 +195,22 @@ def test_long_run_equal_spikes_state_traces_and_clamps(name):
     same_state()
 
 
+@pytest.mark.parametrize("name", ["synapses-truncate", "discrete-weights", "clamps"])
+def test_threaded_split_changes_nothing(name):
+    """The population split over threads (uneven chunks) gives the same spikes and state."""
+    cfg = config(name)
+    one, three = LifTwin(cfg, threads=1), LifTwin(cfg, threads=3)
+    rng = np.random.default_rng(8)
+    raw = np.asarray(cfg.I.to_raw(rng.uniform(cfg.I.min_value, cfg.I.max_value, (800, N))),
+                     dtype=np.int64)
+    X = rng.random((800, cfg.n_inputs)) < 0.3
+    (ka, na), (kb, nb) = one.run_raw(raw, 800, X), three.run_raw(raw, 800, X)
+    oa, ob = np.lexsort((na, ka)), np.lexsort((nb, kb))
+    assert ka.size and np.array_equal(ka[oa], kb[ob]) and np.array_equal(na[oa], nb[ob])
+    assert np.array_equal(one.v, three.v) and np.array_equal(one.ref, three.ref)
+    assert np.array_equal(one.traces, three.traces) and one.clamp_counts == three.clamp_counts
+
+
 def test_kernel_selection_and_refusals():
     cfg = config("continuous-multiply")
     assert LifTwin(cfg, check=True).kernel == "stages"
