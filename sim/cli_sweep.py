@@ -131,7 +131,9 @@ def register(groups) -> None:
     p = groups.root.add_parser("sweep", help="accuracy against cost over the core's knobs")
     p.add_argument("--out", default="out/sweep", help="output directory (cache inside)")
     p.add_argument("--battery", default="yardstick",
-                   help="yardstick (16 trains), wide (60) or long (48, use --duration-ms)")
+                   help="yardstick (16 trains), wide (60), long (48, use --duration-ms) or "
+                        "behaviours (19 published panels with their stimuli; e.g. "
+                        "--duration-ms 300)")
     p.add_argument("--duration-ms", type=positive_float, default=1000.0)
     p.add_argument("--update-hz", default="16000",
                    help="comma-separated update rates (e.g. 4000,8000,16000,20000,32000,64000)")

@@ -16,7 +16,10 @@ against one **fine-step reference** (float64 RK4 at ``reference_hz``, default 25
 
 The battery (:data:`BATTERIES`): ``yardstick`` (RS, IB, CH, FS x I in {4, 10, 30, 100}, the
 README's 16 trains), ``wide`` (the same presets x 15 currents 3.5..100: 60 trains) and
-``long`` (6 presets x 8 currents 0..40 for ``duration_ms``, e.g. 10 s).
+``long`` (6 presets x 8 currents 0..40 for ``duration_ms``, e.g. 10 s) and ``behaviours``
+(Izhikevich's published panels but (T), each with its parameters - class-1 v-equation,
+accommodation's u-equation, negative ``a`` - initial state and stimulus: steps, pulses, ramps,
+held at their last value after the panel).
 
 Points run in parallel with Dask (``dask.distributed``: a local cluster by default, or a
 scheduler address); each result is cached on disk under its key, so an interrupted sweep
@@ -33,7 +36,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["SweepPoint", "SweepSpec", "BATTERIES", "battery", "reference_trains", "evaluate",
+__all__ = ["SweepPoint", "SweepSpec", "BATTERIES", "Battery", "battery", "reference_trains", "evaluate",
            "run_sweep", "pareto_front", "write_sweep", "grid"]
 
 PRESETS = ("RS", "IB", "CH", "FS")
@@ -43,6 +46,8 @@ BATTERIES = {
              for i in np.round(np.geomspace(3.5, 100.0, 15), 2)],
     "long": [(p, float(i)) for p in ("RS", "IB", "CH", "FS", "LTS", "RZ")
              for i in (0.0, 5.0, 10.0, 15.0, 20.0, 25.0, 30.0, 40.0)],
+    # Izhikevich's published panels (each with its own parameters, initial state and stimulus)
+    "behaviours": "the 20 published behaviours but (T), which diverges at every converged step",
 }
 VP_Q_PER_MS = 0.005           # 5 / s
 
@@ -92,31 +97,87 @@ def grid(update_hz=(16e3,), operand_width=(18,), frac_bits=((18, 20),),
     return pts
 
 
-def battery(name: str):
+@dataclass(frozen=True)
+class Battery:
+    """The trains a sweep simulates: per train a parameter set (preset name or
+    :class:`~cuneate.golden.izhikevich.IzhikevichParams`), an initial state and a current -
+    constant (``constant``) or a stimulus of time (``stimuli``, the published behaviours, each
+    held at its last value after the panel's duration)."""
+
+    name: str
+    params: tuple
+    labels: tuple
+    constant: tuple | None = None
+    stimuli: tuple | None = None
+    v0: tuple | None = None
+    u0: tuple | None = None
+    current_range: tuple | None = None
+
+    @property
+    def n(self) -> int:
+        return len(self.params)
+
+    def currents(self, dt_ms: float, n_steps: int) -> np.ndarray:
+        """Per-update currents ``(n_steps, n)`` read at ``t = k dt`` (constants as a zero-copy
+        broadcast)."""
+        if self.constant is not None:
+            return np.broadcast_to(np.asarray(self.constant, dtype=np.float64),
+                                   (n_steps, self.n))
+        t = np.arange(n_steps) * dt_ms
+        return np.stack([np.broadcast_to(b.current(np.minimum(t, b.duration_ms)), (n_steps,))
+                         for b in self.stimuli], axis=1)
+
+
+def battery(name: str) -> Battery:
     if name not in BATTERIES:
         raise ValueError(f"unknown battery {name!r}; known: {', '.join(BATTERIES)}")
+    if name == "behaviours":
+        from ..golden.behaviours import BEHAVIOURS
+        bs = [b for k, b in BEHAVIOURS.items() if k != "T"]
+        return Battery(name, tuple(b.params for b in bs), tuple(b.key for b in bs),
+                       stimuli=tuple(bs), v0=tuple(b.v0 for b in bs),
+                       u0=tuple(b.u0 for b in bs),
+                       current_range=(min(b.current_range[0] for b in bs),
+                                      max(b.current_range[1] for b in bs)))
     b = BATTERIES[name]
-    return [p for p, _ in b], np.array([i for _, i in b])
+    return Battery(name, tuple(p for p, _ in b), tuple(f"{p} I={i:g}" for p, i in b),
+                   constant=tuple(float(i) for _, i in b))
+
+
+def _simulate_float(bat: Battery, dt_ms: float, n_steps: int, scheme: str,
+                    dtype=np.float64) -> list[np.ndarray]:
+    from ..golden import izhikevich as giz
+    r = giz.simulate(list(bat.params), bat.currents(dt_ms, n_steps), n_neurons=bat.n,
+                     n_steps=n_steps, dt_ms=dt_ms, scheme=scheme, dtype=dtype,
+                     v0=None if bat.v0 is None else np.asarray(bat.v0),
+                     u0=None if bat.u0 is None else np.asarray(bat.u0))
+    return [np.asarray(s) for s in r.spikes_ms]
 
 
 def reference_trains(spec: SweepSpec) -> list[np.ndarray]:
     """Float64 RK4 at ``reference_hz`` on the battery (the accuracy reference)."""
-    from ..golden import izhikevich as giz
-    names, cur = battery(spec.battery)
-    r = giz.simulate(names, lambda t: cur, n_neurons=len(names), duration_ms=spec.duration_ms,
-                     dt_ms=1000.0 / spec.reference_hz, scheme="rk4")
-    return [np.asarray(s) for s in r.spikes_ms]
+    dt = 1000.0 / spec.reference_hz
+    return _simulate_float(battery(spec.battery), dt, int(round(spec.duration_ms / dt)), "rk4")
 
 
-def _fixed_config(p: SweepPoint, names, n: int):
+def _fixed_config(p: SweepPoint, bat: Battery):
     from ..hdl.izhikevich import IzhikevichConfig
-    sets = tuple(dict.fromkeys(names))
-    return IzhikevichConfig(n_neurons=max(n, 5), clock_hz=p.update_hz * max(n, 5),
-                            update_hz=p.update_hz, param_sets=sets,
-                            neuron_sets=[sets.index(x) for x in names] + [0] * (max(n, 5) - n),
+    n = bat.n
+    N = max(n, 5)
+    sets = tuple(dict.fromkeys(bat.params))
+    pad = N - n
+    kw = {}
+    if bat.v0 is not None:
+        kw["v_init"] = list(bat.v0) + [bat.v0[0]] * pad
+        kw["u_init"] = list(bat.u0) + [bat.u0[0]] * pad
+    if bat.current_range is not None:
+        kw["current_range"] = bat.current_range
+    return IzhikevichConfig(n_neurons=N, clock_hz=p.update_hz * N, update_hz=p.update_hz,
+                            param_sets=sets,
+                            neuron_sets=[sets.index(x) for x in bat.params] + [0] * pad,
                             operand_width=p.operand_width, v_frac_bits=p.v_frac_bits,
                             u_frac_bits=p.u_frac_bits, rounding=p.rounding,
-                            tick_source="external")
+                            tick_source="external", **kw)
 
 
 def _synth(p: SweepPoint, spec: SweepSpec) -> dict:
@@ -147,10 +208,9 @@ def _synth(p: SweepPoint, spec: SweepSpec) -> dict:
 
 def evaluate(p: SweepPoint, spec: SweepSpec, ref: list) -> dict:
     """Simulate the battery at point ``p`` and measure it against ``ref``."""
-    from ..golden import izhikevich as giz
     from ..golden.metrics import compare_populations
-    names, cur = battery(spec.battery)
-    n = len(names)
+    bat = battery(spec.battery)
+    n = bat.n
     dt = 1000.0 / p.update_hz
     n_steps = int(round(spec.duration_ms / dt))
     row: dict = {"key": p.key(spec), "label": p.label(), **asdict(p), "dt_ms": dt}
@@ -158,17 +218,22 @@ def evaluate(p: SweepPoint, spec: SweepSpec, ref: list) -> dict:
     try:
         if p.engine == "fixed":
             from ..hdl.izhikevich import IzhikevichTwin
-            cfg = _fixed_config(p, names, n)
-            trains = IzhikevichTwin(cfg).run(np.concatenate([cur, np.zeros(cfg.n_neurons - n)]),
-                                             n_steps)[:n]
+            cfg = _fixed_config(p, bat)
+            twin = IzhikevichTwin(cfg)
+            pad = np.zeros(cfg.n_neurons - n)
+            if bat.constant is not None:
+                trains = twin.run(np.concatenate([bat.constant, pad]), n_steps)[:n]
+            else:
+                sched = np.concatenate([bat.currents(dt, n_steps),
+                                        np.zeros((n_steps, cfg.n_neurons - n))], axis=1)
+                trains = twin.run(lambda t: sched[int(round(t / dt))], n_steps)[:n]
             row.update(multipliers=4 if cfg.dt_shift is not None else 5,
                        state_bits=cfg.V.width + cfg.U.width,
-                       neurons_per_core=int(spec.clock_hz // p.update_hz))
+                       neurons_per_core=int(spec.clock_hz // p.update_hz),
+                       clamped_updates=int(sum(twin.clamp_counts.values())))
         else:
             dtype = np.float32 if p.engine == "float32" else np.float64
-            r = giz.simulate(names, lambda t: cur, n_neurons=n, n_steps=n_steps, dt_ms=dt,
-                             scheme=p.scheme, dtype=dtype)
-            trains = [np.asarray(s) for s in r.spikes_ms]
+            trains = _simulate_float(bat, dt, n_steps, p.scheme, dtype)
             row.update(multipliers=None, state_bits=64 if dtype == np.float32 else 128,
                        neurons_per_core=None)
     except Exception as exc:              # a configuration the core refuses, a divergence
@@ -191,9 +256,8 @@ def evaluate(p: SweepPoint, spec: SweepSpec, ref: list) -> dict:
                host_s_per_neuron_bio_s=wall / (spec.duration_ms / 1000.0) / n)
     if p.engine == "fixed" or p.engine == "float32" or p.scheme != "euler":
         # the error of the arithmetic alone: against float64 forward Euler at the same dt
-        e = giz.simulate(names, lambda t: cur, n_neurons=n, n_steps=n_steps, dt_ms=dt,
-                         scheme="euler")
-        ce = compare_populations([np.asarray(x) for x in e.spikes_ms], trains, dt, VP_Q_PER_MS)
+        ce = compare_populations(_simulate_float(bat, dt, n_steps, "euler"), trains, dt,
+                                 VP_Q_PER_MS)
         row.update(vs_euler_fraction_within_tick=ce["fraction_within_tick"],
                    vs_euler_counts_equal=bool(ce["counts_equal"]),
                    vs_euler_mean_vp=ce["mean_vp_distance"])

@@ -3,10 +3,12 @@
 import csv
 import json
 
+import numpy as np
 import pytest
 
 from cuneate.sim.cli import main
-from cuneate.sim.sweep import SweepSpec, grid, pareto_front, run_sweep
+from cuneate.sim.sweep import (SweepPoint, SweepSpec, battery, evaluate, grid, pareto_front,
+                               reference_trains, run_sweep)
 
 
 def test_small_sweep_on_a_local_dask_cluster(tmp_path, capsys):
@@ -51,6 +53,42 @@ def test_interrupted_sweep_resumes_from_its_cache(tmp_path):
         [r["fraction_within_tick"] for r in first]
     # another battery or duration is another key
     assert pts[0].key(SweepSpec(duration_ms=200.0)) != pts[0].key(spec)
+
+
+def test_the_published_behaviours_are_a_battery_of_the_sweep():
+    """The 19 expressible panels (own parameters, initial state and stimulus) run on every
+    engine of a sweep; the core holds every published stimulus without a clamp, float32 keeps
+    every spike count of float64 Euler, and the fixed-point core keeps every count but the
+    depolarizing after-potential's (Q), whose last spike sits on a threshold the update's
+    rounding decides; truncation is further from Euler than rounding to nearest."""
+    bat = battery("behaviours")
+    assert bat.n == 19 and not any(lab.startswith("T ") for lab in bat.labels)
+    spec = SweepSpec(battery="behaviours", duration_ms=300.0)
+    ref = reference_trains(spec)
+    assert len(ref) == 19 and sum(map(len, ref)) > 100
+    rows = {p.label(): evaluate(p, spec, ref)
+            for p in grid(rounding=("nearest", "truncate"), floats=("float32",))}
+    near, trunc = rows["fixed 16 kHz w18 v.18 u.20 nearest"], \
+        rows["fixed 16 kHz w18 v.18 u.20 truncate"]
+    f32 = rows["float32 euler 16 kHz"]
+    assert all(r["status"] == "ok" and r["trains"] == 19 for r in rows.values()), rows
+    assert near["clamped_updates"] == 0 and trunc["clamped_updates"] == 0
+    assert f32["vs_euler_counts_equal"]
+    assert trunc["vs_euler_fraction_within_tick"] < near["vs_euler_fraction_within_tick"]
+    # per train: the core against float64 Euler at its dt
+    from cuneate.golden import izhikevich as giz
+    from cuneate.hdl.izhikevich import IzhikevichTwin
+    from cuneate.sim.sweep import _fixed_config
+    dt, n = 1.0 / 16.0, 4800
+    euler = giz.simulate(list(bat.params), bat.currents(dt, n), n_steps=n, dt_ms=dt,
+                         v0=np.asarray(bat.v0), u0=np.asarray(bat.u0)).spike_counts
+    cfg = _fixed_config(SweepPoint("fixed"), bat)
+    cur = np.concatenate([bat.currents(dt, n), np.zeros((n, cfg.n_neurons - bat.n))], axis=1)
+    fixed = [len(s) for s in IzhikevichTwin(cfg).run(lambda t: cur[int(round(t / dt))], n)]
+    differ = [lab for lab, a, b in zip(bat.labels, euler, fixed) if a != b]
+    assert differ == ["Q depolarizing after-potential"], differ
+    q = bat.labels.index("Q depolarizing after-potential")
+    assert abs(int(euler[q]) - fixed[q]) == 1
 
 
 def test_pareto_front_by_hand():
