@@ -45,7 +45,7 @@ from amaranth.lib.wiring import In, Out
 
 from ..golden.izhikevich import group_spikes
 from .cuneate_config import CoincidenceConfig, ConfigError
-from .fixed import narrow, round_shift, select
+from .fixed import narrow, round_shift, select, tally_clamps
 from .izhikevich import (CLAMP_KINDS, IzhikevichTwin, _lookup, multiply1, multiply2,
                          operands, update_state)
 from .lif_synapses import trace_products, trace_update
@@ -154,13 +154,6 @@ class CoincidenceTwin:
         self.pending = np.zeros(self.cfg.n_sources, dtype=bool)
         return self.inputs()
 
-    def _account(self, counts) -> None:
-        for b, k in enumerate(CLAMP_KINDS):
-            n = int(counts[b])
-            self.clamp_counts[k] += n
-            if n:
-                self.clamp_sticky |= 1 << b
-
     def run_pending(self, pending) -> tuple[np.ndarray, np.ndarray]:
         """Run ``len(pending)`` ticks, tick ``k`` stamping the sources set in ``pending[k]``
         (``(n_ticks, n_sources)`` bool; spikes already pending join the first tick). Returns
@@ -176,7 +169,7 @@ class CoincidenceTwin:
             ks, ns, totals = self._k.run_ticks(self._consts, self.v, self.u, self.xd, self.xr,
                                                self.sel, self.history, pend, self.ticks)
             self.ticks += len(pend)
-            self._account(totals)
+            tally_clamps(self, CLAMP_KINDS, totals)
             return ks, ns
         hits_k, hits_n = [], []
         for k, row in enumerate(pend):
@@ -200,11 +193,7 @@ class CoincidenceTwin:
         out = self.update(self.v, self.u, self.xd, self.xr, self.stamp())
         self.v, self.u = out["v"].astype(np.int64), out["u"].astype(np.int64)
         self.xd, self.xr = out["xd"], out["xr"]
-        for b, k in enumerate(CLAMP_KINDS):
-            n = int(np.count_nonzero(out[k]))
-            self.clamp_counts[k] += n
-            if n:
-                self.clamp_sticky |= 1 << b
+        tally_clamps(self, CLAMP_KINDS, [np.count_nonzero(out[k]) for k in CLAMP_KINDS])
         self.ticks += 1
         return np.asarray(out["spike"], dtype=bool)
 

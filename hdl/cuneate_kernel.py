@@ -65,7 +65,7 @@ def gather_constants(cfg) -> CoincidenceConstants:
 
 if numba is not None:
     from .izhikevich_kernel import _neuron as _iz_neuron
-    from .izhikevich_kernel import _rq
+    from .izhikevich_kernel import _record, _rq
     from .lif_kernel import trace_step
 
     _jit = dict(nogil=True, cache=True, error_model="numpy")
@@ -97,7 +97,7 @@ if numba is not None:
 
     @njit(**_jit)
     def _run(v, u, xd, xr, sel, history, pend, tick0, delays, W, sc, ttab, iztab, izsc, k0,
-             n_ticks, spk_k, spk_n, n_spk, totals):
+             n_ticks, spk_k, spk_n, n_spk, totals, flags, fwords):
         """Ticks ``k0 .. n_ticks - 1`` in place; tick ``k`` stamps ``pend[k]`` into history
         slot ``(tick0 + k) mod D``. Returns (next tick, spikes recorded); stops early when the
         spike buffer could overflow."""
@@ -105,18 +105,12 @@ if numba is not None:
         D = history.shape[0]
         cap = spk_k.shape[0]
         acc = np.zeros(M, np.int64)
-        flags = np.zeros(M, np.bool_)
         uniform = len(iztab[0]) == 1          # one parameter set: no per-target gather
-        c0 = c1 = c2 = c3 = c4 = 0
         for k in range(k0, n_ticks):
             if cap - n_spk < M:
-                totals[0] += c0
-                totals[1] += c1
-                totals[2] += c2
-                totals[3] += c3
-                totals[4] += c4
                 return k, n_spk
             hits = 0
+            c0 = c1 = c2 = c3 = c4 = 0
             T = tick0 + k
             slot = T % D
             for s in range(S):
@@ -144,16 +138,12 @@ if numba is not None:
                 c3 += (cl >> 3) & 1
                 c4 += (cl >> 4) & 1
             if hits:
-                for t in range(M):
-                    if flags[t]:
-                        spk_k[n_spk] = k
-                        spk_n[n_spk] = t
-                        n_spk += 1
-        totals[0] += c0
-        totals[1] += c1
-        totals[2] += c2
-        totals[3] += c3
-        totals[4] += c4
+                n_spk = _record(flags, fwords, k, spk_k, spk_n, n_spk)
+            totals[0] += c0
+            totals[1] += c1
+            totals[2] += c2
+            totals[3] += c3
+            totals[4] += c4
         return n_ticks, n_spk
 
 
@@ -179,11 +169,12 @@ def run_ticks(consts: CoincidenceConstants, v, u, xd, xr, sel, history, pending,
     cap = max(4 * M, 1024)
     spk_k, spk_n = np.empty(cap, np.int64), np.empty(cap, np.int64)
     tab, sc_iz = consts.iz
+    flags = np.zeros((M + 7) // 8 * 8, np.bool_)           # whole words for _record
     k, n_spk = 0, 0
     while k < n_ticks:
         k, n_spk = _run(v, u, xd, xr, sel, history, pending, tick0, consts.delays,
                         consts.weights, consts.sc, consts.ttab, tab, sc_iz, k, n_ticks, spk_k,
-                        spk_n, n_spk, totals)
+                        spk_n, n_spk, totals, flags, flags.view(np.uint64))
         if k < n_ticks:
             cap *= 2
             spk_k, spk_n = np.resize(spk_k, cap), np.resize(spk_n, cap)

@@ -31,6 +31,7 @@ __all__ = [
     "ROUNDINGS", "QFormat", "FixedConstant", "FixedPointError", "is_hdl", "round_shift",
     "round_shift_add",
     "round_shift_select", "saturate", "narrow", "clamp_flagged", "select", "check_int64",
+    "tally_clamps",
 ]
 
 ROUNDINGS = ("nearest", "truncate")
@@ -339,6 +340,17 @@ def clamp_flagged(x, lo: int, hi: int, fmt: QFormat, bounds: tuple[int, int] | N
         return arr, z, z
     below, above = arr < lo, arr > hi
     return np.clip(arr, lo, hi), below, above
+
+
+def tally_clamps(twin, kinds, counts) -> None:
+    """Add one sweep's (or run's) clamp counts per kind (``counts[i]`` for ``kinds[i]``) to a
+    twin's ``clamp_counts`` and set its ``clamp_sticky`` bits, as the RTL's counters and sticky
+    flags do: a clamp that acted is never silent."""
+    for i, k in enumerate(kinds):
+        n = int(counts[i])
+        twin.clamp_counts[k] += n
+        if n:
+            twin.clamp_sticky |= 1 << i
 
 
 def check_int64(name: str, x) -> None:

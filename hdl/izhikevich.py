@@ -38,7 +38,7 @@ from amaranth.lib.wiring import In, Out
 
 from ..golden import izhikevich as golden
 from .fixed import (check_int64, clamp_flagged, is_hdl, narrow, round_shift, round_shift_add,
-                    select)
+                    select, tally_clamps)
 from .izhikevich_config import (CLAMP_KINDS, PIPELINE_DEPTH, SATURATION, ConfigError,
                                 IzhikevichConfig)
 from .tick import tick_strobe
@@ -315,12 +315,9 @@ class IzhikevichTwin:
         return out
 
     def _account(self, counts):
+        tally_clamps(self, CLAMP_KINDS, counts)
         for i, k in enumerate(CLAMP_KINDS):
-            n = int(counts[i])
-            self.last_sweep_clamps[k] = n
-            self.clamp_counts[k] += n
-            if n:
-                self.clamp_sticky |= 1 << i
+            self.last_sweep_clamps[k] = int(counts[i])
 
     def sweep(self):
         """Update every neuron once (one tick); returns the boolean spike vector."""
@@ -356,10 +353,7 @@ class IzhikevichTwin:
                                                           threads=self.threads)
                 hits_k.append(ks)
                 hits_n.append(ns)
-                for i, k in enumerate(CLAMP_KINDS):
-                    self.clamp_counts[k] += int(totals[i])
-                    if totals[i]:
-                        self.clamp_sticky |= 1 << i
+                tally_clamps(self, CLAMP_KINDS, totals)
                 done += todo
                 self.sweeps += todo
                 if progress is not None and done % 1000 == 0:

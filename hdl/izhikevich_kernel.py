@@ -303,14 +303,18 @@ def run_sweeps(cfg_consts, v, u, I, sel, n_sweeps: int, k0: int = 0,
                 spk_n = np.resize(spk_n, cap)
         return spk_k[:n_spk], spk_n[:n_spk] + lo, totals, last
 
-    if threads == 1 or n_sweeps == 0:
-        parts = [chunk(0, N)]
+    return split_over_threads(chunk, N, threads if n_sweeps else 1)
+
+
+def split_over_threads(chunk, n: int, threads: int):
+    """Run ``chunk(lo, hi)`` on ``threads`` contiguous slices of ``n`` neurons (one call when
+    ``threads == 1``) and join the results: each chunk returns ``(spike_sweeps,
+    spike_neurons, totals, last)`` with neuron indices already offset by ``lo``."""
+    if threads == 1:
+        parts = [chunk(0, n)]
     else:
-        edges = np.linspace(0, N, threads + 1).astype(int)
+        edges = np.linspace(0, n, threads + 1).astype(int)
         with ThreadPoolExecutor(threads) as pool:
             parts = list(pool.map(chunk, edges[:-1], edges[1:]))
-    ks = np.concatenate([p[0] for p in parts])
-    ns = np.concatenate([p[1] for p in parts])
-    totals = sum(p[2] for p in parts)
-    last = sum(p[3] for p in parts)
-    return ks, ns, totals, last
+    return (np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts]),
+            sum(p[2] for p in parts), sum(p[3] for p in parts))

@@ -42,7 +42,7 @@ from amaranth.lib.wiring import In, Out
 
 from ..golden.izhikevich import group_spikes
 from .fixed import (QFormat, check_int64, clamp_flagged, is_hdl, narrow, round_shift, round_shift_select,
-                    select)
+                    select, tally_clamps)
 from .lif_synapses import TRACE_NAMES, trace_inputs, trace_products, trace_update
 from .lif_config import (CLAMP_KINDS, DECAYS, FORMS, PIPELINE_DEPTH, ConfigError, LifConfig,
                          LifSet)
@@ -267,13 +267,6 @@ class LifTwin:
         out["clamp"] = clamp_bits(out)
         return out
 
-    def _account(self, counts) -> None:
-        for i, k in enumerate(CLAMP_KINDS):
-            n = int(counts[i])
-            self.clamp_counts[k] += n
-            if n:
-                self.clamp_sticky |= 1 << i
-
     def _traces_arg(self):
         return self.traces if self.cfg.synapses else np.zeros((1, self.cfg.n_neurons),
                                                               dtype=np.int64)
@@ -300,7 +293,7 @@ class LifTwin:
             if cfg.synapses:
                 self.traces = tr
             self.sweeps += n_sweeps
-            self._account(totals)
+            tally_clamps(self, CLAMP_KINDS, totals)
             if n_sweeps:
                 self.I[:] = I if I.ndim == 1 else I[-1]
             return ks, ns
@@ -326,7 +319,7 @@ class LifTwin:
             if self.cfg.synapses:
                 self.traces = tr
             self.sweeps += 1
-            self._account(totals)
+            tally_clamps(self, CLAMP_KINDS, totals)
             spk = np.zeros(self.cfg.n_neurons, dtype=bool)
             spk[ns] = True
             return spk
@@ -336,11 +329,7 @@ class LifTwin:
         if self.cfg.synapses:
             self.traces = out["traces"]
         self.sweeps += 1
-        for i, k in enumerate(CLAMP_KINDS):
-            n = int(np.count_nonzero(out[k]))
-            self.clamp_counts[k] += n
-            if n:
-                self.clamp_sticky |= 1 << i
+        tally_clamps(self, CLAMP_KINDS, [np.count_nonzero(out[k]) for k in CLAMP_KINDS])
         return np.asarray(out["spike"], dtype=bool)
 
     def run(self, currents, n_sweeps: int, inputs=None) -> list[np.ndarray]:

@@ -19,12 +19,11 @@ wider than the state).
 
 from __future__ import annotations
 
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
 
-from .izhikevich_kernel import available, default_threads, rounding_slots
+from .izhikevich_kernel import available, default_threads, rounding_slots, split_over_threads
 from .lif_config import CLAMP_KINDS, LifConfig
 
 __all__ = ["available", "LifConstants", "gather_constants", "trace_table", "update_arrays",
@@ -124,7 +123,7 @@ def _tuples(a: np.ndarray) -> tuple:
 
 # ----------------------------------------------------------------------------------------------
 if numba is not None:
-    from .izhikevich_kernel import _rq, _rs
+    from .izhikevich_kernel import _record, _rq
 
     _jit = dict(nogil=True, cache=True, error_model="numpy")
 
@@ -240,7 +239,7 @@ if numba is not None:
 
     @njit(**_jit)
     def _run(v, ref, tr, I, per_sweep, sel, W, exc, X, has_x, tab, tab_a, sc, ttab, k0, n_sweeps,
-             spk_k, spk_n, n_spk, totals, last, flags):
+             spk_k, spk_n, n_spk, totals, last, flags, fwords):
         """Sweeps ``k0 .. n_sweeps - 1`` of a program, in place. ``I`` is (n_sweeps, N) when
         ``per_sweep`` else (1, N); ``X`` (n_sweeps, F) input spikes when ``has_x``. Spikes are
         appended to (spk_k, spk_n) from ``n_spk``; stops early (before a sweep) when the buffer
@@ -299,11 +298,7 @@ if numba is not None:
                 c1 += f_in
                 c2 += v_low
             if hits:
-                for i in range(N):
-                    if flags[i]:
-                        spk_k[n_spk] = k
-                        spk_n[n_spk] = i
-                        n_spk += 1
+                n_spk = _record(flags, fwords, k, spk_k, spk_n, n_spk)
             last[0] = c0
             last[1] = c1
             last[2] = c2
@@ -359,22 +354,16 @@ def run_program(consts: LifConstants, v, ref, traces, I, sel, W, inputs, n_sweep
         last = np.zeros(len(CLAMP_KINDS), np.int64)
         cap = max(4 * n, 1024)
         spk_k, spk_n = np.empty(cap, np.int64), np.empty(cap, np.int64)
-        flags = np.zeros(n, np.bool_)
+        flags = np.zeros((n + 7) // 8 * 8, np.bool_)       # whole words for _record
         k, n_spk = 0, 0
         while k < n_sweeps:
             k, n_spk = _run(vv, rr, tt, I2[:, lo:hi], per_sweep, ss, ww, consts.exc, X, has_x,
                             consts.tab, consts.tab_array, consts.sc, consts.ttab, k, n_sweeps,
-                            spk_k, spk_n, n_spk, totals, last, flags)
+                            spk_k, spk_n, n_spk, totals, last, flags,
+                            flags.view(np.uint64))
             if k < n_sweeps:                   # buffer full: grow and go on
                 cap *= 2
                 spk_k, spk_n = np.resize(spk_k, cap), np.resize(spk_n, cap)
         return spk_k[:n_spk], spk_n[:n_spk] + lo, totals, last
 
-    if threads == 1 or n_sweeps == 0:
-        parts = [chunk(0, N)]
-    else:
-        edges = np.linspace(0, N, threads + 1).astype(int)
-        with ThreadPoolExecutor(threads) as pool:
-            parts = list(pool.map(chunk, edges[:-1], edges[1:]))
-    return (np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts]),
-            sum(p[2] for p in parts), sum(p[3] for p in parts))
+    return split_over_threads(chunk, N, threads if n_sweeps else 1)
