@@ -267,9 +267,18 @@ class LifTwin:
         out["clamp"] = clamp_bits(out)
         return out
 
-    def _traces_arg(self):
-        return self.traces if self.cfg.synapses else np.zeros((1, self.cfg.n_neurons),
-                                                              dtype=np.int64)
+    def _run_kernel(self, I, n_sweeps: int, inputs, threads):
+        """``n_sweeps`` ticks by the compiled kernel (state, traces and clamp accounting kept);
+        returns the spikes as ``(sweeps, neurons)``."""
+        syn = self.cfg.synapses
+        tr = self.traces if syn else np.zeros((1, self.cfg.n_neurons), dtype=np.int64)
+        ks, ns, totals, _ = self._k.run_program(self._consts, self.v, self.ref, tr, I, self.sel,
+                                                self.W, inputs, n_sweeps, threads)
+        if syn:
+            self.traces = tr
+        self.sweeps += n_sweeps
+        tally_clamps(self, CLAMP_KINDS, totals)
+        return ks, ns
 
     def run_raw(self, currents_raw, n_sweeps: int, inputs=None):
         """``n_sweeps`` ticks from raw currents, (n,) for the whole run or (n_sweeps, n) per
@@ -286,14 +295,7 @@ class LifTwin:
             if inputs.shape != (n_sweeps, cfg.n_inputs):
                 raise ValueError(f"input spikes must have shape ({n_sweeps}, {cfg.n_inputs})")
         if self.kernel == "numba":
-            tr = self._traces_arg()
-            ks, ns, totals, _ = self._k.run_program(self._consts, self.v, self.ref, tr, I,
-                                                    self.sel, self.W, inputs, n_sweeps,
-                                                    self.threads)
-            if cfg.synapses:
-                self.traces = tr
-            self.sweeps += n_sweeps
-            tally_clamps(self, CLAMP_KINDS, totals)
+            ks, ns = self._run_kernel(I, n_sweeps, inputs, self.threads)
             if n_sweeps:
                 self.I[:] = I if I.ndim == 1 else I[-1]
             return ks, ns
@@ -313,13 +315,7 @@ class LifTwin:
             xs = None if x is None else np.asarray(x, dtype=bool).reshape(1, -1)
             if xs is not None and xs.shape[1] != self.cfg.n_inputs:
                 raise ValueError(f"input spike vector must have {self.cfg.n_inputs} entries")
-            tr = self._traces_arg()
-            _, ns, totals, _ = self._k.run_program(self._consts, self.v, self.ref, tr, self.I,
-                                                   self.sel, self.W, xs, 1, threads=1)
-            if self.cfg.synapses:
-                self.traces = tr
-            self.sweeps += 1
-            tally_clamps(self, CLAMP_KINDS, totals)
+            _, ns = self._run_kernel(self.I, 1, xs, threads=1)
             spk = np.zeros(self.cfg.n_neurons, dtype=bool)
             spk[ns] = True
             return spk

@@ -180,6 +180,16 @@ def _fixed_config(p: SweepPoint, bat: Battery):
                             tick_source="external", **kw)
 
 
+def _run_fixed(twin, bat: Battery, dt_ms: float, n_steps: int) -> list[np.ndarray]:
+    """The battery's trains on a core twin built by :func:`_fixed_config` (the neurons that pad
+    the core to its minimum size get no current)."""
+    n, pad = bat.n, twin.cfg.n_neurons - bat.n
+    if bat.constant is not None:
+        return twin.run(np.concatenate([bat.constant, np.zeros(pad)]), n_steps)[:n]
+    sched = np.concatenate([bat.currents(dt_ms, n_steps), np.zeros((n_steps, pad))], axis=1)
+    return twin.run(lambda t: sched[int(round(t / dt_ms))], n_steps)[:n]
+
+
 def _synth(p: SweepPoint, spec: SweepSpec) -> dict:
     """yosys synth_ecp5 of the core with as many neurons as the clock allows at this rate."""
     import re
@@ -220,13 +230,7 @@ def evaluate(p: SweepPoint, spec: SweepSpec, ref: list) -> dict:
             from ..hdl.izhikevich import IzhikevichTwin
             cfg = _fixed_config(p, bat)
             twin = IzhikevichTwin(cfg)
-            pad = np.zeros(cfg.n_neurons - n)
-            if bat.constant is not None:
-                trains = twin.run(np.concatenate([bat.constant, pad]), n_steps)[:n]
-            else:
-                sched = np.concatenate([bat.currents(dt, n_steps),
-                                        np.zeros((n_steps, cfg.n_neurons - n))], axis=1)
-                trains = twin.run(lambda t: sched[int(round(t / dt))], n_steps)[:n]
+            trains = _run_fixed(twin, bat, dt, n_steps)
             row.update(multipliers=4 if cfg.dt_shift is not None else 5,
                        state_bits=cfg.V.width + cfg.U.width,
                        neurons_per_core=int(spec.clock_hz // p.update_hz),

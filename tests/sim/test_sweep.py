@@ -78,13 +78,12 @@ def test_the_published_behaviours_are_a_battery_of_the_sweep():
     # per train: the core against float64 Euler at its dt
     from cuneate.golden import izhikevich as giz
     from cuneate.hdl.izhikevich import IzhikevichTwin
-    from cuneate.sim.sweep import _fixed_config
+    from cuneate.sim.sweep import _fixed_config, _run_fixed
     dt, n = 1.0 / 16.0, 4800
     euler = giz.simulate(list(bat.params), bat.currents(dt, n), n_steps=n, dt_ms=dt,
                          v0=np.asarray(bat.v0), u0=np.asarray(bat.u0)).spike_counts
-    cfg = _fixed_config(SweepPoint("fixed"), bat)
-    cur = np.concatenate([bat.currents(dt, n), np.zeros((n, cfg.n_neurons - bat.n))], axis=1)
-    fixed = [len(s) for s in IzhikevichTwin(cfg).run(lambda t: cur[int(round(t / dt))], n)]
+    twin = IzhikevichTwin(_fixed_config(SweepPoint("fixed"), bat))
+    fixed = [len(s) for s in _run_fixed(twin, bat, dt, n)]
     differ = [lab for lab, a, b in zip(bat.labels, euler, fixed) if a != b]
     assert differ == ["Q depolarizing after-potential"], differ
     q = bat.labels.index("Q depolarizing after-potential")
