@@ -29,10 +29,12 @@ def _frac(text: str) -> tuple[int, int]:
 
 
 def cmd_sweep(args) -> int:
-    from .sweep import BATTERIES, SweepSpec, grid, run_sweep, write_sweep
-    if args.battery not in BATTERIES:
-        raise CliError(f"--battery: unknown battery {args.battery!r} (known: "
-                       f"{', '.join(BATTERIES)})")
+    from .sweep import SweepSpec, battery, grid, run_sweep, write_sweep
+    try:
+        bat = battery(args.battery)
+    except ValueError as exc:
+        raise CliError(f"--battery: {exc}") from None
+    duration = args.duration_ms or bat.duration_ms or 1000.0
     rates = _list(args.update_hz, float, "--update-hz")
     if any(r <= 0 for r in rates):
         raise CliError("--update-hz: rates must be > 0")
@@ -47,8 +49,9 @@ def cmd_sweep(args) -> int:
     if set(schemes) - {"euler", "izhikevich", "rk4"}:
         raise CliError("--schemes: euler, izhikevich and/or rk4")
     floats = [] if args.no_float else ["float64", "float32"]
-    spec = SweepSpec(battery=args.battery, duration_ms=args.duration_ms,
-                     reference_hz=args.reference_hz, clock_hz=args.clock_hz, synth=args.synth)
+    spec = SweepSpec(battery=args.battery, duration_ms=duration,
+                     reference_hz=args.reference_hz, clock_hz=args.clock_hz, synth=args.synth,
+                     fmax=args.fmax)
     pts = grid(rates, widths, fracs, rnd, schemes, floats)
     out = output_dir(args.out)
     rows = run_sweep(pts, spec, out / "cache", scheduler=args.scheduler, workers=args.workers,
@@ -61,7 +64,8 @@ def cmd_sweep(args) -> int:
               + (f"within 1 tick {acc:.4f}" if acc is not None else r.get("reason", "")[:70])
               + (f", of Euler at its dt {ve:.4f}" if ve is not None else "")
               + (f", {r['host_s_per_bio_s']:.2f} s/bio s" if r.get("host_s_per_bio_s")
-                 else ""))
+                 else "")
+              + (f", fmax {r['fmax_mhz']:.1f} MHz" if r.get("fmax_mhz") else ""))
     print(f"report: {page}")
     return 0
 
@@ -131,10 +135,12 @@ def register(groups) -> None:
     p = groups.root.add_parser("sweep", help="accuracy against cost over the core's knobs")
     p.add_argument("--out", default="out/sweep", help="output directory (cache inside)")
     p.add_argument("--battery", default="yardstick",
-                   help="yardstick (16 trains), wide (60), long (48, use --duration-ms) or "
+                   help="yardstick (16 trains), wide (60), long (48, use --duration-ms), "
                         "behaviours (19 published panels with their stimuli; e.g. "
-                        "--duration-ms 300)")
-    p.add_argument("--duration-ms", type=positive_float, default=1000.0)
+                        "--duration-ms 300), scene (the default scene's neurons and front-end "
+                        "currents), scene:NAME (an example) or scene:PATH (a scene file)")
+    p.add_argument("--duration-ms", type=positive_float, default=None,
+                   help="biological time (default: a scene's length, else 1000)")
     p.add_argument("--update-hz", default="16000",
                    help="comma-separated update rates (e.g. 4000,8000,16000,20000,32000,64000)")
     p.add_argument("--operand-width", default="18", help="comma-separated (e.g. 16,18,20,25)")
@@ -149,6 +155,9 @@ def register(groups) -> None:
                    help="clock for neurons per core (default 40e6)")
     p.add_argument("--synth", action="store_true",
                    help="yosys synth_ecp5 per fixed point (slow: a core per point)")
+    p.add_argument("--fmax", action="store_true",
+                   help="also nextpnr-ecp5 place and route per fixed point for its fmax on the "
+                        "ULX3S's LFE5U-85F (implies --synth; ~35 s a point)")
     p.add_argument("--scheduler", default=None,
                    help="dask.distributed address; 'sync' runs in this process (default: a "
                         "local cluster)")

@@ -32,7 +32,8 @@ from .decode import decode, isi_samples, trial_features
 from .driver import AfferentEncoding, FbgDriver
 from .scenes import Scene
 
-__all__ = ["SceneRun", "run_scene", "BLOCKS", "ENGINES", "synthesize", "build_neurons"]
+__all__ = ["SceneRun", "run_scene", "BLOCKS", "ENGINES", "synthesize", "build_neurons",
+           "front_end"]
 
 
 @dataclass
@@ -204,6 +205,27 @@ def build_izhikevich(scene: Scene, neurons: Neurons):
 BLOCKS = {"izhikevich": build_izhikevich}
 
 
+def front_end(scene: Scene, neurons: Neurons, traces: list, infos: list, cfg):
+    """The host driver for core ``cfg`` and the float currents (mV/ms) its front end computes
+    from the traces, per sample ``(n_samples, n_neurons)`` (gaps held when the scene drops
+    samples, zero outside the loading phase when its window says so), and the gaps held."""
+    sen = scene["sensor"]
+    on_gap = "hold" if "dropped_samples" in sen["effects"] else "error"
+    drv = FbgDriver(cfg, neurons.encoding, sen["sample_rate_hz"],
+                    scene["frontend"]["latency_ticks"], on_gap=on_gap)
+    dl = np.stack([traces[t][:, g] for t, g in zip(neurons.trial, neurons.grating)], axis=1)
+    x, gaps = drv.fill_gaps(dl)
+    currents = drv.currents(x)
+    if scene["frontend"]["window"] == "loading":
+        # the front end sees the loading phase only (contact to stop), per trial
+        t_ms = np.arange(dl.shape[0]) * 1000.0 / sen["sample_rate_hz"]
+        for i, t in enumerate(neurons.trial):
+            inf = infos[t]
+            outside = (t_ms < scene["stimulus"]["contact_ms"]) | (t_ms > inf["stop_ms"])
+            currents[outside, i] = 0.0
+    return drv, currents, gaps
+
+
 # --------------------------------------------------------------------------- engines
 def run_golden(ctx) -> tuple[list, dict]:
     """Float64 golden model (forward Euler, same dt) on the unquantized currents, held per
@@ -302,23 +324,10 @@ def run_scene(scene: Scene, engines: list[str] | None = None, build_dir: Path | 
         cfg_m, desc = BLOCKS[m](scene, neurons)
         blocks.append(desc)
         cfg = cfg_m
-    sen = scene["sensor"]
-    on_gap = "hold" if "dropped_samples" in sen["effects"] else "error"
-    drv = FbgDriver(cfg, neurons.encoding, sen["sample_rate_hz"],
-                    scene["frontend"]["latency_ticks"], on_gap=on_gap)
-    dl = np.stack([traces[t][:, g] for t, g in zip(neurons.trial, neurons.grating)], axis=1)
-    x, gaps = drv.fill_gaps(dl)
-    currents = drv.currents(x)
-    if scene["frontend"]["window"] == "loading":
-        # the front end sees the loading phase only (contact to stop), per trial
-        t_ms = np.arange(dl.shape[0]) * 1000.0 / sen["sample_rate_hz"]
-        for i, t in enumerate(neurons.trial):
-            inf = infos[t]
-            outside = (t_ms < scene["stimulus"]["contact_ms"]) | (t_ms > inf["stop_ms"])
-            currents[outside, i] = 0.0
+    drv, currents, gaps = front_end(scene, neurons, traces, infos, cfg)
     raw, sat = drv.quantize(currents)
     sat["gaps_held"] = gaps
-    n_ticks = dl.shape[0] * drv.hold_ticks
+    n_ticks = currents.shape[0] * drv.hold_ticks
     timing["front_end_s"] = time.perf_counter() - t0
     ctx = {"config": cfg, "driver": drv, "neurons": neurons, "currents": currents, "raw": raw,
            "n_ticks": n_ticks, "build_dir": build_dir}

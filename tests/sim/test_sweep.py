@@ -90,6 +90,36 @@ def test_the_published_behaviours_are_a_battery_of_the_sweep():
     assert abs(int(euler[q]) - fixed[q]) == 1
 
 
+def test_a_scene_is_a_battery_of_the_sweep(tmp_path):
+    """A scene's driven neurons with its front end's currents: the sweep's float64 Euler and
+    default fixed-point trains are the ones `cuneate run` produces on its golden and fixed
+    engines (same currents, same core), and a sweep point runs on the scene."""
+    from cuneate.hdl.izhikevich import IzhikevichTwin
+    from cuneate.sim.scene_run import run_scene
+    from cuneate.sim.scenes import example_path, load_scene
+    from cuneate.sim.sweep import _fixed_config, _run_fixed, simulate_float
+    run = run_scene(load_scene(example_path("pulse_amplitudes")), engines=["golden", "fixed"])
+    bat = battery("scene:pulse_amplitudes")
+    assert bat.n == len(run.neurons) and bat.duration_ms == 400.0
+    assert np.array_equal(bat.samples, run.currents)
+    n = int(round(bat.duration_ms / run.dt_ms))
+    assert n == run.n_ticks
+    for engine, trains in (
+            ("golden", simulate_float(bat, run.dt_ms, n, "euler")),
+            ("fixed", _run_fixed(IzhikevichTwin(_fixed_config(SweepPoint("fixed"), bat)),
+                                 bat, run.dt_ms, n))):
+        assert sum(map(len, trains)) > 500
+        assert all(np.array_equal(a, b) for a, b in zip(trains, run.spikes[engine])), engine
+    spec = SweepSpec(battery="scene:pulse_amplitudes", duration_ms=400.0)
+    rows = run_sweep([SweepPoint("fixed"), SweepPoint("fixed", rounding="truncate"),
+                      SweepPoint("float64")], spec, tmp_path, scheduler="sync")
+    fx, tr, f64 = rows
+    assert fx["status"] == "ok" and fx["trains"] == bat.n and fx["clamped_updates"] == 0
+    assert f64["spikes"] == sum(map(len, run.spikes["golden"]))
+    assert fx["vs_euler_fraction_within_tick"] > 0.99
+    assert tr["vs_euler_fraction_within_tick"] <= fx["vs_euler_fraction_within_tick"]
+
+
 def test_pareto_front_by_hand():
     rows = [{"key": k, "status": "ok", "fraction_within_tick": a, "cost": c}
             for k, a, c in (("a", 0.9, 1.0), ("b", 0.95, 2.0), ("c", 0.9, 3.0),
@@ -105,6 +135,8 @@ def test_pareto_front_by_hand():
     (["--rounding", "up"], "--rounding: nearest and/or truncate"),
     (["--schemes", "heun"], "--schemes: euler, izhikevich and/or rk4"),
     (["--battery", "nope"], "--battery: unknown battery 'nope'"),
+    (["--battery", "scene:skin_3x3"], "does not drive independent Izhikevich neurons"),
+    (["--battery", "scene:nope"], "scene 'nope' is neither an example"),
 ])
 def test_refusals(argv, expect, tmp_path, capsys):
     assert main(["sweep", "--out", str(tmp_path), *argv]) == 2
@@ -115,8 +147,8 @@ def test_refusals(argv, expect, tmp_path, capsys):
 @pytest.mark.long
 def test_sweep_with_synthesis_and_update_rates(tmp_path):
     """A real instance of the long kind: update rates (powers of two and not) x widths, with
-    yosys synth_ecp5 of each fixed core sized for 40 MHz."""
-    spec = SweepSpec(duration_ms=1000.0, synth=True)
+    yosys synth_ecp5 and nextpnr-ecp5 (fmax) of each fixed core sized for 40 MHz."""
+    spec = SweepSpec(duration_ms=1000.0, synth=True, fmax=True)
     pts = grid(update_hz=(8e3, 16e3, 20e3), operand_width=(18, 20), schemes=("euler", "rk4"))
     rows = {r["label"]: r for r in run_sweep(pts, spec, tmp_path, workers=2)}
     a, b = rows["fixed 16 kHz w18 v.18 u.20 nearest"], rows["fixed 8 kHz w18 v.18 u.20 nearest"]
@@ -124,6 +156,9 @@ def test_sweep_with_synthesis_and_update_rates(tmp_path):
     assert a["MULT18X18D"] >= 4 and b["DP16KD"] > a["DP16KD"]
     assert rows["fixed 20 kHz w18 v.18 u.20 nearest"]["multipliers"] == 5
     assert all(r["status"] == "ok" for r in rows.values())
+    # every fixed core placed and routed on the LFE5U-85F meets its 40 MHz clock
+    fixed = [r for r in rows.values() if r["engine"] == "fixed"]
+    assert len(fixed) == 6 and all(r["fmax_mhz"] >= 40.0 for r in fixed)
 
 
 def test_hardcases_summary_prints_the_records(tmp_path, capsys):
