@@ -42,6 +42,10 @@ def cmd_sweep(args) -> int:
     if any(not 8 <= w <= 32 for w in widths):
         raise CliError("--operand-width: widths must lie in 8..32")
     fracs = _list(args.frac_bits, _frac, "--frac-bits")
+    cfb = (_list(args.current_frac_bits, int, "--current-frac-bits")
+           if args.current_frac_bits else [None])
+    if any(c is not None and not 0 <= c <= 24 for c in cfb):
+        raise CliError("--current-frac-bits: fraction bits must lie in 0..24")
     rnd = _list(args.rounding, str, "--rounding")
     if set(rnd) - {"nearest", "truncate"}:
         raise CliError("--rounding: nearest and/or truncate")
@@ -52,7 +56,7 @@ def cmd_sweep(args) -> int:
     spec = SweepSpec(battery=args.battery, duration_ms=duration,
                      reference_hz=args.reference_hz, clock_hz=args.clock_hz, synth=args.synth,
                      fmax=args.fmax)
-    pts = grid(rates, widths, fracs, rnd, schemes, floats)
+    pts = grid(rates, widths, fracs, rnd, schemes, floats, cfb)
     out = output_dir(args.out)
     rows = run_sweep(pts, spec, out / "cache", scheduler=args.scheduler, workers=args.workers,
                      progress=sys.stderr.isatty(), log=lambda m: print(m, file=sys.stderr))
@@ -146,6 +150,9 @@ def register(groups) -> None:
     p.add_argument("--operand-width", default="18", help="comma-separated (e.g. 16,18,20,25)")
     p.add_argument("--frac-bits", default="18:20",
                    help="comma-separated V:U state fraction bits (e.g. 16:18,18:20,20:22)")
+    p.add_argument("--current-frac-bits", default="",
+                   help="comma-separated fraction bits of the core's current format (default: "
+                        "the battery's, sQ10.8 unless a scene says otherwise; e.g. 8,10,12)")
     p.add_argument("--rounding", default="nearest", help="nearest,truncate")
     p.add_argument("--schemes", default="euler", help="golden schemes: euler,izhikevich,rk4")
     p.add_argument("--no-float", action="store_true", help="skip the float64/float32 points")

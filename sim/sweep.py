@@ -43,7 +43,9 @@ VP_Q_PER_MS = 0.005           # 5 / s
 
 @dataclass(frozen=True)
 class SweepPoint:
-    """One configuration: ``engine`` is ``fixed``, ``float64`` or ``float32``."""
+    """One configuration: ``engine`` is ``fixed``, ``float64`` or ``float32``;
+    ``current_frac_bits``: fraction bits of the core's current format (``None``: the
+    battery's, by default sQ10.8)."""
 
     engine: str
     update_hz: float = 16e3
@@ -52,16 +54,19 @@ class SweepPoint:
     u_frac_bits: int = 20
     rounding: str = "nearest"
     scheme: str = "euler"
+    current_frac_bits: int | None = None
 
     def key(self, spec: "SweepSpec") -> str:
-        blob = json.dumps([asdict(self), spec.battery, spec.duration_ms, spec.reference_hz,
+        fields = {k: v for k, v in asdict(self).items() if v is not None}
+        blob = json.dumps([fields, spec.battery, spec.duration_ms, spec.reference_hz,
                            spec.clock_hz, spec.synth or spec.fmax, spec.fmax], sort_keys=True)
         return hashlib.sha256(blob.encode()).hexdigest()[:16]
 
     def label(self) -> str:
         if self.engine == "fixed":
+            cur = "" if self.current_frac_bits is None else f" i.{self.current_frac_bits}"
             return (f"fixed {self.update_hz / 1e3:g} kHz w{self.operand_width} "
-                    f"v.{self.v_frac_bits} u.{self.u_frac_bits} {self.rounding}")
+                    f"v.{self.v_frac_bits} u.{self.u_frac_bits}{cur} {self.rounding}")
         return f"{self.engine} {self.scheme} {self.update_hz / 1e3:g} kHz"
 
 
@@ -77,11 +82,13 @@ class SweepSpec:
 
 def grid(update_hz=(16e3,), operand_width=(18,), frac_bits=((18, 20),),
          rounding=("nearest",), schemes=("euler",), floats=("float64", "float32"),
-         ) -> list[SweepPoint]:
+         current_frac_bits=(None,)) -> list[SweepPoint]:
     """The points of a sweep: every fixed-point combination, and the float models at each
     scheme and update rate."""
-    pts = [SweepPoint("fixed", float(h), int(w), int(fv), int(fu), r)
-           for h in update_hz for w in operand_width for fv, fu in frac_bits for r in rounding]
+    pts = [SweepPoint("fixed", float(h), int(w), int(fv), int(fu), r,
+                      current_frac_bits=None if c is None else int(c))
+           for h in update_hz for w in operand_width for fv, fu in frac_bits
+           for c in current_frac_bits for r in rounding]
     pts += [SweepPoint(f, float(h), scheme=s) for f in floats for s in schemes
             for h in update_hz]
     return pts
@@ -111,12 +118,25 @@ def _fixed_config(p: SweepPoint, bat: Battery):
         kw["current_range"] = bat.current_range
     if bat.current_format is not None:
         kw["current_format"] = bat.current_format
+    if p.current_frac_bits is not None:
+        kw["current_format"] = _current_format(p, bat.current_format)
     return IzhikevichConfig(n_neurons=N, clock_hz=p.update_hz * N, update_hz=p.update_hz,
                             param_sets=sets,
                             neuron_sets=[sets.index(x) for x in bat.params] + [0] * pad,
                             operand_width=p.operand_width, v_frac_bits=p.v_frac_bits,
                             u_frac_bits=p.u_frac_bits, rounding=p.rounding,
                             tick_source="external", **kw)
+
+
+def _current_format(p: SweepPoint, base=None):
+    """The core's current format at point ``p``: ``base`` (default sQ10.8) with the point's
+    fraction bits."""
+    from ..hdl.fixed import QFormat
+    from ..hdl.izhikevich import IzhikevichConfig
+    base = base or IzhikevichConfig.current_format
+    if p.current_frac_bits is None:
+        return base
+    return QFormat(base.int_bits, p.current_frac_bits)
 
 
 def _run_fixed(twin, bat: Battery, dt_ms: float, n_steps: int) -> list[np.ndarray]:
@@ -142,7 +162,8 @@ def _synth(p: SweepPoint, spec: SweepSpec) -> dict:
     n = int(spec.clock_hz // p.update_hz)
     cfg = IzhikevichConfig(n_neurons=n, clock_hz=n * p.update_hz, update_hz=p.update_hz,
                            operand_width=p.operand_width, v_frac_bits=p.v_frac_bits,
-                           u_frac_bits=p.u_frac_bits, rounding=p.rounding)
+                           u_frac_bits=p.u_frac_bits, rounding=p.rounding,
+                           current_format=_current_format(p))
     bindir = Path(sys.executable).parent
     json_out = " -json core.json" if spec.fmax else ""
     out = {}
@@ -203,7 +224,7 @@ def evaluate(p, spec: SweepSpec, ref: list) -> dict:
             twin = IzhikevichTwin(cfg)
             trains = _run_fixed(twin, bat, dt, n_steps)
             row.update(multipliers=4 if cfg.dt_shift is not None else 5,
-                       state_bits=cfg.V.width + cfg.U.width,
+                       state_bits=cfg.V.width + cfg.U.width, current_bits=cfg.I.width,
                        neurons_per_core=int(spec.clock_hz // p.update_hz),
                        clamped_updates=int(sum(twin.clamp_counts.values())))
         else:
@@ -312,11 +333,12 @@ def pareto_front(rows: list[dict], cost: str, accuracy: str = "fraction_within_t
 
 
 COLUMNS = ("label", "engine", "update_hz", "operand_width", "v_frac_bits", "u_frac_bits",
-           "rounding", "scheme", "status", "counts_equal", "count_error",
+           "current_frac_bits", "rounding", "scheme", "status", "counts_equal", "count_error",
            "fraction_within_tick", "mean_abs_error_ms", "mean_vp",
            "first_spike_latency_error_ms", "vs_euler_fraction_within_tick",
            "vs_euler_counts_equal", "vs_euler_mean_vp", "neurons_per_core", "multipliers",
-           "state_bits", "host_s_per_bio_s", "LUT4", "CCU2C", "TRELLIS_FF", "DP16KD", "MULT18X18D",
+           "state_bits", "current_bits", "host_s_per_bio_s", "LUT4", "CCU2C", "TRELLIS_FF",
+           "DP16KD", "MULT18X18D",
            "fmax_mhz", "reason")
 
 

@@ -90,6 +90,37 @@ def test_the_published_behaviours_are_a_battery_of_the_sweep():
     assert abs(int(euler[q]) - fixed[q]) == 1
 
 
+def test_the_price_of_float32_parity_on_the_behaviours():
+    """Over 1 s of the published behaviours the default core (sQ10.8 currents, 18-bit operands)
+    changes two counts against float64 Euler: bistability (P), whose 0.24 mV/ms holding current
+    is 0.238 in sQ10.8, and the DAP (Q). Four more current fraction bits fix P, wider operands Q:
+    sQ10.12 with 24-bit operands keeps every count and is at least float32's equal."""
+    from cuneate.golden.metrics import compare_populations
+    from cuneate.hdl.izhikevich import IzhikevichTwin
+    from cuneate.sim.sweep import _fixed_config, _run_fixed, simulate_float
+    bat = battery("behaviours")
+    dt, n = 1.0 / 16.0, 16000
+    euler = simulate_float(bat, dt, n, "euler")
+    f32 = compare_populations(euler, simulate_float(bat, dt, n, "euler", np.float32), dt, 0.005)
+    assert f32["counts_equal"]
+
+    def core(**kw):
+        twin = IzhikevichTwin(_fixed_config(SweepPoint("fixed", **kw), bat))
+        c = compare_populations(euler, _run_fixed(twin, bat, dt, n), dt, 0.005)
+        assert sum(twin.clamp_counts.values()) == 0
+        return c, [lab[0] for lab, x in zip(bat.labels, c["per_train"])
+                   if x["count_difference"]]
+    default, differ = core()
+    assert differ == ["P", "Q"] and default["fraction_within_tick"] < \
+        f32["fraction_within_tick"] - 0.05
+    _, differ = core(current_frac_bits=12)
+    assert differ == ["Q"]                 # the current LSB decided bistability
+    _, differ = core(operand_width=24)
+    assert differ == ["P"]                 # the operands decided the DAP
+    parity, differ = core(operand_width=24, current_frac_bits=12)
+    assert differ == [] and parity["fraction_within_tick"] >= f32["fraction_within_tick"]
+
+
 def test_a_scene_is_a_battery_of_the_sweep(tmp_path):
     """A scene's driven neurons with its front end's currents: the sweep's float64 Euler and
     default fixed-point trains are the ones `cuneate run` produces on its golden and fixed
@@ -133,6 +164,7 @@ def test_pareto_front_by_hand():
     (["--update-hz", "-5"], "--update-hz: rates must be > 0"),
     (["--operand-width", "40"], "--operand-width: widths must lie in 8..32"),
     (["--rounding", "up"], "--rounding: nearest and/or truncate"),
+    (["--current-frac-bits", "40"], "--current-frac-bits: fraction bits must lie in 0..24"),
     (["--schemes", "heun"], "--schemes: euler, izhikevich and/or rk4"),
     (["--battery", "nope"], "--battery: unknown battery 'nope'"),
     (["--battery", "scene:skin_3x3"], "does not drive independent Izhikevich neurons"),
