@@ -110,11 +110,12 @@ class LIFDivergenceError(FloatingPointError):
 
 # ----------------------------------------------------------------------------- validation helpers
 
-def _per_neuron(x, n: int, name: str, *, positive=False, nonneg=False) -> np.ndarray:
+def _per_neuron(x, n: int, name: str, *, positive=False, nonneg=False,
+                dtype=np.float64) -> np.ndarray:
     arr = finite_array(x, name, ndim=(0, 1))
     if arr.ndim == 1 and arr.shape[0] != n:
         raise ValueError(f"{name} has {arr.shape[0]} values for {n} neurons")
-    arr = np.broadcast_to(arr, (n,)).astype(np.float64)
+    arr = np.broadcast_to(arr, (n,)).astype(dtype)
     if positive and not np.all(arr > 0):
         raise ValueError(f"{name} must be > 0, got {arr[~(arr > 0)][0]!r}")
     if nonneg and not np.all(arr >= 0):
@@ -201,17 +202,19 @@ def _infer_n(current, n_neurons, *arrays) -> int:
 
 
 class _Membranes:
-    """Shared LIF membrane bookkeeping (parameters, refractory counters, spike collection)."""
+    """Shared LIF membrane bookkeeping (parameters, refractory counters, spike collection).
+    The parameters and the state are held in ``dtype`` (float64, or float32 for the precision
+    yardstick), so the whole update runs in that arithmetic."""
 
     def __init__(self, n, dt_ms, tau_m_ms, v_th, v_reset, v_rest, t_ref_ms, scheme, v0,
-                 state_bound):
+                 state_bound, dtype=np.float64):
         if scheme not in LIF_SCHEMES:
             raise ValueError(f"unknown LIF scheme {scheme!r}; known: {', '.join(LIF_SCHEMES)}")
         self.n, self.dt, self.scheme = n, dt_ms, scheme
-        self.tau = _per_neuron(tau_m_ms, n, "tau_m_ms", positive=True)
-        self.v_th = _per_neuron(v_th, n, "v_th")
-        self.v_reset = _per_neuron(v_reset, n, "v_reset")
-        self.v_rest = _per_neuron(v_rest, n, "v_rest")
+        self.tau = _per_neuron(tau_m_ms, n, "tau_m_ms", positive=True, dtype=dtype)
+        self.v_th = _per_neuron(v_th, n, "v_th", dtype=dtype)
+        self.v_reset = _per_neuron(v_reset, n, "v_reset", dtype=dtype)
+        self.v_rest = _per_neuron(v_rest, n, "v_rest", dtype=dtype)
         t_ref = _per_neuron(t_ref_ms, n, "t_ref_ms", nonneg=True)
         if not np.all(self.v_reset < self.v_th):
             i = int(np.flatnonzero(~(self.v_reset < self.v_th))[0])
@@ -222,7 +225,7 @@ class _Membranes:
                              f"min tau_m = {self.tau.min()!r}); use scheme='exact' or a smaller dt")
         self.n_ref = np.ceil(t_ref / dt_ms - _GRID_EPS).astype(np.int64).clip(min=0)
         self.decay = np.exp(-dt_ms / self.tau)
-        self.v = self.v_rest.copy() if v0 is None else _per_neuron(v0, n, "v0")
+        self.v = self.v_rest.copy() if v0 is None else _per_neuron(v0, n, "v0", dtype=dtype)
         self.ref = np.zeros(n, dtype=np.int64)
         self.bound = state_bound
         self.hit_steps: list[np.ndarray] = []
@@ -262,7 +265,7 @@ def simulate_lif(current, dt_ms: float, *, duration_ms: float | None = None,
                  n_steps: int | None = None, n_neurons: int | None = None,
                  tau_m_ms=TAU_M_EXC_MS, v_th=V_TH, v_reset=V_RESET, v_rest=V_REST,
                  t_ref_ms=T_REF_EXC_MS, scheme: str = "exact", v0=None, record: bool = True,
-                 state_bound: float = STATE_BOUND) -> LIFResult:
+                 state_bound: float = STATE_BOUND, dtype=np.float64) -> LIFResult:
     """Simulate uncoupled continuous LIF neurons driven by an input current.
 
     Parameters
@@ -287,6 +290,9 @@ def simulate_lif(current, dt_ms: float, *, duration_ms: float | None = None,
         Initial potential (default ``v_rest``).
     record
         Keep the ``(n_steps + 1, n_neurons)`` membrane trace (row 0 is the initial state).
+    dtype
+        Arithmetic of the parameters, the current and the state: ``numpy.float64`` (default)
+        or ``numpy.float32`` (the precision yardstick of :mod:`cuneate.sim.sweep_lif`).
 
     Raises
     ------
@@ -298,11 +304,12 @@ def simulate_lif(current, dt_ms: float, *, duration_ms: float | None = None,
     dt = number(dt_ms, "dt_ms", positive=True)
     steps = _resolve_steps(current, duration_ms, n_steps, dt)
     n = _infer_n(current, n_neurons, tau_m_ms, v_th, v_reset, v_rest, t_ref_ms, v0)
-    mem = _Membranes(n, dt, tau_m_ms, v_th, v_reset, v_rest, t_ref_ms, scheme, v0, state_bound)
-    I_of = current_schedule(current, steps, n, dt)
+    mem = _Membranes(n, dt, tau_m_ms, v_th, v_reset, v_rest, t_ref_ms, scheme, v0, state_bound,
+                     dtype)
+    I_of = current_schedule(current, steps, n, dt, dtype=dtype)
     v_tr = None
     if record:
-        v_tr = np.empty((steps + 1, n))
+        v_tr = np.empty((steps + 1, n), dtype=dtype)
         v_tr[0] = mem.v
     with np.errstate(over="ignore", invalid="ignore"):
         for k in range(steps):
@@ -429,7 +436,8 @@ class DiscreteLIFResult:
 def simulate_discrete_lif(inputs, weights, alpha: float | None = None,
                           u_th: float = DISCRETE_U_TH, u_rest: float = 0.0,
                           refractory_steps: int = 0, *, tau: float | None = None,
-                          dt: float | None = None, u0=None) -> DiscreteLIFResult:
+                          dt: float | None = None, u0=None,
+                          dtype=np.float64) -> DiscreteLIFResult:
     """Simulate a layer of discrete-time LIF neurons (see the module docstring).
 
     Parameters
@@ -449,9 +457,12 @@ def simulate_discrete_lif(inputs, weights, alpha: float | None = None,
         Steps after a spike during which ``u`` is held at ``u_rest`` and cannot spike.
     u0
         State before the first step (scalar or ``(n_neurons,)``; default ``u_rest``).
+    dtype
+        Arithmetic of the inputs, weights, decay and state: ``numpy.float64`` (default) or
+        ``numpy.float32``.
     """
-    x = finite_array(inputs, "inputs", ndim=(2,))
-    w = finite_array(weights, "weights", ndim=(1, 2))
+    x = finite_array(inputs, "inputs", ndim=(2,)).astype(dtype, copy=False)
+    w = finite_array(weights, "weights", ndim=(1, 2)).astype(dtype, copy=False)
     if w.ndim == 1:
         w = w[:, None]
     if w.shape[0] != x.shape[1]:
@@ -474,14 +485,14 @@ def simulate_discrete_lif(inputs, weights, alpha: float | None = None,
                          f"{refractory_steps!r}")
     r = int(refractory_steps)
     n_steps, n = x.shape[0], w.shape[1]
-    u = np.full(n, rest) if u0 is None else _per_neuron(u0, n, "u0")
+    u = np.full(n, rest, dtype=dtype) if u0 is None else _per_neuron(u0, n, "u0", dtype=dtype)
     with np.errstate(over="ignore", invalid="ignore"):
         drive = x @ w
     if not np.all(np.isfinite(drive)):
         raise ValueError("input drive x @ w overflowed float64")
     spikes = np.zeros((n_steps, n), dtype=bool)
-    u_tr = np.empty((n_steps, n))
-    u_pre = np.empty((n_steps, n))
+    u_tr = np.empty((n_steps, n), dtype=dtype)
+    u_pre = np.empty((n_steps, n), dtype=dtype)
     ref = np.zeros(n, dtype=np.int64)
     for t in range(n_steps):
         frozen = ref > 0

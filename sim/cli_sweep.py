@@ -28,13 +28,41 @@ def _frac(text: str) -> tuple[int, int]:
     return int(v), int(u or v)
 
 
+def _block_points(args, rates, widths, rnd, floats):
+    """The points of a LIF or coincidence-detector battery, and the report's columns."""
+    from .sweep_cuneate import CUNEATE_BATTERIES, CUNEATE_COLUMNS, coincidence_grid
+    from .sweep_lif import LIF_BATTERIES, LIF_COLUMNS, lif_battery, lif_grid
+    wbits = _list(args.weight_bits, int, "--weight-bits") if args.weight_bits else None
+    try:
+        if args.battery in LIF_BATTERIES:
+            decay = _list(args.decay, str, "--decay")
+            return lif_grid(rates, lif_battery(args.battery).form,
+                            _list(args.v_frac_bits, int, "--v-frac-bits"), widths,
+                            wbits or [8], decay, rnd, floats,
+                            _list(args.max_decay_error, float, "--max-decay-error")), \
+                LIF_COLUMNS
+        if args.battery in CUNEATE_BATTERIES:
+            return coincidence_grid(rates, wbits or [12],
+                                    _list(args.trace_frac_bits, int, "--trace-frac-bits"),
+                                    widths, rnd, floats), CUNEATE_COLUMNS
+    except ValueError as exc:
+        raise CliError(f"cuneate sweep: {exc}") from None
+    return None, None
+
+
 def cmd_sweep(args) -> int:
     from .sweep import SweepSpec, battery, grid, run_sweep, write_sweep
-    try:
-        bat = battery(args.battery)
-    except ValueError as exc:
-        raise CliError(f"--battery: {exc}") from None
-    duration = args.duration_ms or bat.duration_ms or 1000.0
+    from .sweep_cuneate import CUNEATE_BATTERIES
+    from .sweep_lif import LIF_BATTERIES
+    block = args.battery in LIF_BATTERIES or args.battery in CUNEATE_BATTERIES
+    bat = None
+    if not block:
+        try:
+            bat = battery(args.battery)
+        except ValueError as exc:
+            raise CliError(f"--battery: {exc}; LIF: {', '.join(LIF_BATTERIES)}; coincidence: "
+                           f"{', '.join(CUNEATE_BATTERIES)}") from None
+    duration = args.duration_ms or (bat and bat.duration_ms) or 1000.0
     rates = _list(args.update_hz, float, "--update-hz")
     if any(r <= 0 for r in rates):
         raise CliError("--update-hz: rates must be > 0")
@@ -56,17 +84,19 @@ def cmd_sweep(args) -> int:
     spec = SweepSpec(battery=args.battery, duration_ms=duration,
                      reference_hz=args.reference_hz, clock_hz=args.clock_hz, synth=args.synth,
                      fmax=args.fmax)
-    pts = grid(rates, widths, fracs, rnd, schemes, floats, cfb)
+    pts, columns = _block_points(args, rates, widths, rnd, floats) if block else \
+        (grid(rates, widths, fracs, rnd, schemes, floats, cfb), None)
     out = output_dir(args.out)
     rows = run_sweep(pts, spec, out / "cache", scheduler=args.scheduler, workers=args.workers,
                      progress=sys.stderr.isatty(), log=lambda m: print(m, file=sys.stderr))
-    page = write_sweep(rows, spec, out)
+    page = write_sweep(rows, spec, out, columns)
     for r in rows:
         acc = r.get("fraction_within_tick")
-        ve = r.get("vs_euler_fraction_within_tick")
+        ve = r.get("vs_euler_fraction_within_tick", r.get("vs_float64_fraction_within_tick"))
         print(f"  {r['label']:44s} "
               + (f"within 1 tick {acc:.4f}" if acc is not None else r.get("reason", "")[:70])
-              + (f", of Euler at its dt {ve:.4f}" if ve is not None else "")
+              + (f", of {'float64' if block else 'Euler'} at its dt {ve:.4f}"
+                 if ve is not None else "")
               + (f", {r['host_s_per_bio_s']:.2f} s/bio s" if r.get("host_s_per_bio_s")
                  else "")
               + (f", fmax {r['fmax_mhz']:.1f} MHz" if r.get("fmax_mhz") else ""))
@@ -142,7 +172,10 @@ def register(groups) -> None:
                    help="yardstick (16 trains), wide (60), long (48, use --duration-ms), "
                         "behaviours (19 published panels with their stimuli; e.g. "
                         "--duration-ms 300), scene (the default scene's neurons and front-end "
-                        "currents), scene:NAME (an example) or scene:PATH (a scene file)")
+                        "currents), scene:NAME (an example) or scene:PATH (a scene file); LIF: "
+                        "lif-currents (24 continuous trains), lif-pow2 (tau_m 8/16/32 ms: decay "
+                        "by shift possible), lif-inputs (32 discrete neurons x 64 random "
+                        "weights); coincidence detector: cuneate-afferents")
     p.add_argument("--duration-ms", type=positive_float, default=None,
                    help="biological time (default: a scene's length, else 1000)")
     p.add_argument("--update-hz", default="16000",
@@ -154,6 +187,18 @@ def register(groups) -> None:
                    help="comma-separated fraction bits of the core's current format (default: "
                         "the battery's, sQ10.8 unless a scene says otherwise; e.g. 8,10,12)")
     p.add_argument("--rounding", default="nearest", help="nearest,truncate")
+    p.add_argument("--v-frac-bits", default="16",
+                   help="LIF: comma-separated state fraction bits (e.g. 8,12,16,20)")
+    p.add_argument("--weight-bits", default=None,
+                   help="LIF / coincidence: comma-separated weight widths (default 8 / 12; "
+                        "e.g. 2,4,6,8,10,12,16)")
+    p.add_argument("--decay", default="multiply",
+                   help="LIF: multiply and/or shift (no multiplier; only where 1-exp(-dt/tau) "
+                        "is a power of two within --max-decay-error, e.g. lif-pow2)")
+    p.add_argument("--max-decay-error", default="0.01",
+                   help="LIF: comma-separated largest accepted relative error of the decay")
+    p.add_argument("--trace-frac-bits", default="16",
+                   help="coincidence: comma-separated PSP trace fraction bits (e.g. 8,12,16)")
     p.add_argument("--schemes", default="euler", help="golden schemes: euler,izhikevich,rk4")
     p.add_argument("--no-float", action="store_true", help="skip the float64/float32 points")
     p.add_argument("--reference-hz", type=positive_float, default=256e3,

@@ -342,18 +342,20 @@ COLUMNS = ("label", "engine", "update_hz", "operand_width", "v_frac_bits", "u_fr
            "fmax_mhz", "reason")
 
 
-def write_sweep(rows: list[dict], spec: SweepSpec, out: Path) -> Path:
-    """``sweep.csv``, ``sweep.json``, ``pareto.png`` and ``index.html`` in ``out``."""
+def write_sweep(rows: list[dict], spec: SweepSpec, out: Path, columns=None) -> Path:
+    """``sweep.csv`` (``columns``, default :data:`COLUMNS`), ``sweep.json``, ``pareto.png`` and
+    ``index.html`` in ``out``."""
     import csv
     import html
     from .report import _plt, _table, figures_html, page_head
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     with open(out / "sweep.csv", "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=COLUMNS, extrasaction="ignore")
+        cols = columns or COLUMNS
+        w = csv.DictWriter(f, fieldnames=cols, extrasaction="ignore")
         w.writeheader()
         for r in rows:
-            w.writerow({k: r.get(k) for k in COLUMNS})
+            w.writerow({k: r.get(k) for k in cols})
     fronts = {c: pareto_front(rows, c) for c in ("host_s_per_bio_s", "state_bits",
                                                  "multipliers")}
     (out / "sweep.json").write_text(json.dumps({"spec": asdict(spec), "rows": rows,
@@ -382,7 +384,9 @@ def write_sweep(rows: list[dict], spec: SweepSpec, out: Path) -> Path:
     def fmt(x, nd=4):
         return "-" if x is None else (f"{x:.{nd}g}" if isinstance(x, float) else str(x))
     table = [[("* " if r["key"] in front else "") + r["label"], r.get("status"),
-              fmt(r.get("fraction_within_tick")), fmt(r.get("vs_euler_fraction_within_tick")),
+              fmt(r.get("fraction_within_tick")),
+              fmt(r.get("vs_euler_fraction_within_tick",
+                        r.get("vs_float64_fraction_within_tick"))),
               fmt(r.get("count_error")),
               fmt(r.get("mean_vp")), fmt(r.get("mean_abs_error_ms")),
               fmt(r.get("neurons_per_core")), fmt(r.get("multipliers")),
@@ -394,7 +398,7 @@ def write_sweep(rows: list[dict], spec: SweepSpec, out: Path) -> Path:
 <p>Battery <b>{html.escape(spec.battery)}</b>, {spec.duration_ms:g} ms, against float64 RK4 at
 {spec.reference_hz / 1e3:g} kHz; neurons per core at {spec.clock_hz / 1e6:g} MHz. * marks
 the Pareto front of accuracy against host time.</p>
-{_table(table, ["point", "status", "within 1 tick", "within 1 tick of float64 Euler (same dt)",
+{_table(table, ["point", "status", "within 1 tick", "within 1 tick of float64 (Euler; same dt)",
                 "count error", "mean VP (q=5/s)",
                 "mean |dt| ms", "neurons/core", "multipliers", "state bits",
                 "host s / bio s", "LUT4", "MULT18", "fmax MHz", "reason"])}
