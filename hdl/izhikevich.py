@@ -520,6 +520,8 @@ class IzhikevichCore(wiring.Component):
         v3 = reg("v", st_rd.data[:V.width].as_signed(), 3)
         u3 = reg("u", st_rd.data[V.width:].as_signed(), 3)
         i3, sel3 = reg("i", cur_rd.data, 3), reg("sel", sel_rd.data, 3)
+        # what an update starts from, for the formal harness (hdl/formal_core.py)
+        self.probes = {"valid": t3[0], "index": t3[1], "v": v3, "u": u3, "i": i3, "sel": sel3}
         # --- stage 3: operands and the first multipliers ----------------------------------
         s2 = operands(cfg, v3, u3, i3, sel3)
         wq3, vq3, x3 = s2["wq"], s2["vq"], s2["x"]
