@@ -36,9 +36,22 @@ import numpy as np
 from .sweep_batteries import BATTERIES, Battery, battery, simulate_float
 
 __all__ = ["SweepPoint", "SweepSpec", "BATTERIES", "Battery", "battery", "reference_trains",
-           "evaluate", "accuracy_row", "run_sweep", "pareto_front", "write_sweep", "grid"]
+           "evaluate", "accuracy_row", "ok_row", "same_dt_columns", "refused", "point_key",
+           "n_steps", "run_sweep", "pareto_front", "write_sweep", "grid"]
 
 VP_Q_PER_MS = 0.005           # 5 / s
+
+
+def point_key(*parts) -> str:
+    """A point's cache key: a hash of ``parts`` (its fields and the spec fields its result
+    depends on), shared by every block's points."""
+    blob = json.dumps(list(parts), sort_keys=True)
+    return hashlib.sha256(blob.encode()).hexdigest()[:16]
+
+
+def n_steps(duration_ms: float, dt_ms: float) -> int:
+    """Updates in ``duration_ms`` at a step of ``dt_ms``."""
+    return int(round(duration_ms / dt_ms))
 
 
 @dataclass(frozen=True)
@@ -58,9 +71,8 @@ class SweepPoint:
 
     def key(self, spec: "SweepSpec") -> str:
         fields = {k: v for k, v in asdict(self).items() if v is not None}
-        blob = json.dumps([fields, spec.battery, spec.duration_ms, spec.reference_hz,
-                           spec.clock_hz, spec.synth or spec.fmax, spec.fmax], sort_keys=True)
-        return hashlib.sha256(blob.encode()).hexdigest()[:16]
+        return point_key(fields, spec.battery, spec.duration_ms, spec.reference_hz,
+                         spec.clock_hz, spec.synth or spec.fmax, spec.fmax)
 
     def label(self) -> str:
         if self.engine == "fixed":
@@ -101,7 +113,7 @@ def reference_trains(spec: SweepSpec) -> list[np.ndarray]:
         from .sweep_lif import lif_reference_trains
         return lif_reference_trains(spec)
     dt = 1000.0 / spec.reference_hz
-    return simulate_float(battery(spec.battery), dt, int(round(spec.duration_ms / dt)), "rk4")
+    return simulate_float(battery(spec.battery), dt, n_steps(spec.duration_ms, dt), "rk4")
 
 
 def _fixed_config(p: SweepPoint, bat: Battery):
@@ -205,16 +217,43 @@ def accuracy_row(ref: list, trains: list, dt_ms: float) -> dict:
                 first_spike_latency_error_ms=float(np.mean(lat)) if lat else None)
 
 
+def refused(row: dict, exc: Exception) -> dict:
+    """``row`` as a refused point: status and the first line of the reason."""
+    row.update(status="refused", reason=str(exc).splitlines()[0][:300])
+    return row
+
+
+def ok_row(ref: list, trains: list, dt_ms: float, spec: SweepSpec, t0: float) -> dict:
+    """The columns of a simulated point: status, accuracy against ``ref`` and host time since
+    ``t0`` per biological second (in all, and per neuron)."""
+    wall = time.perf_counter() - t0
+    bio_s = spec.duration_ms / 1000.0
+    return dict(status="ok", trains=len(trains), **accuracy_row(ref, trains, dt_ms),
+                host_s=wall, host_s_per_bio_s=wall / bio_s,
+                host_s_per_neuron_bio_s=wall / bio_s / len(trains))
+
+
+#: what the LIF and coincidence rows report against float64 at the same dt
+BLOCK_SAME_DT_KEYS = ("fraction_within_tick", "counts_equal", "count_error", "mean_vp",
+                      "mean_abs_error_ms")
+
+
+def same_dt_columns(prefix: str, baseline: list, trains: list, dt_ms: float,
+                    keys=("fraction_within_tick", "counts_equal", "mean_vp")) -> dict:
+    """The error of the arithmetic alone: ``keys`` of ``trains`` against ``baseline`` (float64
+    at the same dt), named ``prefix + key``."""
+    acc = accuracy_row(baseline, trains, dt_ms)
+    return {prefix + k: acc[k] for k in keys}
+
+
 def evaluate(p, spec: SweepSpec, ref: list) -> dict:
     """Simulate the battery at point ``p`` and measure it against ``ref``. A point of another
     block (e.g. :class:`cuneate.sim.sweep_lif.LifSweepPoint`) evaluates itself."""
-    from ..golden.metrics import compare_populations
     if not isinstance(p, SweepPoint):
         return p.evaluate(spec, ref)
     bat = battery(spec.battery)
-    n = bat.n
     dt = 1000.0 / p.update_hz
-    n_steps = int(round(spec.duration_ms / dt))
+    steps = n_steps(spec.duration_ms, dt)
     row: dict = {"key": p.key(spec), "label": p.label(), **asdict(p), "dt_ms": dt}
     t0 = time.perf_counter()
     try:
@@ -222,30 +261,23 @@ def evaluate(p, spec: SweepSpec, ref: list) -> dict:
             from ..hdl.izhikevich import IzhikevichTwin
             cfg = _fixed_config(p, bat)
             twin = IzhikevichTwin(cfg)
-            trains = _run_fixed(twin, bat, dt, n_steps)
+            trains = _run_fixed(twin, bat, dt, steps)
             row.update(multipliers=4 if cfg.dt_shift is not None else 5,
                        state_bits=cfg.V.width + cfg.U.width, current_bits=cfg.I.width,
                        neurons_per_core=int(spec.clock_hz // p.update_hz),
                        clamped_updates=int(sum(twin.clamp_counts.values())))
         else:
             dtype = np.float32 if p.engine == "float32" else np.float64
-            trains = simulate_float(bat, dt, n_steps, p.scheme, dtype)
+            trains = simulate_float(bat, dt, steps, p.scheme, dtype)
             row.update(multipliers=None, state_bits=64 if dtype == np.float32 else 128,
                        neurons_per_core=None)
     except Exception as exc:              # a configuration the core refuses, a divergence
-        row.update(status="refused", reason=str(exc).splitlines()[0][:300])
-        return row
-    wall = time.perf_counter() - t0
-    row.update(status="ok", trains=n, **accuracy_row(ref, trains, dt),
-               host_s=wall, host_s_per_bio_s=wall / (spec.duration_ms / 1000.0),
-               host_s_per_neuron_bio_s=wall / (spec.duration_ms / 1000.0) / n)
+        return refused(row, exc)
+    row.update(ok_row(ref, trains, dt, spec, t0))
     if p.engine == "fixed" or p.engine == "float32" or p.scheme != "euler":
         # the error of the arithmetic alone: against float64 forward Euler at the same dt
-        ce = compare_populations(simulate_float(bat, dt, n_steps, "euler"), trains, dt,
-                                 VP_Q_PER_MS)
-        row.update(vs_euler_fraction_within_tick=ce["fraction_within_tick"],
-                   vs_euler_counts_equal=bool(ce["counts_equal"]),
-                   vs_euler_mean_vp=ce["mean_vp_distance"])
+        row.update(same_dt_columns("vs_euler_", simulate_float(bat, dt, steps, "euler"),
+                                   trains, dt))
     if (spec.synth or spec.fmax) and p.engine == "fixed":
         row.update(_synth(p, spec))
     return row

@@ -28,8 +28,6 @@ Euler at the same dt, reported in the ``vs_float64_*`` columns.
 
 from __future__ import annotations
 
-import hashlib
-import json
 import time
 from dataclasses import asdict, dataclass, field
 from functools import lru_cache
@@ -41,7 +39,9 @@ from ..golden import izhikevich as giz
 from ..hdl.cuneate_config import CYCLES_PER_TARGET_EXTRA, CoincidenceConfig
 from ..hdl.fixed import FixedPointError
 from .cuneate_engines import run_coincidence
-from .sweep import SweepSpec, accuracy_row
+from .sweep import (BLOCK_SAME_DT_KEYS, SweepSpec, ok_row, point_key, refused,
+                    same_dt_columns)
+from .sweep import n_steps as n_steps_of
 
 __all__ = ["CUNEATE_BATTERIES", "AfferentBattery", "afferent_battery", "CoincidenceSweepPoint",
            "coincidence_grid", "cuneate_reference_trains", "golden_cuneate_trains",
@@ -120,10 +120,6 @@ def afferent_battery(name: str, duration_ms: float) -> AfferentBattery:
     return AfferentBattery(name, tuple(trains), delays, weights)
 
 
-def _n_steps(duration_ms: float, dt_ms: float) -> int:
-    return int(round(duration_ms / dt_ms))
-
-
 def golden_cuneate_trains(bat: AfferentBattery, dt_ms: float, n_steps: int,
                           scheme: str = "euler", dtype=np.float64) -> list[np.ndarray]:
     """The battery on the golden model: the PSP drive of :func:`cuneate.golden.cuneate
@@ -146,7 +142,7 @@ def cuneate_reference_trains(spec: SweepSpec) -> list[np.ndarray]:
     """Float64 golden, RK4 at ``spec.reference_hz`` (see the module docstring)."""
     bat = afferent_battery(spec.battery, float(spec.duration_ms))
     dt = 1000.0 / spec.reference_hz
-    return golden_cuneate_trains(bat, dt, _n_steps(spec.duration_ms, dt), "rk4")
+    return golden_cuneate_trains(bat, dt, n_steps_of(spec.duration_ms, dt), "rk4")
 
 
 @dataclass(frozen=True)
@@ -163,9 +159,8 @@ class CoincidenceSweepPoint:
     rounding: str = "nearest"
 
     def key(self, spec: SweepSpec) -> str:
-        blob = json.dumps(["coincidence", asdict(self), spec.battery, spec.duration_ms,
-                           spec.reference_hz, spec.clock_hz], sort_keys=True)
-        return hashlib.sha256(blob.encode()).hexdigest()[:16]
+        return point_key("coincidence", asdict(self), spec.battery, spec.duration_ms,
+                         spec.reference_hz, spec.clock_hz)
 
     def label(self) -> str:
         rate = f"{self.update_hz / 1e3:g} kHz"
@@ -179,15 +174,14 @@ class CoincidenceSweepPoint:
         Euler at the same dt; a row shaped like :func:`cuneate.sim.sweep.evaluate`'s."""
         bat = afferent_battery(spec.battery, float(spec.duration_ms))
         dt = 1000.0 / self.update_hz
-        n_steps = _n_steps(spec.duration_ms, dt)
+        n_steps = n_steps_of(spec.duration_ms, dt)
         row: dict = {"key": self.key(spec), "label": self.label(), **asdict(self), "dt_ms": dt}
         t0 = time.perf_counter()
         if self.engine == "fixed":
             try:
                 cfg = coincidence_config(self, bat)
             except FixedPointError as exc:     # the configuration refuses these widths
-                row.update(status="refused", reason=str(exc).splitlines()[0][:300])
-                return row
+                return refused(row, exc)
             run = run_coincidence("fixed", cfg, bat.ticks(dt)[0], n_steps)
             trains = [np.asarray(s, dtype=np.float64) for s in run.spikes_ms]
             per_target = bat.n_sources + CYCLES_PER_TARGET_EXTRA
@@ -206,14 +200,9 @@ class CoincidenceSweepPoint:
                        neurons_per_core=None)
         else:
             raise ValueError(f"unknown engine {self.engine!r}; known: fixed, float64, float32")
-        wall = time.perf_counter() - t0
-        row.update(status="ok", trains=bat.n, **accuracy_row(ref, trains, dt), host_s=wall,
-                   host_s_per_bio_s=wall / (spec.duration_ms / 1000.0))
-        same_dt = accuracy_row(list(_float64_trains(bat.name, float(spec.duration_ms), dt,
-                                                    n_steps)), trains, dt)
-        row.update({f"vs_float64_{k}": same_dt[k] for k in
-                    ("fraction_within_tick", "counts_equal", "count_error", "mean_vp",
-                     "mean_abs_error_ms")})
+        row.update(ok_row(ref, trains, dt, spec, t0))
+        f64 = _float64_trains(bat.name, float(spec.duration_ms), dt, n_steps)
+        row.update(same_dt_columns("vs_float64_", list(f64), trains, dt, BLOCK_SAME_DT_KEYS))
         return row
 
 
@@ -238,7 +227,7 @@ def coincidence_point_trains(p: CoincidenceSweepPoint, spec: SweepSpec) -> list[
     the detector refuses the point."""
     bat = afferent_battery(spec.battery, float(spec.duration_ms))
     dt = 1000.0 / p.update_hz
-    n_steps = _n_steps(spec.duration_ms, dt)
+    n_steps = n_steps_of(spec.duration_ms, dt)
     if p.engine == "fixed":
         run = run_coincidence("fixed", coincidence_config(p, bat), bat.ticks(dt)[0], n_steps)
         return [np.asarray(s, dtype=np.float64) for s in run.spikes_ms]

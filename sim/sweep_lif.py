@@ -52,8 +52,6 @@ measured against):
 
 from __future__ import annotations
 
-import hashlib
-import json
 import time
 from dataclasses import asdict, dataclass, field
 from functools import lru_cache
@@ -64,7 +62,9 @@ from ..golden import lif as golden
 from ..hdl.fixed import ROUNDINGS, FixedPointError
 from ..hdl.lif_config import DECAYS, FORMS, LifSet
 from .lif_engines import LifProgram, engine_config, run_lif
-from .sweep import SweepSpec, accuracy_row
+from .sweep import (BLOCK_SAME_DT_KEYS, SweepSpec, ok_row, point_key, refused,
+                    same_dt_columns)
+from .sweep import n_steps as n_steps_of
 
 __all__ = ["LIF_BATTERIES", "LifBattery", "lif_battery", "LifSweepPoint", "lif_grid",
            "lif_reference_trains", "golden_lif_trains", "lif_core_kwargs", "lif_point_trains",
@@ -207,10 +207,6 @@ def lif_battery(name: str) -> LifBattery:
     raise ValueError(f"unknown LIF battery {name!r}; known: {', '.join(LIF_BATTERIES)}")
 
 
-def _n_steps(duration_ms: float, dt_ms: float) -> int:
-    return int(round(duration_ms / dt_ms))
-
-
 def golden_lif_trains(bat: LifBattery, dt_ms: float, n_steps: int,
                       dtype=np.float64) -> list[np.ndarray]:
     """The battery on the golden model in ``dtype`` at ``dt_ms``: spike times (ms) per train."""
@@ -249,7 +245,7 @@ def lif_reference_trains(spec: SweepSpec) -> list[np.ndarray]:
         return cuneate_reference_trains(spec)
     bat = lif_battery(spec.battery)
     dt = bat.dt_ms(spec.reference_hz)
-    return golden_lif_trains(bat, dt, _n_steps(spec.duration_ms, dt))
+    return golden_lif_trains(bat, dt, n_steps_of(spec.duration_ms, dt))
 
 
 @dataclass(frozen=True)
@@ -276,9 +272,8 @@ class LifSweepPoint:
     def key(self, spec: SweepSpec) -> str:
         """Cache key of the point on ``spec`` (its fields, the battery, duration, reference
         rate and clock)."""
-        blob = json.dumps(["lif", asdict(self), spec.battery, spec.duration_ms,
-                           spec.reference_hz, spec.clock_hz], sort_keys=True)
-        return hashlib.sha256(blob.encode()).hexdigest()[:16]
+        return point_key("lif", asdict(self), spec.battery, spec.duration_ms,
+                         spec.reference_hz, spec.clock_hz)
 
     def label(self) -> str:
         rate = f"{self.update_hz / 1e3:g} kHz"
@@ -298,15 +293,14 @@ class LifSweepPoint:
             raise ValueError(f"point {self.label()!r} is {self.form}-form, battery "
                              f"{bat.name!r} is {bat.form}-form")
         dt = bat.dt_ms(self.update_hz)
-        n_steps = _n_steps(spec.duration_ms, dt)
+        n_steps = n_steps_of(spec.duration_ms, dt)
         row: dict = {"key": self.key(spec), "label": self.label(), **asdict(self), "dt_ms": dt}
         t0 = time.perf_counter()
         if self.engine == "fixed":
             try:
                 cfg = engine_config(lif_core_kwargs(self, bat), bat.n)
             except FixedPointError as exc:     # the configuration refuses these widths
-                row.update(status="refused", reason=str(exc).splitlines()[0][:300])
-                return row
+                return refused(row, exc)
             trains, clamps = _run_twin(cfg, bat, dt, n_steps)
             row.update(state_bits=cfg.V.width + cfg.ref_bits, weight_bits=cfg.W.width,
                        acc_bits=cfg.acc_bits,
@@ -322,13 +316,9 @@ class LifSweepPoint:
                        acc_bits=None, multipliers=None, neurons_per_core=None)
         else:
             raise ValueError(f"unknown engine {self.engine!r}; known: fixed, float64, float32")
-        wall = time.perf_counter() - t0
-        row.update(status="ok", trains=bat.n, **accuracy_row(ref, trains, dt), host_s=wall,
-                   host_s_per_bio_s=wall / (spec.duration_ms / 1000.0))
-        same_dt = accuracy_row(list(_float64_trains(bat.name, dt, n_steps)), trains, dt)
-        row.update({f"vs_float64_{k}": same_dt[k] for k in
-                    ("fraction_within_tick", "counts_equal", "count_error", "mean_vp",
-                     "mean_abs_error_ms")})
+        row.update(ok_row(ref, trains, dt, spec, t0))
+        f64 = _float64_trains(bat.name, dt, n_steps)
+        row.update(same_dt_columns("vs_float64_", list(f64), trains, dt, BLOCK_SAME_DT_KEYS))
         return row
 
 
@@ -363,7 +353,7 @@ def lif_point_trains(p: LifSweepPoint, spec: SweepSpec) -> list[np.ndarray]:
     refuses the point."""
     bat = lif_battery(spec.battery)
     dt = bat.dt_ms(p.update_hz)
-    n_steps = _n_steps(spec.duration_ms, dt)
+    n_steps = n_steps_of(spec.duration_ms, dt)
     if p.engine == "fixed":
         return _run_twin(engine_config(lif_core_kwargs(p, bat), bat.n), bat, dt, n_steps)[0]
     return golden_lif_trains(bat, dt, n_steps,
