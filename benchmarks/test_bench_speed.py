@@ -126,7 +126,7 @@ def lif_rates(n: int, sweeps: int = 2000) -> list[dict]:
 
 
 def coincidence_rates(targets: int, ticks: int = 2000, sources: int = 8) -> list[dict]:
-    from cuneate.hdl.cuneate import CoincidenceConfig, CoincidenceTwin
+    from cuneate.hdl.coincidence import CoincidenceConfig, CoincidenceTwin
     rng = np.random.default_rng(1)
     cfg = CoincidenceConfig(n_sources=sources, n_targets=targets,
                             delays_ticks=rng.integers(0, 64, (targets, sources)),
@@ -183,7 +183,7 @@ def _scoreboard_cases() -> dict:
 
 
 def cocotb_scoreboard_rate(simulator: str, build_root: Path, case: str = "n240_mixed") -> dict:
-    from cuneate.hdl.generate import izhikevich_verilog
+    from cuneate.hdl.izhikevich import izhikevich_verilog
     from cuneate.sim.benches.izhikevich_tb import make_config
     from cuneate.sim.runner import run_cocotb
 

@@ -26,7 +26,7 @@ from pathlib import Path
 
 import pytest
 
-from cuneate.hdl.generate import izhikevich_verilog
+from cuneate.hdl.izhikevich import izhikevich_verilog
 from cuneate.hdl.izhikevich import IzhikevichConfig
 
 pytestmark = pytest.mark.benchmark

@@ -19,7 +19,7 @@ from pathlib import Path
 
 from amaranth.back import verilog
 
-from ..hdl.izhikevich_config import ConfigError
+from ..hdl.izhikevich.config import ConfigError
 from ..hdl.link import LinkedCore
 from .sizing import size_core
 from .targets import TARGETS
@@ -104,7 +104,7 @@ def build_target(board: str, out: Path, n_neurons: int | None = None,
     """Size the core for ``board``, write its Verilog (``<name>.v`` of the linked core, the
     board top's ``<name>.debug.v``), build the bitstream when the board supports it and
     ``bitstream`` is true, and write ``<name>.report.json`` / ``.txt``. Returns the report.
-    Raises :class:`~cuneate.hdl.izhikevich_config.ConfigError` for a core the device cannot
+    Raises :class:`~cuneate.hdl.izhikevich.config.ConfigError` for a core the device cannot
     hold and :class:`BuildError` for a failed tool."""
     if board not in TARGETS:
         raise ConfigError(f"unknown board {board!r}; known: {', '.join(TARGETS)}")

@@ -19,11 +19,11 @@ import time
 
 import numpy as np
 
-from ..hdl.link_codec import (COUNTER_NAMES, MSG_COUNTERS, MSG_SPIKES, OP_CLEAR_COUNTERS,
+from ..hdl.link.codec import (COUNTER_NAMES, MSG_COUNTERS, MSG_SPIKES, OP_CLEAR_COUNTERS,
                               OP_READ_COUNTERS, OP_STEP, OP_STOP, FrameDecoder, LinkModel,
                               control_message, current_bytes, encode_frame, parse_counters,
                               parse_spikes, write_message)
-from ..hdl.link_codec import MAX_FRAME, MIN_FRAME
+from ..hdl.link.codec import MAX_FRAME, MIN_FRAME
 from ..sim.transport import SpikeBatch, Transport, TransportError
 
 __all__ = ["UartTransport", "ModelSerial", "DEVICE_ERRORS"]

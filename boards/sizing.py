@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 
-from ..hdl.izhikevich_config import ConfigError, IzhikevichConfig
+from ..hdl.izhikevich.config import ConfigError, IzhikevichConfig
 from ..hdl.link import LinkConfig
 from .top import ClockPlan
 

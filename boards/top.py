@@ -13,7 +13,7 @@ from dataclasses import dataclass
 from amaranth.lib import io
 from amaranth import ClockDomain, ClockSignal, Elaboratable, Module, ResetSignal, Signal
 
-from ..hdl.izhikevich_config import ConfigError
+from ..hdl.izhikevich.config import ConfigError
 from ..hdl.link import LinkConfig, LinkedCore
 
 __all__ = ["ClockPlan", "BoardTop"]

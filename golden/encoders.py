@@ -47,7 +47,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._validate import finite_array, number
+from .validate import finite_array, number
 
 __all__ = [
     "DEFAULT_GAIN_K", "DEFAULT_R_OHM", "DEFAULT_CM", "DEFAULT_FA_TAU_MS", "RECTIFY_MODES",

@@ -53,7 +53,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.signal
 
-from ._validate import finite_array, number
+from .validate import finite_array, number
 
 __all__ = [
     "LAMBDA_B_NM", "P_E", "THERMO_PER_K", "FS_HZ", "DEFAULT_GAIN_S", "STABILITY_TOL",

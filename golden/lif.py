@@ -64,9 +64,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._validate import finite_array, number
+from .validate import finite_array, number
 from .izhikevich import current_schedule, group_spikes
-from .synapses import (AMPA, GABA, LATENCY_MS, NORMALIZATIONS, DiffExpSynapse, _ExpTraces,
+from .synapses import (AMPA, GABA, LATENCY_MS, NORMALIZATIONS, DiffExpSynapse, ExpTraces,
                        diff_exp_kernel, diff_exp_peak_time, synaptic_current)
 
 __all__ = [
@@ -363,7 +363,7 @@ def simulate_lif_network(n: int, weights_exc, weights_inh, ext_current, dt_ms: f
 
     Notes
     -----
-    Synaptic currents use the exact two-trace recursion described in :class:`_ExpTraces`, which
+    Synaptic currents use the exact two-trace recursion described in :class:`ExpTraces`, which
     reproduces :func:`synaptic_current` on the grid. The current for update ``k`` is the value at
     ``t = k dt``.
     """
@@ -379,7 +379,7 @@ def simulate_lif_network(n: int, weights_exc, weights_inh, ext_current, dt_ms: f
     steps = _resolve_steps(ext_current, duration_ms, n_steps, dt)
     mem = _Membranes(n, dt, tau_m_ms, v_th, v_reset, v_rest, t_ref_ms, scheme, v0, state_bound)
     I_of = current_schedule(ext_current, steps, n, dt)
-    exc, inh = _ExpTraces(ampa, n, dt), _ExpTraces(gaba, n, dt)
+    exc, inh = ExpTraces(ampa, n, dt), ExpTraces(gaba, n, dt)
     v_tr = i_e = i_g = None
     if record:
         v_tr = np.empty((steps + 1, n))

@@ -26,10 +26,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._validate import finite_array, number
+from .validate import finite_array, number
 
 __all__ = ["LATENCY_MS", "NORMALIZATIONS", "DiffExpSynapse", "AMPA", "GABA",
-           "diff_exp_peak_time", "diff_exp_kernel", "synaptic_current"]
+           "diff_exp_peak_time", "diff_exp_kernel", "synaptic_current", "check_taus",
+           "norm_factor", "ExpTraces"]
 
 LATENCY_MS = 1.0
 NORMALIZATIONS = ("peak", "area", "none")
@@ -39,7 +40,8 @@ _GRID_EPS = 1e-9
 _BLOCK_ELEMS = 1 << 22
 
 
-def _check_taus(tau_rise_ms, tau_decay_ms) -> tuple[float, float]:
+def check_taus(tau_rise_ms, tau_decay_ms) -> tuple[float, float]:
+    """The time constants as floats, or ``ValueError`` unless ``0 < tau_rise < tau_decay``."""
     tr = number(tau_rise_ms, "tau_rise_ms", positive=True)
     td = number(tau_decay_ms, "tau_decay_ms", positive=True)
     if not tr < td:
@@ -60,11 +62,13 @@ def _check_normalize(normalize: str) -> str:
 def diff_exp_peak_time(tau_rise_ms: float, tau_decay_ms: float) -> float:
     """Time (ms) of the maximum of ``exp(-t/tau_d) - exp(-t/tau_r)``:
     ``tau_r tau_d / (tau_d - tau_r) * ln(tau_d / tau_r)``."""
-    tr, td = _check_taus(tau_rise_ms, tau_decay_ms)
+    tr, td = check_taus(tau_rise_ms, tau_decay_ms)
     return tr * td / (td - tr) * math.log(td / tr)
 
 
-def _norm_factor(tr: float, td: float, normalize: str) -> float:
+def norm_factor(tr: float, td: float, normalize: str) -> float:
+    """The divisor that normalizes the difference of exponentials to a peak of 1
+    (``"peak"``), an area of ``tau_d - tau_r`` (``"area"``) or not at all (``"none"``)."""
     if normalize == "none":
         return 1.0
     if normalize == "area":
@@ -92,9 +96,9 @@ def diff_exp_kernel(t_ms, tau_rise_ms: float, tau_decay_ms: float,
     normalize
         ``"peak"`` (max 1), ``"area"`` (integral 1 ms^-1) or ``"none"``.
     """
-    tr, td = _check_taus(tau_rise_ms, tau_decay_ms)
+    tr, td = check_taus(tau_rise_ms, tau_decay_ms)
     t = finite_array(t_ms, "t_ms")
-    return _kernel_unchecked(t, tr, td, _norm_factor(tr, td, _check_normalize(normalize)))
+    return _kernel_unchecked(t, tr, td, norm_factor(tr, td, _check_normalize(normalize)))
 
 
 def _spike_lists(spike_times_ms, name: str) -> tuple[list[np.ndarray], bool]:
@@ -150,8 +154,8 @@ def synaptic_current(spike_times_ms, t_grid_ms, tau_rise_ms: float, tau_decay_ms
         ``(n_t,)`` when neither ``latency_ms`` nor ``weight`` is 2-D (sum over sources), else
         ``(n_t, n_post)``.
     """
-    tr, td = _check_taus(tau_rise_ms, tau_decay_ms)
-    norm = _norm_factor(tr, td, _check_normalize(normalize))
+    tr, td = check_taus(tau_rise_ms, tau_decay_ms)
+    norm = norm_factor(tr, td, _check_normalize(normalize))
     spikes, _ = _spike_lists(spike_times_ms, "spike_times_ms")
     t = finite_array(t_grid_ms, "t_grid_ms", ndim=(1,))
     n_pre = len(spikes)
@@ -203,7 +207,7 @@ class DiffExpSynapse:
     normalize: str = "peak"
 
     def __post_init__(self):
-        _check_taus(self.tau_rise_ms, self.tau_decay_ms)
+        check_taus(self.tau_rise_ms, self.tau_decay_ms)
         number(self.weight, "weight")
         number(self.latency_ms, "latency_ms", nonneg=True)
         _check_normalize(self.normalize)
@@ -230,7 +234,7 @@ AMPA = DiffExpSynapse(0.4, 2.0, 1.0, LATENCY_MS)
 GABA = DiffExpSynapse(0.25, 5.0, 1.0, LATENCY_MS)
 
 
-class _ExpTraces:
+class ExpTraces:
     """Exact grid implementation of a difference-of-exponentials synapse population.
 
     A spike arriving at ``t_a`` (between grid points) is added to the two traces at the first grid
@@ -240,7 +244,7 @@ class _ExpTraces:
 
     def __init__(self, syn: DiffExpSynapse, n: int, dt: float):
         self.tr, self.td, self.lat = syn.tau_rise_ms, syn.tau_decay_ms, syn.latency_ms
-        self.c = syn.weight / _norm_factor(self.tr, self.td, syn.normalize)
+        self.c = syn.weight / norm_factor(self.tr, self.td, syn.normalize)
         self.dt = dt
         self.dec_d, self.dec_r = math.exp(-dt / self.td), math.exp(-dt / self.tr)
         self.xd = np.zeros(n)

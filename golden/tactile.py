@@ -45,7 +45,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._validate import number
+from .validate import number
 from .fbg import bragg_shift_nm, strain_sensitivity_pm_per_microstrain
 
 __all__ = ["Material", "MATERIALS", "Pad", "contact_stiffness", "series_stiffness",

@@ -32,7 +32,7 @@ def cmd_boards(args) -> int:
 def cmd_build(args) -> int:
     from ..boards.build import BuildError, build_target
     from ..boards.targets import TARGETS
-    from ..hdl.izhikevich_config import ConfigError
+    from ..hdl.izhikevich.config import ConfigError
     if args.board not in TARGETS:
         raise CliError(f"cuneate build: unknown board {args.board!r}; known: "
                        f"{', '.join(TARGETS)}")

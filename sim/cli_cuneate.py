@@ -82,7 +82,7 @@ def add_coincidence_options(p) -> None:
 
 
 def coincidence_kwargs(args) -> dict:
-    """Constructor keywords of :class:`~cuneate.hdl.cuneate.CoincidenceConfig` from the
+    """Constructor keywords of :class:`~cuneate.hdl.coincidence.CoincidenceConfig` from the
     shared options (delays converted to ticks, refused when not whole)."""
     from .cli_izhikevich import parse_param_set
     delays = parse_matrix(args.delays_ms, "--delays-ms") if args.delays_ms else None
@@ -131,7 +131,7 @@ def coincidence_kwargs(args) -> dict:
 
 def coincidence_from_args(kw: dict):
     """The configuration, or the one-line refusal shared by every command."""
-    from ..hdl.cuneate import CoincidenceConfig, ConfigError
+    from ..hdl.coincidence import CoincidenceConfig, ConfigError
     try:
         return CoincidenceConfig(**kw)
     except ConfigError as exc:
@@ -181,7 +181,7 @@ def cmd_simulate(args) -> int:
     kw = coincidence_kwargs(args)
     # the engines run an external tick; a clock that just fits the schedule unless given
     if args.clock_hz is None:
-        from ..hdl.cuneate_config import CYCLES_PER_TARGET_EXTRA
+        from ..hdl.coincidence.config import CYCLES_PER_TARGET_EXTRA
         need = kw["n_targets"] * (kw["n_sources"] + CYCLES_PER_TARGET_EXTRA) + 2
         kw["clock_hz"] = args.update_hz * max(need, 64)
     cfg = coincidence_from_args(kw)
@@ -233,7 +233,7 @@ def _resources(args, cfg, json_path) -> None:
     added to the JSON description under ``resources``."""
     if not args.resources:
         return
-    from ..hdl.cuneate_synth import format_resources, synth_resources
+    from ..hdl.coincidence import format_resources, synth_resources
     try:
         res = synth_resources(cfg)
     except RuntimeError as exc:
@@ -247,7 +247,7 @@ def _resources(args, cfg, json_path) -> None:
 
 
 def cmd_generate(args) -> int:
-    from ..hdl.cuneate import generate_coincidence
+    from ..hdl.coincidence import generate_coincidence
     kw = coincidence_kwargs(args) | {"tick_source": args.tick_source}
     kw.setdefault("clock_hz", 40e6)
     cfg = coincidence_from_args(kw)
@@ -274,7 +274,7 @@ def _network_from_args(args, clock_default=None):
         if clock_default is not None:
             clock = clock_default
         else:
-            from ..hdl.cuneate_config import CYCLES_PER_TARGET_EXTRA
+            from ..hdl.coincidence.config import CYCLES_PER_TARGET_EXTRA
             need = max(args.afferents + SWEEP_EXTRA, det["n_targets"] *
                        (det["n_sources"] + CYCLES_PER_TARGET_EXTRA) + 2) + 2
             clock = args.update_hz * max(need, 64)

@@ -313,7 +313,7 @@ def cmd_simulate(args) -> int:
 # --------------------------------------------------------------------------------------------
 # generate
 def cmd_generate(args) -> int:
-    from ..hdl.generate import generate_izhikevich
+    from ..hdl.izhikevich import generate_izhikevich
     from ..golden.izhikevich import PRESETS
     sets = [parse_param_set(s) for s in args.param_set] if args.param_set else [PRESETS["RS"]]
     kw = core_kwargs(args, sets, args.neurons) | {"tick_source": args.tick_source}

@@ -1,7 +1,7 @@
 """``cuneate sweep``: what accuracy costs, over update rate, operand width, state fraction bits,
 rounding and the golden model's scheme (see :mod:`cuneate.sim.sweep`);
 ``cuneate hardcases summary``: the hard-case suite's record (:mod:`cuneate.sim.hardcases`); and
-``cuneate prove``: SymbiYosys checks of the one-update datapath (:mod:`cuneate.hdl.formal`)."""
+``cuneate prove``: SymbiYosys checks of the one-update datapath (:mod:`cuneate.hdl.izhikevich.formal`)."""
 
 from __future__ import annotations
 
@@ -117,7 +117,7 @@ def cmd_hardcases(args) -> int:
 def cmd_prove(args) -> int:
     import json
     import tempfile
-    from ..hdl.formal import FormalError, prove
+    from ..hdl.izhikevich.formal import FormalError, prove
     from ..hdl.izhikevich import ConfigError, IzhikevichConfig
     args.preset = args.preset or ["RS"]
     try:

@@ -5,12 +5,12 @@ afferent spike at ``T dt`` ms) and a number of ticks; every engine reports the t
 with the golden convention (update of tick ``T`` -> ``(T + 1) dt``):
 
 ``golden``
-    :func:`cuneate.golden.cuneate.simulate_cuneate` (float64 PSP sums, forward Euler) with the
+    :func:`cuneate.golden.coincidence.simulate_cuneate` (float64 PSP sums, forward Euler) with the
     exact delays and weights.
 ``fixed``
-    The bit-exact twin :class:`cuneate.hdl.cuneate.CoincidenceTwin`.
+    The bit-exact twin :class:`cuneate.hdl.coincidence.CoincidenceTwin`.
 ``amaranth``
-    The Amaranth simulator on :class:`cuneate.hdl.cuneate.CoincidenceDetector`.
+    The Amaranth simulator on :class:`cuneate.hdl.coincidence.CoincidenceDetector`.
 ``icarus``, ``verilator``
     cocotb on the generated Verilog (bench ``cuneate.sim.benches.cuneate_tb``, test ``engine``;
     Icarus runs the yosys-lowered netlist).
@@ -25,8 +25,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..golden import cuneate as gcun
-from ..hdl.cuneate import CoincidenceConfig, CoincidenceDetector, CoincidenceTwin, \
+from ..golden import coincidence as gcun
+from ..hdl.coincidence import CoincidenceConfig, CoincidenceDetector, CoincidenceTwin, \
     coincidence_verilog
 from ..hdl.izhikevich import CLAMP_KINDS
 

@@ -34,7 +34,7 @@ def golden_summary() -> list[str]:
 def run_demo(out: Path) -> int:
     out.mkdir(parents=True, exist_ok=True)
     try:
-        from ..hdl.generate import generate_izhikevich
+        from ..hdl.izhikevich import generate_izhikevich
     except ImportError:
         generate_izhikevich = None
     if generate_izhikevich is not None:

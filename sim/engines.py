@@ -188,7 +188,7 @@ def run_cocotb_engine(simulator: str, cfg: IzhikevichConfig, cur, n_sweeps: int,
     """Generate the core for ``cfg`` and run the cocotb ``engine`` bench in ``build_dir``;
     returns the :class:`~cuneate.sim.runner.CocotbRun` (its report has the spike sweeps and the
     clamp counters)."""
-    from ..hdl.generate import izhikevich_verilog
+    from ..hdl.izhikevich import izhikevich_verilog
     from .runner import run_cocotb
     build_dir = Path(build_dir)
     build_dir.mkdir(parents=True, exist_ok=True)

@@ -37,7 +37,7 @@ import numpy as np
 
 from ..golden import encoders
 from ..golden import izhikevich as giz
-from ..hdl.cuneate import CoincidenceConfig
+from ..hdl.coincidence import CoincidenceConfig
 from ..hdl.izhikevich import IzhikevichConfig, IzhikevichTwin
 from .cuneate_engines import run_coincidence, run_network
 

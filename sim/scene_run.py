@@ -27,7 +27,7 @@ from ..golden.fbg import IIRFilter, design_bandpass
 from ..golden.tactile import (MATERIALS, GraspSpec, Material, Pad, PulseSpec, SlideSpec,
                               apply_effects, synthesize_grasp, synthesize_pulse,
                               synthesize_slide)
-from ..hdl.fixed import QFormat
+from ..hdl.lib.fixed import QFormat
 from .decode import decode, isi_samples, trial_features
 from .driver import AfferentEncoding, FbgDriver
 from .scenes import Scene

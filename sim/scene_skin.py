@@ -113,7 +113,7 @@ def validate_skin(V, raw: dict, sections: dict, pops: list) -> None:
     raw_hw = raw.get("hardware", {})
     hw["current_int_bits"] = raw_hw.get("current_int_bits", LIF_CURRENT_FORMAT[0])
     hw["current_frac_bits"] = raw_hw.get("current_frac_bits", LIF_CURRENT_FORMAT[1])
-    from ..hdl.fixed import QFormat
+    from ..hdl.lib.fixed import QFormat
     fmt = QFormat(hw["current_int_bits"], hw["current_frac_bits"])
     f_max = max(st["press_amplitudes_N"] + [st["press_base_amplitude_N"]])
     ends = [fe["force_offset_mV"], fe["force_offset_mV"] + fe["force_gain_mV_per_N"] * f_max]
@@ -151,7 +151,7 @@ class SkinSceneRun:
 
 
 def _core(scene) -> dict:
-    from ..hdl.fixed import QFormat
+    from ..hdl.lib.fixed import QFormat
     hw, p = scene["hardware"], scene.populations[0]
     return {"current_format": QFormat(hw["current_int_bits"], hw["current_frac_bits"]),
             "rounding": hw["rounding"], "param_sets": [dict(LIF_PRESETS[p["preset"]])]}

@@ -143,7 +143,7 @@ def _fixed_config(p: SweepPoint, bat: Battery):
 def _current_format(p: SweepPoint, base=None):
     """The core's current format at point ``p``: ``base`` (default sQ10.8) with the point's
     fraction bits."""
-    from ..hdl.fixed import QFormat
+    from ..hdl.lib.fixed import QFormat
     from ..hdl.izhikevich import IzhikevichConfig
     base = base or IzhikevichConfig.current_format
     if p.current_frac_bits is None:
@@ -169,7 +169,7 @@ def _synth(p: SweepPoint, spec: SweepSpec) -> dict:
     import subprocess
     import sys
     import tempfile
-    from ..hdl.generate import izhikevich_verilog
+    from ..hdl.izhikevich import izhikevich_verilog
     from ..hdl.izhikevich import IzhikevichConfig
     n = int(spec.clock_hz // p.update_hz)
     cfg = IzhikevichConfig(n_neurons=n, clock_hz=n * p.update_hz, update_hz=p.update_hz,

@@ -4,13 +4,13 @@ The coincidence-detector counterpart of :mod:`cuneate.sim.sweep_lif` (same
 :class:`~cuneate.sim.sweep.SweepSpec`, :func:`~cuneate.sim.sweep.run_sweep` and accuracy
 columns). A :class:`CoincidenceSweepPoint` is one way to simulate the afferent battery:
 
-* ``fixed``: the bit-exact twin of the detector (:class:`cuneate.hdl.cuneate.CoincidenceTwin`,
+* ``fixed``: the bit-exact twin of the detector (:class:`cuneate.hdl.coincidence.CoincidenceTwin`,
   run through :func:`cuneate.sim.cuneate_engines.run_coincidence`) configured from the point's
   knobs - update rate, weight width, trace fraction bits, the multiplier operand width (the
   trace decays and the targets' Izhikevich arithmetic) and rounding; a configuration
-  :class:`~cuneate.hdl.cuneate_config.CoincidenceConfig` refuses is a row with status
+  :class:`~cuneate.hdl.coincidence.config.CoincidenceConfig` refuses is a row with status
   ``refused`` and its one-line reason;
-* ``float64`` / ``float32``: the golden model (:mod:`cuneate.golden.cuneate`: the PSP drive
+* ``float64`` / ``float32``: the golden model (:mod:`cuneate.golden.coincidence`: the PSP drive
   summed in float64, the targets' forward Euler in that arithmetic) at the point's rate.
 
 The battery ``cuneate-afferents`` (:func:`afferent_battery`): 6 afferents, 10 RS cuneate
@@ -34,10 +34,10 @@ from functools import lru_cache
 
 import numpy as np
 
-from ..golden import cuneate as gcun
+from ..golden import coincidence as gcun
 from ..golden import izhikevich as giz
-from ..hdl.cuneate_config import CYCLES_PER_TARGET_EXTRA, CoincidenceConfig
-from ..hdl.fixed import FixedPointError
+from ..hdl.coincidence.config import CYCLES_PER_TARGET_EXTRA, CoincidenceConfig
+from ..hdl.lib.fixed import FixedPointError
 from .cuneate_engines import run_coincidence
 from .sweep import (BLOCK_SAME_DT_KEYS, SweepSpec, ok_row, point_key, refused,
                     same_dt_columns)
@@ -122,9 +122,9 @@ def afferent_battery(name: str, duration_ms: float) -> AfferentBattery:
 
 def golden_cuneate_trains(bat: AfferentBattery, dt_ms: float, n_steps: int,
                           scheme: str = "euler", dtype=np.float64) -> list[np.ndarray]:
-    """The battery on the golden model: the PSP drive of :func:`cuneate.golden.cuneate
+    """The battery on the golden model: the PSP drive of :func:`cuneate.golden.coincidence
     .psp_drive` (float64) into RS targets integrated by ``scheme`` in ``dtype`` - what
-    :func:`cuneate.golden.cuneate.simulate_cuneate` does, with the arithmetic selectable."""
+    :func:`cuneate.golden.coincidence.simulate_cuneate` does, with the arithmetic selectable."""
     drive = gcun.psp_drive([np.asarray(s) for s in bat.spike_times_ms], bat.delays_ms,
                            np.arange(n_steps) * dt_ms, J=1.0, weights=bat.weights)
     r = giz.simulate("RS", drive, n_steps=n_steps, n_neurons=bat.n, dt_ms=dt_ms, scheme=scheme,
@@ -148,7 +148,7 @@ def cuneate_reference_trains(spec: SweepSpec) -> list[np.ndarray]:
 @dataclass(frozen=True)
 class CoincidenceSweepPoint:
     """One way to simulate the afferent battery: ``engine`` is ``fixed``, ``float64`` or
-    ``float32``; the knobs of :class:`~cuneate.hdl.cuneate_config.CoincidenceConfig` apply to
+    ``float32``; the knobs of :class:`~cuneate.hdl.coincidence.config.CoincidenceConfig` apply to
     ``fixed`` only."""
 
     engine: str

@@ -7,7 +7,7 @@ columns). A :class:`LifSweepPoint` is one way to simulate a LIF battery:
 * ``fixed``: the bit-exact twin of the LIF core (:class:`cuneate.hdl.lif.LifTwin`, run through
   :func:`cuneate.sim.lif_engines.run_lif`) configured from the point's knobs - update rate,
   state fraction bits, multiplier operand width, weight width, decay by multiplier or by shift,
-  rounding, accepted decay error; a configuration :class:`~cuneate.hdl.lif_config.LifConfig`
+  rounding, accepted decay error; a configuration :class:`~cuneate.hdl.lif.config.LifConfig`
   refuses is a row with status ``refused`` and its one-line reason;
 * ``float64`` / ``float32``: the golden model (:mod:`cuneate.golden.lif`) in that arithmetic at
   the point's update rate.
@@ -59,8 +59,8 @@ from functools import lru_cache
 import numpy as np
 
 from ..golden import lif as golden
-from ..hdl.fixed import ROUNDINGS, FixedPointError
-from ..hdl.lif_config import DECAYS, FORMS, LifSet
+from ..hdl.lib.fixed import ROUNDINGS, FixedPointError
+from ..hdl.lif.config import DECAYS, FORMS, LifSet
 from .lif_engines import LifProgram, engine_config, run_lif
 from .sweep import (BLOCK_SAME_DT_KEYS, SweepSpec, ok_row, point_key, refused,
                     same_dt_columns)
@@ -100,7 +100,7 @@ class LifBattery:
     name, form
         Battery name and LIF form (``"continuous"`` or ``"discrete"``).
     param_sets, neuron_sets, labels
-        Parameter sets (dicts, see :class:`cuneate.hdl.lif_config.LifSet`), the set of every
+        Parameter sets (dicts, see :class:`cuneate.hdl.lif.config.LifSet`), the set of every
         train and its label.
     drives
         Continuous form, per train: ``("constant", I_mV)`` or ``("staircase", lo, hi,

@@ -183,7 +183,7 @@ class CocotbTransport(_Batch):
         self.name = simulator
 
     def _execute(self, n_ticks, writes) -> dict:
-        from ..hdl.generate import izhikevich_verilog
+        from ..hdl.izhikevich import izhikevich_verilog
         from .runner import run_cocotb
         cfg = self.cfg
         config = {"core": cfg.to_kwargs(), "ticks": n_ticks,

@@ -1,4 +1,4 @@
-"""cocotb bench for the generated :class:`cuneate.hdl.cuneate.CoincidenceDetector` Verilog.
+"""cocotb bench for the generated :class:`cuneate.hdl.coincidence.CoincidenceDetector` Verilog.
 
 Configured by the JSON file named in ``CUNEATE_BENCH_CONFIG``; figures go to
 ``CUNEATE_BENCH_REPORT``. Test ``scoreboard``: external ticks every ``period`` cycles; between
@@ -10,7 +10,7 @@ Every cycle is watched; every target update is checked when its tick is complete
 * traces, PSP current, ``v``, ``u``, spike and clamp flags equal the bit-exact twin advanced from
   the DUT's own previous state (zero mismatches);
 * the float64 golden steps from the same state stay within their derived one-step bounds:
-  the traces (:func:`~cuneate.hdl.lif_synapses.trace_golden_check`) and the Izhikevich update
+  the traces (:func:`~cuneate.hdl.lib.synapses.trace_golden_check`) and the Izhikevich update
   (:class:`~cuneate.sim.scoreboard.SweepChecker`, flagged clamps expected, unflagged fail);
 * the spike stream equals the updates' spikes, ``merged_count`` the duplicate events and
   ``tick_count`` the ticks.
@@ -31,8 +31,8 @@ import numpy as np
 from cocotb.clock import Clock
 from cocotb.triggers import FallingEdge, RisingEdge
 
-from cuneate.hdl.cuneate import CoincidenceConfig, CoincidenceTwin
-from cuneate.hdl.lif_synapses import trace_golden_check
+from cuneate.hdl.coincidence import CoincidenceConfig, CoincidenceTwin
+from cuneate.hdl.lib.synapses import trace_golden_check
 from cuneate.sim.scoreboard import SweepChecker
 
 

@@ -34,7 +34,7 @@ from cocotb.clock import Clock
 from cocotb.triggers import FallingEdge, RisingEdge
 
 from cuneate.hdl.lif import CLAMP_KINDS, PIPELINE_DEPTH, LifConfig, LifTwin
-from cuneate.hdl.lif_synapses import trace_golden_check
+from cuneate.hdl.lib.synapses import trace_golden_check
 
 
 def _load():

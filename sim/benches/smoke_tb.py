@@ -1,4 +1,4 @@
-"""cocotb bench for :class:`cuneate.hdl.smoke.SmokeCounter` (toolchain smoke test)."""
+"""cocotb bench for :class:`cuneate.hdl.lib.smoke.SmokeCounter` (toolchain smoke test)."""
 
 import json
 import os
@@ -8,7 +8,7 @@ import cocotb
 from cocotb.clock import Clock
 from cocotb.triggers import FallingEdge, ReadOnly, RisingEdge
 
-from cuneate.hdl.smoke import smoke_reference
+from cuneate.hdl.lib.smoke import smoke_reference
 
 
 @cocotb.test()

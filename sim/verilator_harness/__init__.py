@@ -88,7 +88,7 @@ def _verilator() -> str:
 def build_harness(cfg: IzhikevichConfig, build_root: Path | None = None,
                   jobs: int = 2) -> Path:
     """Build (or reuse) the harness executable for ``cfg``; returns its path."""
-    from ...hdl.generate import izhikevich_verilog
+    from ...hdl.izhikevich import izhikevich_verilog
     for fmt, name in ((cfg.V, "v"), (cfg.U, "u"), (cfg.I, "current")):
         if fmt.width > 64:
             raise HarnessError(f"the harness reads ports up to 64 bits; {name} has {fmt.width}")

@@ -9,7 +9,7 @@ from cuneate.boards.build import build_target
 from cuneate.boards.sizing import size_core
 from cuneate.boards.targets import TARGETS
 from cuneate.boards.top import BoardTop, ClockPlan
-from cuneate.hdl.izhikevich_config import ConfigError
+from cuneate.hdl.izhikevich.config import ConfigError
 from cuneate.sim.cli import main
 
 

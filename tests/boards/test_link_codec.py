@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from cuneate.hdl.link_codec import (MAX_FRAME, MSG_SPIKES, CobsError, FrameDecoder,
+from cuneate.hdl.link.codec import (MAX_FRAME, MSG_SPIKES, CobsError, FrameDecoder,
                                     FrameError, Message, cobs_decode, cobs_encode, crc16,
                                     decode_frame, encode_frame, parse_spikes, write_message)
 

@@ -10,7 +10,7 @@ import pytest
 from amaranth.sim import Simulator
 
 from cuneate.hdl.link import LinkedCore, link_config
-from cuneate.hdl.link_codec import (COUNTER_NAMES, MSG_COUNTERS, MSG_SPIKES, OP_CLEAR_COUNTERS,
+from cuneate.hdl.link.codec import (COUNTER_NAMES, MSG_COUNTERS, MSG_SPIKES, OP_CLEAR_COUNTERS,
                                     OP_READ_COUNTERS, OP_STEP, FrameDecoder, LinkModel,
                                     Message, cobs_encode, control_message, encode_frame,
                                     parse_counters, parse_spikes, write_message)

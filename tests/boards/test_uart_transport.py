@@ -7,7 +7,7 @@ import pytest
 from cuneate.boards.link import ModelSerial, UartTransport
 from cuneate.hdl.izhikevich import IzhikevichTwin
 from cuneate.hdl.link import link_config
-from cuneate.hdl.link_codec import MSG_WRITE, Message, encode_frame
+from cuneate.hdl.link.codec import MSG_WRITE, Message, encode_frame
 from cuneate.sim.transport import TransportError
 
 CORE = dict(n_neurons=100, clock_hz=16e3 * 128, update_hz=16e3)

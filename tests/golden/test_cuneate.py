@@ -1,11 +1,11 @@
-"""Tests of the cuneate coincidence-detector reference (cuneate.golden.cuneate)."""
+"""Tests of the cuneate coincidence-detector reference (cuneate.golden.coincidence)."""
 
 import math
 
 import numpy as np
 import pytest
 
-from cuneate.golden import cuneate as cn
+from cuneate.golden import coincidence as cn
 from cuneate.golden import izhikevich
 
 DT = izhikevich.DEFAULT_DT_MS

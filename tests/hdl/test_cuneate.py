@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 from amaranth.sim import Simulator
 
-from cuneate.golden import cuneate as gcun
-from cuneate.hdl.cuneate import (CoincidenceConfig, CoincidenceDetector, CoincidenceTwin,
+from cuneate.golden import coincidence as gcun
+from cuneate.hdl.coincidence import (CoincidenceConfig, CoincidenceDetector, CoincidenceTwin,
                                  ConfigError)
 
 DELAYS = [[0, 3, 1, 0], [2, 0, 0, 5], [7, 7, 0, 0]]

@@ -11,8 +11,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from cuneate.hdl import cuneate_kernel as kernel
-from cuneate.hdl.cuneate import CLAMP_KINDS, CoincidenceConfig, CoincidenceTwin
+from cuneate.hdl.coincidence import kernel as kernel
+from cuneate.hdl.coincidence import CLAMP_KINDS, CoincidenceConfig, CoincidenceTwin
 
 pytestmark = pytest.mark.skipif(not kernel.available(), reason="numba not installed")
 

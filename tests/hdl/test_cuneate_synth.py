@@ -5,8 +5,8 @@ import json
 
 import pytest
 
-from cuneate.hdl.cuneate import CoincidenceConfig
-from cuneate.hdl.cuneate_synth import synth_resources
+from cuneate.hdl.coincidence import CoincidenceConfig
+from cuneate.hdl.coincidence import synth_resources
 from cuneate.sim.cli import main
 
 

@@ -1,4 +1,4 @@
-"""cuneate.hdl.fixed: the RTL (Amaranth) and twin (NumPy) paths of every fixed-point operation
+"""cuneate.hdl.lib.fixed: the RTL (Amaranth) and twin (NumPy) paths of every fixed-point operation
 agree bit for bit, the twin agrees with exact rational arithmetic, and QFormat / FixedConstant /
 check_int64 keep their contracts."""
 
@@ -10,7 +10,7 @@ import pytest
 from amaranth.hdl import Module, Signal, Value, signed, unsigned
 from amaranth.sim import Simulator
 
-from cuneate.hdl.fixed import (FixedConstant, FixedPointError, QFormat, check_int64, is_hdl,
+from cuneate.hdl.lib.fixed import (FixedConstant, FixedPointError, QFormat, check_int64, is_hdl,
                                round_shift, round_shift_select, saturate, select)
 
 SEED = 20240611

@@ -5,7 +5,7 @@ counterexample, caught by the flagged u_high clamp)."""
 import numpy as np
 import pytest
 
-from cuneate.hdl.formal import prove
+from cuneate.hdl.izhikevich.formal import prove
 from cuneate.hdl.izhikevich import IzhikevichConfig, IzhikevichTwin
 from cuneate.sim.hardcases import record
 

@@ -3,8 +3,8 @@ bounded proof on the smallest core, and injected faults the same check catches."
 
 import pytest
 
-from cuneate.hdl import izhikevich as izh
-from cuneate.hdl.formal_core import prove_core
+from cuneate.hdl.izhikevich import datapath as izh
+from cuneate.hdl.izhikevich.formal import prove_core
 from cuneate.hdl.izhikevich import IzhikevichConfig
 from cuneate.sim.hardcases import record
 

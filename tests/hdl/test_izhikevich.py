@@ -9,7 +9,7 @@ from amaranth.sim import Simulator
 
 from cuneate.golden import izhikevich as golden
 from cuneate.golden.metrics import compare_populations
-from cuneate.hdl.generate import generate_izhikevich
+from cuneate.hdl.izhikevich import generate_izhikevich
 from cuneate.hdl.izhikevich import (CLAMP_KINDS, PIPELINE_DEPTH, ConfigError,
                                     IzhikevichConfig, IzhikevichCore, IzhikevichTwin)
 

@@ -14,7 +14,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from cuneate.golden.behaviours import BEHAVIOURS
-from cuneate.hdl import izhikevich_kernel as kernel
+from cuneate.hdl.izhikevich import kernel as kernel
 from cuneate.hdl.izhikevich import CLAMP_KINDS, IzhikevichConfig, IzhikevichTwin
 
 pytestmark = pytest.mark.skipif(not kernel.available(), reason="numba not installed")

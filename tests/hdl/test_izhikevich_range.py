@@ -10,7 +10,7 @@ from hypothesis import strategies as st
 from cuneate.golden import izhikevich as golden
 from cuneate.golden.metrics import compare_trains
 from cuneate.hdl.izhikevich import ConfigError, IzhikevichConfig, IzhikevichTwin
-from cuneate.hdl.izhikevich_range import reachable_ranges
+from cuneate.hdl.izhikevich.range import reachable_ranges
 
 PRESETS = ("RS", "IB", "CH", "FS", "LTS", "RZ")
 DT = 1.0 / 16.0

@@ -279,7 +279,7 @@ def test_synaptic_traces_follow_the_golden_kernel():
     t = np.arange(steps) * cfg.dt_ms
     from cuneate.golden import synapses as gs
     w_eff = cfg.W.to_float(cfg.weights_raw[0]) * np.array(
-        [gs._norm_factor(*cfg.ampa, "peak")] * 2 + [gs._norm_factor(*cfg.gaba, "peak")])
+        [gs.norm_factor(*cfg.ampa, "peak")] * 2 + [gs.norm_factor(*cfg.gaba, "peak")])
     pre = [np.flatnonzero(x[:, i]) * cfg.dt_ms for i in range(n_in)]
     ref = (golden.synaptic_current(pre[:2], t, *cfg.ampa, latency_ms=0.0, weight=w_eff[:2])
            - golden.synaptic_current(pre[2:], t, *cfg.gaba, latency_ms=0.0, weight=w_eff[2:]))

@@ -13,7 +13,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from cuneate.hdl import lif_kernel as kernel
+from cuneate.hdl.lif import kernel as kernel
 from cuneate.hdl.lif import CLAMP_KINDS, LifConfig, LifTwin
 
 pytestmark = pytest.mark.skipif(not kernel.available(), reason="numba not installed")

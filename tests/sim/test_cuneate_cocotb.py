@@ -7,7 +7,7 @@ import json
 import numpy as np
 import pytest
 
-from cuneate.hdl.cuneate import CoincidenceConfig, CoincidenceTwin, coincidence_verilog
+from cuneate.hdl.coincidence import CoincidenceConfig, CoincidenceTwin, coincidence_verilog
 from cuneate.sim.runner import run_cocotb
 from cuneate.sim.toolchain import SIMULATORS
 

@@ -13,7 +13,7 @@ import json
 
 import pytest
 
-from cuneate.hdl.generate import izhikevich_verilog
+from cuneate.hdl.izhikevich import izhikevich_verilog
 from cuneate.sim.benches.izhikevich_tb import make_config
 from cuneate.sim.runner import run_cocotb
 from cuneate.sim.toolchain import SIMULATORS

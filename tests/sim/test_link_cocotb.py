@@ -17,7 +17,7 @@ import pytest
 
 from cuneate.hdl.izhikevich import IzhikevichTwin
 from cuneate.hdl.link import link_config, link_verilog
-from cuneate.hdl.link_codec import (COUNTER_NAMES, MSG_COUNTERS, MSG_SPIKES, OP_READ_COUNTERS,
+from cuneate.hdl.link.codec import (COUNTER_NAMES, MSG_COUNTERS, MSG_SPIKES, OP_READ_COUNTERS,
                                     OP_STEP, FrameDecoder, LinkModel, Message, cobs_encode,
                                     control_message, encode_frame, parse_counters,
                                     parse_spikes, write_message)

@@ -6,7 +6,7 @@ from dataclasses import replace
 import numpy as np
 
 from cuneate.golden.izhikevich import group_spikes
-from cuneate.hdl.cuneate import CoincidenceConfig, CoincidenceTwin
+from cuneate.hdl.coincidence import CoincidenceConfig, CoincidenceTwin
 from cuneate.hdl.lif import LifConfig, LifTwin
 from cuneate.sim.sweep import SweepPoint, SweepSpec, reference_trains, run_sweep
 from cuneate.sim.sweep_cuneate import (CoincidenceSweepPoint, afferent_battery,

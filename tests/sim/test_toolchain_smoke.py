@@ -4,7 +4,7 @@
 import pytest
 from amaranth.back import verilog
 
-from cuneate.hdl.smoke import SmokeCounter
+from cuneate.hdl.lib.smoke import SmokeCounter
 from cuneate.sim.runner import run_cocotb
 from cuneate.sim.toolchain import SIMULATORS
 

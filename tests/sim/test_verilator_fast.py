@@ -5,9 +5,9 @@ update dump passes the per-sweep checker, and that checker catches the same inje
 import numpy as np
 import pytest
 
-import cuneate.hdl.izhikevich as izh
-from cuneate.hdl.fixed import round_shift_add
-from cuneate.hdl.generate import izhikevich_verilog
+import cuneate.hdl.izhikevich.datapath as izh
+from cuneate.hdl.lib.fixed import round_shift_add
+from cuneate.hdl.izhikevich import izhikevich_verilog
 from cuneate.hdl.izhikevich import CLAMP_KINDS, IzhikevichConfig, IzhikevichTwin
 from cuneate.sim.engines import run_engine
 from cuneate.sim.verilator_harness import check_dump, raw_cycle_rate, run_harness

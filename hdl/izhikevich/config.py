@@ -1,7 +1,7 @@
 """Configuration of the Izhikevich core: sizes, rates, parameter sets, and every format and
 constant derived from them, with the refusals of what cannot be held.
 
-The arithmetic is forward Euler, per parameter set ``s`` (see :mod:`cuneate.hdl.izhikevich`)::
+The arithmetic is forward Euler, per parameter set ``s`` (see :mod:`cuneate.hdl.izhikevich.datapath`)::
 
     w   = v + B_s/(2 A_s)                                  (rounded once into the v format)
     v'  = v + (A_s dt) w^2 + dt (C_s - A_s woff_s^2) + dt I - dt u
@@ -10,7 +10,7 @@ The arithmetic is forward Euler, per parameter set ``s`` (see :mod:`cuneate.hdl.
 
 **The accepted input range is the proven range.** The configuration accepts currents in
 ``current_range`` (default: the whole current format) and derives, for every parameter set, the
-range of ``v`` and ``u`` reachable for those currents (:mod:`cuneate.hdl.izhikevich_range`:
+range of ``v`` and ``u`` reachable for those currents (:mod:`cuneate.hdl.izhikevich.range`:
 a documented worst-case search for ``u``, a proof for ``v`` from ``u``'s bound). The state
 formats are sized to hold it (``v_int_bits``/``u_int_bits`` = None, the default) and the clamp
 levels of the datapath sit just outside it: ``v`` never below ``v_floor``, ``u`` within
@@ -36,9 +36,10 @@ from typing import Sequence
 
 import numpy as np
 
-from ..golden import izhikevich as golden
-from .fixed import FixedConstant, FixedPointError, QFormat, round_shift
-from .izhikevich_range import RangeSearchError, reachable_ranges
+from ...golden import izhikevich as golden
+from ..lib.config import ConfigError, int_bits_for, shared_exponent
+from ..lib.fixed import FixedConstant, FixedPointError, QFormat, round_shift
+from .range import RangeSearchError, one_step_bound, reachable_ranges
 
 __all__ = ["ConfigError", "IzhikevichConfig", "PIPELINE_DEPTH", "CLAMP_KINDS", "SATURATION"]
 
@@ -49,27 +50,10 @@ _REL = 2.0 ** -12          # largest relative representation error accepted for 
 _INT64_GUARD = 1 << 62
 
 
-class ConfigError(FixedPointError):
-    """A core configuration that cannot hold; raised at construction (before elaboration)."""
-
-
-def _int_bits_for(lo: float, hi: float) -> int:
-    """Fewest integer bits (sign included) of a signed format holding [lo, hi] at any
-    fraction width (the format's max is ``2**(ib-1) - lsb``, so ``hi`` needs strict room)."""
-    ib = 1
-    while not (-(2.0 ** (ib - 1)) <= lo and hi < 2.0 ** (ib - 1)):
-        ib += 1
-    return ib
-
-
 def _shared_exponent(name: str, values: Sequence[float], width: int, nominal: float = 1.0):
-    """Constants sharing one exponent, normalized to the largest magnitude (so one shift serves
-    every parameter set); ``nominal`` sets the exponent when every value is 0."""
-    big = max(abs(x) for x in values)
-    ref = FixedConstant.normalized(name, big if big else nominal, width)
-    return [FixedConstant.scaled(f"{name}[{i}]", x, ref.frac_bits, width,
-                                 max_rel_error=_REL if x else None)
-            for i, x in enumerate(values)]
+    """Constants sharing one exponent (see :func:`~cuneate.hdl.lib.config.shared_exponent`),
+    each within the relative error every constant of the core is held to."""
+    return shared_exponent(name, values, width, nominal, max_rel_error=_REL)
 
 
 @dataclass
@@ -278,8 +262,8 @@ class IzhikevichConfig:
         v_need_lo = min([v_floor] + [p.c for p in self.params] + list(self._v_init))
         u_need = [u_lo, u_hi] + list(self._u_init)
         self.proven = {"v": (v_need_lo, self.v_th), "u": (min(u_need), max(u_need))}
-        ib_v = _int_bits_for(v_need_lo, self.v_th)
-        ib_u = _int_bits_for(min(u_need), max(u_need))
+        ib_v = int_bits_for(v_need_lo, self.v_th)
+        ib_u = int_bits_for(min(u_need), max(u_need))
         self.v_int_bits_derived, self.u_int_bits_derived = ib_v, ib_u
         narrow = []
         if self.v_int_bits is None:
@@ -393,7 +377,7 @@ class IzhikevichConfig:
         yf = ow - 9 if self.y_frac_bits is None else self.y_frac_bits
         if yf < 1:
             raise ConfigError(f"y_frac_bits must be >= 1, got {yf}")
-        y_ib = _int_bits_for(*self.y_range)
+        y_ib = int_bits_for(*self.y_range)
         yfit = QFormat.for_range(*self.y_range, max(ow, y_ib + yf))
         if self.y_int_bits is None:
             self.Y = yfit
@@ -516,61 +500,13 @@ class IzhikevichConfig:
         v, u, I = (np.asarray(x, dtype=dtype) for x in (v, u, I))
         return golden.step(v, u, I, p.a, p.b, p.c, p.d, self.dt_ms, "euler", **p.extras())
 
-    # ------------------------------------------------------------------------------------------
-    # Error bound of one update against float64 Euler from the same state.
     def one_step_bound(self, v, u, I, sel=None):
         """Upper bounds (mV) on |v' - v'_golden| and |u' - u'_golden| for one update from the
-        state ``(v, u)`` (floats, exactly representable) with input ``I`` (inside the accepted
-        range), before reset, for neurons of parameter sets ``sel`` (default: the worst set).
-
-        Sum of every rounding and representation error of the datapath, each at its worst:
-        operand roundings (half an LSB, or one LSB when truncating), constant errors, the
-        rounded completing-the-square offset, and the alignments into the state formats.
-        """
-        v, u, I = (np.asarray(x, dtype=np.float64) for x in (v, u, I))
-        half = 0.5 if self.rounding == "nearest" else 1.0
-        eW, eQ, eV, eU, eY = (half * f.lsb for f in (self.W, self.Q, self.V, self.U, self.Y))
-        eVQ = half * self.VQ.lsb
-        dt = self.dt_ms
-
-        def per(values, reduce=max):
-            arr = np.asarray(values, dtype=np.float64)
-            if sel is None:
-                return reduce(arr)
-            return arr[np.asarray(sel, dtype=np.int64)]
-        P = self.params
-        woff = per([w.quantized for w in self.woff], reduce=lambda a: a[np.argmax(np.abs(a))])
-        ka = per([k.quantized for k in self.KA])
-        dka = per([abs(k.abs_error) for k in self.KA])
-        dB = per([abs(2 * p.A * w.quantized - p.B) for p, w in zip(P, self.woff)])
-        dK0 = per([abs(k.abs_error) for k in self.K0])
-        same = len({w.raw for w in self.woff}) == 1
-        w = np.abs(v + woff) if (sel is not None or same) else np.abs(v) + np.abs(woff)
-        bound_v = (dka * w * w + ka * (2 * w * eW + eW * eW) + eQ * (w + eW) + eV + dK0
-                   + dt * dB * np.abs(v))
-        if self.dt_shift is not None:
-            bound_v = bound_v + eV                           # dt*u alignment (dt*I is exact)
-        else:
-            eX = half * self.X.lsb
-            kd, dkd = self.KDT.quantized, abs(self.KDT.abs_error)
-            bound_v = bound_v + dkd * np.abs(I - u) + kd * (eX + eU) + eV
-        bq = per([abs(b.quantized) for b in self.beta])
-        db = per([abs(b.abs_error) for b in self.beta])
-        aq = per([abs(a.quantized) for a in self.alpha])
-        da = per([abs(a.abs_error) for a in self.alpha])
-        dE = per([abs(e.abs_error) for e in self.E])
-        vu = per([abs(p.v_u) for p in P])
-        lam = per([p.u_leak for p in P])
-        ey = bq * eVQ + db * (np.abs(v) + vu) + dE + eU + eY
-        bound_u = aq * ey + da * (bq * (np.abs(v) + vu) + lam * np.abs(u)) + eU
-        # on a spike v is replaced by c and u gets d: their representation errors
-        bound_v = bound_v + per([abs(c.abs_error) for c in self.c])
-        bound_u = bound_u + per([abs(d.abs_error) for d in self.d])
-        return bound_v + 1e-9, bound_u + 1e-9
+        state ``(v, u)`` (see :func:`cuneate.hdl.izhikevich.range.one_step_bound`)."""
+        return one_step_bound(self, v, u, I, sel)
 
     # ------------------------------------------------------------------------------------------
     def clamps_dict(self) -> dict:
-        V, U, I = self.V, self.U, self.I
         return {
             "kinds": list(CLAMP_KINDS),
             "v_low": {"level_mV": self.v_floor, "raw": self.v_floor_raw,
@@ -615,7 +551,7 @@ class IzhikevichConfig:
             "constants": {c.name: c.to_dict() for c in consts},
             "proven_range": {
                 "method": "u: worst-case stimulus search (float64 forward Euler at the core's "
-                          "dt, cuneate.hdl.izhikevich_range); v: proven lower bound from u's "
+                          "dt, cuneate.hdl.izhikevich.range); v: proven lower bound from u's "
                           "bound; margins as documented there",
                 "v": list(self.proven["v"]), "u": list(self.proven["u"]),
                 "per_set": [r.to_dict() for r in self.ranges],

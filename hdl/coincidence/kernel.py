@@ -1,14 +1,14 @@
 """Compiled (numba) kernel of the coincidence detector's twin.
 
-A tick of :class:`cuneate.hdl.cuneate.CoincidenceTwin` - stamp the pending input spikes into the
+A tick of :class:`cuneate.hdl.coincidence.CoincidenceTwin` - stamp the pending input spikes into the
 history ring, sum each target's delayed weighted inputs (``accumulate``), the PSP current and
 trace inputs (``psp_current``), the two trace decays (``trace_products`` / ``trace_update`` of
-:mod:`cuneate.hdl.lif_synapses`) and the Izhikevich update (``operands`` .. ``update_state``) -
+:mod:`cuneate.hdl.lib.synapses`) and the Izhikevich update (``operands`` .. ``update_state``) -
 restated per target with the same integer operations in the same order, one compiled loop over a
-whole run. The Izhikevich step and the trace step are the ones of the Izhikevich and LIF kernels
-(:mod:`cuneate.hdl.izhikevich_kernel`, :mod:`cuneate.hdl.lif_kernel`), so each integer operation
-is restated once. Proven bit-exact against the stage-function twin by property tests (random
-states, traces and input sums) and long runs (``tests/hdl/test_cuneate_kernel.py``).
+whole run. The Izhikevich step is the Izhikevich kernel's (:mod:`cuneate.hdl.izhikevich.kernel`) and the
+trace step the shared one (:mod:`cuneate.hdl.lib.kernel`), so each integer operation is
+restated once. Proven bit-exact against the stage-function twin by property tests (random
+states, traces and input sums) and long runs (``tests/hdl/test_coincidence_kernel.py``).
 """
 
 from __future__ import annotations
@@ -17,21 +17,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import izhikevich_kernel as izk
-from .izhikevich_config import CLAMP_KINDS
-from .izhikevich_kernel import available, rounding_slots
-from .lif_kernel import _tuples, trace_table
+from ..izhikevich import kernel as izk
+from ..lib.kernel import as_tuples, available, record, rounding_slots, trace_table
+from .config import CLAMP_KINDS
 
 assert len(CLAMP_KINDS) == 5                       # the run loop counts five kinds
 
 __all__ = ["available", "CoincidenceConstants", "gather_constants", "update_arrays",
            "run_ticks"]
-
-try:
-    import numba                                           # noqa: F401
-    from numba import njit
-except ImportError:                                        # pragma: no cover
-    numba = None
 
 S_WSH = 0              # input-sum shift into trace fraction bits
 R_I = 1                # rounding slots of the PSP current (4)
@@ -49,7 +42,7 @@ class CoincidenceConstants:
 
 
 def gather_constants(cfg) -> CoincidenceConstants:
-    """The constants of a :class:`cuneate.hdl.cuneate_config.CoincidenceConfig`."""
+    """The constants of a :class:`cuneate.hdl.coincidence.CoincidenceConfig`."""
     near = cfg.rounding == "nearest"
     sc = np.zeros(N_SCALARS, dtype=np.int64)
     sc[S_WSH] = cfg.wshift
@@ -58,15 +51,17 @@ def gather_constants(cfg) -> CoincidenceConstants:
         raise ValueError("the compiled coincidence kernel needs weights with at most the "
                          "traces' fraction bits")
     return CoincidenceConstants(
-        _tuples(sc), _tuples(trace_table(cfg.tview.traces, cfg.tview.V.frac_bits, near)),
+        as_tuples(sc), as_tuples(trace_table(cfg.tview.traces, cfg.tview.V.frac_bits, near)),
         izk.gather_constants(cfg.iz), np.ascontiguousarray(cfg.delays, dtype=np.int64),
         np.ascontiguousarray(cfg.weights_raw, dtype=np.int64))
 
 
-if numba is not None:
-    from .izhikevich_kernel import _neuron as _iz_neuron
-    from .izhikevich_kernel import _record, _rq
-    from .lif_kernel import trace_step
+if available():
+    from numba import njit
+
+    from ..izhikevich.kernel import neuron_update as _iz_neuron
+    from ..lib.kernel import rq as _rq
+    from ..lib.kernel import trace_step
 
     _jit = dict(nogil=True, cache=True, error_model="numpy")
 
@@ -138,7 +133,7 @@ if numba is not None:
                 c3 += (cl >> 3) & 1
                 c4 += (cl >> 4) & 1
             if hits:
-                n_spk = _record(flags, fwords, k, spk_k, spk_n, n_spk)
+                n_spk = record(flags, fwords, k, spk_k, spk_n, n_spk)
             totals[0] += c0
             totals[1] += c1
             totals[2] += c2
@@ -169,7 +164,7 @@ def run_ticks(consts: CoincidenceConstants, v, u, xd, xr, sel, history, pending,
     cap = max(4 * M, 1024)
     spk_k, spk_n = np.empty(cap, np.int64), np.empty(cap, np.int64)
     tab, sc_iz = consts.iz
-    flags = np.zeros((M + 7) // 8 * 8, np.bool_)           # whole words for _record
+    flags = np.zeros((M + 7) // 8 * 8, np.bool_)           # whole words for record
     k, n_spk = 0, 0
     while k < n_ticks:
         k, n_spk = _run(v, u, xd, xr, sel, history, pending, tick0, consts.delays,

@@ -1,6 +1,6 @@
 """Configuration of the coincidence detector (cuneate neurons): formats derived, bad input refused.
 
-:class:`CoincidenceConfig` holds what :class:`cuneate.hdl.cuneate.CoincidenceDetector` is built
+:class:`CoincidenceConfig` holds what :class:`cuneate.hdl.coincidence.CoincidenceDetector` is built
 from: ``n_sources`` afferents, ``n_targets`` cuneate neurons, a conduction delay in ticks and a
 weight for every (target, source) pair, the PSP time constants and the Izhikevich parameters of
 the targets. It derives and proves:
@@ -8,10 +8,10 @@ the targets. It derives and proves:
 * the spike history (a ring of ``max_delay_ticks`` words of ``n_sources`` bits in block RAM);
 * the weight format (``weight_bits``, unsigned, the most fraction bits that hold ``J w``);
 * the input accumulator (``a = sum_s J w_s x_s``: width from the fan-in, never overflows);
-* the two PSP traces (decay and rise) as in :mod:`cuneate.hdl.lif_synapses`, sized from the
+* the two PSP traces (decay and rise) as in :mod:`cuneate.hdl.lib.synapses`, sized from the
   largest per-tick input;
 * the PSP current ``I = x_d - x_r`` and its proven range, which becomes the accepted current
-  range of the Izhikevich arithmetic (an :class:`~cuneate.hdl.izhikevich_config.IzhikevichConfig`
+  range of the Izhikevich arithmetic (an :class:`~cuneate.hdl.izhikevich.IzhikevichConfig`
   built for the targets: its proven state ranges hold, no unflagged clamp can act).
 
 Refused at construction, one line each: delays outside ``0 .. max_delay_ticks - 1``, negative
@@ -28,35 +28,20 @@ from typing import Sequence
 
 import numpy as np
 
-from ..golden import cuneate as gcun
-from .fixed import FixedConstant, FixedPointError, QFormat
-from .izhikevich_config import PIPELINE_DEPTH as IZ_PIPELINE_DEPTH
-from .izhikevich_config import ConfigError, IzhikevichConfig
-from .lif_synapses import TraceSpec
+from ...golden import coincidence as gcun
+from ..izhikevich.config import CLAMP_KINDS, IzhikevichConfig
+from ..izhikevich.config import PIPELINE_DEPTH as IZ_PIPELINE_DEPTH
+from ..lib.config import ConfigError, int_bits_for
+from ..lib.fixed import FixedPointError, QFormat
+from ..lib.synapses import TraceView, trace_spec
 
-__all__ = ["CoincidenceConfig", "ConfigError", "CYCLES_PER_TARGET_EXTRA", "TRACE_NAMES"]
+__all__ = ["CoincidenceConfig", "ConfigError", "CYCLES_PER_TARGET_EXTRA", "TRACE_NAMES",
+           "CLAMP_KINDS"]
 
 #: trace order (state, ports, twin arrays): decay, rise
 TRACE_NAMES = ("xd", "xr")
 #: cycles per target beyond one per input: history/weight read latency and the update stages
 CYCLES_PER_TARGET_EXTRA = 8
-
-
-@dataclass
-class _TraceView:
-    """What the shared trace stage functions of :mod:`cuneate.hdl.lif_synapses` read."""
-
-    traces: list
-    V: QFormat
-    rounding: str
-    dt_ms: float
-
-
-def _int_bits(lo: float, hi: float) -> int:
-    ib = 1
-    while not (-(2.0 ** (ib - 1)) <= lo and hi < 2.0 ** (ib - 1)):
-        ib += 1
-    return ib
 
 
 @dataclass
@@ -222,7 +207,7 @@ class CoincidenceConfig:
                 n_neurons=n_iz, clock_hz=self.update_hz * n_iz, update_hz=self.update_hz,
                 param_sets=tuple(self.param_sets), neuron_sets=ts + [0] * (n_iz - M),
                 operand_width=self.operand_width, rounding=self.rounding,
-                current_format=QFormat(_int_bits(self.i_lo, self.i_hi), self.i_frac_bits),
+                current_format=QFormat(int_bits_for(self.i_lo, self.i_hi), self.i_frac_bits),
                 current_range=(self.i_lo, self.i_hi), tick_source="external")
         except ConfigError as exc:
             raise ConfigError(f"coincidence detector: the targets' Izhikevich arithmetic "
@@ -242,34 +227,11 @@ class CoincidenceConfig:
         self.T = QFormat(32, F)                   # nominal; the stored formats follow
         self.wshift = F - self.W.frac_bits
         a = self.acc_max_raw * self.W.lsb           # largest per-tick input, mV/ms
-        specs = []
-        for name, tau in (("xd", self.tau_decay_ms), ("xr", self.tau_rise_ms)):
-            k = -math.expm1(-self.dt_ms / tau)
-            K = FixedConstant.normalized(f"k_{name}", k, ow)
-            if K.quantized >= 1 or K.quantized <= 0 or abs(K.rel_error) > self.max_decay_error:
-                raise ConfigError(f"PSP trace {name}: decay k = 1 - exp(-dt/tau) = {k:.6g} "
-                                  f"(tau {tau:g} ms at dt {self.dt_ms:g} ms) is represented as "
-                                  f"{K.quantized:.6g} in {ow} bits")
-            y_max = a / K.quantized + 8 * lsb
-            Y = QFormat.for_range(-4 * lsb, y_max, ow)
-            if Y.frac_bits > F:
-                Y = QFormat(Y.int_bits, F)
-            t_lo = -(Y.lsb + 2 * lsb) / K.quantized - 4 * lsb
-            t_hi = y_max + (Y.lsb + 2 * lsb) / K.quantized
-            T = QFormat(_int_bits(t_lo, t_hi), F)
-            t_bounds = (int(math.floor(t_lo / lsb)), int(math.ceil(t_hi / lsb)))
-
-            def yb(Y):
-                return int(math.floor(t_lo / Y.lsb)) - 1, int(math.ceil((t_hi + a) / Y.lsb)) + 1
-            lo_r, hi_r = yb(Y)
-            while not (Y.min_raw <= lo_r and hi_r <= Y.max_raw):
-                Y = QFormat(Y.int_bits + 1, Y.frac_bits - 1)
-                lo_r, hi_r = yb(Y)
-            specs.append(TraceSpec(name, tau, k, K, Y, (lo_r, hi_r), T, t_bounds,
-                                   Y.frac_bits + K.frac_bits - F, y_max))
+        specs = [trace_spec(name, tau, self.dt_ms, ow, F, a, self.max_decay_error, "PSP trace")
+                 for name, tau in (("xd", self.tau_decay_ms), ("xr", self.tau_rise_ms))]
         self.traces = specs
         self.TV = QFormat(max(s.T.int_bits for s in specs), F)
-        self.tview = _TraceView(specs, QFormat(self.TV.int_bits, F), self.rounding, self.dt_ms)
+        self.tview = TraceView(specs, QFormat(self.TV.int_bits, F), self.rounding, self.dt_ms)
         # I = xd - xr: at most the all-inputs-every-tick steady state, plus rounding margins
         kd, kr = specs[0].K.quantized, specs[1].K.quantized
         top = a * ((1 - kd) / kd - (1 - kr) / kr)

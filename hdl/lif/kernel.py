@@ -1,8 +1,9 @@
-"""Compiled (numba) kernel of the LIF core's twin, and the synaptic-trace step it shares with
-the coincidence detector's kernel.
+"""Compiled (numba) kernel of the LIF core's twin (the synaptic-trace step is the shared one of
+:mod:`cuneate.hdl.lib.kernel`).
 
-The arithmetic is defined once by the stage functions of :mod:`cuneate.hdl.lif` (``gather_input``,
-``leak_operand``, ``leak_product``, ``update_state``) and :mod:`cuneate.hdl.lif_synapses`
+The arithmetic is defined once by the stage functions of :mod:`cuneate.hdl.lif.datapath`
+(``gather_input``, ``leak_operand``, ``leak_product``, ``update_state``) and
+:mod:`cuneate.hdl.lib.synapses`
 (``trace_inputs``, ``trace_products``, ``trace_update``); this module restates the same integer
 operations per neuron, in the same order, as one compiled loop over a whole program of sweeps
 (currents and input spikes per sweep) without temporaries. It is proven bit-exact against the
@@ -23,17 +24,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .izhikevich_kernel import available, default_threads, rounding_slots, split_over_threads
-from .lif_config import CLAMP_KINDS, LifConfig
+from ..lib.kernel import (INT64_MAX, INT64_MIN, as_tuples, available, default_threads, record,
+                          rounding_slots, split_over_threads, trace_table)
+from .config import CLAMP_KINDS, LifConfig
 
-__all__ = ["available", "LifConstants", "gather_constants", "trace_table", "update_arrays",
-           "run_program"]
-
-try:
-    import numba                                           # noqa: F401
-    from numba import njit
-except ImportError:                                        # pragma: no cover
-    numba = None
+__all__ = ["available", "LifConstants", "gather_constants", "update_arrays", "run_program"]
 
 # per-set table rows
 (T_REST, T_K, T_KSH, T_TH, T_RESET, T_NREF) = range(6)
@@ -43,10 +38,6 @@ except ImportError:                                        # pragma: no cover
 R_X = 19                                  # rounding slots of the leak operand (4)
 R_P = 23                                  # rounding slots of the leak product (4)
 N_SCALARS = 27
-# trace table columns: operand rounding (4), k, product rounding (4)
-TR_Y, TR_K, TR_P = 0, 4, 5
-N_TRACE_COLS = 9
-_INT64_MIN, _INT64_MAX = -(1 << 63), (1 << 63) - 1
 assert CLAMP_KINDS == ("current", "input", "v_low")    # the run loop counts in this order
 
 
@@ -58,13 +49,6 @@ class LifConstants:
     ttab: tuple              # n_traces rows of N_TRACE_COLS; one dummy row without synapses
     exc: np.ndarray          # (n_inputs,) bool: source adds to the AMPA traces
     tab_array: np.ndarray    # ``tab`` as an int64 array (per-neuron gathers vectorize)
-
-
-def trace_table(specs, v_frac_bits: int, near: bool) -> np.ndarray:
-    """Kernel table of synaptic traces (:class:`cuneate.hdl.lif_synapses.TraceSpec`)."""
-    rows = [rounding_slots(v_frac_bits - s.Y.frac_bits, near) + [s.K.raw]
-            + rounding_slots(s.product_shift, near) for s in specs]
-    return np.array(rows or [[0] * N_TRACE_COLS], dtype=np.int64)
 
 
 def gather_constants(cfg: LifConfig) -> LifConstants:
@@ -90,17 +74,17 @@ def gather_constants(cfg: LifConfig) -> LifConstants:
     sc[S_NEAR] = int(near)
     sc[S_ICLAMP] = int(cfg.current_clamp)
     sc[S_ILO], sc[S_IHI] = ((cfg.i_lo_raw, cfg.i_hi_raw) if cfg.current_clamp
-                            else (_INT64_MIN, _INT64_MAX))
+                            else (INT64_MIN, INT64_MAX))
     sc[S_ISH], sc[S_WSH] = ish, wsh
     sc[S_SYN] = int(cfg.synapses)
     sc[S_DCLAMP] = int(cfg.input_clamp)
     sc[S_DLO], sc[S_DHI] = ((cfg.d_lo_raw, cfg.d_hi_raw) if cfg.input_clamp
-                            else (_INT64_MIN, _INT64_MAX))
+                            else (INT64_MIN, INT64_MAX))
     sc[S_CONT] = int(cfg.form == "continuous")
     sc[S_KSHIFT] = int(cfg.k_shift is not None)
     sc[S_VCLAMP] = int(cfg.v_clamp)
     sc[S_VMIN], sc[S_VMAX] = ((cfg.V.min_raw, cfg.V.max_raw) if cfg.v_clamp
-                              else (_INT64_MIN, _INT64_MAX))
+                              else (INT64_MIN, INT64_MAX))
     sc[S_REF] = int(cfg.ref_bits > 0)
     for slot, kind in ((S_B_CUR, "current"), (S_B_IN, "input"), (S_B_VLOW, "v_low")):
         sc[slot] = CLAMP_KINDS.index(kind)
@@ -109,29 +93,18 @@ def gather_constants(cfg: LifConfig) -> LifConstants:
     if cfg.k_shift is None:
         sc[R_P:R_P + 4] = rounding_slots(cfg.product_shift, near)
     exc = np.asarray(cfg.input_exc, dtype=np.bool_) if cfg.n_inputs else np.zeros(0, np.bool_)
-    return LifConstants(_tuples(tab), _tuples(sc), _tuples(trace_table(cfg.traces, fv, near)),
+    return LifConstants(as_tuples(tab), as_tuples(sc), as_tuples(trace_table(cfg.traces, fv, near)),
                         exc, tab)
 
 
-def _tuples(a: np.ndarray) -> tuple:
-    """Constants as (nested) tuples of ints: the compiled loop keeps them in registers (an
-    array could alias the state being written, so its loads would stay in the loop)."""
-    if a.ndim == 1:
-        return tuple(int(x) for x in a)
-    return tuple(_tuples(row) for row in a)
-
-
 # ----------------------------------------------------------------------------------------------
-if numba is not None:
-    from .izhikevich_kernel import _record, _rq
+if available():
+    from numba import njit
+
+    from ..lib.kernel import rq as _rq
+    from ..lib.kernel import trace_step
 
     _jit = dict(nogil=True, cache=True, error_model="numpy")
-
-    @njit(inline="always", **_jit)
-    def trace_step(y, ttab, j):
-        """``y - round(k round(y))`` of trace ``j`` (``trace_products`` + ``trace_update``)."""
-        yq = _rq(y, ttab[j], TR_Y)
-        return y - _rq(yq * ttab[j][TR_K], ttab[j], TR_P)
 
     @njit(inline="always", **_jit)
     def _input(I, acc_a, acc_g, i_syn, sc):
@@ -298,7 +271,7 @@ if numba is not None:
                 c1 += f_in
                 c2 += v_low
             if hits:
-                n_spk = _record(flags, fwords, k, spk_k, spk_n, n_spk)
+                n_spk = record(flags, fwords, k, spk_k, spk_n, n_spk)
             last[0] = c0
             last[1] = c1
             last[2] = c2
@@ -332,7 +305,7 @@ def run_program(consts: LifConstants, v, ref, traces, I, sel, W, inputs, n_sweep
     """``n_sweeps`` sweeps in place on ``v``, ``ref``, ``traces`` (int64; ``traces`` (4, n) or
     a dummy (1, n)). ``I``: raw currents, (n,) for the whole run or (n_sweeps, n) per sweep;
     ``inputs``: (n_sweeps, n_inputs) input spikes or None. Populations of at least
-    :data:`~cuneate.hdl.izhikevich_kernel.PARALLEL_MIN_NEURONS` are split over ``threads``
+    :data:`~cuneate.hdl.lib.kernel.PARALLEL_MIN_NEURONS` are split over ``threads``
     (default: all cores) contiguous chunks, each run by the GIL-free kernel (neurons are
     independent given their currents and input spikes).
 
@@ -354,7 +327,7 @@ def run_program(consts: LifConstants, v, ref, traces, I, sel, W, inputs, n_sweep
         last = np.zeros(len(CLAMP_KINDS), np.int64)
         cap = max(4 * n, 1024)
         spk_k, spk_n = np.empty(cap, np.int64), np.empty(cap, np.int64)
-        flags = np.zeros((n + 7) // 8 * 8, np.bool_)       # whole words for _record
+        flags = np.zeros((n + 7) // 8 * 8, np.bool_)       # whole words for record
         k, n_spk = 0, 0
         while k < n_sweeps:
             k, n_spk = _run(vv, rr, tt, I2[:, lo:hi], per_sweep, ss, ww, consts.exc, X, has_x,

@@ -1,6 +1,6 @@
 """The host link's wire format: COBS framing, CRC-16/CCITT and the message layout.
 
-This module is the bit-exact model of the link gateware (:mod:`cuneate.hdl.link`) and the codec
+This module is the bit-exact model of the link gateware (:mod:`cuneate.hdl.link.core`) and the codec
 of the host side (:mod:`cuneate.boards.link`). One frame on the wire is::
 
     COBS( type u8 | seq u8 | tick u32 LE | payload ... | crc u16 BE )  0x00
@@ -112,7 +112,7 @@ def crc16_update(crc, byte):
     on Amaranth values: one XOR tree per output bit from the same definition (the gateware
     uses this function)."""
     from amaranth.hdl import Cat
-    from .fixed import is_hdl
+    from ..lib.fixed import is_hdl
     if not (is_hdl(crc) or is_hdl(byte)):
         return _crc16_step_int(int(crc), int(byte))
     bits = Cat(crc, byte)
@@ -304,7 +304,7 @@ class LinkModel:
     """
 
     def __init__(self, lcfg):
-        from .izhikevich import IzhikevichTwin
+        from ..izhikevich import IzhikevichTwin
         self.lcfg = lcfg
         self.twin = IzhikevichTwin(lcfg.core)
         self.counters = {n: 0 for n in COUNTER_NAMES}

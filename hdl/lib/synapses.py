@@ -1,4 +1,11 @@
-"""Two-exponential (AMPA / GABA) synaptic currents of the LIF core as per-neuron traces.
+"""Synaptic traces: two-exponential currents as pairs of decaying per-neuron traces, shared by
+the LIF core (AMPA / GABA, four traces) and the coincidence detector (one PSP, two traces).
+
+:func:`trace_spec` sizes one trace (its decay constant, operand and stored formats) from its
+time constant and the largest input it can receive per tick; the stage functions
+(:func:`trace_inputs`, :func:`trace_products`, :func:`trace_update`) run in the twins and the RTL.
+
+The LIF core's use:
 
 With ``LifConfig(synapses=True)`` every input source is excitatory (AMPA) or inhibitory (GABA)
 (``input_types``), weights are non-negative peak currents in mV (the sign comes from the type,
@@ -24,11 +31,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..golden import synapses as gsyn
-from .fixed import FixedConstant, QFormat, narrow, round_shift
+from ...golden import synapses as gsyn
+from .config import ConfigError, int_bits_for
+from .fixed import FixedConstant, QFormat, narrow, round_shift, select
 
-__all__ = ["TRACE_NAMES", "TraceSpec", "derive_traces", "trace_inputs", "trace_products",
-           "trace_update", "trace_golden_check"]
+__all__ = ["TRACE_NAMES", "TraceSpec", "TraceView", "trace_spec", "scale_weights",
+           "derive_traces", "trace_inputs", "trace_products", "trace_update",
+           "trace_golden_check"]
 
 #: trace order everywhere (state word, probe ports, twin arrays)
 TRACE_NAMES = ("xd_ampa", "xr_ampa", "xd_gaba", "xr_gaba")
@@ -52,16 +61,53 @@ class TraceSpec:
                 "operand": str(self.Y), "trace": str(self.T), "y_max": self.y_max}
 
 
-def _int_bits(lo, hi):
-    ib = 1
-    while not (-(2.0 ** (ib - 1)) <= lo and hi < 2.0 ** (ib - 1)):
-        ib += 1
-    return ib
+@dataclass
+class TraceView:
+    """What the trace stage functions read of a configuration: the trace specs, the state
+    format (its fraction bits are the traces'), the rounding and dt."""
+
+    traces: list
+    V: QFormat
+    rounding: str
+    dt_ms: float
+
+
+def trace_spec(name: str, tau_ms: float, dt_ms: float, operand_width: int, frac_bits: int,
+               input_max: float, max_decay_error: float, what: str = "trace") -> TraceSpec:
+    """One trace's formats: ``x' = y - round(k round(y))``, ``y = x + a`` with ``a`` at most
+    ``input_max`` per tick, ``k = 1 - exp(-dt/tau)`` in ``operand_width`` bits (refused when its
+    representation error exceeds ``max_decay_error``), the stored trace in ``frac_bits``
+    fraction bits and integer bits proven from the steady state of the largest input."""
+    lsb = 2.0 ** -frac_bits
+    k = -math.expm1(-dt_ms / tau_ms)
+    K = FixedConstant.normalized(f"k_{name}", k, operand_width)
+    if K.quantized >= 1 or K.quantized <= 0 or abs(K.rel_error) > max_decay_error:
+        raise ConfigError(f"{what} {name}: decay k = 1 - exp(-dt/tau) = {k:.6g} (tau "
+                          f"{tau_ms:g} ms at dt {dt_ms:g} ms) is represented as "
+                          f"{K.quantized:.6g} in {operand_width} bits")
+    y_max = input_max / K.quantized + 8 * lsb
+    Y = QFormat.for_range(-4 * lsb, y_max, operand_width)
+    if Y.frac_bits > frac_bits:
+        Y = QFormat(Y.int_bits, frac_bits)
+    # the stored trace: y - round(k round(y)) can dip below 0 by the operand rounding
+    t_lo = -(Y.lsb + 2 * lsb) / K.quantized - 4 * lsb
+    t_hi = y_max + (Y.lsb + 2 * lsb) / K.quantized
+    T = QFormat(int_bits_for(t_lo, t_hi), frac_bits)
+    t_bounds = (int(math.floor(t_lo / lsb)), int(math.ceil(t_hi / lsb)))
+
+    def y_bounds(Y):
+        return (int(math.floor(t_lo / Y.lsb)) - 1,
+                int(math.ceil((t_hi + input_max) / Y.lsb)) + 1)
+    lo_r, hi_r = y_bounds(Y)
+    while not (Y.min_raw <= lo_r and hi_r <= Y.max_raw):
+        Y = QFormat(Y.int_bits + 1, Y.frac_bits - 1)
+        lo_r, hi_r = y_bounds(Y)
+    return TraceSpec(name, float(tau_ms), k, K, Y, (lo_r, hi_r), T, t_bounds,
+                     Y.frac_bits + K.frac_bits - frac_bits, y_max)
 
 
 def scale_weights(cfg, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Validate the typed weights; returns ``(w / N_type, is_exc mask)``."""
-    from .lif_config import ConfigError
     if cfg.form != "continuous":
         raise ConfigError("synaptic traces belong to the continuous form")
     F = w.shape[1]
@@ -75,8 +121,8 @@ def scale_weights(cfg, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         raise ConfigError(f"input_types needs {F} entries of 'exc' or 'inh'")
     exc = np.array([t == "exc" for t in types])
     try:
-        na = gsyn._norm_factor(*gsyn._check_taus(*cfg.ampa), "peak")
-        ng = gsyn._norm_factor(*gsyn._check_taus(*cfg.gaba), "peak")
+        na = gsyn.norm_factor(*gsyn.check_taus(*cfg.ampa), "peak")
+        ng = gsyn.norm_factor(*gsyn.check_taus(*cfg.gaba), "peak")
     except ValueError as exc_:
         raise ConfigError(f"synapse time constants: {exc_}") from None
     return w / np.where(exc, na, ng)[None, :], exc
@@ -85,7 +131,6 @@ def scale_weights(cfg, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def derive_traces(cfg) -> tuple[list[TraceSpec], tuple[int, int]]:
     """Trace formats and constants; returns the specs and the raw bounds of ``I_syn`` (in
     state fraction bits)."""
-    from .lif_config import ConfigError
     fv, ow, lsb = cfg.v_frac_bits, cfg.operand_width, 2.0 ** -cfg.v_frac_bits
     wr = cfg.weights_raw
     wsh = fv - cfg.W.frac_bits
@@ -93,34 +138,11 @@ def derive_traces(cfg) -> tuple[list[TraceSpec], tuple[int, int]]:
                if cfg.input_exc.any() else 0.0,
                "gaba": float((wr[:, ~cfg.input_exc].sum(axis=1).max() << wsh) * lsb)
                if (~cfg.input_exc).any() else 0.0}
-    specs = []
     taus = {"xd_ampa": cfg.ampa[1], "xr_ampa": cfg.ampa[0], "xd_gaba": cfg.gaba[1],
             "xr_gaba": cfg.gaba[0]}
-    for name in TRACE_NAMES:
-        tau = float(taus[name])
-        k = -math.expm1(-cfg.dt_ms / tau)
-        K = FixedConstant.normalized(f"k_{name}", k, ow)
-        if K.quantized >= 1 or K.quantized <= 0 or abs(K.rel_error) > cfg.max_decay_error:
-            raise ConfigError(f"trace {name}: decay k = {k:.6g} (tau {tau:g} ms at dt "
-                              f"{cfg.dt_ms:g} ms) is represented as {K.quantized:.6g}")
-        a = acc_max[name.split("_")[1]]
-        y_max = a / K.quantized + 8 * lsb
-        Y = QFormat.for_range(-4 * lsb, y_max, ow)
-        if Y.frac_bits > fv:
-            Y = QFormat(Y.int_bits, fv)
-        # the stored trace: y - round(k round(y)) can dip below 0 by the operand rounding
-        t_lo = -(Y.lsb + 2 * lsb) / K.quantized - 4 * lsb
-        t_hi = y_max + (Y.lsb + 2 * lsb) / K.quantized
-        T = QFormat(_int_bits(t_lo, t_hi), fv)
-        t_bounds = (int(math.floor(t_lo / lsb)), int(math.ceil(t_hi / lsb)))
-        y_lo_raw = int(math.floor((t_lo) / Y.lsb)) - 1
-        y_hi_raw = int(math.ceil((t_hi + a) / Y.lsb)) + 1
-        while not (Y.min_raw <= y_lo_raw and y_hi_raw <= Y.max_raw):
-            Y = QFormat(Y.int_bits + 1, Y.frac_bits - 1)
-            y_lo_raw = int(math.floor(t_lo / Y.lsb)) - 1
-            y_hi_raw = int(math.ceil((t_hi + a) / Y.lsb)) + 1
-        specs.append(TraceSpec(name, tau, k, K, Y, (y_lo_raw, y_hi_raw), T, t_bounds,
-                               Y.frac_bits + K.frac_bits - fv, y_max))
+    specs = [trace_spec(name, float(taus[name]), cfg.dt_ms, ow, fv,
+                        acc_max[name.split("_")[1]], cfg.max_decay_error)
+             for name in TRACE_NAMES]
     # I_syn = (xd - xr)_A - (xd - xr)_G: the difference of exponentials of the largest
     # steady input, plus rounding margins
     def diff(kd, kr, a):
@@ -139,7 +161,6 @@ def derive_traces(cfg) -> tuple[list[TraceSpec], tuple[int, int]]:
 def trace_inputs(cfg, traces, x, w):
     """Stage 3: ``I_syn`` from the fetched traces and ``y = x + a_T`` for each trace; returns
     ``(I_syn, [y...], acc)`` with ``acc = a_A - a_G`` in weight LSBs."""
-    from .fixed import select
     acc_a, acc_g = 0, 0
     for i, (xi, wi) in enumerate(zip(x, w)):
         term = select(xi, wi, 0)

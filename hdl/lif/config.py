@@ -29,9 +29,9 @@ from typing import Sequence
 
 import numpy as np
 
-from ..golden import lif as golden
-from .fixed import FixedConstant, FixedPointError, QFormat
-from .lif_synapses import _int_bits as _int_bits_for
+from ...golden import lif as golden
+from ..lib.config import ConfigError, int_bits_for
+from ..lib.fixed import FixedConstant, QFormat
 
 __all__ = ["ConfigError", "LifConfig", "LifSet", "PIPELINE_DEPTH", "CLAMP_KINDS", "FORMS",
            "DECAYS", "SATURATION"]
@@ -42,10 +42,6 @@ FORMS = ("continuous", "discrete")
 DECAYS = ("multiply", "shift")
 SATURATION = ("refuse", "flag")
 _GRID_EPS = 1e-9
-
-
-class ConfigError(FixedPointError):
-    """A LIF core configuration that cannot hold; raised at construction."""
 
 
 @dataclass(frozen=True)
@@ -271,7 +267,7 @@ class LifConfig:
         if self.input_types is not None and not self.synapses:
             raise ConfigError("input_types (AMPA/GABA) only apply with synapses=True")
         if self.synapses:
-            from .lif_synapses import scale_weights
+            from ..lib.synapses import scale_weights
             w, self.input_exc = scale_weights(self, w)     # the memory holds w / N_type
         wb = self.weight_bits
         if self.weight_frac_bits is None:
@@ -315,7 +311,7 @@ class LifConfig:
         # ---- total input D = I + sum w x (or + I_syn), in state fraction bits
         fv = self.v_frac_bits
         if self.synapses:
-            from .lif_synapses import derive_traces
+            from ..lib.synapses import derive_traces
             self.traces, (s_lo, s_hi) = derive_traces(self)
         else:
             self.traces = []
@@ -408,7 +404,7 @@ class LifConfig:
             hi_all.append(max(H, pre) + margin)
             pre_hi_all.append(pre + margin)
         self.v_lo_proven, self.v_hi_proven = min(lo_all), max(hi_all)
-        need = _int_bits_for(self.v_lo_proven, self.v_hi_proven)
+        need = int_bits_for(self.v_lo_proven, self.v_hi_proven)
         self.v_int_bits_derived = need
         if self.v_int_bits is None:
             self.v_int_bits = need

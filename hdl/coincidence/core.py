@@ -1,7 +1,7 @@
-"""Coincidence detector (cuneate neurons): delayed afferent spikes, bi-exponential PSPs, and
-Izhikevich targets, with its bit-exact NumPy twin.
+"""The coincidence detector's RTL (cuneate neurons): delayed afferent spikes, bi-exponential
+PSPs and Izhikevich targets, and its Verilog.
 
-Per tick ``T`` and target ``t`` (configuration: :class:`~cuneate.hdl.cuneate_config
+Per tick ``T`` and target ``t`` (configuration: :class:`~cuneate.hdl.coincidence.config
 .CoincidenceConfig`)::
 
     a_t   = sum_s  J w[t, s] * x_s(T - delay[t, s])          (input spikes, from the history)
@@ -11,7 +11,7 @@ Per tick ``T`` and target ``t`` (configuration: :class:`~cuneate.hdl.cuneate_con
 
 so a spike of source ``s`` stamped with tick ``T`` adds ``J w (exp(-j dt/tau_d) - exp(-j dt/
 tau_r))`` to the current of tick ``T + delay + j`` - the golden PSP of
-:mod:`cuneate.golden.cuneate` (unnormalized) sampled on the tick grid, 0 at lag 0.
+:mod:`cuneate.golden.coincidence` (unnormalized) sampled on the tick grid, 0 at lag 0.
 
 Input spikes arrive as events (``in_valid``, ``in_source``) at any cycle and are collected in a
 pending bit vector; the next tick stamps them (an event on the tick cycle itself belongs to the
@@ -30,9 +30,10 @@ back, ``upd_*`` and the spike event (``spike_valid``, ``spike_target``, ``spike_
 next cycle. A tick needs ``n_targets (n_sources + 8) + 2`` cycles; a tick that arrives while
 one is processed sets ``tick_overrun`` and is counted, never silently lost.
 
-All arithmetic is written once: :func:`accumulate` and :func:`psp_current` here, the trace
-stages of :mod:`cuneate.hdl.lif_synapses` and the Izhikevich stages of
-:mod:`cuneate.hdl.izhikevich` - each runs on NumPy ints (twin) and Amaranth values (RTL).
+All arithmetic is written once: :func:`accumulate` and :func:`psp_current`
+(:mod:`cuneate.hdl.coincidence.datapath`), the trace stages of :mod:`cuneate.hdl.lib.synapses`
+and the Izhikevich stages of :mod:`cuneate.hdl.izhikevich.datapath` - each runs on NumPy ints
+(twin) and Amaranth values (RTL).
 """
 
 from __future__ import annotations
@@ -43,181 +44,20 @@ from amaranth.lib import wiring
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
-from ..golden.izhikevich import group_spikes
-from .cuneate_config import CoincidenceConfig, ConfigError
-from .fixed import narrow, round_shift, select, tally_clamps
-from .izhikevich import (CLAMP_KINDS, IzhikevichTwin, _lookup, multiply1, multiply2,
-                         operands, update_state)
-from .lif_synapses import trace_products, trace_update
-from .tick import tick_strobe
+from ..flow.synth import synthesize
+from ..flow.verilog import verilog_text, write_block
+from ..izhikevich import multiply1, multiply2, operands, update_state
+from ..lib.datapath import lookup
+from ..lib.synapses import trace_products, trace_update
+from ..lib.tick import tick_strobe
+from .config import CLAMP_KINDS, CoincidenceConfig
+from .datapath import accumulate, clamp_bits_hdl, psp_current
 
-__all__ = ["CoincidenceConfig", "ConfigError", "CoincidenceTwin", "CoincidenceDetector",
-           "accumulate", "psp_current", "coincidence_verilog", "generate_coincidence"]
+__all__ = ["synth_resources", "CoincidenceDetector", "coincidence_verilog", "generate_coincidence", "COUNTER_BITS"]
 
 COUNTER_BITS = 32
 
 
-# ----------------------------------------------------------------------------------------------
-# stage functions (twin and RTL)
-
-def accumulate(acc, bit, w):
-    """One input of the sum: ``acc + (w if bit else 0)``."""
-    return acc + select(bit, w, 0)
-
-
-def psp_current(cfg: CoincidenceConfig, xd, xr, a):
-    """Update cycle 1: the PSP current ``x_d - x_r`` (traces as fetched) rounded to the
-    Izhikevich current format, and ``y = x + a`` for both traces."""
-    i = narrow(round_shift(xd - xr, cfg.i_shift, cfg.rounding), cfg.iz.I, cfg.i_raw_bounds,
-               "PSP current")
-    ys = [xd + (a << cfg.wshift), xr + (a << cfg.wshift)]
-    return i, ys
-
-
-# ----------------------------------------------------------------------------------------------
-class CoincidenceTwin:
-    """Bit-exact NumPy model of :class:`CoincidenceDetector` (int64, vectorized over targets).
-
-    Two implementations of :meth:`tick` and :meth:`run` compute the same bits: ``kernel=
-    "stages"`` (the stage functions over NumPy arrays, the Izhikevich step included) and
-    ``kernel="numba"`` (the compiled loop of :mod:`cuneate.hdl.cuneate_kernel`, proven
-    bit-exact against the stages by property tests and long runs; the default whenever numba
-    is available). :meth:`update` always runs the stage functions.
-    """
-
-    KERNELS = ("stages", "numba")
-
-    def __init__(self, config: CoincidenceConfig | None = None, kernel: str | None = None,
-                 **kwargs):
-        from . import cuneate_kernel as _k
-        self.cfg = cfg = config or CoincidenceConfig(**kwargs)
-        M, S, D = cfg.n_targets, cfg.n_sources, cfg.max_delay_ticks
-        if kernel is not None and kernel not in self.KERNELS:
-            raise ValueError(f"unknown twin kernel {kernel!r}; known: {', '.join(self.KERNELS)}")
-        if kernel == "numba" and not _k.available():
-            raise ValueError("twin kernel 'numba' needs numba installed")
-        self.kernel = kernel or ("numba" if _k.available() else "stages")
-        self._k = _k
-        self._consts = _k.gather_constants(cfg) if self.kernel == "numba" else None
-        self.iz = IzhikevichTwin(cfg.iz, kernel="stages" if self.kernel == "stages" else None)
-        self.sel = np.asarray(cfg.target_sets_, dtype=np.int64)
-        self.v = np.asarray(cfg.iz.v_init_raw, dtype=np.int64)[:M].copy()
-        self.u = np.asarray(cfg.iz.u_init_raw, dtype=np.int64)[:M].copy()
-        self.xd = np.zeros(M, dtype=np.int64)
-        self.xr = np.zeros(M, dtype=np.int64)
-        self.history = np.zeros((D, S), dtype=bool)
-        self.pending = np.zeros(S, dtype=bool)
-        self.ticks = 0
-        self.events = 0
-        self.merged = 0
-        self.clamp_sticky = 0
-        self.clamp_counts = {k: 0 for k in CLAMP_KINDS}
-
-    def spike_in(self, sources) -> None:
-        """Input spike events (source indices) before the next tick."""
-        for s in np.atleast_1d(np.asarray(sources, dtype=np.int64)):
-            if not 0 <= s < self.cfg.n_sources:
-                raise ValueError(f"spike source {int(s)} is outside 0 .. "
-                                 f"{self.cfg.n_sources - 1}")
-            self.events += 1
-            if self.pending[s]:
-                self.merged += 1
-            self.pending[s] = True
-
-    def inputs(self) -> np.ndarray:
-        """``a`` (raw weight LSBs) of every target at the current tick (history stamped)."""
-        cfg = self.cfg
-        idx = (self.ticks - cfg.delays) % cfg.max_delay_ticks
-        bits = self.history[idx, np.arange(cfg.n_sources)[None, :]]
-        a = np.zeros(cfg.n_targets, dtype=np.int64)
-        for s in range(cfg.n_sources):
-            a = accumulate(a, bits[:, s], cfg.weights_raw[:, s])
-        return a
-
-    def update(self, v, u, xd, xr, a, sel=None) -> dict:
-        """One update of the given targets from any state (raw arrays)."""
-        cfg = self.cfg
-        sel = self.sel if sel is None else np.asarray(sel, dtype=np.int64)
-        v, u, xd, xr, a = (np.asarray(x, dtype=np.int64) for x in (v, u, xd, xr, a))
-        i, ys = psp_current(cfg, xd, xr, a)
-        ps = trace_products(cfg.tview, ys)
-        xs = trace_update(cfg.tview, ys, ps)
-        out = self.iz.update(v, u, i, sel)
-        out.update(xd=np.asarray(xs[0], dtype=np.int64), xr=np.asarray(xs[1], dtype=np.int64),
-                   i=i, a=a, ys=ys)
-        return out
-
-    def stamp(self) -> np.ndarray:
-        """Write the pending spikes into this tick's history slot; returns ``a`` (raw weight
-        LSBs) of every target for this tick."""
-        self.history[self.ticks % self.cfg.max_delay_ticks] = self.pending
-        self.pending = np.zeros(self.cfg.n_sources, dtype=bool)
-        return self.inputs()
-
-    def run_pending(self, pending) -> tuple[np.ndarray, np.ndarray]:
-        """Run ``len(pending)`` ticks, tick ``k`` stamping the sources set in ``pending[k]``
-        (``(n_ticks, n_sources)`` bool; spikes already pending join the first tick). Returns
-        every output spike as ``(ticks, targets)``, ticks counted from 0 at this call."""
-        cfg = self.cfg
-        pend = np.array(pending, dtype=bool, order="C")
-        if pend.ndim != 2 or pend.shape[1] != cfg.n_sources:
-            raise ValueError(f"pending spikes must have shape (n_ticks, {cfg.n_sources})")
-        if len(pend):
-            pend[0] |= self.pending
-            self.pending = np.zeros(cfg.n_sources, dtype=bool)
-        if self.kernel == "numba":
-            ks, ns, totals = self._k.run_ticks(self._consts, self.v, self.u, self.xd, self.xr,
-                                               self.sel, self.history, pend, self.ticks)
-            self.ticks += len(pend)
-            tally_clamps(self, CLAMP_KINDS, totals)
-            return ks, ns
-        hits_k, hits_n = [], []
-        for k, row in enumerate(pend):
-            self.pending = row.copy()
-            idx = np.flatnonzero(self.tick())
-            hits_k.append(np.full(idx.size, k, dtype=np.int64))
-            hits_n.append(idx)
-        if not hits_k:
-            return np.zeros(0, np.int64), np.zeros(0, np.int64)
-        return np.concatenate(hits_k), np.concatenate(hits_n)
-
-    def tick(self) -> np.ndarray:
-        """Stamp the pending spikes, update every target once; returns the spike vector."""
-        if self.kernel == "numba":
-            pend = self.pending.reshape(1, -1).copy()
-            self.pending = np.zeros(self.cfg.n_sources, dtype=bool)
-            _, ns = self.run_pending(pend)
-            spk = np.zeros(self.cfg.n_targets, dtype=bool)
-            spk[ns] = True
-            return spk
-        out = self.update(self.v, self.u, self.xd, self.xr, self.stamp())
-        self.v, self.u = out["v"].astype(np.int64), out["u"].astype(np.int64)
-        self.xd, self.xr = out["xd"], out["xr"]
-        tally_clamps(self, CLAMP_KINDS, [np.count_nonzero(out[k]) for k in CLAMP_KINDS])
-        self.ticks += 1
-        return np.asarray(out["spike"], dtype=bool)
-
-    def run(self, input_ticks, n_ticks: int) -> list[np.ndarray]:
-        """Run ``n_ticks`` with input spikes given per source as arrays of the tick each is
-        stamped with; returns spike times (ms) per target ((T + 1) dt for tick T)."""
-        S = self.cfg.n_sources
-        if len(input_ticks) > S:
-            raise ValueError(f"spike source {len(input_ticks) - 1} is outside 0 .. {S - 1}")
-        counts = np.zeros((n_ticks, S), dtype=np.int64)
-        for s, ts in enumerate(input_ticks):
-            ts = np.asarray(ts, dtype=np.int64)
-            ts = ts[(ts >= 0) & (ts < n_ticks)]          # events of later ticks are not sent
-            np.add.at(counts[:, s], ts, 1)
-        self.events += int(counts.sum())
-        self.merged += int(np.maximum(counts - 1, 0).sum())
-        if n_ticks:
-            self.merged += int(np.count_nonzero(self.pending & (counts[0] > 0)))
-        ks, ns = self.run_pending(counts > 0)
-        steps = group_spikes([ks], [ns], self.cfg.n_targets)
-        return [(np.asarray(h, dtype=np.float64) + 1) * self.cfg.dt_ms for h in steps]
-
-
-# ----------------------------------------------------------------------------------------------
 def _pack(fields) -> int:
     """Pack ``(raw, width)`` pairs (first at the LSB) into one unsigned word."""
     word, pos = 0, 0
@@ -326,7 +166,7 @@ class CoincidenceDetector(wiring.Component):
         u0 = word[pos[1]:pos[2]].as_signed()
         xd0 = word[pos[2]:pos[3]].as_signed()
         xr0 = word[pos[3]:pos[4]].as_signed()
-        sel = _lookup(cfg.target_sets_, tgt)
+        sel = lookup(cfg.target_sets_, tgt)
 
         def reg(name, value):
             s = Signal(value.shape(), name=name)
@@ -406,27 +246,24 @@ class CoincidenceDetector(wiring.Component):
         return m
 
 
-def clamp_bits_hdl(flags: dict):
-    """Pack per-update clamp flags into the bit order of :data:`CLAMP_KINDS` (RTL)."""
-    return Cat(*[flags[k] for k in CLAMP_KINDS])
-
-
 def coincidence_verilog(cfg: CoincidenceConfig, name: str = "coincidence_detector",
                         lowered: bool = False, top: CoincidenceDetector | None = None) -> str:
     """Verilog of the detector (deterministic bytes); ``lowered`` gives the yosys-lowered
     netlist that Icarus 11 simulates correctly (see
-    :func:`cuneate.hdl.generate.lowered_verilog`). ``top``: an instance to convert."""
-    top = top or CoincidenceDetector(cfg)
-    if lowered:
-        from .generate import lowered_verilog
-        return lowered_verilog(top, name)
-    from amaranth.back import verilog
-    return verilog.convert(top, name=name, emit_src=False)
+    :func:`cuneate.hdl.flow.verilog.lowered_verilog`). ``top``: an instance to convert."""
+    return verilog_text(top or CoincidenceDetector(cfg), name, lowered)
 
 
 def generate_coincidence(out, config: CoincidenceConfig,
                          name: str = "coincidence_detector") -> list:
     """Write ``out/<name>.v`` and ``out/<name>.json`` (formats, constants and their errors,
     latency, ports, resources hint: multipliers and memories); returns the paths."""
-    from .generate import write_block
     return write_block(out, CoincidenceDetector(config), config.to_dict(), name)
+
+
+def synth_resources(cfg, flows=("ecp5", "xc6s"), workdir=None) -> dict:
+    """``{flow: result}`` of :func:`cuneate.hdl.flow.synth.synthesize` for the block built from
+    ``cfg`` (synthesis only: cell counts, no fmax)."""
+    text = coincidence_verilog(cfg)
+    return {f: synthesize(text, "coincidence_detector", f, None if workdir is None else workdir / f)
+            for f in flows}

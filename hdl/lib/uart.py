@@ -15,13 +15,23 @@ from amaranth.lib.wiring import In, Out
 __all__ = ["UartRx", "UartTx"]
 
 
-class UartRx(wiring.Component):
-    _members = {"rx": In(1, init=1), "valid": Out(1), "data": Out(8), "frame_error": Out(1)}
+class _Uart(wiring.Component):
+    """One end of an 8N1 line at ``clocks_per_bit`` clocks per bit (at least 4)."""
+
+    _members: dict = {}
+
     def __init__(self, clocks_per_bit: int):
         if clocks_per_bit < 4:
             raise ValueError(f"UART needs at least 4 clocks per bit, got {clocks_per_bit}")
         self.clocks_per_bit = int(clocks_per_bit)
         super().__init__(self._members)
+
+
+class UartRx(_Uart):
+    """Receiver: ``valid``/``data`` for one cycle per byte, ``frame_error`` on a zero stop
+    bit."""
+
+    _members = {"rx": In(1, init=1), "valid": Out(1), "data": Out(8), "frame_error": Out(1)}
 
     def elaborate(self, platform):
         m = Module()
@@ -52,13 +62,10 @@ class UartRx(wiring.Component):
         return m
 
 
-class UartTx(wiring.Component):
+class UartTx(_Uart):
+    """Transmitter: a stream sink (``valid``/``ready``/``data``), idle high, LSB first."""
+
     _members = {"tx": Out(1, init=1), "valid": In(1), "ready": Out(1), "data": In(8)}
-    def __init__(self, clocks_per_bit: int):
-        if clocks_per_bit < 4:
-            raise ValueError(f"UART needs at least 4 clocks per bit, got {clocks_per_bit}")
-        self.clocks_per_bit = int(clocks_per_bit)
-        super().__init__(self._members)
 
     def elaborate(self, platform):
         m = Module()

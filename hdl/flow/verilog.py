@@ -1,4 +1,6 @@
-"""Verilog generation: deterministic output plus a JSON description of the generated core."""
+"""Verilog emission: deterministic text of a block (no source locations, so the same
+configuration gives the same bytes), the lowered netlist Icarus needs for some designs, and the
+files every block writes (``<name>.v`` and a JSON description with its port table)."""
 
 from __future__ import annotations
 
@@ -8,22 +10,29 @@ from pathlib import Path
 from amaranth.back import verilog
 from amaranth.lib.wiring import In
 
-from .izhikevich import IzhikevichConfig, IzhikevichCore
-
-__all__ = ["izhikevich_verilog", "generate_izhikevich", "lowered_verilog", "port_table",
-           "write_block"]
+__all__ = ["verilog_text", "lowered_verilog", "port_table", "write_block"]
 
 
-def lowered_verilog(top, name: str) -> str:
+def verilog_text(top, name: str, lowered: bool = False, opt_clean: bool = True) -> str:
+    """Verilog text of the component ``top`` as module ``name``; with ``lowered``, after yosys
+    ``proc`` (see :func:`lowered_verilog`)."""
+    if lowered:
+        return lowered_verilog(top, name, opt_clean)
+    return verilog.convert(top, name=name, emit_src=False)
+
+
+def lowered_verilog(top, name: str, opt_clean: bool = True) -> str:
     """Verilog of ``top`` after yosys ``proc``: every process becomes multiplexers and
     registers (no ``always @*`` blocks). Icarus 11 does not re-evaluate some combinational
     processes of Amaranth FSMs when an input changes while the state holds; it simulates the
-    lowered netlist of the same design correctly."""
+    lowered netlist of the same design correctly. Without ``opt_clean`` internal signals that
+    drive no output stay (for scoreboards that probe them)."""
     from amaranth._toolchain.yosys import find_yosys
     from amaranth.back import rtlil
     il = rtlil.convert(top, name=name, emit_src=False)
     yosys = find_yosys(lambda ver: ver >= (0, 40))
-    return yosys.run(["-q", "-"], f"read_rtlil <<rtlil\n{il}\nrtlil\nproc\nopt_clean\n"
+    clean = "opt_clean\n" if opt_clean else ""
+    return yosys.run(["-q", "-"], f"read_rtlil <<rtlil\n{il}\nrtlil\nproc\n{clean}"
                                   f"write_verilog -noattr\n")
 
 
@@ -36,35 +45,12 @@ def port_table(core) -> dict:
             for pname, member in core.signature.members.items()}
 
 
-def izhikevich_verilog(config: IzhikevichConfig, name: str = "izhikevich_core") -> str:
-    """Verilog text of the core (no source locations, so the same config gives the same bytes)."""
-    return verilog.convert(IzhikevichCore(config), name=name, emit_src=False)
-
-
-def generate_izhikevich(out: Path, n_neurons: int = 2500, clock_hz: float = 40e6,
-                        update_hz: float = 16e3, config: IzhikevichConfig | None = None,
-                        name: str = "izhikevich_core") -> list[Path]:
-    """Write ``out/<name>.v`` and ``out/<name>.json``; returns the paths."""
-    cfg = config or IzhikevichConfig(n_neurons=n_neurons, clock_hz=clock_hz, update_hz=update_hz)
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
-    core = IzhikevichCore(cfg)
-    text = verilog.convert(core, name=name, emit_src=False)
-    desc = cfg.to_dict()
-    desc["module"] = name
-    desc["ports"] = port_table(core)
-    vpath, jpath = out / f"{name}.v", out / f"{name}.json"
-    vpath.write_text(text)
-    jpath.write_text(json.dumps(desc, indent=2, sort_keys=True) + "\n")
-    return [vpath, jpath]
-
-
 def write_block(out, top, description: dict, name: str) -> list[Path]:
     """Write ``out/<name>.v`` (deterministic bytes) and ``out/<name>.json`` (``description``
     plus the module name and the port table) for the component ``top``; returns the paths."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    text = verilog.convert(top, name=name, emit_src=False)
+    text = verilog_text(top, name)
     desc = description | {"module": name, "ports": port_table(top)}
     vpath, jpath = out / f"{name}.v", out / f"{name}.json"
     vpath.write_text(text)

@@ -1,6 +1,6 @@
 """Compiled (numba) kernel of the Izhikevich core's twin: the hot loop, fused per neuron.
 
-The arithmetic is defined once by the stage functions of :mod:`cuneate.hdl.izhikevich`
+The arithmetic is defined once by the stage functions of :mod:`cuneate.hdl.izhikevich.datapath`
 (``operands``, ``multiply1``, ``multiply2``, ``update_state``); this module restates the same
 integer operations per neuron, in the same order, for a compiled loop without temporaries.
 It is proven bit-exact against the stage-function twin by property tests (randomized states,
@@ -19,25 +19,14 @@ All kernels release the GIL, so :func:`run_sweeps` splits large populations over
 
 from __future__ import annotations
 
-import os
-from concurrent.futures import ThreadPoolExecutor
-
 import numpy as np
 
-from .izhikevich_config import CLAMP_KINDS, IzhikevichConfig
+from ..lib.kernel import (INT64_MAX, INT64_MIN, PARALLEL_MIN_NEURONS, available, default_threads,
+                          record, rounding_slots, split_over_threads)
+from .config import CLAMP_KINDS, IzhikevichConfig
 
-__all__ = ["available", "rounding_slots", "gather_constants", "update_arrays", "run_sweeps", "default_threads",
-           "PARALLEL_MIN_NEURONS"]
-
-try:                                   # numba is a project dependency; keep the twin usable
-    import numba                       # without it (stage-function path)
-    from numba import njit
-except ImportError:                    # pragma: no cover
-    numba = None
-
-#: Below this many neurons a sweep is too short for threads to pay (measured on 2 cores: from
-#: 2500 neurons on, two threads give 1.7-1.8x).
-PARALLEL_MIN_NEURONS = 2_000
+__all__ = ["available", "rounding_slots", "gather_constants", "update_arrays", "run_sweeps",
+           "default_threads", "sweep_inplace", "PARALLEL_MIN_NEURONS", "neuron_update"]
 
 # table rows (per parameter set)
 (T_WOFF, T_KA, T_BETA, T_ESH, T_LEAK, T_K0, T_D, T_SA, T_HA, T_ALPHA, T_C) = range(11)
@@ -48,27 +37,6 @@ PARALLEL_MIN_NEURONS = 2_000
 # rounding shifts, each as 4 slots (left shift, right shift, rounding-bit shift, bit mask)
 R_SV, R_SVQ, R_SDTI, R_SU, R_SIU, R_SUX, R_SDX, R_SHQ = (31 + 4 * j for j in range(8))
 N_SCALARS = 31 + 4 * 8
-_INT64_MIN, _INT64_MAX = -(1 << 63), (1 << 63) - 1
-
-
-def available() -> bool:
-    """True when numba is importable (the compiled kernel can be used)."""
-    return numba is not None
-
-
-def default_threads(n_neurons: int) -> int:
-    """Threads :func:`run_sweeps` uses by default: all cores for large populations, else 1."""
-    if n_neurons < PARALLEL_MIN_NEURONS:
-        return 1
-    return max(1, min(os.cpu_count() or 1, n_neurons // (PARALLEL_MIN_NEURONS // 2)))
-
-
-def rounding_slots(shift: int, near: bool) -> list[int]:
-    """The four kernel slots of ``round_shift(x, shift)`` (see ``_rq``): left shift, right
-    shift, the shift that brings the first dropped bit to bit 0, and its mask (0 when
-    truncating or not shifting right)."""
-    rs = max(shift, 0)
-    return [max(-shift, 0), rs, max(rs - 1, 0), int(near and rs > 0)]
 
 
 def gather_constants(cfg: IzhikevichConfig) -> tuple[np.ndarray, np.ndarray]:
@@ -110,9 +78,9 @@ def gather_constants(cfg: IzhikevichConfig) -> tuple[np.ndarray, np.ndarray]:
     sc[S_ULO], sc[S_UHI] = cfg.u_lo_raw, cfg.u_hi_raw
     sc[S_VFLOOR] = cfg.v_floor_raw
     if not sc[S_ICLAMP]:                  # no clamp: levels no int64 can pass
-        sc[S_ILO], sc[S_IHI] = _INT64_MIN, _INT64_MAX
+        sc[S_ILO], sc[S_IHI] = INT64_MIN, INT64_MAX
     if not sc[S_YCLAMP]:
-        sc[S_YLO], sc[S_YHI] = _INT64_MIN, _INT64_MAX
+        sc[S_YLO], sc[S_YHI] = INT64_MIN, INT64_MAX
     for slot, shift in ((R_SV, S_SV), (R_SVQ, S_SVQ), (R_SDTI, S_SDTI), (R_SU, S_SU),
                         (R_SIU, S_SIU), (R_SUX, S_SUX), (R_SDX, S_SDX), (R_SHQ, S_SHQ)):
         sc[slot:slot + 4] = rounding_slots(int(sc[shift]), near)
@@ -125,28 +93,15 @@ def gather_constants(cfg: IzhikevichConfig) -> tuple[np.ndarray, np.ndarray]:
 # ----------------------------------------------------------------------------------------------
 # the kernels (compiled on first use, cached on disk)
 
-if numba is not None:
+if available():
+    from numba import njit
+
+    from ..lib.kernel import rq as _rq
+
     _jit = dict(nogil=True, cache=True, error_model="numpy")
 
     @njit(inline="always", **_jit)
-    def _rs(x, s, near):
-        """round_shift(x, s): rounding to nearest (ties up) or truncation; s <= 0 shifts left."""
-        if s <= 0:
-            return x << (-s)
-        r = x >> s
-        if near:
-            r += (x >> (s - 1)) & 1
-        return r
-
-    @njit(inline="always", **_jit)
-    def _rq(x, sc, j):
-        """round_shift(x, shift) without branches: ``(x << ls) >> rs`` plus, when rounding
-        to nearest and rs > 0, the first dropped bit (slots j .. j+3 of ``sc``)."""
-        y = x << sc[j]
-        return (y >> sc[j + 1]) + ((y >> sc[j + 2]) & sc[j + 3])
-
-    @njit(inline="always", **_jit)
-    def _neuron(v, u, I, s, tab, sc):
+    def neuron_update(v, u, I, s, tab, sc):
         """One update of one neuron: returns (v', u', spike, clamp bits, v_pre). Written
         without branches (selects, min/max) so that a loop over neurons can vectorize."""
         # --- operands (a clamp that is not built has levels no int64 passes)
@@ -189,7 +144,7 @@ if numba is not None:
     @njit(**_jit)
     def _update_arrays(v, u, I, sel, tab, sc, v_out, u_out, spike, clamp, v_pre):
         for i in range(v.shape[0]):
-            a, b, c, d, e = _neuron(v[i], u[i], I[i], sel[i], tab, sc)
+            a, b, c, d, e = neuron_update(v[i], u[i], I[i], sel[i], tab, sc)
             v_out[i] = a
             u_out[i] = b
             spike[i] = c
@@ -204,7 +159,7 @@ if numba is not None:
         n_spk = 0
         c0 = c1 = c2 = c3 = c4 = 0
         for i in range(v.shape[0]):
-            a, b, c, d, _ = _neuron(v[i], u[i], I[i], 0 if uniform else sel[i], tab, sc)
+            a, b, c, d, _ = neuron_update(v[i], u[i], I[i], 0 if uniform else sel[i], tab, sc)
             v[i] = a
             u[i] = b
             flags[i] = c
@@ -222,18 +177,6 @@ if numba is not None:
         return n_spk
 
     @njit(**_jit)
-    def _record(flags, fwords, k, spk_k, spk_n, n_spk):
-        """Append the flagged neurons (skipping flag words that are all zero)."""
-        for w in range(fwords.shape[0]):
-            if fwords[w]:
-                for i in range(8 * w, 8 * w + 8):
-                    if flags[i]:
-                        spk_k[n_spk] = k
-                        spk_n[n_spk] = i
-                        n_spk += 1
-        return n_spk
-
-    @njit(**_jit)
     def _run_const(v, u, I, sel, tab, sc, n_sweeps, k0, spk_k, spk_n, n_spk, totals, last,
                    flags, fwords):
         """Up to ``n_sweeps`` sweeps with constant currents, in place. Spikes are appended to
@@ -246,7 +189,7 @@ if numba is not None:
                 return j, n_spk
             hits = _sweep_core(v, u, I, sel, tab, sc, flags, last, len(tab[0]) == 1)
             if hits:
-                n_spk = _record(flags, fwords, k0 + j, spk_k, spk_n, n_spk)
+                n_spk = record(flags, fwords, k0 + j, spk_k, spk_n, n_spk)
             for k in range(last.shape[0]):
                 totals[k] += last[k]
         return n_sweeps, n_spk
@@ -304,17 +247,3 @@ def run_sweeps(cfg_consts, v, u, I, sel, n_sweeps: int, k0: int = 0,
         return spk_k[:n_spk], spk_n[:n_spk] + lo, totals, last
 
     return split_over_threads(chunk, N, threads if n_sweeps else 1)
-
-
-def split_over_threads(chunk, n: int, threads: int):
-    """Run ``chunk(lo, hi)`` on ``threads`` contiguous slices of ``n`` neurons (one call when
-    ``threads == 1``) and join the results: each chunk returns ``(spike_sweeps,
-    spike_neurons, totals, last)`` with neuron indices already offset by ``lo``."""
-    if threads == 1:
-        parts = [chunk(0, n)]
-    else:
-        edges = np.linspace(0, n, threads + 1).astype(int)
-        with ThreadPoolExecutor(threads) as pool:
-            parts = list(pool.map(chunk, edges[:-1], edges[1:]))
-    return (np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts]),
-            sum(p[2] for p in parts), sum(p[3] for p in parts))

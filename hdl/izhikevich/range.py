@@ -1,4 +1,5 @@
-"""The state range an Izhikevich parameter set can reach for currents in an accepted range.
+"""The state range an Izhikevich parameter set can reach for currents in an accepted range, and
+the error bound of one update of the core against the golden model.
 
 The core's state formats and clamp levels are sized from this range (see
 :class:`cuneate.hdl.izhikevich.IzhikevichConfig`), so that no clamp acts for any accepted input.
@@ -35,6 +36,11 @@ and the floor is the lowest of the initial ``v``, the resets ``c`` and the searc
 
 Everything downstream (multiplier operands, sums) follows from these two intervals by interval
 arithmetic in the configuration.
+
+**One step against golden.** :func:`one_step_bound` sums every rounding and representation error
+of the datapath, each at its worst, into a bound on the difference between one update of the
+core and one float64 forward-Euler step from the same state; the scoreboards check every update
+against it.
 """
 
 from __future__ import annotations
@@ -45,10 +51,10 @@ from functools import lru_cache
 
 import numpy as np
 
-from ..golden import izhikevich as golden
+from ...golden import izhikevich as golden
 
 __all__ = ["SetRange", "RangeSearchError", "reachable_ranges", "stimulus_battery",
-           "SEARCH_STATE_BOUND"]
+           "SEARCH_STATE_BOUND", "one_step_bound"]
 
 SEARCH_STATE_BOUND = 1e4
 
@@ -195,3 +201,55 @@ def _cached(key) -> tuple[SetRange, ...]:
                             float(v_pre_max[sel].max()), u_lo, u_hi,
                             base if proven is None else proven, v_floor))
     return tuple(out)
+
+
+def one_step_bound(cfg, v, u, I, sel=None):
+    """Upper bounds (mV) on |v' - v'_golden| and |u' - u'_golden| for one update of the core
+    configured by ``cfg`` from the state ``(v, u)`` (floats, exactly representable) with input
+    ``I`` (inside the accepted range), before reset, for neurons of parameter sets ``sel``
+    (default: the worst set).
+
+    Sum of every rounding and representation error of the datapath, each at its worst:
+    operand roundings (half an LSB, or one LSB when truncating), constant errors, the
+    rounded completing-the-square offset, and the alignments into the state formats.
+    """
+    v, u, I = (np.asarray(x, dtype=np.float64) for x in (v, u, I))
+    half = 0.5 if cfg.rounding == "nearest" else 1.0
+    eW, eQ, eV, eU, eY = (half * f.lsb for f in (cfg.W, cfg.Q, cfg.V, cfg.U, cfg.Y))
+    eVQ = half * cfg.VQ.lsb
+    dt = cfg.dt_ms
+
+    def per(values, reduce=max):
+        arr = np.asarray(values, dtype=np.float64)
+        if sel is None:
+            return reduce(arr)
+        return arr[np.asarray(sel, dtype=np.int64)]
+    P = cfg.params
+    woff = per([w.quantized for w in cfg.woff], reduce=lambda a: a[np.argmax(np.abs(a))])
+    ka = per([k.quantized for k in cfg.KA])
+    dka = per([abs(k.abs_error) for k in cfg.KA])
+    dB = per([abs(2 * p.A * w.quantized - p.B) for p, w in zip(P, cfg.woff)])
+    dK0 = per([abs(k.abs_error) for k in cfg.K0])
+    same = len({w.raw for w in cfg.woff}) == 1
+    w = np.abs(v + woff) if (sel is not None or same) else np.abs(v) + np.abs(woff)
+    bound_v = (dka * w * w + ka * (2 * w * eW + eW * eW) + eQ * (w + eW) + eV + dK0
+               + dt * dB * np.abs(v))
+    if cfg.dt_shift is not None:
+        bound_v = bound_v + eV                           # dt*u alignment (dt*I is exact)
+    else:
+        eX = half * cfg.X.lsb
+        kd, dkd = cfg.KDT.quantized, abs(cfg.KDT.abs_error)
+        bound_v = bound_v + dkd * np.abs(I - u) + kd * (eX + eU) + eV
+    bq = per([abs(b.quantized) for b in cfg.beta])
+    db = per([abs(b.abs_error) for b in cfg.beta])
+    aq = per([abs(a.quantized) for a in cfg.alpha])
+    da = per([abs(a.abs_error) for a in cfg.alpha])
+    dE = per([abs(e.abs_error) for e in cfg.E])
+    vu = per([abs(p.v_u) for p in P])
+    lam = per([p.u_leak for p in P])
+    ey = bq * eVQ + db * (np.abs(v) + vu) + dE + eU + eY
+    bound_u = aq * ey + da * (bq * (np.abs(v) + vu) + lam * np.abs(u)) + eU
+    # on a spike v is replaced by c and u gets d: their representation errors
+    bound_v = bound_v + per([abs(c.abs_error) for c in cfg.c])
+    bound_u = bound_u + per([abs(d.abs_error) for d in cfg.d])
+    return bound_v + 1e-9, bound_u + 1e-9

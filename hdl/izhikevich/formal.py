@@ -1,7 +1,25 @@
-"""Formal check that the pipelined Izhikevich core equals the one-step datapath (SymbiYosys, z3).
+"""Formal checks of the Izhikevich block with SymbiYosys (``yowasp-sby``, z3).
 
-:func:`core_vs_one_step` puts a small core (external tick) beside a reference written against
-the core's documented contract, not its registers:
+**The one-update datapath.** :func:`one_step` builds the datapath as one combinational
+update from the same stage functions as the core and the twin (``operands``, ``multiply1``, ``multiply2``,
+``update_state``), with free inputs ``v``, ``u``, ``I`` (and the parameter-set index) assumed
+inside the configuration's state box (``v_floor <= v <= v_th``, ``u_lo <= u <= u_hi``) and the
+accepted current range. It asserts:
+
+* ``datapath`` (default): every unclamped narrowing of the datapath (:func:`cuneate.hdl.lib.fixed
+  .narrow`: the ``w`` and ``v`` operands, ``q``, ``v`` below threshold where it is used) holds
+  its proven bounds - nothing can wrap - and the ``y`` operand clamp never acts;
+* ``state_box``: additionally, the next state stays in the box with no flagged clamp (``v_low``,
+  ``u_high``, ``u_low``) - i.e. the box is closed under one update.
+
+A bounded check of depth 1 on a combinational circuit covers every input: a pass is a proof for
+all states in the box and all accepted currents. :func:`prove` runs SymbiYosys in a work
+directory (relative paths: the YoWASP tools see only their current directory) and returns the
+status, the time and, on failure, the counterexample ``(v, u, I)``.
+
+**The pipelined core against the one-step datapath.** :func:`core_vs_one_step` puts a small
+core (external tick) beside a reference written against the core's documented contract, not its
+registers:
 
 * **host writes**: a write to the current or set RAM in cycle ``c`` is in the RAM from
   ``c + 1``; the update fetched in cycle ``f`` sees the RAM as it was ``PIPELINE_DEPTH`` cycles
@@ -34,18 +52,106 @@ from the free RAM and once after its own write-back, host writes in flight throu
 
 from __future__ import annotations
 
+import contextlib
 import re
 from pathlib import Path
 
 from amaranth import Array, Cat, ClockDomain, Elaboratable, Module, Mux, Signal
 from amaranth.hdl import Assert, Assume
 
-from . import izhikevich as izh
-from .formal import FormalError, run_sby
-from .izhikevich import IzhikevichConfig, IzhikevichCore
-from .izhikevich_config import CLAMP_KINDS, PIPELINE_DEPTH
+from ..flow.sby import FormalError, run_sby, signed_bits
+from . import datapath as izh
+from .config import CLAMP_KINDS, PIPELINE_DEPTH, IzhikevichConfig
+from .core import IzhikevichCore
 
-__all__ = ["core_vs_one_step", "prove_core"]
+__all__ = ["PROPERTIES", "one_step", "prove", "FormalError", "core_vs_one_step", "prove_core"]
+
+PROPERTIES = ("datapath", "state_box")
+
+
+@contextlib.contextmanager
+def _recording_narrows(checks: list):
+    orig = izh.narrow
+
+    def narrow(x, fmt, bounds, name="value"):
+        checks.append((x, bounds, name))
+        return orig(x, fmt, bounds, name)
+    izh.narrow = narrow
+    try:
+        yield
+    finally:
+        izh.narrow = orig
+
+
+class _OneStep(Elaboratable):
+    def __init__(self, cfg: IzhikevichConfig, prop: str):
+        self.cfg, self.prop = cfg, prop
+        self.v = Signal(cfg.V.shape(), name="v")
+        self.u = Signal(cfg.U.shape(), name="u")
+        self.I = Signal(cfg.I.shape(), name="I")
+        n_sets = len(cfg.params)
+        self.sel = Signal(range(max(2, n_sets)), name="sel")
+
+    def elaborate(self, platform):
+        cfg, m = self.cfg, Module()
+        v, u, I = self.v, self.u, self.I
+        n_sets = len(cfg.params)
+        sel = self.sel if n_sets > 1 else 0
+        checks: list = []
+        with _recording_narrows(checks):
+            s2 = izh.operands(cfg, v, u, I, sel)
+            s3 = izh.multiply1(cfg, s2["wq"], s2["vq"], s2["x"], u, sel)
+            s4 = izh.multiply2(cfg, s3["q"], s3["bvp"], s3["uy"], s2["wq"], v, u, s3["x"], sel)
+            out = izh.update_state(cfg, *(s4[k] for k in ("vb_sh", "vb_th", "vb_lo", "u_sh",
+                                                          "ud_sh", "p", "m")), sel)
+        m.d.comb += [Assume((v >= cfg.v_floor_raw) & (v <= cfg.VTH.raw)),
+                     Assume((u >= cfg.u_lo_raw) & (u <= cfg.u_hi_raw)),
+                     Assume((I >= cfg.i_lo_raw) & (I <= cfg.i_hi_raw))]
+        if n_sets > 1:
+            m.d.comb += Assume(self.sel < n_sets)
+        for x, (lo, hi), name in checks:
+            ok = (x >= lo) & (x <= hi)
+            if name == "v below threshold":     # used only when neither spike nor floor
+                ok = ok | out["spike"] | ((s4["vb_lo"] + s4["p"]) < 0)
+            m.d.comb += Assert(ok, name)
+        m.d.comb += Assert(~s4["y_flag"], "y clamp")
+        if self.prop == "state_box":
+            m.d.comb += Assert(~out["u_low"] & ~out["u_high"] & ~out["v_low"], "state clamp")
+        return m
+
+
+def one_step(cfg: IzhikevichConfig, prop: str = "datapath"):
+    """The one-update harness of ``cfg`` for property ``prop`` and its ports."""
+    if prop not in PROPERTIES:
+        raise ValueError(f"unknown property {prop!r}; known: {', '.join(PROPERTIES)}")
+    top = _OneStep(cfg, prop)
+    return top, [top.v, top.u, top.I, top.sel]
+
+
+def prove(cfg: IzhikevichConfig, workdir: Path, prop: str = "datapath",
+          timeout_s: float = 1800) -> dict:
+    """Run the one-step check; returns ``{"property", "status" ("pass"/"fail"), "seconds",
+    "counterexample" ({"v", "u", "I", "sel"} raw, or None)}``."""
+    from amaranth.back import rtlil
+    top, ports = one_step(cfg, prop)
+    status, secs, out = run_sby(workdir, "onestep",
+                                rtlil.convert(top, name="onestep", ports=ports), 1, timeout_s)
+    if status != "fail":
+        return {"property": prop, "status": status, "seconds": secs, "counterexample": None}
+    vcd = (Path(workdir) / "onestep" / "engine_0" / "trace.vcd").read_text()
+    names = dict(re.findall(r"\$var wire \d+ (\S+) (\w+) ", vcd))
+    cex = {}
+    for bits, ident in re.findall(r"^b([01]+) (\S+)$", vcd, re.M):
+        n = names.get(ident)
+        if n in ("v", "u", "I", "sel") and n not in cex:
+            cex[n] = signed_bits(bits) if n != "sel" else int(bits, 2)
+    failed = re.findall(r"failed assertion (\S+)", out)
+    return {"property": prop, "status": "fail", "seconds": secs, "counterexample": cex,
+            "failed": failed}
+
+
+# ----------------------------------------------------------------------------------------------
+# the pipelined core against the one-step datapath
 
 _STAGES = (izh.operands, izh.multiply1, izh.multiply2, izh.update_state)
 #: cycles from the stage-3 registers (the state an update read) to the ``upd_*`` outputs

@@ -48,7 +48,7 @@ from typing import Sequence
 import numpy as np
 
 from . import izhikevich
-from ._validate import finite_array, number
+from .validate import finite_array, number
 from .lif import diff_exp_kernel, diff_exp_peak_time, synaptic_current
 
 __all__ = [

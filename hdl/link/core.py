@@ -3,7 +3,7 @@
 :class:`HostLink` sits between a UART and an :class:`~cuneate.hdl.izhikevich.IzhikevichCore`
 configured with ``tick_source="external"``; :class:`LinkedCore` is the two wired together
 (the unit a board top instantiates and the cocotb bench drives through its ``rx``/``tx`` pins).
-The wire format is :mod:`cuneate.hdl.link_codec` (its functions are the model: the CRC step
+The wire format is :mod:`cuneate.hdl.link.codec` (its functions are the model: the CRC step
 is the same function in RTL and host, the COBS encoder scans as the model does).
 
 Receive path
@@ -29,7 +29,7 @@ Transmit path
     counted ``batches_dropped`` (the host sees the gap in ticks). Frames are built into a byte
     RAM with their CRC, then COBS-encoded by scanning, into a small FIFO feeding the UART.
 
-Counters (32 bits, saturating, never wrapping): :data:`~cuneate.hdl.link_codec.COUNTER_NAMES`.
+Counters (32 bits, saturating, never wrapping): :data:`~cuneate.hdl.link.codec.COUNTER_NAMES`.
 """
 
 from __future__ import annotations
@@ -40,13 +40,12 @@ from amaranth.lib.fifo import SyncFIFOBuffered
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
-from .izhikevich import IzhikevichCore
-from .izhikevich_config import ConfigError, IzhikevichConfig
-from .link_codec import (COUNTER_NAMES, MAX_FRAME, MIN_FRAME, MSG_CONTROL, MSG_COUNTERS,
+from ..izhikevich import ConfigError, IzhikevichConfig, IzhikevichCore
+from ..lib.uart import UartRx, UartTx
+from .codec import (COUNTER_NAMES, MAX_FRAME, MIN_FRAME, MSG_CONTROL, MSG_COUNTERS,
                          MSG_SPIKES, MSG_WRITE, OP_CLEAR_COUNTERS, OP_READ_COUNTERS,
                          OP_START, OP_STEP, OP_STOP, SPIKE_HEADER, CONTROL_PAYLOAD,
                          HEADER_BYTES, crc16_update, current_bytes)
-from .uart import UartRx, UartTx
 
 __all__ = ["HostLink", "LinkedCore", "LinkConfig", "link_config", "link_verilog"]
 
@@ -537,10 +536,10 @@ class LinkedCore(wiring.Component):
 
 def link_verilog(lcfg: LinkConfig, name: str = "linked_core", lowered: bool = False) -> str:
     """Verilog of :class:`LinkedCore`; ``lowered`` gives the yosys-lowered netlist for Icarus 11
-    (see :func:`cuneate.hdl.generate.lowered_verilog`: it mis-schedules some combinational
+    (see :func:`cuneate.hdl.flow.verilog.lowered_verilog`: it mis-schedules some combinational
     processes of the link's transmit FSM in the direct output)."""
     from amaranth.back import verilog
     if not lowered:
         return verilog.convert(LinkedCore(lcfg), name=name, emit_src=False)
-    from .generate import lowered_verilog
+    from ..flow.verilog import lowered_verilog
     return lowered_verilog(LinkedCore(lcfg), name)

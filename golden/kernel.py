@@ -1,0 +1,64 @@
+"""Compiled-loop (numba) helpers shared by the golden models' loops and the twins' kernels.
+
+:func:`available` says whether numba is importable (every compiled loop has a NumPy fallback);
+:func:`record` appends the neurons a sweep flagged to a spike buffer; :func:`split_over_threads`
+runs a GIL-free loop on contiguous slices of a population and joins the slices' spikes. The
+twins (``cuneate.hdl.*.kernel``) build on these; they live here, at the bottom of the layers,
+because the golden models use them too.
+"""
+
+from __future__ import annotations
+
+from concurrent.futures import ThreadPoolExecutor
+
+import numpy as np
+
+__all__ = ["available", "record", "split_over_threads", "thread_slices"]
+
+try:                                   # numba is a dependency; keep the models usable without it
+    import numba
+    from numba import njit
+except ImportError:                    # pragma: no cover
+    numba = None
+
+
+def available() -> bool:
+    """True when numba is importable (the compiled loops can be used)."""
+    return numba is not None
+
+
+if numba is not None:
+    @njit(nogil=True, cache=True)
+    def record(flags, fwords, k, spk_k, spk_n, n_spk):
+        """Append the neurons flagged in ``flags`` (bool, length a multiple of 8; ``fwords``
+        its uint64 view, so words that are all zero are skipped) as spikes of step ``k`` to
+        ``(spk_k, spk_n)`` from position ``n_spk``; returns the new count."""
+        for w in range(fwords.shape[0]):
+            if fwords[w]:
+                for i in range(8 * w, 8 * w + 8):
+                    if flags[i]:
+                        spk_k[n_spk] = k
+                        spk_n[n_spk] = i
+                        n_spk += 1
+        return n_spk
+else:                                  # pragma: no cover
+    record = None
+
+
+def thread_slices(n: int, threads: int) -> list[tuple[int, int]]:
+    """``threads`` contiguous ``(lo, hi)`` slices covering ``0 .. n``."""
+    if threads <= 1:
+        return [(0, n)]
+    edges = np.linspace(0, n, threads + 1).astype(int)
+    return list(zip(edges[:-1].tolist(), edges[1:].tolist()))
+
+
+def split_over_threads(chunk, n: int, threads: int) -> list:
+    """Run ``chunk(lo, hi)`` on ``threads`` contiguous slices of ``n`` neurons (one call when
+    ``threads == 1``, else a thread pool: the loops release the GIL); returns the chunks'
+    results in slice order."""
+    slices = thread_slices(n, threads)
+    if len(slices) == 1:
+        return [chunk(0, n)]
+    with ThreadPoolExecutor(len(slices)) as pool:
+        return list(pool.map(lambda s: chunk(*s), slices))

@@ -1,0 +1,118 @@
+"""RTL every time-multiplexed core shares: the sweep issue counter, the pipeline tags, per-sweep
+spike and clamp counters, sticky clamp flags and the spike FIFO.
+
+The Izhikevich and LIF cores issue one neuron per clock from a tick; each update leaves the
+pipeline on the core's ``upd_*`` probe ports, from which the bookkeeping below counts spikes and
+clamps per sweep, keeps sticky clamp flags and queues spikes for the host. The port names are
+the contract of both cores (see :class:`cuneate.hdl.izhikevich.IzhikevichCore`):
+
+``busy``, ``overrun``
+    a sweep is being issued; a tick arrived while one was (ignored, sticky flag).
+``sweep_done``, ``sweep_count``, ``sweep_number``, ``sweep_clamps_<kind>``
+    pulse in the cycle after the last update of a sweep left the pipeline, with that sweep's
+    spike count, number and clamp counts per kind.
+``clamp_flags``, ``clamp_clear``
+    sticky clamp flags (bit per kind); a clamp in the clearing cycle keeps its flag set.
+``spike_valid``, ``spike_ready``, ``spike_index``, ``spike_sweep``, ``spike_overflow``
+    the spike FIFO; a spike that finds it full is dropped and sets the sticky overflow flag.
+"""
+
+from __future__ import annotations
+
+from amaranth import Cat, Module, Mux, Signal
+from amaranth.lib.fifo import SyncFIFOBuffered
+
+__all__ = ["SweepIssue", "sweep_issue", "pipeline_tags", "registrar", "sweep_bookkeeping"]
+
+
+class SweepIssue:
+    """The issue counter's signals: ``start`` (a sweep starts this cycle), ``issuing``,
+    ``addr`` (the neuron issued), ``sweep_no`` (the sweep's number)."""
+
+    def __init__(self, start, issuing, addr, sweep_no):
+        self.start, self.issuing, self.addr, self.sweep_no = start, issuing, addr, sweep_no
+
+
+def sweep_issue(m: Module, core, n_neurons: int, tick, number_width: int) -> SweepIssue:
+    """Issue neurons ``0 .. n_neurons - 1``, one per clock, from each ``tick``; a tick while a
+    sweep is still being issued sets ``core.overrun`` (a tick in the last issuing cycle is on
+    time). Drives ``core.busy``."""
+    N = n_neurons
+    issuing = Signal()
+    addr = Signal(range(N))
+    sweep_no = Signal(number_width)
+    started = Signal()
+    last_issue = issuing & (addr == N - 1)
+    start = tick & (~issuing | last_issue)
+    with m.If(tick & ~start):
+        m.d.sync += core.overrun.eq(1)
+    with m.If(start):
+        m.d.sync += [issuing.eq(1), addr.eq(0), started.eq(1),
+                     sweep_no.eq(Mux(started, sweep_no + 1, 0))]
+    with m.Elif(issuing):
+        m.d.sync += addr.eq(addr + 1)
+        with m.If(last_issue):
+            m.d.sync += issuing.eq(0)
+    m.d.comb += core.busy.eq(issuing)
+    return SweepIssue(start, issuing, addr, sweep_no)
+
+
+def pipeline_tags(m: Module, n_neurons: int, number_width: int, issue: SweepIssue,
+                  last_stage: int = 5) -> dict:
+    """``{stage: (valid, index, sweep)}`` registers that carry each issued neuron from stage 2
+    to ``last_stage`` beside its data."""
+    tags = {n: (Signal(name=f"valid{n}"), Signal(range(n_neurons), name=f"idx{n}"),
+                Signal(number_width, name=f"swp{n}")) for n in range(2, last_stage + 1)}
+    t2 = tags[2]
+    m.d.sync += [t2[0].eq(issue.issuing), t2[1].eq(issue.addr), t2[2].eq(issue.sweep_no)]
+    for n in range(2, last_stage):
+        a, b = tags[n], tags[n + 1]
+        m.d.sync += [b[0].eq(a[0]), b[1].eq(a[1]), b[2].eq(a[2])]
+    return tags
+
+
+def registrar(m: Module):
+    """``reg(name, value, stage)``: a pipeline register named ``<name><stage>`` loaded with
+    ``value`` every cycle."""
+    def reg(name, value, stage):
+        s = Signal(value.shape(), name=f"{name}{stage}")
+        m.d.sync += s.eq(value)
+        return s
+    return reg
+
+
+def sweep_bookkeeping(m: Module, core, n_neurons: int, number_width: int, last_tag,
+                      clamp_kinds, fifo_depth: int) -> None:
+    """Per-sweep spike and clamp counters, sticky clamp flags and the spike FIFO, all fed from
+    the core's registered ``upd_*`` outputs (off the datapath's critical path); ``last_tag`` is
+    the last stage's ``(valid, index, sweep)``."""
+    N = n_neurons
+    upd_sweep = Signal(number_width)
+    m.d.sync += upd_sweep.eq(last_tag[2])
+    count = Signal(range(N + 1))
+    last = core.upd_valid & (core.upd_index == N - 1)
+    m.d.sync += core.sweep_done.eq(last)
+    with m.If(last):
+        m.d.sync += [core.sweep_count.eq(count + core.upd_spike),
+                     core.sweep_number.eq(upd_sweep), count.eq(0)]
+    with m.Elif(core.upd_valid):
+        m.d.sync += count.eq(count + core.upd_spike)
+    for i, k in enumerate(clamp_kinds):
+        cnt = Signal(range(N + 1), name=f"clamp_count_{k}")
+        with m.If(last):
+            m.d.sync += [getattr(core, f"sweep_clamps_{k}").eq(cnt + core.upd_clamp[i]),
+                         cnt.eq(0)]
+        with m.Elif(core.upd_valid):
+            m.d.sync += cnt.eq(cnt + core.upd_clamp[i])
+    m.d.sync += core.clamp_flags.eq(Mux(core.clamp_clear, 0, core.clamp_flags)
+                                    | core.upd_clamp)
+    # spike stream
+    iw = (N - 1).bit_length() or 1
+    m.submodules.spike_fifo = fifo = SyncFIFOBuffered(width=iw + number_width, depth=fifo_depth)
+    push = core.upd_valid & core.upd_spike
+    m.d.comb += [fifo.w_data.eq(Cat(core.upd_index[:iw], upd_sweep)), fifo.w_en.eq(push),
+                 core.spike_valid.eq(fifo.r_rdy), fifo.r_en.eq(core.spike_ready),
+                 core.spike_index.eq(fifo.r_data[:iw]),
+                 core.spike_sweep.eq(fifo.r_data[iw:])]
+    with m.If(push & ~fifo.w_rdy):
+        m.d.sync += core.spike_overflow.eq(1)

@@ -1,0 +1,42 @@
+"""What every block's configuration shares: the one :class:`ConfigError` and the format sizing
+helpers.
+
+A configuration (``IzhikevichConfig``, ``LifConfig``, ``CoincidenceConfig``, ``NetworkConfig``,
+``LinkConfig``) derives every format and constant of its block at construction and refuses, by
+raising :class:`ConfigError` with a one-line reason, whatever its formats cannot hold. Nothing is
+refused later, at elaboration or while simulating.
+"""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+from .fixed import FixedConstant, FixedPointError
+
+__all__ = ["ConfigError", "int_bits_for", "shared_exponent"]
+
+
+class ConfigError(FixedPointError):
+    """A block configuration that cannot hold; raised at construction (before elaboration),
+    with a one-line reason."""
+
+
+def int_bits_for(lo: float, hi: float) -> int:
+    """Fewest integer bits (sign included) of a signed format holding [lo, hi] at any
+    fraction width (the format's max is ``2**(ib-1) - lsb``, so ``hi`` needs strict room)."""
+    ib = 1
+    while not (-(2.0 ** (ib - 1)) <= lo and hi < 2.0 ** (ib - 1)):
+        ib += 1
+    return ib
+
+
+def shared_exponent(name: str, values: Sequence[float], width: int, nominal: float = 1.0,
+                    max_rel_error: float | None = None):
+    """Constants sharing one exponent, normalized to the largest magnitude (so one shift serves
+    every parameter set); ``nominal`` sets the exponent when every value is 0; a non-zero value
+    whose relative representation error exceeds ``max_rel_error`` is refused."""
+    big = max(abs(x) for x in values)
+    ref = FixedConstant.normalized(name, big if big else nominal, width)
+    return [FixedConstant.scaled(f"{name}[{i}]", x, ref.frac_bits, width,
+                                 max_rel_error=max_rel_error if x else None)
+            for i, x in enumerate(values)]

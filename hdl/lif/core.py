@@ -1,0 +1,216 @@
+"""The LIF core's RTL: a time-multiplexed, pipelined Amaranth component built from the datapath's
+stage functions (:mod:`cuneate.hdl.lif.datapath`) and the synaptic traces
+(:mod:`cuneate.hdl.lib.synapses`), and its Verilog.
+
+Latency 5 cycles, then one neuron update per clock; formats from
+:class:`~cuneate.hdl.lif.config.LifConfig`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from amaranth import Cat, Const, Module, Mux, Signal, signed
+from amaranth.lib import wiring
+from amaranth.lib.memory import Memory
+from amaranth.lib.wiring import In, Out
+
+from ..flow.verilog import verilog_text, write_block
+from ..lib.bookkeeping import pipeline_tags, registrar, sweep_bookkeeping, sweep_issue
+from ..lib.synapses import trace_products, trace_update
+from ..lib.tick import tick_strobe
+from .config import CLAMP_KINDS, LifConfig
+from .datapath import gather_input, leak_operand, leak_product, update_state
+from .twin import LifTwin
+
+__all__ = ["LifCore", "lif_verilog", "generate_lif"]
+
+
+class LifCore(wiring.Component):
+    """Time-multiplexed LIF core: one neuron update per clock, 5-stage pipeline.
+
+    Latency: a neuron's index is issued at cycle t; its update is on ``upd_*`` at t + 5.
+
+    1. **Fetch** - the sweep counter addresses the state (``v``, refractory counter), current,
+       set-select and weight RAMs (synchronous read); the tick's input spike vector is tagged
+       onto the neuron.
+    2. **Read** - the RAM outputs are registered.
+    3. **Input, operand** - ``D = clamp(I) + sum w x`` (adder tree over the fan-in, width from
+       the fan-in) and the leak operand ``v - v_rest - D`` (or ``v``), rounded to ``X``.
+    4. **Leak** - ``k x`` (one multiplier) or ``x >> s`` (no multiplier).
+    5. **Update** - subtract, refractory hold, threshold, reset, flagged floor clamp; write
+       back; outputs registered.
+
+    Input spikes: ``in_valid``/``in_source`` set a source's bit in the pending vector; each
+    tick moves the pending vector into the active one (used by every neuron of that sweep)
+    and clears it, so a spike arriving during tick t acts on the sweep of tick t + 1. Several
+    spikes of one source in one tick count once and set the sticky ``in_merged`` flag. Other ports are those of
+    :class:`cuneate.hdl.izhikevich.IzhikevichCore` (``i_wr_*``, ``sel_wr_*``, spike stream,
+    ``upd_*`` probe with ``upd_ref``, ``upd_acc``, sweep counters, sticky clamp flags). With
+    ``weights_writable``, ``w_wr_en/w_wr_addr/w_wr_data`` write a neuron's whole weight row
+    (same rules as the current writes; the accepted input range is then proven for any weights
+    of the format).
+    """
+
+    def __init__(self, config: LifConfig | None = None, **kwargs):
+        self.cfg = cfg = config or LifConfig(**kwargs)
+        N, F = cfg.n_neurons, cfg.n_inputs
+        sig = {
+            "i_wr_en": In(1), "i_wr_addr": In(range(N)), "i_wr_data": In(cfg.I.shape()),
+            "sel_wr_en": In(1), "sel_wr_addr": In(range(N)), "sel_wr_data": In(cfg.sel_bits),
+            "spike_valid": Out(1), "spike_ready": In(1), "spike_index": Out(range(N)),
+            "spike_sweep": Out(cfg.sweep_number_width), "spike_overflow": Out(1),
+            "upd_valid": Out(1), "upd_index": Out(range(N)), "upd_v": Out(cfg.V.shape()),
+            "upd_ref": Out(max(1, cfg.ref_bits)), "upd_current": Out(cfg.I.shape()),
+            "upd_acc": Out(signed(cfg.acc_bits)), "upd_spike": Out(1),
+            "upd_clamp": Out(len(CLAMP_KINDS)),
+            "clamp_flags": Out(len(CLAMP_KINDS)), "clamp_clear": In(1),
+            "sweep_done": Out(1), "sweep_count": Out(range(N + 1)),
+            "sweep_number": Out(cfg.sweep_number_width), "overrun": Out(1), "busy": Out(1),
+        }
+        for t in cfg.traces:
+            sig[f"upd_{t.name}"] = Out(t.T.shape())
+        if F:
+            sig["in_valid"] = In(1)
+            sig["in_source"] = In(range(F))
+            sig["in_merged"] = Out(1)
+            if cfg.weights_writable:
+                sig["w_wr_en"] = In(1)
+                sig["w_wr_addr"] = In(range(N))
+                sig["w_wr_data"] = In(F * cfg.W.width)
+        for k in CLAMP_KINDS:
+            sig[f"sweep_clamps_{k}"] = Out(range(N + 1))
+        if cfg.tick_source == "external":
+            sig["tick"] = In(1)
+        super().__init__(sig)
+
+    def elaborate(self, platform):
+        cfg = self.cfg
+        N, F, V, R = cfg.n_neurons, cfg.n_inputs, cfg.V, cfg.ref_bits
+        m = Module()
+        init_state = [int(v) & ((1 << V.width) - 1) for v in cfg.v_init_raw]
+        m.submodules.state_mem = state_mem = Memory(shape=V.width + R, depth=N,
+                                                    init=init_state)
+        m.submodules.cur_mem = cur_mem = Memory(shape=cfg.I.shape(), depth=N, init=[])
+        m.submodules.sel_mem = sel_mem = Memory(shape=cfg.sel_bits, depth=N,
+                                                init=cfg.neuron_sets)
+        st_rd, st_wr = state_mem.read_port(), state_mem.write_port()
+        cur_rd, cur_wr = cur_mem.read_port(), cur_mem.write_port()
+        sel_rd, sel_wr = sel_mem.read_port(), sel_mem.write_port()
+        rd_ports = [st_rd, cur_rd, sel_rd]
+        wb = cfg.W.width
+        if F:
+            rows = [LifTwin.pack_weights(cfg, row) for row in cfg.weights_raw]
+            m.submodules.weight_mem = w_mem = Memory(shape=wb * F, depth=N, init=rows)
+            w_rd = w_mem.read_port()
+            rd_ports.append(w_rd)
+            if cfg.weights_writable:
+                w_wr = w_mem.write_port()
+                m.d.comb += [w_wr.addr.eq(self.w_wr_addr), w_wr.data.eq(self.w_wr_data),
+                             w_wr.en.eq(self.w_wr_en)]
+        TW = [t.T.width for t in cfg.traces]
+        if cfg.traces:
+            m.submodules.trace_mem = tr_mem = Memory(shape=sum(TW), depth=N, init=[])
+            tr_rd, tr_wr = tr_mem.read_port(), tr_mem.write_port()
+            rd_ports.append(tr_rd)
+        m.d.comb += [
+            cur_wr.addr.eq(self.i_wr_addr), cur_wr.data.eq(self.i_wr_data),
+            cur_wr.en.eq(self.i_wr_en),
+            sel_wr.addr.eq(self.sel_wr_addr), sel_wr.data.eq(self.sel_wr_data),
+            sel_wr.en.eq(self.sel_wr_en),
+        ]
+
+        # --- sweep control -----------------------------------------------------------------
+        tick = tick_strobe(m, cfg, getattr(self, "tick", None))
+        issue = sweep_issue(m, self, N, tick, cfg.sweep_number_width)
+        start = issue.start
+        for port in rd_ports:
+            m.d.comb += [port.addr.eq(issue.addr), port.en.eq(1)]
+
+        # --- input spikes: pending -> active on each sweep start ------------------------------
+        active = Signal(max(1, F))
+        if F:
+            pending = Signal(F)
+            event = Mux(self.in_valid, Const(1, F) << self.in_source, 0)
+            with m.If(start):
+                m.d.sync += [active.eq(pending), pending.eq(event)]
+            with m.Else():
+                m.d.sync += pending.eq(pending | event)
+                # a second spike of a source within one tick merges with the first: flagged
+                with m.If(self.in_valid & pending.bit_select(self.in_source, 1)):
+                    m.d.sync += self.in_merged.eq(1)
+
+        # --- pipeline tags --------------------------------------------------------------------
+        tags = pipeline_tags(m, N, cfg.sweep_number_width, issue)
+        t5 = tags[5]
+        reg = registrar(m)
+
+        x2 = reg("x", active, 2)
+        # --- stage 2: RAM outputs registered -------------------------------------------------
+        v3 = reg("v", st_rd.data[:V.width].as_signed(), 3)
+        ref3 = reg("ref", st_rd.data[V.width:] if R else Const(0, 1), 3)
+        i3, sel3, x3 = reg("i", cur_rd.data, 3), reg("sel", sel_rd.data, 3), reg("x", x2, 3)
+        w3 = reg("w", w_rd.data, 3) if F else None
+        # --- stage 3: total input and leak operand -------------------------------------------
+        ws = [w3[wb * i: wb * (i + 1)].as_signed() for i in range(F)]
+        tr3 = None
+        if cfg.traces:
+            offs = np.cumsum([0] + TW)
+            tr3 = [reg(f"tr_{t.name}", tr_rd.data[offs[j]:offs[j + 1]].as_signed(), 3)
+                   for j, t in enumerate(cfg.traces)]
+        g = gather_input(cfg, i3, [x3[i] for i in range(F)], ws, tr3)
+        xop = leak_operand(cfg, v3, g["d"], sel3)
+        v4, ref4, sel4, i4 = (reg(n, s, 4) for n, s in
+                              (("v", v3), ("ref", ref3), ("sel", sel3), ("i", i3)))
+        d4, acc4, x4 = reg("d", g["d"], 4), reg("acc", g["acc"], 4), reg("xop", xop, 4)
+        fcur4, fin4 = reg("flag_current", g["current"], 4), reg("flag_input", g["input"], 4)
+        # --- stage 4: the leak product --------------------------------------------------------
+        p = leak_product(cfg, x4, sel4)
+        v5, ref5, sel5, i5, d5, acc5 = (reg(n, s, 5) for n, s in
+                                        (("v", v4), ("ref", ref4), ("sel", sel4), ("i", i4),
+                                         ("d", d4), ("acc", acc4)))
+        p5 = reg("p", p, 5)
+        ys4 = [reg(f"y_{t.name}", y, 4) for t, y in zip(cfg.traces, g["ys"])]
+        # the trace products are formed in stage 4 from the registered ys
+        if cfg.traces:
+            tp5 = [reg(f"tp_{t.name}", q, 5) for t, q in zip(cfg.traces,
+                                                             trace_products(cfg, ys4))]
+            ys5 = [reg(f"y_{t.name}", y, 5) for t, y in zip(cfg.traces, ys4)]
+            tr_new = trace_update(cfg, ys5, tp5)
+            tr_out = [Signal(t.T.shape(), name=f"{t.name}_out") for t in cfg.traces]
+            m.d.comb += [o.eq(v) for o, v in zip(tr_out, tr_new)]
+            m.d.comb += [tr_wr.addr.eq(t5[1]), tr_wr.data.eq(Cat(*tr_out)),
+                         tr_wr.en.eq(t5[0])]
+            m.d.sync += [getattr(self, f"upd_{t.name}").eq(o)
+                         for t, o in zip(cfg.traces, tr_out)]
+        fcur5, fin5 = reg("flag_current", fcur4, 5), reg("flag_input", fin4, 5)
+        # --- stage 5: update, write back ------------------------------------------------------
+        s5 = update_state(cfg, v5, p5, d5, ref5, sel5)
+        v_out = Signal(V.shape())
+        ref_out = Signal(max(1, R))
+        spike = Signal()
+        clamp = Signal(len(CLAMP_KINDS))
+        flags = {"current": fcur5, "input": fin5, "v_low": s5["v_low"]}
+        m.d.comb += [v_out.eq(s5["v"]), ref_out.eq(s5["ref"]), spike.eq(s5["spike"] & t5[0]),
+                     clamp.eq(Mux(t5[0], Cat(*(flags[k] for k in CLAMP_KINDS)), 0))]
+        m.d.comb += [st_wr.addr.eq(t5[1]),
+                     st_wr.data.eq(Cat(v_out, ref_out[:R]) if R else v_out),
+                     st_wr.en.eq(t5[0])]
+        m.d.sync += [self.upd_valid.eq(t5[0]), self.upd_index.eq(t5[1]), self.upd_v.eq(v_out),
+                     self.upd_ref.eq(ref_out), self.upd_current.eq(i5),
+                     self.upd_acc.eq(acc5), self.upd_spike.eq(spike), self.upd_clamp.eq(clamp)]
+
+        # --- bookkeeping ------------------------------------------------------------------------
+        sweep_bookkeeping(m, self, N, cfg.sweep_number_width, t5, CLAMP_KINDS,
+                          cfg.spike_fifo_depth)
+        return m
+
+
+def lif_verilog(config: LifConfig, name: str = "lif_core") -> str:
+    """Verilog text of the core (no source locations: the same config gives the same bytes)."""
+    return verilog_text(LifCore(config), name)
+
+
+def generate_lif(out, config: LifConfig, name: str = "lif_core") -> list:
+    """Write ``out/<name>.v`` and ``out/<name>.json`` (formats, constants and their errors,
+    latency, ports, resources hint); returns the paths."""
+    return write_block(out, LifCore(config), config.to_dict(), name)
