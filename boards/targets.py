@@ -1,10 +1,13 @@
-"""The registry of board targets (one module per board)."""
+"""The registry of board targets: one module per board, each defining ``TARGET`` (its device,
+clock plans, resources and build options). Adding a board: write its module and add it to
+:data:`BOARD_MODULES`."""
 
 from __future__ import annotations
 
-from . import icebreaker, ulx3s
-from .estimate_targets import ARTY, ATLYS
+from . import arty, atlys, icebreaker, ulx3s
 
-__all__ = ["TARGETS"]
+__all__ = ["TARGETS", "BOARD_MODULES"]
 
-TARGETS = {t["name"]: t for t in (ulx3s.TARGET, icebreaker.TARGET, ATLYS, ARTY)}
+#: Board modules, in the order ``cuneate boards`` lists them.
+BOARD_MODULES = (ulx3s, icebreaker, atlys, arty)
+TARGETS = {m.TARGET["name"]: m.TARGET for m in BOARD_MODULES}

@@ -28,7 +28,7 @@ import numpy as np
 
 from .izhikevich import IzhikevichParams
 
-__all__ = ["Behaviour", "BEHAVIOURS", "behaviour"]
+__all__ = ["Behaviour", "BEHAVIOURS", "behaviour", "pulses"]
 
 
 @dataclass(frozen=True)
@@ -68,7 +68,8 @@ def _where(cond, x, y):
     return np.where(cond, x, y).astype(np.float64)
 
 
-def _pulses(t, starts, width, amp, base=0.0):
+def pulses(t, starts, width, amp, base=0.0):
+    """``base`` plus ``amp`` during each pulse of ``width`` ms starting at ``starts`` (ms)."""
     on = np.zeros(np.shape(t), dtype=bool)
     for s in starts:
         on |= (t > s) & (t < s + width)
@@ -106,24 +107,24 @@ def _table() -> list[Behaviour]:
                        lambda t: _where(t > 30, -0.5 + 0.015 * (t - 30), -0.5), 0.25,
                        (-0.5, -0.5 + 0.015 * 270)))
     B.append(Behaviour("I", "spike latency", _p("I", "spike latency", 0.02, 0.2, -65, 6),
-                       -70, 0.2 * -70, 100, lambda t: _pulses(t, [10], 3, 7.04), 0.2, (0, 7.04)))
+                       -70, 0.2 * -70, 100, lambda t: pulses(t, [10], 3, 7.04), 0.2, (0, 7.04)))
     B.append(Behaviour("J", "subthreshold oscillations",
                        _p("J", "subthreshold oscillations", 0.05, 0.26, -60, 0),
-                       -62, 0.26 * -62, 200, lambda t: _pulses(t, [20], 5, 2.0), 0.25, (0, 2)))
+                       -62, 0.26 * -62, 200, lambda t: pulses(t, [20], 5, 2.0), 0.25, (0, 2)))
     B.append(Behaviour("K", "resonator", _p("K", "resonator", 0.1, 0.26, -60, -1),
                        -62, 0.26 * -62, 400,
-                       lambda t: _pulses(t, [40, 60, 280, 320], 4, 0.65), 0.25, (0, 0.65),
+                       lambda t: pulses(t, [40, 60, 280, 320], 4, 0.65), 0.25, (0, 0.65),
                        "pulse pairs 20 ms apart (at 40 ms) and 40 ms apart (at 280 ms)"))
     B.append(Behaviour("L", "integrator",
                        _p("L", "integrator", 0.02, -0.1, -55, 6, **_CLASS1),
                        -60, -0.1 * -60, 100,
-                       lambda t: _pulses(t, [100 / 11, 100 / 11 + 5, 70, 80], 2, 9.0), 0.25,
+                       lambda t: pulses(t, [100 / 11, 100 / 11 + 5, 70, 80], 2, 9.0), 0.25,
                        (0, 9), "v-equation 0.04 v^2 + 4.1 v + 108 (figure code); pulse pairs "
                        "5 ms apart (at 9.09 ms) and 10 ms apart (at 70 ms)"))
     B.append(Behaviour("M", "rebound spike", _p("M", "rebound spike", 0.03, 0.25, -60, 4),
-                       -64, 0.25 * -64, 200, lambda t: _pulses(t, [20], 5, -15.0), 0.2, (-15, 0)))
+                       -64, 0.25 * -64, 200, lambda t: pulses(t, [20], 5, -15.0), 0.2, (-15, 0)))
     B.append(Behaviour("N", "rebound burst", _p("N", "rebound burst", 0.03, 0.25, -52, 0),
-                       -64, 0.25 * -64, 200, lambda t: _pulses(t, [20], 5, -15.0), 0.2, (-15, 0)))
+                       -64, 0.25 * -64, 200, lambda t: pulses(t, [20], 5, -15.0), 0.2, (-15, 0)))
 
     def thresh_var(t):
         exc = ((t > 10) & (t < 15)) | ((t > 80) & (t < 85))
@@ -136,7 +137,7 @@ def _table() -> list[Behaviour]:
                        "at 70 ms)"))
     B.append(Behaviour("P", "bistability", _p("P", "bistability", 0.1, 0.26, -60, 0),
                        -61, 0.26 * -61, 300,
-                       lambda t: _pulses(t, [300 / 8, 216], 5, 1.24, base=0.24), 0.25,
+                       lambda t: pulses(t, [300 / 8, 216], 5, 1.24, base=0.24), 0.25,
                        (0.24, 1.24), "a = 0.1, b = 0.26 (figure code; the table lists a = 1, "
                        "b = 1.5); pulses at 37.5 ms (on) and 216 ms (off)"))
     B.append(Behaviour("Q", "depolarizing after-potential",

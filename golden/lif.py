@@ -292,7 +292,7 @@ def simulate_lif(current, dt_ms: float, *, duration_ms: float | None = None,
         Keep the ``(n_steps + 1, n_neurons)`` membrane trace (row 0 is the initial state).
     dtype
         Arithmetic of the parameters, the current and the state: ``numpy.float64`` (default)
-        or ``numpy.float32`` (the precision yardstick of :mod:`cuneate.sim.sweep_lif`).
+        or ``numpy.float32`` (the precision yardstick of :mod:`cuneate.sim.lif.sweep`).
 
     Raises
     ------

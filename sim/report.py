@@ -16,10 +16,12 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["write_report", "summary_dict", "figure_names", "page_head", "figures_html"]
+__all__ = ["write_report", "summary_dict", "figure_names", "page_head", "figures_html",
+           "pyplot", "html_table", "fmt"]
 
 
-def _plt():
+def pyplot():
+    """matplotlib's pyplot on the non-interactive Agg backend."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -150,7 +152,8 @@ def summary_dict(run) -> dict:
     }
 
 
-def _table(rows, head) -> str:
+def html_table(rows, head) -> str:
+    """An HTML table of ``rows`` under the header ``head`` (cells escaped)."""
     h = "".join(f"<th>{html.escape(str(x))}</th>" for x in head)
     body = "".join("<tr>" + "".join(f"<td>{html.escape(str(x))}</td>" for x in r) + "</tr>"
                    for r in rows)
@@ -175,7 +178,8 @@ def figures_html(names) -> str:
                    for n in names)
 
 
-def _f(x, nd=3):
+def fmt(x, nd=3):
+    """A number for a table: ``-`` for None, ``nd`` decimals for floats."""
     return "-" if x is None else (f"{x:.{nd}f}" if isinstance(x, float) else str(x))
 
 
@@ -183,35 +187,35 @@ def write_report(run, out: Path) -> Path:
     """Write figures, ``run.json`` and ``index.html`` into ``out``; returns the HTML path."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    plt = _plt()
+    plt = pyplot()
     _fig_traces(run, out, plt)
     for e in run.spikes:
         _fig_engine(run, e, out, plt)
     summ = summary_dict(run)
     (out / "run.json").write_text(json.dumps(summ, indent=2, default=float))
-    acc_rows = [[e, _f(100 * d.accuracy, 1) if d.accuracy is not None else d.reason,
+    acc_rows = [[e, fmt(100 * d.accuracy, 1) if d.accuracy is not None else d.reason,
                  d.n_samples, d.folds, f"{d.kind} / {d.features}",
-                 _f(run.timing["engines_s"].get(e), 2)] for e, d in run.decoded.items()]
+                 fmt(run.timing["engines_s"].get(e), 2)] for e, d in run.decoded.items()]
     agr_rows = [[k, v["spikes_a"], v["spikes_b"], f"{v['identical_trains']}/{v['neurons']}",
-                 _f(v["mean_abs_count_diff"]), v["max_abs_count_diff"],
-                 _f(v["mean_victor_purpura_q1"]), _f(v["fraction_within_1_tick"])]
+                 fmt(v["mean_abs_count_diff"]), v["max_abs_count_diff"],
+                 fmt(v["mean_victor_purpura_q1"]), fmt(v["fraction_within_1_tick"])]
                 for k, v in run.agreement.items()]
-    cur_rows = [[r["class"], _f(r["peak_min"], 1), _f(r["peak_max"], 1), _f(r["min"], 1)]
+    cur_rows = [[r["class"], fmt(r["peak_min"], 1), fmt(r["peak_max"], 1), fmt(r["min"], 1)]
                 for r in summ["current_per_class"]]
     s = run.saturations
     n_sat = s.get("format_low", 0) + s.get("format_high", 0)
     n_range = s.get("range_low", 0) + s.get("range_high", 0)
     ran = run.ran
     t = run.timing
-    stage_rows = [["stimulus", _f(t["stimulus_s"], 2)], ["front end", _f(t["front_end_s"], 2)]]
+    stage_rows = [["stimulus", fmt(t["stimulus_s"], 2)], ["front end", fmt(t["front_end_s"], 2)]]
     for e, v in t["engines_s"].items():
         sim_ms = run.counters.get(e, {}).get("simulate_ms")
         note = f" (simulation {sim_ms / 1000:.2f} s, rest generate + build)" if sim_ms else ""
-        stage_rows.append([f"engine {e}{note}", _f(v, 2)])
+        stage_rows.append([f"engine {e}{note}", fmt(v, 2)])
     if "engines_wall_s" in t:
         stage_rows.append(["all engines (HDL simulators overlapped with the others)",
-                           _f(t["engines_wall_s"], 2)])
-    stage_rows += [["decode", _f(t["decode_s"], 2)]]
+                           fmt(t["engines_wall_s"], 2)])
+    stage_rows += [["decode", fmt(t["decode_s"], 2)]]
     figs = figures_html(figure_names(run))
     blocks = "; ".join(f"{b['block']} ({b['neurons']} neurons on a core of "
                        f"{b['core_neurons']}, sets {', '.join(b['param_sets'])}, "
@@ -221,16 +225,16 @@ def write_report(run, out: Path) -> Path:
 <p>Scene: {html.escape(run.scene.source)}. {len(run.trial_class)} trials of {len(run.classes)}
 classes, {len(run.neurons)} neurons, {run.n_ticks} ticks of {run.dt_ms:g} ms.</p>
 <h2>Decoding accuracy (cross-validated)</h2>
-{_table(acc_rows, ["engine", "accuracy %", "samples", "folds", "decoder", "engine run s"])}
+{html_table(acc_rows, ["engine", "accuracy %", "samples", "folds", "decoder", "engine run s"])}
 <p>{html.escape("; ".join(
     f"{k}: accuracies differ by {100 * v['difference']:.1f} points, tolerance "
     f"{100 * v['tolerance']:.1f}: {'within' if v['within'] else 'OUTSIDE'}"
     for k, v in run.decode_agreement.items()))}</p>
 <h2>Engine agreement</h2>
-{_table(agr_rows, ["pair", "spikes A", "spikes B", "identical trains", "mean |count diff|",
+{html_table(agr_rows, ["pair", "spikes A", "spikes B", "identical trains", "mean |count diff|",
                    "max |count diff|", "mean VP (q=1/ms)", "within 1 tick"])}
 <h2>Currents per class (mV/ms) and saturation</h2>
-{_table(cur_rows, ["class", "lowest peak", "highest peak", "minimum"])}
+{html_table(cur_rows, ["class", "lowest peak", "highest peak", "minimum"])}
 <p>Format {html.escape(str(s.get('format')))}: {n_sat} of {s.get('values')} values saturated by
 the driver; {n_range} outside the accepted range; {s.get('gaps_held', 0)} missing samples held.</p>
 <h2>What ran</h2>
@@ -239,7 +243,7 @@ the driver; {n_range} outside the accepted range; {s.get('gaps_held', 0)} missin
 <li>front end: {html.escape('; '.join(ran.get('front_end_detail', ran['front_end'])))}</li>
 <li>blocks: {html.escape(blocks)}</li>
 <li>engines: {html.escape(', '.join(ran['engines']))}</li></ul>
-{_table(stage_rows, ["stage", "wall s"])}
+{html_table(stage_rows, ["stage", "wall s"])}
 <h2>Figures</h2>
 {figs}
 </body></html>

@@ -4,11 +4,11 @@ pyserial URL: lockstep spikes equal the twin's, and every loss or refusal raises
 import numpy as np
 import pytest
 
-from cuneate.boards.link import ModelSerial, UartTransport
+from cuneate.boards.uart import ModelSerial, UartTransport
 from cuneate.hdl.izhikevich import IzhikevichTwin
 from cuneate.hdl.link import link_config
 from cuneate.hdl.link.codec import MSG_WRITE, Message, encode_frame
-from cuneate.sim.transport import TransportError
+from cuneate.sim.host.transport import TransportError
 
 CORE = dict(n_neurons=100, clock_hz=16e3 * 128, update_hz=16e3)
 

@@ -11,7 +11,7 @@ from cuneate.golden import izhikevich as golden
 from cuneate.golden.fbg import IIRFilter, design_bandpass
 from cuneate.hdl.izhikevich import ConfigError, IzhikevichConfig, IzhikevichTwin
 from cuneate.hdl.lif import LifConfig, LifTwin
-from cuneate.sim.engines import _run_amaranth
+from cuneate.sim.izhikevich.engines import run_amaranth_sweeps as _run_amaranth
 from cuneate.sim.hardcases import record
 from cuneate.sim.scenes import DEFAULT_SCENE_TOML, SceneError, parse_scene
 

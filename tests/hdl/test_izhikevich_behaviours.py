@@ -19,7 +19,8 @@ import pytest
 from amaranth.sim import Simulator
 
 from cuneate.golden import izhikevich as golden
-from cuneate.golden.behaviours import BEHAVIOURS, Behaviour, _pulses
+from cuneate.golden.behaviours import BEHAVIOURS, Behaviour
+from cuneate.golden.behaviours import pulses as _pulses
 from cuneate.hdl.izhikevich import ConfigError, IzhikevichConfig, IzhikevichCore, IzhikevichTwin
 
 DT = 1.0 / 16.0

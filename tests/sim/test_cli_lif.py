@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from cuneate.sim.cli import main
-from cuneate.sim.toolchain import SIMULATORS
+from cuneate.sim.engines.toolchain import SIMULATORS
 
 
 def run_cli(capsys, argv):

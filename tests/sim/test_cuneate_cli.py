@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from cuneate.sim.cli import main
-from cuneate.sim.toolchain import SIMULATORS
+from cuneate.sim.engines.toolchain import SIMULATORS
 
 # two afferents, two cuneate neurons tuned to opposite 2 ms lags; J w = 10 mV/ms: one PSP peaks
 # at 4.7 mV/ms (below the ~7.7 an RS neuron needs from rest), two coincident ones at 9.45

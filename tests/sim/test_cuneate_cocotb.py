@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from cuneate.hdl.coincidence import CoincidenceConfig, CoincidenceTwin, coincidence_verilog
-from cuneate.sim.runner import run_cocotb
-from cuneate.sim.toolchain import SIMULATORS
+from cuneate.sim.engines.cocotb import run_cocotb
+from cuneate.sim.engines.toolchain import SIMULATORS
 
 CASES = {
     # small history and mixed parameter sets: delays wrap around the ring many times
@@ -41,7 +41,7 @@ def test_scoreboard(simulator, case, build_root):
     cfg = CoincidenceConfig(**spec["detector"])
     bd = build_root / f"cuneate_{case}_{simulator}"
     run = run_cocotb(simulator, [_src(cfg, simulator, bd)], "coincidence_detector",
-                     "cuneate.sim.benches.cuneate_tb", bd,
+                     "cuneate.sim.coincidence.bench", bd,
                      config=spec | {"detector": cfg.to_kwargs()}, testcase="scoreboard")
     r = run.report
     iz = r.pop("izhikevich")
@@ -74,7 +74,7 @@ def test_engine_equals_twin(simulator, build_root):
             events.setdefault(str(int(t)), []).append(s)
     bd = build_root / f"cuneate_engine_{simulator}"
     rep = run_cocotb(simulator, [_src(cfg, simulator, bd)], "coincidence_detector",
-                     "cuneate.sim.benches.cuneate_tb", bd,
+                     "cuneate.sim.coincidence.bench", bd,
                      config={"detector": cfg.to_kwargs(), "ticks": n, "events": events},
                      testcase="engine").report
     twin = CoincidenceTwin(cfg).run(ins, n)

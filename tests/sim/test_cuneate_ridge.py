@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 from cuneate.sim.cli import main
-from cuneate.sim.experiments_cuneate import (RidgeSpec, afferent_currents, detector_config,
+from cuneate.sim.coincidence.experiments import (RidgeSpec, afferent_currents, detector_config,
                                              ridge_comparison, ridge_experiment)
-from cuneate.sim.toolchain import SIMULATORS
+from cuneate.sim.engines.toolchain import SIMULATORS
 
 
 def test_stimulus_and_tuning_follow_the_geometry():

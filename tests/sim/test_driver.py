@@ -6,11 +6,11 @@ import pytest
 
 from cuneate.golden.fbg import DEFAULT_BANDPASS, FbgFrontEnd
 from cuneate.hdl.izhikevich import IzhikevichTwin
-from cuneate.sim.driver import AfferentEncoding, FbgDriver, GapError
-from cuneate.sim.engines import engine_core
-from cuneate.sim.toolchain import SIMULATORS
-from cuneate.sim.transport import SpikeBatch, Transport, TransportError
-from cuneate.sim.transports import (AmaranthTransport, CocotbTransport, TwinTransport,
+from cuneate.sim.host.driver import AfferentEncoding, FbgDriver, GapError
+from cuneate.sim.izhikevich.engines import engine_core
+from cuneate.sim.engines.toolchain import SIMULATORS
+from cuneate.sim.host.transport import SpikeBatch, Transport, TransportError
+from cuneate.sim.izhikevich.engines import (AmaranthTransport, CocotbTransport, TwinTransport,
                                     make_transport)
 
 FA = AfferentEncoding("FA", 180.0, 10.0, DEFAULT_BANDPASS)

@@ -7,7 +7,7 @@ import pytest
 from cuneate.golden import izhikevich as golden
 from cuneate.golden.metrics import compare_trains
 from cuneate.sim.cli import main
-from cuneate.sim.toolchain import SIMULATORS
+from cuneate.sim.engines.toolchain import SIMULATORS
 
 ARGS = ["simulate", "izhikevich", "--preset", "RS", "--neurons", "3", "--current", "4", "10",
         "30", "--duration-ms", "150", "--json"]
@@ -21,7 +21,7 @@ def run_cli(capsys, argv):
 
 @pytest.fixture(scope="module")
 def fixed_result():
-    from cuneate.sim.engines import run_hardware_engine
+    from cuneate.sim.izhikevich.engines import run_hardware_engine
     params = dict(zip("abcd", golden.PRESETS["RS"].as_tuple()))
     return run_hardware_engine("fixed", params, [4.0, 10.0, 30.0], 150.0)
 

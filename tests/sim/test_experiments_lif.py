@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from cuneate.sim.experiments_lif import quantization_table, skin_3x3
-from cuneate.sim.toolchain import SIMULATORS
+from cuneate.sim.lif.experiments import quantization_table, skin_3x3
+from cuneate.sim.engines.toolchain import SIMULATORS
 
 
 @pytest.fixture(scope="module")

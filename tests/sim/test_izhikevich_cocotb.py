@@ -14,9 +14,9 @@ import json
 import pytest
 
 from cuneate.hdl.izhikevich import izhikevich_verilog
-from cuneate.sim.benches.izhikevich_tb import make_config
-from cuneate.sim.runner import run_cocotb
-from cuneate.sim.toolchain import SIMULATORS
+from cuneate.sim.izhikevich.bench import make_config
+from cuneate.sim.engines.cocotb import run_cocotb
+from cuneate.sim.engines.toolchain import SIMULATORS
 
 CASES = {
     # a few hundred neurons, four presets interleaved, idle cycles between sweeps
@@ -58,7 +58,7 @@ def test_scoreboard(simulator, case, build_root):
     build_dir.mkdir(parents=True, exist_ok=True)
     src = build_dir / "izhikevich_core.v"
     src.write_text(izhikevich_verilog(cfg))
-    run = run_cocotb(simulator, [src], "izhikevich_core", "cuneate.sim.benches.izhikevich_tb",
+    run = run_cocotb(simulator, [src], "izhikevich_core", "cuneate.sim.izhikevich.bench",
                      build_dir, config=spec, testcase="scoreboard")
     r = run.report
     print(f"\n{simulator} {case}: " + json.dumps(r))

@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 
 from cuneate.hdl.lif import CLAMP_KINDS, LifConfig, lif_verilog
-from cuneate.sim.runner import run_cocotb
-from cuneate.sim.toolchain import SIMULATORS
+from cuneate.sim.engines.cocotb import run_cocotb
+from cuneate.sim.engines.toolchain import SIMULATORS
 
 _W = np.random.default_rng(4).integers(-8, 8, (16, 8)) / 8.0
 
@@ -80,7 +80,7 @@ def test_scoreboard(simulator, case, build_root):
     build_dir.mkdir(parents=True, exist_ok=True)
     src = build_dir / "lif_core.v"
     src.write_text(lif_verilog(cfg))
-    run = run_cocotb(simulator, [src], "lif_core", "cuneate.sim.benches.lif_tb", build_dir,
+    run = run_cocotb(simulator, [src], "lif_core", "cuneate.sim.lif.bench", build_dir,
                      config=spec | {"core": cfg.to_kwargs()}, testcase="scoreboard")
     r = run.report
     print(f"\n{simulator} {case}: " + json.dumps(r))
@@ -123,7 +123,7 @@ def test_scoreboard_long(simulator, build_root):
     build_dir.mkdir(parents=True, exist_ok=True)
     src = build_dir / "lif_core.v"
     src.write_text(lif_verilog(cfg))
-    r = run_cocotb(simulator, [src], "lif_core", "cuneate.sim.benches.lif_tb", build_dir,
+    r = run_cocotb(simulator, [src], "lif_core", "cuneate.sim.lif.bench", build_dir,
                    config=spec | {"core": cfg.to_kwargs()}, testcase="scoreboard").report
     print(f"\n{simulator} long: " + json.dumps(r))
     assert r["sweeps_checked"] == 10000 and r["twin_mismatches"] == 0

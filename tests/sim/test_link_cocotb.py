@@ -21,8 +21,8 @@ from cuneate.hdl.link.codec import (COUNTER_NAMES, MSG_COUNTERS, MSG_SPIKES, OP_
                                     OP_STEP, FrameDecoder, LinkModel, Message, cobs_encode,
                                     control_message, encode_frame, parse_counters,
                                     parse_spikes, write_message)
-from cuneate.sim.runner import run_cocotb
-from cuneate.sim.toolchain import SIMULATORS
+from cuneate.sim.engines.cocotb import run_cocotb
+from cuneate.sim.engines.toolchain import SIMULATORS
 
 
 CPB = 8
@@ -42,7 +42,7 @@ def play(simulator, lc, chunks, total_cycles, build_dir):
     src = build(lc, build_dir, simulator)
     cfg = {"clocks_per_bit": CPB, "total_cycles": total_cycles,
            "chunks": [[bytes(c).hex(), g] for c, g in chunks]}
-    run = run_cocotb(simulator, [src], "linked_core", "cuneate.sim.benches.link_tb",
+    run = run_cocotb(simulator, [src], "linked_core", "cuneate.sim.link.bench",
                      build_dir, config=cfg, testcase="play")
     dec = FrameDecoder()
     msgs = dec.feed(bytes.fromhex(run.report["received"]))

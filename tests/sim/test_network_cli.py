@@ -8,8 +8,8 @@ import pytest
 
 from cuneate.hdl.network import NetworkConfig
 from cuneate.sim.cli import main
-from cuneate.sim.cuneate_engines import current_writes, run_network
-from cuneate.sim.toolchain import SIMULATORS
+from cuneate.sim.network.engines import current_writes, run_network
+from cuneate.sim.engines.toolchain import SIMULATORS
 
 ARGS = ["--delays-ms", "0,0,1,1;0,0,0,0;1,1,0,0", "--current", "20", "30", "15", "45", "60",
         "18", "10", "10", "--duration-ms", "60"]

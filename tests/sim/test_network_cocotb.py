@@ -8,8 +8,8 @@ import json
 import pytest
 
 from cuneate.hdl.network import NetworkConfig, network_verilog
-from cuneate.sim.runner import run_cocotb
-from cuneate.sim.toolchain import SIMULATORS
+from cuneate.sim.engines.cocotb import run_cocotb
+from cuneate.sim.engines.toolchain import SIMULATORS
 
 DET = dict(n_sources=5, n_targets=3, delays_ticks=[[0, 0, 0, 3, 3], [0] * 5, [3, 3, 0, 0, 0]],
            max_delay_ticks=8, weights=[[5.0] * 5] * 3)
@@ -29,7 +29,7 @@ def test_network_scoreboard(simulator, build_root):
     src.write_text(network_verilog(cfg, lowered=simulator == "icarus"))
     spec = {"network": cfg.to_kwargs(), "ticks": 500, "seed": 7, "current_range": [5.0, 60.0]}
     r = run_cocotb(simulator, [src], "afferent_cuneate_network",
-                   "cuneate.sim.benches.network_tb", bd, config=spec,
+                   "cuneate.sim.network.bench", bd, config=spec,
                    testcase="scoreboard").report
     core, det = r.pop("core"), r.pop("detector")
     print(f"\n{simulator}: " + json.dumps(r))

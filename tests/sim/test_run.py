@@ -7,9 +7,11 @@ import numpy as np
 import pytest
 
 from cuneate.golden import tactile
-from cuneate.sim import cli, scene_run
+from cuneate.sim import cli
+from cuneate.sim.scenes import afferent as scene_run
+from cuneate.sim.scenes import run_scene
 from cuneate.sim.scenes import DEFAULT_SCENE_TOML, parse_scene
-from cuneate.sim.toolchain import SIMULATORS
+from cuneate.sim.engines.toolchain import SIMULATORS
 
 SMALL = DEFAULT_SCENE_TOML.replace("trials = 10", "trials = 4").replace(
     "cv_folds = 50", "cv_folds = 10")
@@ -23,7 +25,7 @@ def _scene(text=SMALL, engines=("golden", "fixed")):
 
 @pytest.fixture(scope="module")
 def small_run():
-    return scene_run.run_scene(_scene())
+    return run_scene(_scene())
 
 
 def test_golden_and_fixed_decode_alike(small_run):
@@ -63,19 +65,19 @@ def test_unrequested_engines_effects_and_blocks_are_not_instantiated(monkeypatch
         monkeypatch.setitem(tactile.EFFECTS, e, spy(e))
     monkeypatch.setitem(scene_run.BLOCKS, "cuneate", spy("cuneate block"))
     monkeypatch.setitem(scene_run.BLOCKS, "lif", spy("lif block"))
-    r = scene_run.run_scene(_scene(engines=("fixed",)))
+    r = run_scene(_scene(engines=("fixed",)))
     assert called == [] and list(r.spikes) == ["fixed"]
     # and an effect that is listed is computed (the spy is reached)
     text = SMALL.replace('effects = ["strain"]', 'effects = ["strain", "noise"]')
     with pytest.raises(AssertionError, match="noise must not run"):
-        scene_run.run_scene(_scene(text, engines=("fixed",)))
+        run_scene(_scene(text, engines=("fixed",)))
 
 
 def test_dropped_samples_are_held_and_counted():
     text = SMALL.replace('effects = ["strain"]',
                          'effects = ["strain", "dropped_samples"]\n'
                          'dropped_samples = {probability = 0.01}')
-    r = scene_run.run_scene(_scene(text, engines=("fixed",)))
+    r = run_scene(_scene(text, engines=("fixed",)))
     n = r.ran["effect_counts"]["dropped_samples"]["samples_dropped"]
     assert n > 0 and r.saturations["gaps_held"] == n * 2      # both gratings of each sample
 
@@ -117,7 +119,7 @@ def test_example_scenes_run(name, front_end, tmp_path, capsys):
 def test_scene_on_hdl_simulator_equals_twin(simulator, build_root):
     text = SMALL.replace("trials = 4", "trials = 1").replace("duration_ms = 700",
                                                              "duration_ms = 250")
-    r = scene_run.run_scene(_scene(text, engines=("fixed", simulator)),
+    r = run_scene(_scene(text, engines=("fixed", simulator)),
                              build_dir=build_root / f"scene_{simulator}")
     a = r.agreement[f"{simulator} vs fixed"]
     assert a["spikes_a"] > 0 and a["identical_trains"] == a["neurons"] == 8
@@ -159,7 +161,7 @@ def test_default_scene_on_golden_fixed_and_verilator(tmp_path, capsys):
 def test_scene_on_amaranth_simulator_equals_twin():
     text = SMALL.replace("trials = 4", "trials = 1").replace("duration_ms = 700",
                                                              "duration_ms = 150")
-    r = scene_run.run_scene(_scene(text, engines=("fixed", "amaranth")))
+    r = run_scene(_scene(text, engines=("fixed", "amaranth")))
     a = r.agreement["amaranth vs fixed"]
     assert a["spikes_a"] > 0 and a["identical_trains"] == a["neurons"] == 8
     assert r.counters["amaranth"]["writes"] == r.counters["fixed"]["writes"] > 0

@@ -4,7 +4,8 @@ import json
 
 import pytest
 
-from cuneate.sim import scene_run
+from cuneate.sim.scenes import afferent as scene_run
+from cuneate.sim.scenes import run_scene
 from cuneate.sim.cli import main
 from cuneate.sim.scenes import SceneError, example_path, load_scene, parse_scene
 
@@ -70,7 +71,7 @@ def test_given_delays_set_the_cuneate_neurons():
                       f"target = \"cn\"\nweight = 4.5\n{d}\n\n[decoder]",
                   "trials = 6": "trials = 2"})
     assert {p["name"]: p for p in s.populations}["cn"]["size"] == 2
-    run = scene_run.run_scene(s, engines=["fixed"])
+    run = run_scene(s, engines=["fixed"])
     r = run.results["fixed"]
     assert run.ran["blocks"][1]["delays_ticks"] == [[200, 200, 0, 0], [0, 0, 0, 0]]
     by = {a: {p for p, x in zip(r.patterns, r.trial_angle) if x == a} for a in r.angles}
@@ -82,7 +83,7 @@ def test_golden_and_fixed_decode_alike_and_only_the_two_blocks_run(monkeypatch):
         raise AssertionError("the FBG front end or another block was built")
     monkeypatch.setattr(scene_run, "synthesize", forbidden)
     monkeypatch.setitem(scene_run.BLOCKS, "izhikevich", forbidden)
-    run = scene_run.run_scene(_scene(**{"trials = 6": "trials = 4"}),
+    run = run_scene(_scene(**{"trials = 6": "trials = 4"}),
                               engines=["golden", "fixed"])
     g, f = run.results["golden"], run.results["fixed"]
     assert g.accuracy == f.accuracy == 1.0 and g.patterns == f.patterns

@@ -5,7 +5,8 @@ import json
 import numpy as np
 import pytest
 
-from cuneate.sim import scene_run
+from cuneate.sim.scenes import afferent as scene_run
+from cuneate.sim.scenes import run_scene
 from cuneate.sim.cli import main
 from cuneate.sim.scenes import SceneError, example_path, load_scene, parse_scene
 
@@ -108,7 +109,7 @@ def test_grid_press_behaves_and_only_the_lif_core_runs(monkeypatch):
         raise AssertionError("an unrequested block or front end was built")
     monkeypatch.setitem(scene_run.BLOCKS, "izhikevich", forbidden)
     monkeypatch.setattr(scene_run, "synthesize", forbidden)
-    import cuneate.sim.lif_engines as le
+    import cuneate.sim.lif.engines as le
     ran = []
     real = le.run_lif
 
@@ -116,11 +117,11 @@ def test_grid_press_behaves_and_only_the_lif_core_runs(monkeypatch):
         ran.append(engine)
         return real(engine, *a, **k)
     monkeypatch.setattr(le, "run_lif", spy)
-    import cuneate.sim.experiments_lif as ex
+    import cuneate.sim.lif.experiments as ex
     monkeypatch.setattr(ex, "run_lif", spy)
     # a corner of a 4x5 grid
     s = _scene(**{"grid = [3, 3]": "grid = [4, 5]", "press_taxel = 4": "press_taxel = 0"})
-    run = scene_run.run_scene(s)
+    run = run_scene(s)
     assert ran == ["golden", "fixed"]
     assert [b["block"] for b in run.ran["blocks"]] == ["lif_core"]
     assert run.ran["effects"] == [] and run.ran["engines"] == ["golden", "fixed"]
@@ -137,7 +138,7 @@ def test_grid_press_behaves_and_only_the_lif_core_runs(monkeypatch):
 
 
 def test_centre_press_is_symmetric():
-    run = scene_run.run_scene(_scene(), engines=["fixed"])
+    run = run_scene(_scene(), engines=["fixed"])
     c = run.results["fixed"].counts
     assert np.array_equal(c, c.T) and np.array_equal(c, c[::-1, ::-1])
     assert c[1, 1] > c[0, 1] > 0 and run.results["fixed"].row_sums == \
@@ -147,7 +148,7 @@ def test_centre_press_is_symmetric():
 @pytest.mark.cocotb
 @pytest.mark.parametrize("simulator", SIMULATORS)
 def test_skin_scene_on_hdl_simulator(simulator, tmp_path):
-    run = scene_run.run_scene(_scene(), engines=["fixed", simulator], build_dir=tmp_path)
+    run = run_scene(_scene(), engines=["fixed", simulator], build_dir=tmp_path)
     r = run.results[simulator]
     assert r.winner == 4 and r.width_monotonic and r.amplitude_monotonic
     a = run.agreement[f"{simulator} vs fixed"]

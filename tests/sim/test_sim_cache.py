@@ -5,8 +5,8 @@ import json
 import numpy as np
 import pytest
 
-from cuneate.sim import runner
-from cuneate.sim.lif_engines import LifProgram, engine_config, run_lif
+from cuneate.sim.engines import cocotb as runner
+from cuneate.sim.lif.engines import LifProgram, engine_config, run_lif
 
 
 def _run(build_dir, current=25.0):

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from cuneate.sim.cli import main
-from cuneate.sim.sweep import (SweepPoint, SweepSpec, battery, evaluate, grid, pareto_front,
-                               reference_trains, run_sweep)
+from cuneate.sim.izhikevich.sweep import SweepPoint, battery, grid
+from cuneate.sim.sweep import SweepSpec, evaluate, pareto_front, reference_trains, run_sweep
 
 
 def test_small_sweep_on_a_local_dask_cluster(tmp_path, capsys):
@@ -78,7 +78,7 @@ def test_the_published_behaviours_are_a_battery_of_the_sweep():
     # per train: the core against float64 Euler at its dt
     from cuneate.golden import izhikevich as giz
     from cuneate.hdl.izhikevich import IzhikevichTwin
-    from cuneate.sim.sweep import _fixed_config, _run_fixed
+    from cuneate.sim.izhikevich.sweep import fixed_config as _fixed_config, run_fixed as _run_fixed
     dt, n = 1.0 / 16.0, 4800
     euler = giz.simulate(list(bat.params), bat.currents(dt, n), n_steps=n, dt_ms=dt,
                          v0=np.asarray(bat.v0), u0=np.asarray(bat.u0)).spike_counts
@@ -97,7 +97,7 @@ def test_the_price_of_float32_parity_on_the_behaviours():
     sQ10.12 with 24-bit operands keeps every count and is at least float32's equal."""
     from cuneate.golden.metrics import compare_populations
     from cuneate.hdl.izhikevich import IzhikevichTwin
-    from cuneate.sim.sweep import _fixed_config, _run_fixed, simulate_float
+    from cuneate.sim.izhikevich.sweep import fixed_config as _fixed_config, run_fixed as _run_fixed, simulate_float
     bat = battery("behaviours")
     dt, n = 1.0 / 16.0, 16000
     euler = simulate_float(bat, dt, n, "euler")
@@ -126,9 +126,9 @@ def test_a_scene_is_a_battery_of_the_sweep(tmp_path):
     default fixed-point trains are the ones `cuneate run` produces on its golden and fixed
     engines (same currents, same core), and a sweep point runs on the scene."""
     from cuneate.hdl.izhikevich import IzhikevichTwin
-    from cuneate.sim.scene_run import run_scene
+    from cuneate.sim.scenes import run_scene
     from cuneate.sim.scenes import example_path, load_scene
-    from cuneate.sim.sweep import _fixed_config, _run_fixed, simulate_float
+    from cuneate.sim.izhikevich.sweep import fixed_config as _fixed_config, run_fixed as _run_fixed, simulate_float
     run = run_scene(load_scene(example_path("pulse_amplitudes")), engines=["golden", "fixed"])
     bat = battery("scene:pulse_amplitudes")
     assert bat.n == len(run.neurons) and bat.duration_ms == 400.0

@@ -8,10 +8,11 @@ import numpy as np
 from cuneate.golden.izhikevich import group_spikes
 from cuneate.hdl.coincidence import CoincidenceConfig, CoincidenceTwin
 from cuneate.hdl.lif import LifConfig, LifTwin
-from cuneate.sim.sweep import SweepPoint, SweepSpec, reference_trains, run_sweep
-from cuneate.sim.sweep_cuneate import (CoincidenceSweepPoint, afferent_battery,
+from cuneate.sim.izhikevich.sweep import SweepPoint
+from cuneate.sim.sweep import SweepSpec, reference_trains, run_sweep
+from cuneate.sim.coincidence.sweep import (CoincidenceSweepPoint, afferent_battery,
                                        coincidence_grid, coincidence_point_trains)
-from cuneate.sim.sweep_lif import (LifSweepPoint, lif_battery, lif_grid, lif_point_trains,
+from cuneate.sim.lif.sweep import (LifSweepPoint, lif_battery, lif_grid, lif_point_trains,
                                    lif_reference_trains)
 
 

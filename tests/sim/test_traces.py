@@ -7,7 +7,7 @@ import scipy.io
 
 from cuneate.sim import cli
 from cuneate.sim.scenes import DEFAULT_SCENE_TOML
-from cuneate.sim.traces import TraceError, load_trace
+from cuneate.sim.host.traces import TraceError, load_trace
 
 T = np.arange(50) / 1000.0
 X = np.stack([np.linspace(0, 0.01, 50), np.linspace(0, 0.008, 50)], axis=1)

@@ -9,8 +9,8 @@ import cuneate.hdl.izhikevich.datapath as izh
 from cuneate.hdl.lib.fixed import round_shift_add
 from cuneate.hdl.izhikevich import izhikevich_verilog
 from cuneate.hdl.izhikevich import CLAMP_KINDS, IzhikevichConfig, IzhikevichTwin
-from cuneate.sim.engines import run_engine
-from cuneate.sim.verilator_harness import check_dump, raw_cycle_rate, run_harness
+from cuneate.sim.izhikevich.engines import run_engine
+from cuneate.sim.engines.verilator_fast import check_dump, raw_cycle_rate, run_harness
 
 N = 16
 FLAG_CORE = {"n_neurons": N, "clock_hz": 16e3 * N, "update_hz": 16e3, "tick_source": "external",

@@ -1,0 +1,226 @@
+"""Host side of the UART link: :class:`UartTransport` behind the driver's transport interface.
+
+The transport talks to a :class:`~cuneate.hdl.link.LinkedCore` on a board through pyserial
+(any ``serial_for_url`` URL: a device path, ``socket://host:port``, ``loop://``), or to the
+protocol model (:class:`ModelSerial`, the simulated serial path used by tests and for dry runs).
+
+Lockstep: the core is stopped between calls. ``write_currents`` queues writes by sweep;
+``run(n)`` sends, in one burst, a ``STEP`` to each sweep at which writes are due, the writes
+for that sweep (the device holds each until the core stands exactly between the sweeps, so the
+currents are in effect from their sweep on), and a final ``STEP`` to the end. ``collect`` reads
+spike frames until they cover every sweep run. Loss is never silent: a device sequence gap, a
+gap in the ticks of spike batches, dropped spikes, a damaged frame from the device, or any
+non-zero device error counter raises :class:`~cuneate.sim.host.transport.TransportError`.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from ..hdl.link.codec import (COUNTER_NAMES, MSG_COUNTERS, MSG_SPIKES, OP_CLEAR_COUNTERS,
+                              OP_READ_COUNTERS, OP_STEP, OP_STOP, FrameDecoder, LinkModel,
+                              control_message, current_bytes, encode_frame, parse_counters,
+                              parse_spikes, write_message)
+from ..hdl.link.codec import MAX_FRAME, MIN_FRAME
+from ..sim.host.transport import SpikeBatch, Transport, TransportError
+
+__all__ = ["UartTransport", "ModelSerial", "DEVICE_ERRORS"]
+
+#: Device counters that mean something was lost or refused.
+DEVICE_ERRORS = tuple(n for n in COUNTER_NAMES if n != "frames_ok")
+
+
+class ModelSerial:
+    """A serial port whose far end is :class:`LinkModel` (the device's protocol on the twin):
+    what is written is fed to the model, which runs each step at once; ``read`` returns its
+    answers. ``corrupt``, if given, is called on every chunk the device sends (fault tests)."""
+
+    def __init__(self, lcfg, corrupt=None):
+        self.model = LinkModel(lcfg)
+        self.corrupt = corrupt
+        self._rx = bytearray()
+        self.is_open = True
+
+    def write(self, data: bytes) -> int:
+        out = self.model.feed(bytes(data))
+        self.model.advance(self.model.steps)
+        out += self.model.feed(b"")
+        if self.corrupt is not None:
+            out = self.corrupt(out)
+        self._rx += out
+        return len(data)
+
+    def read(self, size: int = 1) -> bytes:
+        out, self._rx = bytes(self._rx[:size]), self._rx[size:]
+        return out
+
+    @property
+    def in_waiting(self) -> int:
+        return len(self._rx)
+
+    def close(self):
+        self.is_open = False
+
+
+class UartTransport(Transport):
+    """The board link as a :class:`~cuneate.sim.host.transport.Transport`.
+
+    Parameters
+    ----------
+    port
+        A pyserial URL or device path, or an open serial-like object (``write``, ``read``,
+        ``in_waiting``, ``close``), e.g. :class:`ModelSerial`.
+    baud
+        Line rate for a URL (the board top's rate, 3 Mbaud by default).
+    batch_sweeps
+        Sweeps per spike batch of the gateware (``LinkConfig.batch_sweeps``).
+    timeout_s
+        How long ``collect``/``counters`` wait for the device before raising.
+    """
+
+    name = "uart"
+
+    def __init__(self, port, baud: int = 3_000_000, batch_sweeps: int = 16,
+                 timeout_s: float = 5.0):
+        self._port_arg, self.baud, self.batch_sweeps = port, baud, batch_sweeps
+        self.timeout_s = timeout_s
+        self.port = None
+        self.cfg = None
+
+    # -- connection --------------------------------------------------------------------------
+    def open(self, config) -> None:
+        self.cfg = config
+        if isinstance(self._port_arg, str):
+            import serial
+            try:
+                self.port = serial.serial_for_url(self._port_arg, baudrate=self.baud,
+                                                  timeout=0.05)
+            except (serial.SerialException, ValueError) as exc:
+                raise TransportError(f"uart: cannot open {self._port_arg}: {exc}") from None
+        else:
+            self.port = self._port_arg
+        self._dec = FrameDecoder()
+        self._seq = 0
+        self._dev_seq = None
+        self._ticks = 0                 # sweeps requested so far
+        self._covered = 0               # sweeps covered by spike frames received
+        self._queued: dict[int, list[tuple[int, np.ndarray]]] = {}
+        self._spikes: list[SpikeBatch] = []
+        self._counts = {"frames_sent": 0, "writes_sent": 0, "currents_sent": 0,
+                        "frames_received": 0, "spikes_received": 0}
+        self._last_counters = None
+        self._send(control_message(0, OP_STOP))
+        self._send(control_message(0, OP_CLEAR_COUNTERS))
+
+    def close(self) -> None:
+        if self.port is not None:
+            self.port.close()
+            self.port = None
+
+    # -- frames ------------------------------------------------------------------------------
+    def _send(self, msg_or_none):
+        msg = msg_or_none
+        msg = type(msg)(msg.type, self._seq, msg.tick, msg.payload)
+        self._seq = (self._seq + 1) & 0xFF
+        self.port.write(encode_frame(msg))
+        self._counts["frames_sent"] += 1
+
+    def _receive(self, until, what: str):
+        """Read frames until ``until()`` is true; raise on timeout or any damaged frame."""
+        deadline = time.monotonic() + self.timeout_s
+        while not until():
+            data = self.port.read(max(1, getattr(self.port, "in_waiting", 0) or 1))
+            if not data:
+                if time.monotonic() > deadline:
+                    raise TransportError(f"uart: no answer from the device while waiting for "
+                                         f"{what} ({self.timeout_s:g} s)")
+                continue
+            for msg in self._dec.feed(data):
+                self._accept(msg)
+            bad = {k: v for k, v in self._dec.errors.items() if v}
+            if bad:
+                raise TransportError(f"uart: damaged frames from the device: {bad}")
+
+    def _accept(self, msg):
+        self._counts["frames_received"] += 1
+        if self._dev_seq is not None and msg.seq != (self._dev_seq + 1) & 0xFF:
+            raise TransportError(f"uart: device frame sequence gap: expected "
+                                 f"{(self._dev_seq + 1) & 0xFF}, got {msg.seq}")
+        self._dev_seq = msg.seq
+        if msg.type == MSG_SPIKES:
+            dropped, sweeps, spikes = parse_spikes(msg)
+            if msg.tick != self._covered:
+                raise TransportError(f"uart: spike batches lost: expected the batch of sweep "
+                                     f"{self._covered}, got sweep {msg.tick}")
+            if dropped:
+                raise TransportError(f"uart: {dropped} spikes dropped in the batch of sweeps "
+                                     f"{msg.tick}..{msg.tick + sweeps - 1} (batch buffer full)")
+            self._covered += sweeps
+            t = np.array([s[0] for s in spikes], np.int64)
+            n = np.array([s[1] for s in spikes], np.int64)
+            self._spikes.append(SpikeBatch(t, n))
+            self._counts["spikes_received"] += len(spikes)
+        elif msg.type == MSG_COUNTERS:
+            self._last_counters = parse_counters(msg)
+        else:
+            raise TransportError(f"uart: unexpected frame type {msg.type:#x} from the device")
+
+    # -- transport interface -----------------------------------------------------------------
+    def write_currents(self, tick: int, first: int, raw) -> None:
+        raw = np.asarray(raw, dtype=np.int64).ravel()
+        N = self.cfg.n_neurons
+        if tick < self._ticks:
+            raise TransportError(f"uart: write for sweep {tick} but the core has run to sweep "
+                                 f"{self._ticks}: it would be applied late")
+        if first < 0 or first + raw.size > N:
+            raise TransportError(f"uart: write of neurons {first}..{first + raw.size - 1} "
+                                 f"outside the core's {N}")
+        self._queued.setdefault(int(tick), []).append((int(first), raw))
+
+    def _flush_writes(self, tick: int):
+        width = self.cfg.I.width
+        per_frame = (MAX_FRAME - MIN_FRAME - 2) // current_bytes(width)
+        for first, raw in self._queued.pop(tick, []):
+            for i in range(0, raw.size, per_frame):
+                self._send(write_message(0, tick, first + i, raw[i:i + per_frame], width))
+                self._counts["writes_sent"] += 1
+                self._counts["currents_sent"] += min(per_frame, raw.size - i)
+
+    def run(self, n_ticks: int) -> None:
+        if n_ticks < 0:
+            raise TransportError(f"uart: cannot run {n_ticks} sweeps")
+        end = self._ticks + n_ticks
+        self._flush_writes(self._ticks)
+        at = self._ticks
+        for t in sorted(k for k in self._queued if at < k < end):
+            self._send(control_message(0, OP_STEP, t - at))
+            self._flush_writes(t)
+            at = t
+        if end > at:
+            self._send(control_message(0, OP_STEP, end - at))
+        self._ticks = end
+
+    def collect(self) -> SpikeBatch:
+        self._receive(lambda: self._covered >= self._ticks,
+                      f"the spikes of sweeps {self._covered}..{self._ticks - 1}")
+        out = SpikeBatch.concat(self._spikes)
+        self._spikes = []
+        return out
+
+    def counters(self) -> dict[str, int]:
+        self._last_counters = None
+        self._send(control_message(0, OP_READ_COUNTERS))
+        self._receive(lambda: self._last_counters is not None, "the device counters")
+        dev = self._last_counters
+        return dict(self._counts, **{f"device_{k}": v for k, v in dev.items()})
+
+    def check(self) -> dict[str, int]:
+        """Counters, raising :class:`TransportError` naming every device error counted."""
+        c = self.counters()
+        bad = {k: c[f"device_{k}"] for k in DEVICE_ERRORS if c[f"device_{k}"]}
+        if bad:
+            raise TransportError("uart: the device counted errors: " +
+                                 ", ".join(f"{k}={v}" for k, v in bad.items()))
+        return c

@@ -1,1 +1,0 @@
-"""cuneate.sim.benches."""

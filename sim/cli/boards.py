@@ -1,0 +1,105 @@
+"""``cuneate boards`` (list the targets and their limits) and ``cuneate build BOARD``."""
+
+from __future__ import annotations
+
+import json
+
+from .options import CliError, CommandGroups, output_dir, positive_int
+
+__all__ = ["register"]
+
+
+def cmd_boards(args) -> int:
+    from ...boards.targets import TARGETS
+    rows = []
+    for name, t in TARGETS.items():
+        plan = t["clock_plan"]
+        rows.append({"name": name, "device": t["device"], "description": t["description"],
+                     "bitstream": bool(t.get("bitstream")), "clock_mhz": plan.clock_hz / 1e6,
+                     "update_khz": plan.update_hz / 1e3, "baud": plan.baud,
+                     "max_neurons": plan.cycles_per_tick - 16,
+                     "default_neurons": t["default_neurons"], "resources": t["resources"]})
+    if args.json:
+        print(json.dumps(rows, indent=2))
+    else:
+        for r in rows:
+            print(f"{r['name']:11s} {r['device']:20s} {r['clock_mhz']:g} MHz, "
+                  f"{r['update_khz']:g} kHz, up to {r['max_neurons']} neurons, "
+                  f"{'bitstream' if r['bitstream'] else 'Verilog + estimate'}")
+    return 0
+
+
+def cmd_build(args) -> int:
+    from ...boards.build import BuildError, build_target
+    from ...boards.targets import TARGETS
+    from ...hdl.lib.config import ConfigError
+    if args.board not in TARGETS:
+        raise CliError(f"cuneate build: unknown board {args.board!r}; known: "
+                       f"{', '.join(TARGETS)}")
+    out = output_dir(args.out)
+    try:
+        report = build_target(args.board, out, n_neurons=args.neurons,
+                              clock_hz=args.clock_hz, update_hz=args.update_hz,
+                              bitstream=not args.no_bitstream, seed=args.seed)
+    except ConfigError as exc:
+        raise CliError(f"cuneate build: {exc}") from None
+    except BuildError as exc:
+        print(f"cuneate build: {exc}")
+        return 1
+    from ...boards.build import format_report
+    print(json.dumps(report, indent=2) if args.json else format_report(report), end="")
+    pr = report.get("place_route")
+    return 0 if pr is None or pr["timing_met"] else 1
+
+
+def cmd_program(args) -> int:
+    import shutil
+    import subprocess
+    from pathlib import Path
+    from ...boards.targets import TARGETS
+    t = TARGETS.get(args.board)
+    if t is None or not t.get("loader_board"):
+        known = ", ".join(k for k, v in TARGETS.items() if v.get("loader_board"))
+        raise CliError(f"cuneate program: no bitstream flow for {args.board!r}; "
+                       f"programmable: {known}")
+    bit = Path(args.bitstream)
+    if not bit.is_file():
+        raise CliError(f"cuneate program: bitstream {str(bit)!r} not found (run cuneate build "
+                       f"{args.board} first)")
+    loader = shutil.which("openFPGALoader")
+    if loader is None:
+        raise CliError("cuneate program: openFPGALoader is not installed (apt install "
+                       "openfpgaloader, or program the bitstream with your own tool)")
+    r = subprocess.run([loader, "-b", t["loader_board"], str(bit)], capture_output=True,
+                       text=True)
+    if r.returncode != 0:
+        last = (r.stderr or r.stdout).strip().splitlines()[-1:] or ["no output"]
+        raise CliError(f"cuneate program: no {args.board} board programmed "
+                       f"(openFPGALoader: {last[0]})")
+    print(f"programmed {args.board} with {bit}")
+    return 0
+
+
+def register(groups: CommandGroups) -> None:
+    p = groups.root.add_parser("program", help="load a bitstream with openFPGALoader")
+    p.add_argument("board")
+    p.add_argument("bitstream")
+    p.set_defaults(func=cmd_program)
+
+    b = groups.root.add_parser("boards", help="list the board targets and their limits")
+    b.add_argument("--json", action="store_true")
+    b.set_defaults(func=cmd_boards)
+
+    c = groups.root.add_parser("build", help="Verilog, bitstream and resource/timing report "
+                                             "for a board")
+    c.add_argument("board", help="target name (see cuneate boards)")
+    c.add_argument("--neurons", type=positive_int, default=None)
+    c.add_argument("--clock-hz", type=float, default=None,
+                   help="core clock (must be one of the board's PLL plans)")
+    c.add_argument("--update-hz", type=float, default=None)
+    c.add_argument("--out", required=True)
+    c.add_argument("--seed", type=positive_int, default=1, help="nextpnr placement seed")
+    c.add_argument("--no-bitstream", action="store_true",
+                   help="Verilog and estimate only (no place and route)")
+    c.add_argument("--json", action="store_true")
+    c.set_defaults(func=cmd_build)

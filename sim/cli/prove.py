@@ -1,0 +1,59 @@
+"""``cuneate prove``: SymbiYosys checks of the Izhikevich datapath
+(:mod:`cuneate.hdl.izhikevich.formal`)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from .options import CliError, CommandGroups, positive_float, positive_int
+
+__all__ = ["register", "cmd_prove"]
+
+
+def cmd_prove(args) -> int:
+    import json
+    import tempfile
+    from ...hdl.izhikevich import ConfigError, IzhikevichConfig
+    from ...hdl.izhikevich.formal import FormalError, prove
+    args.preset = args.preset or ["RS"]
+    try:
+        cfg = IzhikevichConfig(n_neurons=8, clock_hz=args.update_hz * 8,
+                               update_hz=args.update_hz, param_sets=tuple(args.preset),
+                               operand_width=args.operand_width, rounding=args.rounding)
+    except ConfigError as exc:
+        raise CliError(f"cuneate prove: {exc}") from None
+    with tempfile.TemporaryDirectory(prefix="cuneate-prove-") as d:
+        try:
+            r = prove(cfg, Path(args.work_dir) if args.work_dir else Path(d), args.property,
+                      timeout_s=args.timeout_s)
+        except FormalError as exc:
+            raise CliError(f"cuneate prove: {exc}") from None
+    r |= {"param_sets": list(args.preset), "update_hz": args.update_hz,
+          "operand_width": args.operand_width, "rounding": args.rounding}
+    if args.json:
+        print(json.dumps(r))
+    else:
+        what = {"datapath": "no narrowing of the datapath wraps and the y clamp never acts",
+                "state_box": "one update keeps every state of the box in the box, no clamp"}
+        print(f"{r['property']}: {what[r['property']]} - {r['status'].upper()} "
+              f"({r['seconds']:.1f} s)")
+        if r["counterexample"]:
+            c = r["counterexample"]
+            print(f"  counterexample: v = {cfg.V.to_float(c['v']):.6g} mV, "
+                  f"u = {cfg.U.to_float(c['u']):.6g}, I = {cfg.I.to_float(c['I']):.6g} mV/ms, "
+                  f"set {c.get('sel', 0)}")
+    return 0 if r["status"] == "pass" else 1
+
+
+def register(groups: CommandGroups) -> None:
+    f = groups.root.add_parser("prove", help="SymbiYosys checks of the one-update datapath")
+    f.add_argument("--preset", action="append", default=None,
+                   help="parameter set(s) (repeat for a mix; default RS)")
+    f.add_argument("--property", choices=("datapath", "state_box"), default="datapath")
+    f.add_argument("--update-hz", type=positive_float, default=16e3)
+    f.add_argument("--operand-width", type=positive_int, default=18)
+    f.add_argument("--rounding", choices=("nearest", "truncate"), default="nearest")
+    f.add_argument("--timeout-s", type=positive_float, default=1800.0)
+    f.add_argument("--work-dir", default=None, help="keep the SymbiYosys files here")
+    f.add_argument("--json", action="store_true")
+    f.set_defaults(func=cmd_prove, preset=None)

@@ -1,0 +1,115 @@
+"""``cuneate sweep``: what accuracy costs, over each block's knobs (update rate, operand width,
+fraction bits, rounding, the golden model's scheme; see :mod:`cuneate.sim.sweep`)."""
+
+from __future__ import annotations
+
+import sys
+
+from .options import CliError, CommandGroups, output_dir, positive_float, positive_int
+
+__all__ = ["register", "cmd_sweep"]
+
+
+def _list(text: str, conv, what: str) -> list:
+    try:
+        out = [conv(x) for x in text.split(",") if x.strip()]
+    except ValueError:
+        raise CliError(f"{what}: expected a comma-separated list, got {text!r}") from None
+    if not out:
+        raise CliError(f"{what}: empty list")
+    return out
+
+
+def cmd_sweep(args) -> int:
+    from ..sweep import SweepSpec, battery_module, run_sweep, write_sweep
+    try:
+        block = battery_module(args.battery)
+        duration = args.duration_ms or block.default_duration_ms(args.battery) or 1000.0
+    except ValueError as exc:
+        raise CliError(f"--battery: {exc}") from None
+    rates = _list(args.update_hz, float, "--update-hz")
+    if any(r <= 0 for r in rates):
+        raise CliError("--update-hz: rates must be > 0")
+    widths = _list(args.operand_width, int, "--operand-width")
+    if any(not 8 <= w <= 32 for w in widths):
+        raise CliError("--operand-width: widths must lie in 8..32")
+    rnd = _list(args.rounding, str, "--rounding")
+    if set(rnd) - {"nearest", "truncate"}:
+        raise CliError("--rounding: nearest and/or truncate")
+    floats = [] if args.no_float else ["float64", "float32"]
+    spec = SweepSpec(battery=args.battery, duration_ms=duration,
+                     reference_hz=args.reference_hz, clock_hz=args.clock_hz, synth=args.synth,
+                     fmax=args.fmax)
+    try:
+        pts, columns = block.points_from_args(args, rates, widths, rnd, floats, _list)
+    except ValueError as exc:
+        raise CliError(f"cuneate sweep: {exc}") from None
+    izhikevich = block.__name__.endswith(".izhikevich.sweep")
+    out = output_dir(args.out)
+    rows = run_sweep(pts, spec, out / "cache", scheduler=args.scheduler, workers=args.workers,
+                     progress=sys.stderr.isatty(), log=lambda m: print(m, file=sys.stderr))
+    page = write_sweep(rows, spec, out, columns)
+    for r in rows:
+        acc = r.get("fraction_within_tick")
+        ve = r.get("vs_euler_fraction_within_tick", r.get("vs_float64_fraction_within_tick"))
+        print(f"  {r['label']:44s} "
+              + (f"within 1 tick {acc:.4f}" if acc is not None else r.get("reason", "")[:70])
+              + (f", of {'Euler' if izhikevich else 'float64'} at its dt {ve:.4f}"
+                 if ve is not None else "")
+              + (f", {r['host_s_per_bio_s']:.2f} s/bio s" if r.get("host_s_per_bio_s")
+                 else "")
+              + (f", fmax {r['fmax_mhz']:.1f} MHz" if r.get("fmax_mhz") else ""))
+    print(f"report: {page}")
+    return 0
+
+
+def register(groups: CommandGroups) -> None:
+    p = groups.root.add_parser("sweep", help="accuracy against cost over the core's knobs")
+    p.add_argument("--out", default="out/sweep", help="output directory (cache inside)")
+    p.add_argument("--battery", default="yardstick",
+                   help="yardstick (16 trains), wide (60), long (48, use --duration-ms), "
+                        "behaviours (19 published panels with their stimuli; e.g. "
+                        "--duration-ms 300), scene (the default scene's neurons and front-end "
+                        "currents), scene:NAME (an example) or scene:PATH (a scene file); LIF: "
+                        "lif-currents (24 continuous trains), lif-pow2 (tau_m 8/16/32 ms: decay "
+                        "by shift possible), lif-inputs (32 discrete neurons x 64 random "
+                        "weights); coincidence detector: cuneate-afferents")
+    p.add_argument("--duration-ms", type=positive_float, default=None,
+                   help="biological time (default: a scene's length, else 1000)")
+    p.add_argument("--update-hz", default="16000",
+                   help="comma-separated update rates (e.g. 4000,8000,16000,20000,32000,64000)")
+    p.add_argument("--operand-width", default="18", help="comma-separated (e.g. 16,18,20,25)")
+    p.add_argument("--frac-bits", default="18:20",
+                   help="comma-separated V:U state fraction bits (e.g. 16:18,18:20,20:22)")
+    p.add_argument("--current-frac-bits", default="",
+                   help="comma-separated fraction bits of the core's current format (default: "
+                        "the battery's, sQ10.8 unless a scene says otherwise; e.g. 8,10,12)")
+    p.add_argument("--rounding", default="nearest", help="nearest,truncate")
+    p.add_argument("--v-frac-bits", default="16",
+                   help="LIF: comma-separated state fraction bits (e.g. 8,12,16,20)")
+    p.add_argument("--weight-bits", default=None,
+                   help="LIF / coincidence: comma-separated weight widths (default 8 / 12; "
+                        "e.g. 2,4,6,8,10,12,16)")
+    p.add_argument("--decay", default="multiply",
+                   help="LIF: multiply and/or shift (no multiplier; only where 1-exp(-dt/tau) "
+                        "is a power of two within --max-decay-error, e.g. lif-pow2)")
+    p.add_argument("--max-decay-error", default="0.01",
+                   help="LIF: comma-separated largest accepted relative error of the decay")
+    p.add_argument("--trace-frac-bits", default="16",
+                   help="coincidence: comma-separated PSP trace fraction bits (e.g. 8,12,16)")
+    p.add_argument("--schemes", default="euler", help="golden schemes: euler,izhikevich,rk4")
+    p.add_argument("--no-float", action="store_true", help="skip the float64/float32 points")
+    p.add_argument("--reference-hz", type=positive_float, default=256e3,
+                   help="rate of the float64 RK4 reference (default 256e3)")
+    p.add_argument("--clock-hz", type=positive_float, default=40e6,
+                   help="clock for neurons per core (default 40e6)")
+    p.add_argument("--synth", action="store_true",
+                   help="yosys synth_ecp5 per fixed point (slow: a core per point)")
+    p.add_argument("--fmax", action="store_true",
+                   help="also nextpnr-ecp5 place and route per fixed point for its fmax on the "
+                        "ULX3S's LFE5U-85F (implies --synth; ~35 s a point)")
+    p.add_argument("--scheduler", default=None,
+                   help="dask.distributed address; 'sync' runs in this process (default: a "
+                        "local cluster)")
+    p.add_argument("--workers", type=positive_int, default=2)
+    p.set_defaults(func=cmd_sweep)

@@ -1,0 +1,256 @@
+"""The one cocotb runner: run a block's bench on its generated Verilog through
+:mod:`cocotb_tools.runner`, on Icarus or Verilator.
+
+Each (simulator, design, parameters) case gets its own build directory. A block's bench is the
+module ``cuneate.sim.<block>.bench``, imported inside the simulator by its dotted name;
+configuration goes in through environment variables (a JSON file path), and results come back as
+JSON written by the bench (:func:`bench_config`, :func:`bench_report`, :func:`bench_progress`
+are the bench side), so the caller can print figures and assert on them. :func:`run_bench`
+writes a block's Verilog and runs its bench in one call (in a scratch directory unless one is
+given).
+
+Verilator models are cached: a build is keyed by the Verilog's bytes, the top level, the build
+arguments, waves, and the Verilator and cocotb versions, and kept under
+``$CUNEATE_SIM_CACHE`` (default ``$XDG_CACHE_HOME/cuneate/sim`` or ``~/.cache/cuneate/sim``;
+``CUNEATE_SIM_CACHE=off`` builds in the case's own directory every time). The same design is
+compiled once and reused by every later run, whatever its build directory; concurrent runs
+serialize on a lock per entry, and the least recently used entries beyond
+:data:`CACHE_ENTRIES` are removed.
+"""
+
+from __future__ import annotations
+
+import fcntl
+import hashlib
+import json
+import os
+import shutil
+import tempfile
+import threading
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+from .toolchain import SIMULATORS, apply_simulator_env
+
+__all__ = ["CocotbRun", "run_cocotb", "run_bench", "SimulatorFailed", "sim_cache_root",
+           "CACHE_ENTRIES", "bench_config", "bench_report", "bench_progress"]
+
+#: Verilator builds kept in the cache (least recently used removed first).
+CACHE_ENTRIES = 48
+
+
+class SimulatorFailed(RuntimeError):
+    """The cocotb run reported failures, ran no test, or produced no results."""
+
+
+@dataclass
+class CocotbRun:
+    simulator: str
+    build_dir: Path
+    n_tests: int
+    n_failed: int
+    results_xml: Path
+    report: dict | None
+
+
+def run_cocotb(simulator: str, sources: list[Path], toplevel: str, test_module: str,
+               build_dir: Path, config: dict | None = None, testcase: str | None = None,
+               build_args: list[str] | None = None, waves: bool = False,
+               quiet: bool = True, progress=None) -> CocotbRun:
+    """Build ``sources`` with ``simulator`` and run the cocotb ``test_module`` on ``toplevel``.
+
+    ``config`` is written to ``build_dir/config.json`` and passed as ``CUNEATE_BENCH_CONFIG``;
+    the bench writes ``build_dir/report.json`` (path in ``CUNEATE_BENCH_REPORT``), returned as
+    :attr:`CocotbRun.report`. Raises :class:`SimulatorFailed` unless at least one test ran and none
+    failed. ``progress``, if given, is called with the count a bench writes to
+    ``build_dir/progress.json`` (``{"done": n}``) while the simulator runs.
+    """
+    if simulator not in SIMULATORS:
+        raise ValueError(f"unknown simulator {simulator!r}; known: {', '.join(SIMULATORS)}")
+    apply_simulator_env()
+    from cocotb_tools.check_results import get_results
+    from cocotb_tools.runner import get_runner
+
+    build_dir = Path(build_dir).resolve()
+    build_dir.mkdir(parents=True, exist_ok=True)
+    cfg_path = build_dir / "config.json"
+    report_path = build_dir / "report.json"
+    progress_path = build_dir / "progress.json"
+    cfg_path.write_text(json.dumps((config or {}) | {"progress_file": str(progress_path)}))
+    for f in (report_path, progress_path):
+        if f.exists():
+            f.unlink()
+
+    args = list(build_args or [])
+    if simulator == "verilator":
+        # Amaranth's output is lint-clean in spirit but not width-pedantic.
+        args += ["-Wno-fatal", "-Wno-WIDTHEXPAND", "-Wno-WIDTHTRUNC", "-O3"]
+    runner = get_runner(simulator)
+    log = build_dir / "build.log" if quiet else None
+    sim_dir = build_dir
+    cache = sim_cache_root() if simulator == "verilator" else None
+    if cache is not None:
+        try:
+            cache.mkdir(parents=True, exist_ok=True)
+        except OSError:
+            cache = None                 # an unwritable cache: build in the case's directory
+    if cache is not None:
+        sim_dir = _cached_build(runner, cache, sources, toplevel, args, waves, log)
+    else:
+        runner.build(sources=[str(s) for s in sources], hdl_toplevel=toplevel,
+                     build_dir=build_dir, timescale=("1ns", "1ps"), build_args=args,
+                     always=True, waves=waves, log_file=log)
+    env = {"CUNEATE_BENCH_CONFIG": str(cfg_path), "CUNEATE_BENCH_REPORT": str(report_path),
+           "COCOTB_LOG_LEVEL": os.environ.get("COCOTB_LOG_LEVEL", "WARNING")}
+    stop = threading.Event()
+    poller = None
+    if progress is not None:
+        def poll():
+            last = -1
+            while not stop.wait(0.5):
+                try:
+                    done = int(json.loads(progress_path.read_text())["done"])
+                except (OSError, ValueError, KeyError):
+                    continue
+                if done != last:
+                    progress(done)
+                    last = done
+        poller = threading.Thread(target=poll, daemon=True)
+        poller.start()
+    try:
+        results = runner.test(test_module=test_module, hdl_toplevel=toplevel,
+                              hdl_toplevel_lang="verilog",
+                              build_dir=sim_dir, test_dir=build_dir, extra_env=env,
+                              testcase=testcase, waves=waves,
+                              log_file=build_dir / "test.log" if quiet else None)
+    finally:
+        stop.set()
+        if poller is not None:
+            poller.join()
+    n_tests, n_failed = get_results(Path(results))
+    report = json.loads(report_path.read_text()) if report_path.exists() else None
+    run = CocotbRun(simulator, build_dir, n_tests, n_failed, Path(results), report)
+    if n_tests == 0 or n_failed:
+        tail = ""
+        logf = build_dir / "test.log"
+        if logf.exists():
+            tail = "\n".join(logf.read_text(errors="replace").splitlines()[-40:])
+        raise SimulatorFailed(f"{simulator}: {n_failed} of {n_tests} cocotb tests failed "
+                              f"(build dir {build_dir})\n{tail}")
+    return run
+
+
+def run_bench(simulator: str, verilog: str, toplevel: str, block: str, config: dict,
+              build_dir: Path | None = None, testcase: str | None = None,
+              progress=None) -> CocotbRun:
+    """Write ``verilog`` as ``<toplevel>.v`` and run the bench of ``block``
+    (``cuneate.sim.<block>.bench``) on it with ``config``, in ``build_dir`` or a scratch
+    directory; returns the :class:`CocotbRun` (its ``report`` is the bench's JSON)."""
+    def go(bd: Path) -> CocotbRun:
+        bd.mkdir(parents=True, exist_ok=True)
+        src = bd / f"{toplevel}.v"
+        src.write_text(verilog)
+        return run_cocotb(simulator, [src], toplevel, f"cuneate.sim.{block}.bench", bd,
+                          config=config, testcase=testcase, progress=progress)
+    if build_dir is not None:
+        return go(Path(build_dir))
+    with tempfile.TemporaryDirectory(prefix=f"cuneate-{block}-{simulator}-") as tmp:
+        return go(Path(tmp))
+
+
+# ----------------------------------------------------------------------------------------------
+# the bench side (inside the simulator process)
+
+def bench_config() -> dict:
+    """The configuration the caller gave :func:`run_cocotb` (inside a bench)."""
+    with open(os.environ["CUNEATE_BENCH_CONFIG"]) as f:
+        return json.load(f)
+
+
+def bench_report(data: dict) -> None:
+    """Hand ``data`` back to the caller as the run's report (inside a bench)."""
+    with open(os.environ["CUNEATE_BENCH_REPORT"], "w") as f:
+        json.dump(data, f, default=float)
+
+
+def bench_progress(config: dict, done: int) -> None:
+    """Tell the caller how far the bench got (the ``progress`` callback of
+    :func:`run_cocotb`)."""
+    path = config.get("progress_file")
+    if path:
+        with open(path, "w") as f:
+            json.dump({"done": int(done)}, f)
+
+
+# ----------------------------------------------------------------------------------------------
+# the build cache
+
+def sim_cache_root() -> Path | None:
+    """The Verilator build cache directory, or None when ``CUNEATE_SIM_CACHE=off``."""
+    env = os.environ.get("CUNEATE_SIM_CACHE", "")
+    if env.lower() in ("off", "0", "no"):
+        return None
+    if env:
+        return Path(env).expanduser().resolve()
+    base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
+    return Path(base) / "cuneate" / "sim"
+
+
+def _cache_key(sources, toplevel: str, args: list[str], waves: bool) -> str:
+    from importlib.metadata import PackageNotFoundError, version
+    h = hashlib.sha256()
+    for pkg in ("verilator", "cocotb"):
+        try:
+            h.update(f"{pkg}={version(pkg)};".encode())
+        except PackageNotFoundError:
+            h.update(f"{pkg}={shutil.which(pkg)};".encode())
+    h.update(json.dumps([toplevel, args, bool(waves), "1ns/1ps"]).encode())
+    for src in sources:
+        data = Path(src).read_bytes()
+        h.update(f"{Path(src).name}:{len(data)};".encode())
+        h.update(data)
+    return h.hexdigest()[:20]
+
+
+def _cached_build(runner, root: Path, sources, toplevel: str, args: list[str], waves: bool,
+                  log) -> Path:
+    """Build in (or reuse) the cache entry of this design; returns its directory."""
+    entry = root / f"verilator-{toplevel}-{_cache_key(sources, toplevel, args, waves)}"
+    stamp = entry / "built.json"
+    if not stamp.exists():
+        entry.mkdir(parents=True, exist_ok=True)
+        with open(entry / ".lock", "w") as lock:
+            fcntl.flock(lock, fcntl.LOCK_EX)
+            if not stamp.exists():
+                # fixed source paths inside the entry: the build does not depend on where the
+                # caller wrote its Verilog
+                src_dir = entry / "src"
+                src_dir.mkdir(exist_ok=True)
+                copies = []
+                for src in sources:
+                    dst = src_dir / Path(src).name
+                    shutil.copyfile(src, dst)
+                    copies.append(str(dst))
+                runner.build(sources=copies, hdl_toplevel=toplevel, build_dir=entry,
+                             timescale=("1ns", "1ps"), build_args=args, always=True,
+                             waves=waves, log_file=log)
+                stamp.write_text(json.dumps({"toplevel": toplevel, "args": args,
+                                             "sources": [Path(c).name for c in copies]}))
+                _prune(root, keep=entry)
+    os.utime(stamp)
+    return entry
+
+
+def _prune(root: Path, keep: Path) -> None:
+    entries = []
+    for d in root.glob("verilator-*"):
+        st = d / "built.json"
+        if d != keep and st.exists():
+            entries.append((st.stat().st_mtime, d))
+    entries.sort()
+    excess = len(entries) + 1 - CACHE_ENTRIES
+    now = time.time()
+    for mtime, d in entries[:max(0, excess)]:
+        if now - mtime > 600:            # never remove an entry a run may still be using
+            shutil.rmtree(d, ignore_errors=True)

@@ -1,0 +1,352 @@
+"""cocotb benches for the generated :class:`cuneate.hdl.izhikevich.IzhikevichCore` Verilog.
+
+The bench is configured by the JSON file named in ``CUNEATE_BENCH_CONFIG`` and writes its
+figures to ``CUNEATE_BENCH_REPORT``. Two tests:
+
+``scoreboard``
+    Watches every cycle. Each update that leaves the pipeline is collected; when a sweep is
+    complete it is checked by :class:`cuneate.sim.izhikevich.scoreboard.SweepChecker`: (a) the bit-exact
+    twin advanced from the DUT's own previous state with the current the DUT reports it used,
+    clamp flags included - zero mismatches allowed - and (b) the float64 golden Euler step from
+    the same state, within the error bound derived from the formats, for every update no clamp
+    touched (a flagged clamp is an expected deviation, counted). The current used must be the
+    last one the host wrote (or, for a write in the cycle of the fetch, the one before). The
+    spike stream, the per-sweep spike and clamp counters and the sticky clamp flags must agree
+    with the updates; nothing may overflow or overrun. Currents are random in
+    ``current_range`` (rewritten during sweeps), or, with ``flip_every``, held at the two ends
+    of the range and flipped every ``flip_every`` sweeps (the full-scale extremes).
+``engine``
+    Writes the currents, drives external ticks and records the spike stream: the
+    ``icarus``/``verilator`` engines of ``cuneate simulate``.
+``play``
+    Plays a host driver's write schedule (the ``icarus``/``verilator`` transports).
+"""
+
+from __future__ import annotations
+
+import random
+import time
+
+import cocotb
+import numpy as np
+from cocotb.clock import Clock
+from cocotb.triggers import ClockCycles, FallingEdge, RisingEdge
+
+from cuneate.hdl.izhikevich import CLAMP_KINDS, PIPELINE_DEPTH, IzhikevichConfig
+from cuneate.sim.engines.cocotb import bench_config, bench_progress, bench_report
+from cuneate.sim.izhikevich.scoreboard import SweepChecker
+
+
+def make_config(core: dict) -> IzhikevichConfig:
+    """The core configuration from its JSON form (:meth:`IzhikevichConfig.to_kwargs`)."""
+    return IzhikevichConfig.from_kwargs(core)
+
+
+class TB:
+    """Owns the clock, reset, host-write driver and the update/spike monitors."""
+
+    def __init__(self, dut, cfg: IzhikevichConfig):
+        self.dut, self.cfg = dut, cfg
+        self.cycle = 0
+        self.writes: dict[int, list[tuple[int, int]]] = {}    # neuron -> [(cycle, raw)]
+
+    async def start(self):
+        cocotb.start_soon(Clock(self.dut.clk, 10, unit="ns").start())
+        d = self.dut
+        d.rst.value = 1
+        for s in (d.i_wr_en, d.sel_wr_en, d.i_wr_addr, d.i_wr_data, d.sel_wr_addr,
+                  d.sel_wr_data, d.clamp_clear):
+            s.value = 0
+        d.spike_ready.value = 1
+        if self.cfg.tick_source == "external":
+            d.tick.value = 0
+        await RisingEdge(d.clk)
+        await RisingEdge(d.clk)
+        await FallingEdge(d.clk)
+        d.rst.value = 0
+
+    async def write_current(self, neuron: int, raw: int):
+        """Drive one host write (call at a falling edge; returns at the next falling edge)."""
+        d = self.dut
+        d.i_wr_addr.value = neuron
+        d.i_wr_data.value = int(raw)
+        d.i_wr_en.value = 1
+        self.writes.setdefault(neuron, []).append((self.cycle, int(raw)))
+        await FallingEdge(d.clk)
+        d.i_wr_en.value = 0
+
+    def allowed_currents(self, neuron: int, fetch_cycle: int) -> set[int]:
+        """Currents the fetch of ``neuron`` at ``fetch_cycle`` may legally have read."""
+        hist = self.writes.get(neuron, [])
+        before = [raw for c, raw in hist if c < fetch_cycle - 2]
+        near = [raw for c, raw in hist if fetch_cycle - 2 <= c <= fetch_cycle + 2]
+        base = before[-1] if before else 0
+        return {base, *near}
+
+
+@cocotb.test()
+async def scoreboard(dut):
+    cfgj = bench_config()
+    cfg = make_config(cfgj["core"])
+    N = cfg.n_neurons
+    checker = SweepChecker(cfg)
+    tb = TB(dut, cfg)
+    rng = random.Random(cfgj.get("seed", 1))
+    n_sweeps = cfgj["sweeps"]
+    lo, hi = cfgj.get("current_range", [0.0, 40.0])
+    writes_per_sweep = cfgj.get("writes_per_sweep", 4)
+    flip_every = cfgj.get("flip_every")
+    await tb.start()
+
+    async def driver():
+        # initial currents, written while the first sweep is already running, then random
+        # rewrites during the sweeps
+        for n in range(N):
+            await tb.write_current(n, cfg.I.to_raw(rng.uniform(lo, hi)))
+        while True:
+            if writes_per_sweep > 0 and rng.random() < writes_per_sweep / N:
+                await tb.write_current(rng.randrange(N), cfg.I.to_raw(rng.uniform(lo, hi)))
+            else:
+                await FallingEdge(dut.clk)
+
+    async def flipper():
+        # full-scale extremes: neuron n starts at hi (even n) or lo (odd n); all flip to the
+        # other end every flip_every sweeps
+        level = [hi if n % 2 == 0 else lo for n in range(N)]
+        for n in range(N):
+            await tb.write_current(n, cfg.I.to_raw(level[n]))
+        period = flip_every * cfg.cycles_per_tick
+        while True:
+            for _ in range(period - N):
+                await FallingEdge(dut.clk)
+            level = [hi if x == lo else lo for x in level]
+            for n in range(N):
+                await tb.write_current(n, cfg.I.to_raw(level[n]))
+
+    cocotb.start_soon(flipper() if flip_every else driver())
+    buf = {k: np.zeros(N, dtype=np.int64) for k in ("v", "u", "i", "spike", "clamp", "cycle")}
+    fill = 0
+    extra = {"stream_spikes": 0, "current_violations": 0, "count_mismatches": 0,
+             "clamp_counter_mismatches": 0, "sticky_mismatches": 0}
+    stream: list[tuple[int, int]] = []
+    done: list[tuple] = []
+    expected_done: list[tuple] = []
+    expected_stream: list[tuple[int, int]] = []
+    sticky_seen = 0
+    sticky_due = False
+    t0 = time.perf_counter()
+    d = dut
+    counters = [getattr(d, f"sweep_clamps_{k}") for k in CLAMP_KINDS]
+    while checker.stats.sweeps_checked < n_sweeps:
+        await FallingEdge(d.clk)
+        tb.cycle += 1
+        if sticky_due:
+            # one cycle after a sweep's last update the sticky flags hold every clamp so far
+            sticky_due = False
+            if int(d.clamp_flags.value) != sticky_seen:
+                extra["sticky_mismatches"] += 1
+        # sample the outputs registered at the last rising edge
+        if int(d.spike_valid.value):
+            stream.append((int(d.spike_index.value), int(d.spike_sweep.value)))
+        if int(d.sweep_done.value):
+            done.append((int(d.sweep_number.value), int(d.sweep_count.value),
+                         *(int(c.value) for c in counters)))
+        if not int(d.upd_valid.value):
+            continue
+        idx = int(d.upd_index.value)
+        if idx == 0:
+            fill = 0
+        if idx != fill:
+            raise AssertionError(f"update order broken: expected neuron {fill}, got {idx}")
+        buf["v"][idx] = d.upd_v.value.to_signed()
+        buf["u"][idx] = d.upd_u.value.to_signed()
+        buf["i"][idx] = d.upd_current.value.to_signed()
+        buf["spike"][idx] = int(d.upd_spike.value)
+        buf["clamp"][idx] = int(d.upd_clamp.value)
+        buf["cycle"][idx] = tb.cycle
+        fill += 1
+        if idx != N - 1:
+            continue
+        sweep_no = checker.stats.sweeps_checked        # sweeps are numbered from 0 after reset
+        # ---- whole sweep collected: vectorized checks ----
+        checker.check(buf["v"], buf["u"], buf["i"], buf["spike"], buf["clamp"])
+        spk = buf["spike"].astype(bool)
+        # currents used must be the ones the host wrote
+        for n in range(N):
+            fetch = int(buf["cycle"][n]) - PIPELINE_DEPTH
+            if int(buf["i"][n]) not in tb.allowed_currents(n, fetch):
+                extra["current_violations"] += 1
+        sums = SweepChecker.sweep_clamp_sums(buf["clamp"])
+        expected_done.append((sweep_no % (1 << cfg.sweep_number_width), int(spk.sum()),
+                              *(sums[k] for k in CLAMP_KINDS)))
+        expected_stream += [(int(n), sweep_no) for n in np.flatnonzero(spk)]
+        sticky_seen |= checker.stats.clamp_sticky
+        sticky_due = True
+    # drain the spike stream
+    for _ in range(cfg.spike_fifo_depth + 4):
+        await FallingEdge(d.clk)
+        if int(d.spike_valid.value):
+            stream.append((int(d.spike_index.value), int(d.spike_sweep.value)))
+        if int(d.sweep_done.value):
+            done.append((int(d.sweep_number.value), int(d.sweep_count.value),
+                         *(int(c.value) for c in counters)))
+    elapsed = time.perf_counter() - t0
+    extra["count_mismatches"] = sum(a[:2] != b[:2] for a, b in zip(done, expected_done)) + \
+        max(0, len(expected_done) - len(done))
+    extra["clamp_counter_mismatches"] = sum(a[2:] != b[2:] for a, b in zip(done, expected_done))
+    first = expected_stream[0][1] if expected_stream else 0
+    stream_checked = [s for s in stream if s[1] >= first][:len(expected_stream)]
+    extra["stream_spikes"] = len(stream_checked)
+    extra["stream_matches"] = stream_checked == expected_stream
+    # a clear empties the sticky flags except for the clamp registered in the same cycle,
+    # which must not be lost; afterwards they accumulate again
+    pending = int(d.upd_clamp.value)
+    d.clamp_clear.value = 1
+    await FallingEdge(d.clk)
+    d.clamp_clear.value = 0
+    after_clear = int(d.clamp_flags.value)
+    pending2 = pending | int(d.upd_clamp.value)
+    await FallingEdge(d.clk)
+    extra["clear_mismatches"] = int(after_clear != pending) + \
+        int(int(d.clamp_flags.value) != pending2)
+    stats = checker.stats.to_dict() | extra
+    stats["overrun"] = int(d.overrun.value)
+    stats["spike_overflow"] = int(d.spike_overflow.value)
+    stats["cycles"] = tb.cycle
+    stats["wall_s"] = elapsed
+    stats["cycles_per_s"] = tb.cycle / elapsed if elapsed else None
+    stats["bound_v_at_rest"] = float(cfg.one_step_bound(-65.0, -13.0, 0.0)[0])
+    bench_report(stats)
+    assert not checker.failures(), "; ".join(checker.failures())
+    assert stats["current_violations"] == 0, "an update used a current the host never wrote"
+    assert stats["count_mismatches"] == 0, "sweep_count disagrees with the updates"
+    assert stats["clamp_counter_mismatches"] == 0, "per-sweep clamp counters disagree"
+    assert stats["sticky_mismatches"] == 0, "sticky clamp flags disagree with the updates"
+    assert stats["stream_matches"], "spike stream differs from the spiking updates"
+    assert stats["overrun"] == 0 and stats["spike_overflow"] == 0
+
+
+@cocotb.test()
+async def engine(dut):
+    """Run the core like a host would: set currents, tick, read the spike stream."""
+    cfgj = bench_config()
+    cfg = make_config(cfgj["core"])
+    N = cfg.n_neurons
+    tb = TB(dut, cfg)
+    await tb.start()
+    currents = cfgj["currents"]
+    for n in range(N):
+        await tb.write_current(n, cfg.I.to_raw(currents[n] if n < len(currents) else 0.0))
+    n_sweeps = cfgj["sweeps"]
+    period = cfgj.get("tick_period", N)
+    d = dut
+    spikes: list[list[int]] = [[] for _ in range(N)]
+    width = cfg.sweep_number_width
+    base, last_raw = 0, 0
+    t0 = time.perf_counter()
+    cycles = 0
+    clamps = {k: 0 for k in CLAMP_KINDS}
+    counters = {k: getattr(d, f"sweep_clamps_{k}") for k in CLAMP_KINDS}
+    total = n_sweeps * period + PIPELINE_DEPTH + cfg.spike_fifo_depth + 4
+    swept = 0
+    for c in range(total):
+        d.tick.value = int(c % period == 0 and c // period < n_sweeps)
+        await FallingEdge(d.clk)
+        cycles += 1
+        if int(d.sweep_done.value):
+            for k in CLAMP_KINDS:
+                clamps[k] += int(counters[k].value)
+            swept += 1
+            if swept % 1000 == 0:
+                bench_progress(cfgj, swept)
+        if int(d.spike_valid.value):
+            raw = int(d.spike_sweep.value)
+            if raw < last_raw:
+                base += 1 << width          # sweep number wrapped
+            last_raw = raw
+            spikes[int(d.spike_index.value)].append(base + raw)
+    elapsed = time.perf_counter() - t0
+    sticky = int(d.clamp_flags.value)
+    bench_report({"spike_sweeps": spikes, "cycles": cycles, "wall_s": elapsed,
+             "overrun": int(d.overrun.value), "spike_overflow": int(d.spike_overflow.value),
+             "clamp_counts": clamps,
+             "clamp_sticky": {k: bool(sticky >> i & 1) for i, k in enumerate(CLAMP_KINDS)}})
+    assert int(d.overrun.value) == 0 and int(d.spike_overflow.value) == 0
+
+
+@cocotb.test()
+async def play(dut):
+    """Play a host driver's write schedule into the core and record its spikes (the
+    ``icarus``/``verilator`` transports of the host driver). Configuration: ``core``, ``ticks``
+    (sweeps to run), ``writes`` (``[tick, first, [raw, ...]]`` in tick order). For each tick
+    ``k`` the writes due at ``k`` go through the host-write port one word per cycle (sweep
+    ``k - 1`` has fully left the pipeline), then one ``tick`` pulse starts sweep ``k``; the
+    bench waits for the sweep to leave the pipeline, checks ``sweep_number``, adds
+    ``sweep_count`` (the core's own spike count) and the per-sweep clamp counters, and drains
+    the spike FIFO, checking each spike's sweep tag (the protocol of the Amaranth transport)."""
+    cfgj = bench_config()
+    cfg = IzhikevichConfig.from_kwargs(cfgj["core"])
+    N = cfg.n_neurons
+    n_ticks = int(cfgj["ticks"])
+    writes = cfgj["writes"]
+    d = dut
+    cocotb.start_soon(Clock(d.clk, 10, unit="ns").start())
+    d.rst.value = 1
+    for s in (d.i_wr_en, d.sel_wr_en, d.i_wr_addr, d.i_wr_data, d.sel_wr_addr, d.sel_wr_data,
+              d.clamp_clear, d.tick, d.spike_ready):
+        s.value = 0
+    await RisingEdge(d.clk)
+    await RisingEdge(d.clk)
+    await FallingEdge(d.clk)
+    d.rst.value = 0
+    await FallingEdge(d.clk)
+    rep = {"writes": 0, "words": 0, "spikes_counted": 0, "overflow": 0, "overrun": 0,
+           "sweeps": 0, "sweep_tag_mismatches": 0, "clamp_counts": {k: 0 for k in CLAMP_KINDS},
+           "spike_tick": [], "spike_neuron": []}
+    counters = {k: getattr(d, f"sweep_clamps_{k}") for k in CLAMP_KINDS}
+    mask = (1 << cfg.sweep_number_width) - 1
+    wait = N + PIPELINE_DEPTH + 4
+    w = 0
+    t0 = time.perf_counter()
+    for k in range(n_ticks):
+        while w < len(writes) and writes[w][0] == k:
+            _, first, raw = writes[w]
+            for i, x in enumerate(raw):
+                d.i_wr_addr.value = first + i
+                d.i_wr_data.value = int(x)
+                d.i_wr_en.value = 1
+                await FallingEdge(d.clk)
+            d.i_wr_en.value = 0
+            rep["writes"] += 1
+            rep["words"] += len(raw)
+            w += 1
+        if w < len(writes) and writes[w][0] < k:
+            raise AssertionError(f"write schedule out of order at write {w}")
+        d.tick.value = 1
+        await FallingEdge(d.clk)
+        d.tick.value = 0
+        await ClockCycles(d.clk, wait, rising=False)
+        rep["sweeps"] += 1
+        if int(d.sweep_number.value) != k & mask:
+            rep["overrun"] += 1
+        rep["spikes_counted"] += int(d.sweep_count.value)
+        for kk in CLAMP_KINDS:
+            rep["clamp_counts"][kk] += int(counters[kk].value)
+        if int(d.spike_valid.value):
+            d.spike_ready.value = 1
+            while int(d.spike_valid.value):
+                rep["spike_neuron"].append(int(d.spike_index.value))
+                rep["spike_tick"].append(k)
+                if int(d.spike_sweep.value) != k & mask:
+                    rep["sweep_tag_mismatches"] += 1
+                await FallingEdge(d.clk)
+            d.spike_ready.value = 0
+        if (k + 1) % 1000 == 0:
+            bench_progress(cfgj, k + 1)
+    rep["overflow"] = int(d.spike_overflow.value)
+    rep["overrun"] += int(d.overrun.value)
+    rep["writes_left"] = len(writes) - w
+    rep["wall_s"] = time.perf_counter() - t0
+    bench_report(rep)
+    assert rep["writes_left"] == 0, f"{rep['writes_left']} writes past the last tick"
+    assert rep["sweep_tag_mismatches"] == 0, "spike sweep tags disagree with the sweep run"

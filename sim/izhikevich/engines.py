@@ -1,0 +1,472 @@
+"""The Izhikevich block's engines: whole runs (``cuneate simulate izhikevich``) and transports
+for the host driver (scenes), one spike convention.
+
+All engines run the same core configuration and report spikes with the golden convention (a
+spike produced by update k is at (k+1) dt ms), so their outputs are directly comparable:
+
+``fixed``
+    The bit-exact NumPy twin.
+``amaranth``
+    The Amaranth simulator on the core.
+``icarus``, ``verilator``
+    cocotb on the generated Verilog (bench :mod:`cuneate.sim.izhikevich.bench`).
+``verilator-fast``
+    The generated Verilog compiled by Verilator with a C++ harness
+    (:mod:`cuneate.sim.engines.verilator_fast`): no Python per cycle, same spikes and clamp
+    counters.
+
+A core is described by its constructor keywords (``core``, as for
+:class:`~cuneate.hdl.izhikevich.IzhikevichConfig`); :func:`engine_core` turns them into the
+configuration an engine simulates: the same parameter sets, formats, accepted range and
+rounding, at least 8 neurons (unused ones idle at zero current), and an external tick every
+``max(n, 8)`` cycles (one update per clock, no idle cycles) - results depend only on the update
+rate (dt), not on the clock. Every engine also reports the core's clamp counters.
+
+Transports (:func:`make_transport`; the interface is :mod:`cuneate.sim.host.transport`) carry a
+host driver's timed current writes to a core. The hardware engines share one sweep protocol
+(:data:`PROTOCOL`): the writes due at tick ``k`` are driven through the host-write port after
+sweep ``k - 1`` has left the pipeline and before the tick of sweep ``k`` (so no write can reach
+the wrong sweep); the spike FIFO (one entry per neuron deep) is read out between sweeps and
+checked against the core's own per-sweep spike count. Idle cycles between sweeps do not change
+the arithmetic (external tick). Every transport refuses a write for a tick already run
+(``TransportError``) and a schedule longer than its buffer (``buffer_writes``; a buffer overrun
+is an error, never a silent drop).
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+
+from ...hdl.izhikevich import (CLAMP_KINDS, PIPELINE_DEPTH, IzhikevichConfig, IzhikevichCore,
+                               IzhikevichTwin, izhikevich_verilog)
+from ..engines.amaranth import simulate
+from ..engines.registry import block_engines, check_engine
+from ..engines.run import EngineRun, TickUnwrap
+from ..host.transport import SpikeBatch, Transport, TransportError
+
+__all__ = ["HARDWARE_ENGINES", "EngineRun", "engine_core", "run_engine", "engine_config",
+           "run_hardware_engine", "run_cocotb_engine", "run_amaranth_sweeps", "MIN_NEURONS", "TwinTransport",
+           "CocotbTransport", "AmaranthTransport", "VerilatorFastTransport", "TRANSPORTS",
+           "make_transport", "PROTOCOL"]
+
+#: The engines that run the core's arithmetic (all but golden), from the engine registry.
+HARDWARE_ENGINES = tuple(e for e in block_engines("izhikevich") if e != "golden")
+MIN_NEURONS = 8
+PROTOCOL = "writes between sweeps, external tick, FIFO drained between sweeps"
+#: Default write-buffer capacity of the batch transports (write calls held until collect).
+BUFFER_WRITES = 1 << 20
+
+
+def engine_core(core: dict, n: int) -> IzhikevichConfig:
+    """The configuration an engine simulates for ``n`` neurons of the core ``core``
+    (constructor keywords); raises :class:`~cuneate.hdl.izhikevich.ConfigError`."""
+    N = max(n, MIN_NEURONS)
+    kw = dict(core)
+    update_hz = float(kw.get("update_hz", 16e3))
+    kw.update(n_neurons=N, clock_hz=update_hz * N, update_hz=update_hz,
+              tick_source="external", spike_fifo_depth=max(16, N + 4))
+    ns = kw.get("neuron_sets")
+    if ns is not None:
+        ns = list(ns)[:n]
+        kw["neuron_sets"] = ns + [0] * (N - len(ns))
+    for k in ("v_init", "u_init"):
+        if kw.pop(k, None) is not None:
+            raise ValueError("engines start every neuron at its set's initial state "
+                             f"({k} is not an engine option)")
+    return IzhikevichConfig.from_kwargs(kw)
+
+
+def engine_config(params: dict, n: int, update_hz: float) -> IzhikevichConfig:
+    """Core configuration for ``n`` neurons with one parameter set ``params`` (a, b, c, d)."""
+    return engine_core({"param_sets": ((params["a"], params["b"], params["c"], params["d"]),),
+                        "update_hz": update_hz}, n)
+
+
+# ----------------------------------------------------------------------------------------------
+# whole runs with constant currents
+
+def _run_fixed(cfg, cur, n_sweeps, n, build_dir, progress):
+    twin = IzhikevichTwin(cfg)
+    spikes = [s.tolist() for s in twin.run(cur, n_sweeps, progress=progress)[:n]]
+    rep = twin.clamp_report()
+    return spikes, rep["counts"], rep["sticky"]
+
+
+def _run_verilator_fast(cfg, cur, n_sweeps, n, build_dir, progress):
+    from ..engines.verilator_fast import run_harness
+    run = run_harness(cfg, cur, n_sweeps, build_root=build_dir)
+    if progress is not None:
+        progress(n_sweeps)
+    ks = run.spikes_per_neuron(n)
+    return ([((k + 1) * cfg.dt_ms).tolist() for k in ks], dict(run.summary["clamp_counts"]),
+            run.clamp_sticky())
+
+
+def _to_times(spike_sweeps, n, dt_ms):
+    return [[(k + 1) * dt_ms for k in sorted(spike_sweeps[i])] for i in range(n)]
+
+
+def run_amaranth_sweeps(cfg: IzhikevichConfig, cur, n_sweeps: int, progress=None):
+    """The core in the Amaranth simulator with constant currents ``cur`` (mV/ms, one per neuron
+    of ``cfg``), ticks every ``n_neurons`` cycles; returns the spike sweeps per neuron, the
+    clamp counts per kind and the sticky flags."""
+    dut = IzhikevichCore(cfg)
+    N = cfg.n_neurons
+    raw = cfg.I.to_raw(cur)
+    spikes = [[] for _ in range(N)]
+    counts = {k: 0 for k in CLAMP_KINDS}
+    out = {}
+
+    async def bench(ctx):
+        ctx.set(dut.spike_ready, 1)
+        for i in range(N):
+            ctx.set(dut.i_wr_en, 1)
+            ctx.set(dut.i_wr_addr, i)
+            ctx.set(dut.i_wr_data, int(raw[i]))
+            await ctx.tick()
+        ctx.set(dut.i_wr_en, 0)
+        unwrap = TickUnwrap(cfg.sweep_number_width)
+        for c in range(n_sweeps * N + PIPELINE_DEPTH + cfg.spike_fifo_depth + 4):
+            ctx.set(dut.tick, int(c % N == 0 and c // N < n_sweeps))
+            await ctx.tick()
+            if ctx.get(dut.sweep_done):
+                for k in CLAMP_KINDS:
+                    counts[k] += ctx.get(getattr(dut, f"sweep_clamps_{k}"))
+                if progress is not None and (c // N + 1) % 1000 == 0:
+                    progress(c // N + 1)
+            if ctx.get(dut.spike_valid):
+                spikes[ctx.get(dut.spike_index)].append(unwrap(ctx.get(dut.spike_sweep)))
+        assert not ctx.get(dut.overrun) and not ctx.get(dut.spike_overflow)
+        out["sticky"] = ctx.get(dut.clamp_flags)
+
+    simulate(dut, bench)
+    sticky = {k: bool(out["sticky"] >> i & 1) for i, k in enumerate(CLAMP_KINDS)}
+    return spikes, counts, sticky
+
+
+def _run_amaranth(cfg, cur, n_sweeps, n, build_dir, progress):
+    spikes, counts, sticky = run_amaranth_sweeps(cfg, cur, n_sweeps, progress)
+    return _to_times(spikes, n, cfg.dt_ms), counts, sticky
+
+
+def run_cocotb_engine(simulator: str, cfg: IzhikevichConfig, cur, n_sweeps: int,
+                      build_dir: Path | None, progress=None):
+    """Generate the core for ``cfg`` and run the cocotb ``engine`` bench (in ``build_dir`` or a
+    scratch directory); returns the :class:`~cuneate.sim.engines.cocotb.CocotbRun` (its report
+    has the spike sweeps and the clamp counters)."""
+    from ..engines.cocotb import run_bench
+    return run_bench(simulator, izhikevich_verilog(cfg), "izhikevich_core", "izhikevich",
+                     {"core": cfg.to_kwargs(), "currents": list(map(float, cur)),
+                      "sweeps": n_sweeps}, build_dir, testcase="engine", progress=progress)
+
+
+def _cocotb_runner(simulator):
+    def run(cfg, cur, n_sweeps, n, build_dir, progress):
+        rep = run_cocotb_engine(simulator, cfg, cur, n_sweeps, build_dir, progress).report
+        return (_to_times(rep["spike_sweeps"], n, cfg.dt_ms), rep["clamp_counts"],
+                rep["clamp_sticky"])
+    return run
+
+
+#: Engine name -> whole-run runner ``(cfg, currents, n_sweeps, n, build_dir, progress) ->
+#: (spikes per neuron, clamp counts, sticky flags)``.
+RUNNERS = {"fixed": _run_fixed, "amaranth": _run_amaranth, "icarus": _cocotb_runner("icarus"),
+           "verilator": _cocotb_runner("verilator"), "verilator-fast": _run_verilator_fast}
+
+
+def run_engine(engine: str, core: dict, currents, duration_ms: float,
+               build_dir: Path | None = None, progress=None) -> EngineRun:
+    """Run ``engine`` on ``len(currents)`` neurons of ``core`` with constant currents (mV/ms).
+
+    ``progress``, if given, is called with the number of sweeps done (the twin and the Amaranth
+    simulator report as they go; cocotb runs report from the simulator's progress file).
+    """
+    if engine not in RUNNERS:
+        check_engine("izhikevich", engine)
+        raise ValueError(f"engine {engine!r} runs the golden model, not the core")
+    n = len(currents)
+    cfg = engine_core(core, n)
+    n_sweeps = int(round(duration_ms / cfg.dt_ms))
+    cur = np.zeros(cfg.n_neurons)
+    cur[:n] = currents
+    for x in currents:
+        if not cfg.I.contains(x):
+            raise ValueError(f"current {x:g} is outside the core's input format {cfg.I} "
+                             f"[{cfg.I.min_value:g}, {cfg.I.max_value:g}]")
+    t0 = time.perf_counter()
+    spikes, counts, sticky = RUNNERS[engine](cfg, cur, n_sweeps, n, build_dir, progress)
+    return EngineRun(engine, cfg.dt_ms, n_sweeps, spikes, dict(counts), sticky,
+                     time.perf_counter() - t0)
+
+
+def run_hardware_engine(engine: str, params: dict, currents, duration_ms: float,
+                        update_hz: float = 16e3, clock_hz: float | None = None,
+                        build_dir: Path | None = None):
+    """Run ``engine`` with one parameter set (a, b, c, d); returns ``(dt_ms, spikes_ms)``."""
+    core = {"param_sets": ((params["a"], params["b"], params["c"], params["d"]),),
+            "update_hz": update_hz}
+    r = run_engine(engine, core, currents, duration_ms, build_dir)
+    return r.dt_ms, r.spikes_ms
+
+
+# ----------------------------------------------------------------------------------------------
+# transports for the host driver
+
+class _Buffered(Transport):
+    """Common bookkeeping: tick, write schedule, counters."""
+
+    def __init__(self, buffer_writes: int = BUFFER_WRITES):
+        self.buffer_writes = int(buffer_writes)
+        self.cfg: IzhikevichConfig | None = None
+        self.tick = 0
+        self.writes: list[tuple[int, int, list[int]]] = []
+        self.cnt = {"writes": 0, "words": 0, "spikes": 0, "spikes_counted": 0, "overflow": 0,
+                    "overrun": 0, "late_writes": 0, "sweeps": 0}
+        self.clamps = {k: 0 for k in CLAMP_KINDS}
+        self.wall_s = 0.0
+
+    def open(self, config) -> None:
+        self.cfg = config
+
+    def _check_write(self, tick: int, first: int, raw) -> list[int]:
+        if self.cfg is None:
+            raise TransportError(f"{self.name}: write before open")
+        if tick < self.tick:
+            self.cnt["late_writes"] += 1
+            raise TransportError(f"{self.name}: write for tick {tick} arrived after tick "
+                                 f"{self.tick - 1} ran (late write refused)")
+        raw = [int(x) for x in np.asarray(raw).ravel()]
+        if first < 0 or first + len(raw) > self.cfg.n_neurons:
+            raise TransportError(f"{self.name}: write to neurons {first}..{first + len(raw) - 1} "
+                                 f"outside the core (0..{self.cfg.n_neurons - 1})")
+        lo, hi = self.cfg.I.min_raw, self.cfg.I.max_raw
+        if raw and (min(raw) < lo or max(raw) > hi):
+            raise TransportError(f"{self.name}: raw current outside {self.cfg.I}")
+        return raw
+
+    def counters(self) -> dict[str, int]:
+        return dict(self.cnt) | {f"clamp_{k}": v for k, v in self.clamps.items()}
+
+
+class TwinTransport(_Buffered):
+    """The bit-exact twin behind the transport interface."""
+
+    name = "fixed"
+
+    def __init__(self, buffer_writes: int = BUFFER_WRITES, progress=None):
+        super().__init__(buffer_writes)
+        self.progress = progress
+
+    def open(self, config) -> None:
+        super().open(config)
+        self.twin = IzhikevichTwin(config)
+        self.pending: dict[int, list[tuple[int, list[int]]]] = {}
+        self.hits_k: list[np.ndarray] = []
+        self.hits_n: list[np.ndarray] = []
+
+    def write_currents(self, tick: int, first: int, raw) -> None:
+        raw = self._check_write(tick, first, raw)
+        if sum(len(w) for w in self.pending.values()) >= self.buffer_writes:
+            raise TransportError(f"fixed: write buffer overrun ({self.buffer_writes} writes "
+                                 f"pending)")
+        self.pending.setdefault(int(tick), []).append((int(first), raw))
+
+    def run(self, n_ticks: int) -> None:
+        t0 = time.perf_counter()
+        tw = self.twin
+        for _ in range(int(n_ticks)):
+            for first, raw in self.pending.pop(self.tick, []):
+                tw.I[first:first + len(raw)] = raw
+                self.cnt["writes"] += 1
+                self.cnt["words"] += len(raw)
+            spk = tw.sweep()
+            if spk.any():
+                idx = np.flatnonzero(spk)
+                self.hits_n.append(idx)
+                self.hits_k.append(np.full(idx.size, self.tick, dtype=np.int64))
+                self.cnt["spikes_counted"] += idx.size
+            self.tick += 1
+            self.cnt["sweeps"] += 1
+            if self.progress is not None and self.tick % 1000 == 0:
+                self.progress(self.tick)
+        self.clamps = dict(tw.clamp_counts)
+        self.wall_s += time.perf_counter() - t0
+
+    def collect(self) -> SpikeBatch:
+        if not self.hits_k:
+            return SpikeBatch()
+        b = SpikeBatch(np.concatenate(self.hits_k), np.concatenate(self.hits_n))
+        self.hits_k, self.hits_n = [], []
+        self.cnt["spikes"] += len(b)
+        return b
+
+
+class _Batch(_Buffered):
+    """Writes and ticks are buffered; the schedule runs on the engine at :meth:`collect`."""
+
+    def __init__(self, build_dir: Path | None = None, buffer_writes: int = BUFFER_WRITES,
+                 progress=None):
+        super().__init__(buffer_writes)
+        self.build_dir = Path(build_dir) if build_dir is not None else None
+        self.progress = progress
+        self.ran_ticks = 0
+
+    def write_currents(self, tick: int, first: int, raw) -> None:
+        raw = self._check_write(tick, first, raw)
+        if len(self.writes) >= self.buffer_writes:
+            raise TransportError(f"{self.name}: write buffer overrun ({self.buffer_writes} "
+                                 f"writes buffered before collect)")
+        self.writes.append((int(tick), int(first), raw))
+
+    def run(self, n_ticks: int) -> None:
+        self.tick += int(n_ticks)
+
+    def collect(self) -> SpikeBatch:
+        if self.tick == self.ran_ticks:
+            return SpikeBatch()
+        if self.ran_ticks:
+            raise TransportError(f"{self.name}: a batch engine runs its schedule once; "
+                                 f"collect after the last run")
+        t0 = time.perf_counter()
+        rep = self._execute(self.tick, self.writes)
+        self.wall_s += time.perf_counter() - t0
+        self.ran_ticks = self.tick
+        for k in ("writes", "words", "spikes_counted", "overflow", "overrun", "sweeps"):
+            self.cnt[k] += rep[k]
+        self.clamps = {k: int(rep["clamp_counts"][k]) for k in CLAMP_KINDS}
+        #: wall time of the simulation proper (the rest of wall_s is generation and build)
+        self.sim_s = float(rep.get("wall_s", self.wall_s))
+        b = SpikeBatch(rep["spike_tick"], rep["spike_neuron"])
+        self.cnt["spikes"] += len(b)
+        return b
+
+    def _execute(self, n_ticks, writes) -> dict:
+        raise NotImplementedError
+
+
+class CocotbTransport(_Batch):
+    """cocotb on Icarus or Verilator (test ``play`` of :mod:`cuneate.sim.izhikevich.bench`)."""
+
+    def __init__(self, simulator: str, build_dir: Path | None = None,
+                 buffer_writes: int = BUFFER_WRITES, progress=None):
+        super().__init__(build_dir, buffer_writes, progress)
+        self.name = simulator
+
+    def _execute(self, n_ticks, writes) -> dict:
+        from ..engines.cocotb import run_bench
+        cfg = self.cfg
+        config = {"core": cfg.to_kwargs(), "ticks": n_ticks,
+                  "writes": [[t, f, r] for t, f, r in writes]}
+        return run_bench(self.name, izhikevich_verilog(cfg), "izhikevich_core", "izhikevich",
+                         config, self.build_dir, testcase="play",
+                         progress=self.progress).report
+
+
+class AmaranthTransport(_Batch):
+    """The Amaranth simulator on the core, same protocol as the cocotb bench."""
+
+    name = "amaranth"
+
+    def _execute(self, n_ticks, writes) -> dict:
+        cfg = self.cfg
+        dut = IzhikevichCore(cfg)
+        N = cfg.n_neurons
+        by_tick: dict[int, list] = {}
+        for t, f, r in writes:
+            by_tick.setdefault(t, []).append((f, r))
+        rep = {"writes": 0, "words": 0, "spikes_counted": 0, "overflow": 0, "overrun": 0,
+               "sweeps": 0, "clamp_counts": {k: 0 for k in CLAMP_KINDS}, "spike_tick": [],
+               "spike_neuron": []}
+        width = cfg.sweep_number_width
+
+        async def bench(ctx):
+            ctx.set(dut.spike_ready, 0)
+            for k in range(n_ticks):
+                for f, r in by_tick.pop(k, []):
+                    for i, x in enumerate(r):
+                        ctx.set(dut.i_wr_en, 1)
+                        ctx.set(dut.i_wr_addr, f + i)
+                        ctx.set(dut.i_wr_data, x)
+                        await ctx.tick()
+                    rep["writes"] += 1
+                    rep["words"] += len(r)
+                ctx.set(dut.i_wr_en, 0)
+                ctx.set(dut.tick, 1)
+                await ctx.tick()
+                ctx.set(dut.tick, 0)
+                await ctx.tick().repeat(N + PIPELINE_DEPTH + 4)
+                rep["sweeps"] += 1
+                counted = ctx.get(dut.sweep_count)
+                if ctx.get(dut.sweep_number) != k % (1 << width):
+                    rep["overrun"] += 1
+                rep["spikes_counted"] += counted
+                for kk in CLAMP_KINDS:
+                    rep["clamp_counts"][kk] += ctx.get(getattr(dut, f"sweep_clamps_{kk}"))
+                ctx.set(dut.spike_ready, 1)
+                while ctx.get(dut.spike_valid):
+                    rep["spike_neuron"].append(ctx.get(dut.spike_index))
+                    rep["spike_tick"].append(k)
+                    await ctx.tick()
+                ctx.set(dut.spike_ready, 0)
+                if self.progress is not None and (k + 1) % 1000 == 0:
+                    self.progress(k + 1)
+            rep["overflow"] = int(ctx.get(dut.spike_overflow))
+            rep["overrun"] += int(ctx.get(dut.overrun))
+
+        t0 = time.perf_counter()
+        simulate(dut, bench)
+        rep["wall_s"] = time.perf_counter() - t0
+        return rep
+
+
+class VerilatorFastTransport(_Batch):
+    """The core compiled by Verilator with the C++ harness
+    (:mod:`cuneate.sim.engines.verilator_fast`): the buffered writes become the harness's
+    current schedule (one segment per tick that has writes, each the whole current vector as
+    the writes leave it), run in one call with no Python per cycle. The harness drives the
+    host port between sweeps like the other engines, so its spikes equal the twin's."""
+
+    name = "verilator-fast"
+
+    def _execute(self, n_ticks, writes) -> dict:
+        from ..engines.verilator_fast import run_harness
+        cfg = self.cfg
+        cur = np.zeros(cfg.n_neurons, dtype=np.int64)
+        segments, words = [], 0
+        for t, f, r in writes:
+            cur[f:f + len(r)] = r
+            words += len(r)
+            if segments and segments[-1][0] == t:
+                segments[-1] = (t, cur.copy())
+            else:
+                segments.append((t, cur.copy()))
+        run = run_harness(cfg, segments, n_ticks, build_root=self.build_dir)
+        if self.progress is not None:
+            self.progress(n_ticks)
+        s = run.summary
+        return {"writes": len(writes), "words": words,
+                "spikes_counted": int(s["stream_spikes"]), "overflow":
+                int(s["spike_overflow"]), "overrun": int(s["overrun"]), "sweeps": n_ticks,
+                "clamp_counts": dict(s["clamp_counts"]), "spike_tick": run.spike_sweeps,
+                "spike_neuron": run.spike_neurons, "wall_s": float(s.get("wall_s", 0.0))}
+
+
+#: Engine name -> transport factory (``build_dir`` and ``progress`` keywords).
+TRANSPORTS = {
+    "fixed": lambda **kw: TwinTransport(progress=kw.get("progress")),
+    "amaranth": lambda **kw: AmaranthTransport(**kw),
+    "icarus": lambda **kw: CocotbTransport("icarus", **kw),
+    "verilator": lambda **kw: CocotbTransport("verilator", **kw),
+    "verilator-fast": lambda **kw: VerilatorFastTransport(**kw),
+}
+
+
+def make_transport(engine: str, **kw) -> Transport:
+    """The transport of ``engine`` for the host driver."""
+    if engine not in TRANSPORTS:
+        check_engine("izhikevich", engine)
+        raise ValueError(f"engine {engine!r} has no transport (it runs the golden model)")
+    return TRANSPORTS[engine](**kw)

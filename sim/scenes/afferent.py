@@ -1,0 +1,448 @@
+"""Afferent scenes: synthesize (or load) FBG traces, drive Izhikevich afferents through the host
+front end, decode, compare engines (the scene kind of the grasp, slide, pulses and recorded
+stimuli).
+
+Only what the scene calls for is computed:
+
+* effects: :func:`cuneate.golden.tactile.apply_effects` calls only the listed effects;
+* blocks: :data:`BLOCKS` maps a population model to the function that builds its hardware
+  configuration; only the models the scene's populations use are built, each sized to its
+  neurons (all trials of a scene are separate neurons of one core, so one build and one run
+  serve every trial);
+* engines: :data:`ENGINES` maps an engine name to its runner; only the scene's engines run.
+
+:func:`run` returns a :class:`SceneRun` whose ``ran`` lists exactly the effects, blocks and
+engines computed, with wall time per stage and per engine.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ...golden import izhikevich as golden
+from ...golden.fbg import IIRFilter, design_bandpass
+from ...golden.tactile import (MATERIALS, GraspSpec, Material, Pad, PulseSpec, SlideSpec,
+                              apply_effects, synthesize_grasp, synthesize_pulse,
+                              synthesize_slide)
+from ...hdl.lib.fixed import QFormat
+from ..decode import decode, isi_samples, trial_features
+from ..engines.registry import ENGINES as ENGINE_TRAITS
+from ..engines.registry import block_engines
+from ..host.driver import AfferentEncoding, FbgDriver
+from .runner import agreement as train_agreement
+from .scene import Scene
+
+__all__ = ["SceneRun", "run", "BLOCKS", "ENGINES", "synthesize", "build_neurons",
+           "front_end", "summary", "write_report", "format_run"]
+
+
+@dataclass
+class Neurons:
+    """The scene's driven neurons, in core order (trial-major, then population, then grating)."""
+
+    trial: list = field(default_factory=list)
+    population: list = field(default_factory=list)
+    grating: list = field(default_factory=list)
+    preset: list = field(default_factory=list)
+    encoding: list = field(default_factory=list)
+
+    def __len__(self):
+        return len(self.trial)
+
+
+@dataclass
+class SceneRun:
+    """The result of an afferent scene (``kind = "afferent"``)."""
+
+    scene: Scene
+    classes: list
+    trial_class: list
+    traces: list                # per trial: (n_samples, channels) nm
+    trial_info: list
+    neurons: Neurons
+    currents: np.ndarray        # (n_samples, n_neurons) float mV/ms
+    saturations: dict
+    config: object
+    dt_ms: float
+    n_ticks: int
+    spikes: dict                # engine -> list of arrays (ms) per neuron
+    counters: dict              # engine -> transport counters
+    decoded: dict               # engine -> Decoded
+    agreement: dict
+    ran: dict
+    timing: dict
+    decode_agreement: dict = field(default_factory=dict)
+    kind: str = "afferent"
+
+
+# --------------------------------------------------------------------------- stimulus
+def _material(m) -> Material:
+    if isinstance(m, str):
+        return MATERIALS[m]
+    return Material(m["name"], m["young_MPa"] * 1e6, m["poisson"], m["diameter_mm"] * 1e-3,
+                    m["height_mm"] * 1e-3)
+
+
+def synthesize(scene: Scene):
+    """Traces for every trial: ``(classes, trial_class, traces, info, effect_counts)``."""
+    st, sen, sc = scene["stimulus"], scene["sensor"], scene["scene"]
+    rng = np.random.default_rng(sc["seed"])
+    fs = sen["sample_rate_hz"]
+    classes = scene.classes()
+    trial_class, traces, infos = [], [], []
+    effect_params = {e: sen[e] for e in sen["effects"] if e != "strain"}
+    counts_all: dict = {}
+    if st["kind"] == "recorded":
+        from ..host.traces import load_trace
+        tr = load_trace(st["file"], time_key=st["time_key"], data_key=st["data_key"],
+                        struct=st["struct"] or None, time_unit=st["time_unit"],
+                        shift_unit=st["shift_unit"], expect_fs_hz=fs,
+                        channels=sen["channels"])
+        return classes, [classes[0]], [tr.d_lambda_nm], [tr.info], {}
+    for c, cls in enumerate(classes):
+        for t in range(sc["trials"]):
+            if st["kind"] == "grasp":
+                spec = GraspSpec(
+                    velocity_m_per_s=st["velocity_mm_per_s"] * 1e-3,
+                    pad=Pad(st["pad_young_MPa"] * 1e6, st["pad_area_mm2"] * 1e-6,
+                            st["pad_thickness_mm"] * 1e-3, st["contact_length_mm"] * 1e-3),
+                    coupling_microstrain_per_N=tuple(st["coupling_microstrain_per_N"]),
+                    stop_nm=st["stop_nm"], contact_ms=st["contact_ms"],
+                    duration_ms=sc["duration_ms"], fs_hz=fs,
+                    spread_velocity=st["spread_velocity"], spread_pad=st["spread_pad"],
+                    spread_young=st["spread_young"], spread_coupling=st["spread_coupling"])
+                strain, info = synthesize_grasp(_material(st["materials"][c]), spec, rng,
+                                                sen["lambda_B_nm"])
+            elif st["kind"] == "pulses":
+                spec = PulseSpec(start_ms=st["pulse_start_ms"], width_ms=st["pulse_width_ms"],
+                                 edge_ms=st["pulse_edge_ms"],
+                                 coupling_microstrain_per_N=tuple(
+                                     st["coupling_microstrain_per_N"]),
+                                 duration_ms=sc["duration_ms"], fs_hz=fs,
+                                 spread_force=st["spread_force"])
+                strain, info = synthesize_pulse(spec, rng, st["pulse_amplitudes_N"][c])
+            else:
+                spec = SlideSpec(speed_m_per_s=st["speed_mm_per_s"] * 1e-3,
+                                 depth_microstrain=st["depth_microstrain"],
+                                 normal_force_N=st["normal_force_N"], ramp_ms=st["ramp_ms"],
+                                 coupling_microstrain_per_N=st["slide_coupling_microstrain_per_N"],
+                                 spacing_m=st["spacing_mm"] * 1e-3, n_gratings=sen["channels"],
+                                 duration_ms=sc["duration_ms"], fs_hz=fs,
+                                 spread_speed=st["spread_speed"],
+                                 spread_force=st["spread_force"])
+                strain, info = synthesize_slide(spec, rng, st["periods_mm"][c] * 1e-3)
+            tr = apply_effects(strain, sen["effects"], effect_params, rng, fs,
+                               sen["lambda_B_nm"])
+            for e, cnt in tr.effect_counts.items():
+                agg = counts_all.setdefault(e, {})
+                for k, v in cnt.items():
+                    if isinstance(v, (int, np.integer)) and not isinstance(v, bool):
+                        agg[k] = agg.get(k, 0) + int(v)
+                    elif isinstance(v, float):
+                        agg[k] = max(agg.get(k, v), v)
+            trial_class.append(cls)
+            traces.append(tr.d_lambda_nm)
+            infos.append(info)
+    return classes, trial_class, traces, infos, counts_all
+
+
+# --------------------------------------------------------------------------- neurons, blocks
+def _filter(fe, fs) -> IIRFilter:
+    if fe["filter_b"] is not None:
+        f = IIRFilter(b=fe["filter_b"], a=fe["filter_a"])
+        f.require_stable()
+        return f
+    return design_bandpass(fe["filter_low_hz"], fe["filter_high_hz"], fs, fe["filter_order"],
+                           fe["filter_kind"])
+
+
+def build_neurons(scene: Scene, n_trials: int) -> Neurons:
+    fe, fs = scene["frontend"], scene["sensor"]["sample_rate_hz"]
+    filt = None
+    nn = Neurons()
+    encs = {}
+    for p in scene.populations:
+        if p["encoding"] == "FA":
+            filt = filt or _filter(fe, fs)
+            encs[p["name"]] = AfferentEncoding(
+                "FA", p["gain"] if p["gain"] is not None else fe["gain_S"],
+                fe["delta_lambda_unit_pm"], filt, fe["fa_rectify"], 0.0, fs)
+        elif p["encoding"] == "SA":
+            encs[p["name"]] = AfferentEncoding(
+                "SA", p["gain"] if p["gain"] is not None else fe["sa_gain"], fe["sa_unit_pm"],
+                None, "none", fe["sa_threshold_pm"], fs)
+    for t in range(n_trials):
+        for p in scene.populations:
+            for g in p["gratings"]:
+                nn.trial.append(t)
+                nn.population.append(p["name"])
+                nn.grating.append(g)
+                nn.preset.append(p["preset"])
+                nn.encoding.append(encs[p["name"]])
+    return nn
+
+
+def build_izhikevich(scene: Scene, neurons: Neurons):
+    """The Izhikevich core for the scene's Izhikevich neurons (one parameter set per preset),
+    sized to them; refused if they do not fit the hardware clock's capacity."""
+    from ..izhikevich.engines import engine_core
+    hw = scene["hardware"]
+    n = len(neurons)
+    capacity = int(hw["clock_hz"] // hw["update_hz"])
+    if n > capacity:
+        raise ValueError(f"the scene needs {n} Izhikevich neurons but a core at "
+                         f"{hw['clock_hz']:g} Hz / {hw['update_hz']:g} Hz holds {capacity}")
+    presets = sorted(set(neurons.preset))
+    core = {"param_sets": tuple(presets), "neuron_sets": [presets.index(p) for p in neurons.preset],
+            "update_hz": hw["update_hz"],
+            "current_format": QFormat(hw["current_int_bits"], hw["current_frac_bits"]),
+            "rounding": hw["rounding"]}
+    cfg = engine_core(core, n)
+    return cfg, {"block": "izhikevich_core", "neurons": n, "core_neurons": cfg.n_neurons,
+                 "capacity_at_clock": capacity, "param_sets": presets,
+                 "current_format": str(cfg.I), "dt_ms": cfg.dt_ms}
+
+
+#: Population model -> builder of its hardware configuration. Only the models a scene uses
+#: are looked up and called.
+BLOCKS = {"izhikevich": build_izhikevich}
+
+
+def front_end(scene: Scene, neurons: Neurons, traces: list, infos: list, cfg):
+    """The host driver for core ``cfg`` and the float currents (mV/ms) its front end computes
+    from the traces, per sample ``(n_samples, n_neurons)`` (gaps held when the scene drops
+    samples, zero outside the loading phase when its window says so), and the gaps held."""
+    sen = scene["sensor"]
+    on_gap = "hold" if "dropped_samples" in sen["effects"] else "error"
+    drv = FbgDriver(cfg, neurons.encoding, sen["sample_rate_hz"],
+                    scene["frontend"]["latency_ticks"], on_gap=on_gap)
+    dl = np.stack([traces[t][:, g] for t, g in zip(neurons.trial, neurons.grating)], axis=1)
+    x, gaps = drv.fill_gaps(dl)
+    currents = drv.currents(x)
+    if scene["frontend"]["window"] == "loading":
+        # the front end sees the loading phase only (contact to stop), per trial
+        t_ms = np.arange(dl.shape[0]) * 1000.0 / sen["sample_rate_hz"]
+        for i, t in enumerate(neurons.trial):
+            inf = infos[t]
+            outside = (t_ms < scene["stimulus"]["contact_ms"]) | (t_ms > inf["stop_ms"])
+            currents[outside, i] = 0.0
+    return drv, currents, gaps
+
+
+# --------------------------------------------------------------------------- engines
+def run_golden(ctx) -> tuple[list, dict]:
+    """Float64 golden model (forward Euler, same dt) on the unquantized currents, held per
+    tick exactly as the driver holds them."""
+    cfg, drv = ctx["config"], ctx["driver"]
+    n = len(ctx["neurons"])
+    params = [golden.to_params(p) for p in ctx["neurons"].preset]
+    cur = drv.held(ctx["currents"], ctx["n_ticks"])
+    r = golden.simulate(params, cur, n_steps=ctx["n_ticks"], n_neurons=n, dt_ms=cfg.dt_ms,
+                        scheme="euler", progress=ctx.get("progress"))
+    return [np.asarray(s) for s in r.spikes_ms], {"spikes": int(sum(len(s) for s in
+                                                                    r.spikes_ms))}
+
+
+def _run_transport(engine):
+    def run(ctx):
+        from ..izhikevich.engines import make_transport
+        kw = {"progress": ctx.get("progress")}
+        if engine != "fixed":
+            bd = ctx.get("build_dir")
+            kw["build_dir"] = (Path(bd) / engine) if bd else None
+        tr = make_transport(engine, **kw)
+        tr.open(ctx["config"])
+        res = ctx["driver"].stream(tr, None, ctx["n_ticks"], raw=ctx["raw"])
+        tr.close()
+        n = len(ctx["neurons"])
+        cnt = dict(res.counters)
+        if hasattr(tr, "sim_s"):    # batch engines: the simulation without generation/build
+            cnt["simulate_ms"] = int(round(tr.sim_s * 1000))
+        return res.spikes.times_ms(ctx["config"].dt_ms, n), cnt
+    return run
+
+
+#: Engine name -> runner, for every engine the Izhikevich block runs on (the registry's list):
+#: golden integrates the float currents, the others stream the quantized currents through the
+#: host driver. Only the scene's engines are looked up and called.
+ENGINES = {e: run_golden if e == "golden" else _run_transport(e)
+           for e in block_engines("izhikevich")}
+
+
+def _front_end_detail(scene: Scene, neurons: Neurons) -> list[str]:
+    fe, out = scene["frontend"], []
+    for e in dict.fromkeys(neurons.encoding):
+        if e.mode == "FA":
+            filt = (f"b = {fe['filter_b']}, a = {fe['filter_a']}" if fe["filter_b"] is not None
+                    else f"{fe['filter_kind']} band-pass {fe['filter_low_hz']:g}-"
+                         f"{fe['filter_high_hz']:g} Hz, order {fe['filter_order']}")
+            out.append(f"FA: {filt}; gain {e.gain:g} per {e.unit_pm:g} pm of shift; rectify "
+                       f"{e.rectify}; window {fe['window']}")
+        else:
+            out.append(f"SA: gain {e.gain:g} per {e.unit_pm:g} pm of shift above "
+                       f"{e.threshold_pm:g} pm")
+    hold = int(scene["hardware"]["update_hz"] // scene["sensor"]["sample_rate_hz"])
+    out.append(f"samples held {hold} ticks each, latency {fe['latency_ticks']} ticks")
+    return out
+
+
+def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None = None,
+        progress: bool = False, log=None) -> SceneRun:
+    """Run an afferent ``scene`` on its engines (or ``engines``)."""
+    timing: dict = {}
+    say = log or (lambda msg: None)
+    t0 = time.perf_counter()
+    classes, trial_class, traces, infos, effect_counts = synthesize(scene)
+    timing["stimulus_s"] = time.perf_counter() - t0
+    say(f"stimulus: {len(traces)} trial(s) of {traces[0].shape[0]} samples x "
+        f"{traces[0].shape[1]} grating(s) ({timing['stimulus_s']:.2f} s)")
+    t0 = time.perf_counter()
+    neurons = build_neurons(scene, len(traces))
+    models = sorted({p["model"] for p in scene.populations})
+    blocks, cfg = [], None
+    for m in models:
+        cfg_m, desc = BLOCKS[m](scene, neurons)
+        blocks.append(desc)
+        cfg = cfg_m
+    drv, currents, gaps = front_end(scene, neurons, traces, infos, cfg)
+    raw, sat = drv.quantize(currents)
+    sat["gaps_held"] = gaps
+    n_ticks = currents.shape[0] * drv.hold_ticks
+    timing["front_end_s"] = time.perf_counter() - t0
+    ctx = {"config": cfg, "driver": drv, "neurons": neurons, "currents": currents, "raw": raw,
+           "n_ticks": n_ticks, "build_dir": build_dir}
+    names = list(engines or scene.engines)
+    for e in names:
+        if e not in ENGINES:
+            raise ValueError(f"unknown engine {e!r}; known: {', '.join(ENGINES)}")
+    results: dict = {}
+
+    def one(e, position):
+        t0 = time.perf_counter()
+        bar = None
+        if progress:
+            from tqdm import tqdm
+            bar = tqdm(total=n_ticks, desc=e, unit="tick", leave=False, position=position)
+        c = dict(ctx, progress=(lambda k, b=bar: b.update(k - b.n)) if bar else None)
+        try:
+            sp, cnt = ENGINES[e](c)
+        finally:
+            if bar:
+                bar.close()
+        results[e] = (sp, cnt, time.perf_counter() - t0)
+        say(f"engine {e}: {sum(len(x) for x in sp)} spikes ({results[e][2]:.1f} s)")
+
+    # HDL simulators run in their own processes: start them first, in the background (one at
+    # a time, the machine's other core serves the Python engines), and overlap them with the
+    # Python engines
+    background = [e for e in names if ENGINE_TRAITS[e].background]
+    t_all = time.perf_counter()
+    pool = None
+    if background:
+        from concurrent.futures import ThreadPoolExecutor
+
+        def hdl():
+            for i, e in enumerate(background):
+                one(e, 1 + i)
+        pool = ThreadPoolExecutor(max_workers=1)
+        fut = pool.submit(hdl)
+    try:
+        for e in names:
+            if e not in background:
+                one(e, 0)
+    finally:
+        if pool is not None:
+            try:
+                fut.result()
+            finally:
+                pool.shutdown()
+    timing["engines_wall_s"] = time.perf_counter() - t_all
+    spikes = {e: results[e][0] for e in names}
+    counters = {e: results[e][1] for e in names}
+    eng_t = {e: results[e][2] for e in names}
+    timing["engines_s"] = eng_t
+    t0 = time.perf_counter()
+    dec = scene["decoder"]
+    decoded = {}
+    if dec["kind"] != "none":
+        window = dec["window_ms"]
+        for e, sp in spikes.items():
+            fn = isi_samples if dec["features"] == "isi" else trial_features
+            X, y = fn(sp, neurons.trial, neurons.grating, trial_class, window)
+            decoded[e] = decode(X, y, classes, dec["kind"], dec["cv_folds"], dec["max_depth"],
+                                dec["neighbours"], scene["scene"]["seed"], dec["features"])
+    timing["decode_s"] = time.perf_counter() - t0
+    agreement = {}
+    names = list(spikes)
+    ref = "fixed" if "fixed" in spikes else None
+    for e in names:
+        if e == ref:
+            continue
+        other = ref or names[0]
+        if e == other:
+            continue
+        agreement[f"{e} vs {other}"] = train_agreement(spikes[e], spikes[other], cfg.dt_ms)
+    dec_agree = {}
+    if "golden" in decoded:
+        tol = dec["tolerance"]
+        for e, d in decoded.items():
+            g = decoded["golden"]
+            if e == "golden" or d.accuracy is None or g.accuracy is None:
+                continue
+            diff = abs(d.accuracy - g.accuracy)
+            dec_agree[f"{e} vs golden"] = {"difference": diff, "tolerance": tol,
+                                           "within": bool(diff <= tol)}
+    ran = {"effects": list(effect_counts) if effect_counts else
+           ([] if scene["stimulus"]["kind"] == "recorded" else ["strain"]),
+           "effect_counts": effect_counts, "blocks": blocks, "engines": list(spikes),
+           "front_end": sorted({f"{e.mode}" for e in neurons.encoding}),
+           "front_end_detail": _front_end_detail(scene, neurons),
+           "stimulus": scene["stimulus"]["kind"]}
+    return SceneRun(scene, classes, trial_class, traces, infos, neurons, currents, sat, cfg,
+                    cfg.dt_ms, n_ticks, spikes, counters, decoded, agreement, ran, timing,
+                    dec_agree)
+
+
+# --------------------------------------------------------------------------- results
+def summary(run: SceneRun) -> dict:
+    """The run as a JSON-ready dictionary (``run.json``)."""
+    from ..report import summary_dict
+    return summary_dict(run)
+
+
+def write_report(run: SceneRun, out: Path) -> Path:
+    """Write ``index.html``, ``run.json`` and figures into ``out``; returns the HTML path."""
+    from ..report import write_report as write
+    return write(run, out)
+
+
+def format_run(run: SceneRun) -> str:
+    """The lines ``cuneate run`` prints for an afferent scene."""
+    scene = run.scene
+    out = [f"{scene.name}: {len(run.trial_class)} trials, {len(run.neurons)} neurons, "
+           f"engines {', '.join(run.spikes)}"]
+    for e, t in run.timing["engines_s"].items():
+        d = run.decoded.get(e)
+        acc = "-" if d is None else (f"{100 * d.accuracy:.1f} %" if d.accuracy is not None
+                                     else d.reason)
+        out.append(f"  {e:10s} accuracy {acc:>8s}  ({t:.1f} s)")
+    for k, v in run.decode_agreement.items():
+        out.append(f"  accuracy {k}: differs by {100 * v['difference']:.1f} points (tolerance "
+                   f"{100 * v['tolerance']:.1f}): {'within' if v['within'] else 'OUTSIDE'}")
+    s = run.saturations
+    for e, sp in run.spikes.items():
+        if not any(len(x) for x in sp):
+            out.append(f"  warning: {e}: no neuron spiked (currents peak at "
+                       f"{s['max_mV_per_ms']:.2f} mV/ms; an RS neuron needs about 3.8)")
+    n_sat = s.get("format_low", 0) + s.get("format_high", 0)
+    if n_sat:
+        out.append(f"  warning: {n_sat} of {s['values']} currents saturated to {s['format']} "
+                   f"(range {s['min_mV_per_ms']:.1f} .. {s['max_mV_per_ms']:.1f} mV/ms)")
+    for k, v in run.agreement.items():
+        out.append(f"  {k}: {v['identical_trains']}/{v['neurons']} identical trains, mean "
+                   f"|spike count diff| {v['mean_abs_count_diff']:.2f}")
+    return "\n".join(out)

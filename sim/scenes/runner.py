@@ -1,0 +1,45 @@
+"""Running a scene of any kind, and what every kind compares between engines.
+
+:func:`run_scene` looks the scene's kind up in the registry (:mod:`cuneate.sim.scenes.registry`)
+and runs it with the kind's module; :func:`agreement` compares two engines' spike trains.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from .registry import kind_module
+
+__all__ = ["run_scene", "agreement", "kind_of"]
+
+
+def kind_of(run_or_scene) -> str:
+    """The scene kind of a scene or of a run."""
+    return getattr(run_or_scene, "kind", "afferent")
+
+
+def run_scene(scene, engines: list[str] | None = None, build_dir: Path | None = None,
+              progress: bool = False, log=None):
+    """Run ``scene`` on its engines (or ``engines``) with its kind's module; returns that
+    kind's run (``run.kind`` names the kind; ``run.ran`` lists exactly what was computed)."""
+    return kind_module(scene.kind).run(scene, engines, build_dir, progress, log)
+
+
+def agreement(a: list, b: list, dt_ms: float) -> dict:
+    """How the spike trains ``a`` and ``b`` (one per neuron, ms) agree: totals, identical
+    trains, spike-count differences, Victor-Purpura distance at q = 1/ms and the fraction of
+    spikes within one tick of ``dt_ms``."""
+    from ...golden import metrics
+    cnt_a = np.array([len(s) for s in a])
+    cnt_b = np.array([len(s) for s in b])
+    vp = [metrics.victor_purpura(x, y, 1.0) for x, y in zip(a, b)]
+    within = [metrics.fraction_within(x, y, dt_ms) for x, y in zip(a, b)]
+    within = [w for w in within if w is not None]
+    return {"neurons": len(a), "spikes_a": int(cnt_a.sum()), "spikes_b": int(cnt_b.sum()),
+            "identical_trains": int(sum(np.array_equal(x, y) for x, y in zip(a, b))),
+            "mean_abs_count_diff": float(np.mean(np.abs(cnt_a - cnt_b))) if a else 0.0,
+            "max_abs_count_diff": int(np.max(np.abs(cnt_a - cnt_b))) if a else 0,
+            "mean_victor_purpura_q1": float(np.mean(vp)) if vp else 0.0,
+            "fraction_within_1_tick": float(np.mean(within)) if within else None}
