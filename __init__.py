@@ -21,29 +21,33 @@ try:
 except PackageNotFoundError:           # pragma: no cover - a source tree that is not installed
     __version__ = "0+unknown"
 
-#: public name -> the module that defines it
-_EXPORTS = {
-    "IzhikevichConfig": "cuneate.hdl.izhikevich", "IzhikevichTwin": "cuneate.hdl.izhikevich",
-    "IzhikevichCore": "cuneate.hdl.izhikevich",
-    "LifConfig": "cuneate.hdl.lif", "LifTwin": "cuneate.hdl.lif", "LifCore": "cuneate.hdl.lif",
-    "CoincidenceConfig": "cuneate.hdl.coincidence",
-    "CoincidenceTwin": "cuneate.hdl.coincidence",
-    "CoincidenceDetector": "cuneate.hdl.coincidence",
-    "NetworkConfig": "cuneate.hdl.network", "NetworkTwin": "cuneate.hdl.network",
-    "ConfigError": "cuneate.hdl.lib.config",
-    "load_scene": "cuneate.sim.scenes.scene", "parse_scene": "cuneate.sim.scenes.scene",
-    "default_scene": "cuneate.sim.scenes.scene", "run_scene": "cuneate.sim.scenes.runner",
-    "FbgDriver": "cuneate.sim.host.driver",
-}
-
-__all__ = ["__version__", *sorted(_EXPORTS)]
 
 
-def __getattr__(name: str):
-    if name in _EXPORTS:
-        return getattr(importlib.import_module(_EXPORTS[name]), name)
-    raise AttributeError(f"module 'cuneate' has no attribute {name!r}")
+
+def lazy_exports(package: str, modules: dict):
+    """``(__getattr__, __dir__, __all__)`` for ``package`` whose public names load on first
+    use (PEP 562), so importing a package stays cheap for the command line. ``modules``: module
+    (absolute, or relative to ``package``) -> the names it exports, space-separated."""
+    exports = {name: mod for mod, names in modules.items() for name in names.split()}
+
+    def getattr_(name: str):
+        if name in exports:
+            return getattr(importlib.import_module(exports[name], package), name)
+        raise AttributeError(f"module {package!r} has no attribute {name!r}")
+
+    def dir_():
+        import sys
+        return sorted(set(vars(sys.modules[package])) | set(exports))
+    return getattr_, dir_, sorted(exports)
 
 
-def __dir__():
-    return sorted(set(globals()) | set(_EXPORTS))
+__getattr__, __dir__, _public = lazy_exports(__name__, {
+    "cuneate.hdl.izhikevich": "IzhikevichConfig IzhikevichTwin IzhikevichCore",
+    "cuneate.hdl.lif": "LifConfig LifTwin LifCore",
+    "cuneate.hdl.coincidence": "CoincidenceConfig CoincidenceTwin CoincidenceDetector",
+    "cuneate.hdl.network": "NetworkConfig NetworkTwin",
+    "cuneate.hdl.lib.config": "ConfigError",
+    "cuneate.sim.scenes.scene": "load_scene parse_scene default_scene",
+    "cuneate.sim.scenes.runner": "run_scene",
+    "cuneate.sim.host.driver": "FbgDriver"})
+__all__ = ["__version__", "lazy_exports", *_public]

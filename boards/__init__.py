@@ -5,15 +5,8 @@ to a device (``sizing``), builds and reports (``build``) and the host side of th
 
 from __future__ import annotations
 
-import importlib
+from .. import lazy_exports
 
-_EXPORTS = {"TARGETS": ".targets", "build_target": ".build", "size_core": ".sizing",
-            "UartTransport": ".uart"}
-
-__all__ = sorted(_EXPORTS)
-
-
-def __getattr__(name: str):
-    if name in _EXPORTS:
-        return getattr(importlib.import_module(_EXPORTS[name], __name__), name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+__getattr__, __dir__, __all__ = lazy_exports(__name__, {
+    ".targets": "TARGETS", ".build": "build_target", ".sizing": "size_core",
+    ".uart": "UartTransport"})

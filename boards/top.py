@@ -16,7 +16,7 @@ from amaranth import ClockDomain, ClockSignal, Elaboratable, Module, ResetSignal
 from ..hdl.izhikevich.config import ConfigError
 from ..hdl.link import LinkConfig, LinkedCore
 
-__all__ = ["ClockPlan", "BoardTop"]
+__all__ = ["xilinx_estimate_target", "ClockPlan", "BoardTop"]
 
 
 @dataclass(frozen=True)
@@ -71,3 +71,17 @@ class BoardTop(Elaboratable):
             m.submodules[f"led{i}"] = led = io.Buffer("o", platform.request("led", i, dir="-"))
             m.d.comb += led.o.eq(sig)
         return m
+
+
+def xilinx_estimate_target(name: str, description: str, family: str, device: str,
+                           resources: dict, bram_shapes: list, synth_family: str,
+                           bram_cells: dict) -> dict:
+    """A Verilog-plus-estimate target on a Xilinx device (no open bitstream flow): a 100 MHz
+    oscillator, a 40 MHz core clock from the vendor's clock manager (2500 cycles per 16 kHz
+    sweep, 20 clocks per bit at 2 Mbaud), 512-bit LUT RAM, 18-bit multipliers;
+    ``resources`` with BRAM in 18 Kbit blocks, ``bram_cells`` the 18 Kbit blocks per cell."""
+    return {"name": name, "description": description, "family": family, "device": device,
+            "clock_plan": ClockPlan(osc_hz=100e6, clock_hz=40e6, update_hz=16e3, baud=2e6),
+            "pll_clocks": [40e6], "resources": resources, "bram_shapes": bram_shapes,
+            "lutram_bits": 512, "dsp_width": 18, "default_neurons": 2400, "bitstream": False,
+            "synth_family": synth_family, "bram_cells": bram_cells}

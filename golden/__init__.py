@@ -8,19 +8,11 @@ Bragg shift and the front-end filters), ``tactile`` (contact physics and sensor 
 
 from __future__ import annotations
 
-import importlib
+from .. import lazy_exports
 
-_EXPORTS = {"simulate": ".izhikevich", "IzhikevichParams": ".izhikevich",
-            "PRESETS": ".izhikevich", "DivergenceError": ".izhikevich",
-            "BEHAVIOURS": ".behaviours", "simulate_lif": ".lif",
-            "simulate_discrete_lif": ".lif", "simulate_cuneate": ".coincidence",
-            "victor_purpura": ".metrics", "compare_trains": ".metrics",
-            "compare_populations": ".metrics"}
-
-__all__ = sorted(_EXPORTS)
-
-
-def __getattr__(name: str):
-    if name in _EXPORTS:
-        return getattr(importlib.import_module(_EXPORTS[name], __name__), name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+__getattr__, __dir__, __all__ = lazy_exports(__name__, {
+    ".izhikevich": "simulate IzhikevichParams PRESETS DivergenceError",
+    ".behaviours": "BEHAVIOURS",
+    ".lif": "simulate_lif simulate_discrete_lif",
+    ".coincidence": "simulate_cuneate",
+    ".metrics": "victor_purpura compare_trains compare_populations"})

@@ -104,12 +104,8 @@ def spike_count_difference(a_ms: ArrayLike, b_ms: ArrayLike) -> int:
 
 
 def first_spike_latency_difference(a_ms: ArrayLike, b_ms: ArrayLike) -> float | None:
-    """Difference of first-spike latencies, ``b[0] - a[0]``, in ms.
-
-    Parameters
-    ----------
-    a_ms, b_ms : array_like
-        Spike trains, spike times in ms (1-D, finite, sorted ascending).
+    """Difference of first-spike latencies, ``b[0] - a[0]``, in ms, of two spike trains (times
+    in ms, 1-D, finite, sorted ascending).
 
     Returns
     -------

@@ -11,33 +11,16 @@ loaded on first use, so importing this package is cheap.
 
 from __future__ import annotations
 
-import importlib
+from .. import lazy_exports
 
 #: public name -> the module that defines it
-_EXPORTS = {
-    "ConfigError": ".lib.config", "QFormat": ".lib.fixed",
-    "IzhikevichConfig": ".izhikevich", "IzhikevichTwin": ".izhikevich",
-    "IzhikevichCore": ".izhikevich", "izhikevich_verilog": ".izhikevich",
-    "generate_izhikevich": ".izhikevich",
-    "LifConfig": ".lif", "LifTwin": ".lif", "LifCore": ".lif", "lif_verilog": ".lif",
-    "generate_lif": ".lif",
-    "CoincidenceConfig": ".coincidence", "CoincidenceTwin": ".coincidence",
-    "CoincidenceDetector": ".coincidence", "coincidence_verilog": ".coincidence",
-    "generate_coincidence": ".coincidence",
-    "NetworkConfig": ".network", "NetworkTwin": ".network",
-    "AfferentCuneateNetwork": ".network", "network_verilog": ".network",
-    "generate_network": ".network",
-    "LinkConfig": ".link", "LinkedCore": ".link", "link_config": ".link",
-}
-
-__all__ = sorted(_EXPORTS)
-
-
-def __getattr__(name: str):
-    if name in _EXPORTS:
-        return getattr(importlib.import_module(_EXPORTS[name], __name__), name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-def __dir__():
-    return sorted(set(globals()) | set(_EXPORTS))
+__getattr__, __dir__, __all__ = lazy_exports(__name__, {
+    ".lib.config": "ConfigError", ".lib.fixed": "QFormat",
+    ".izhikevich": "IzhikevichConfig IzhikevichTwin IzhikevichCore izhikevich_verilog "
+                   "generate_izhikevich",
+    ".lif": "LifConfig LifTwin LifCore lif_verilog generate_lif",
+    ".coincidence": "CoincidenceConfig CoincidenceTwin CoincidenceDetector coincidence_verilog "
+                    "generate_coincidence",
+    ".network": "NetworkConfig NetworkTwin AfferentCuneateNetwork network_verilog "
+                "generate_network",
+    ".link": "LinkConfig LinkedCore link_config"})

@@ -10,19 +10,12 @@ use.
 
 from __future__ import annotations
 
-import importlib
+from .. import lazy_exports
 
-_EXPORTS = {"run_scene": ".scenes.runner", "load_scene": ".scenes.scene",
-            "parse_scene": ".scenes.scene", "default_scene": ".scenes.scene",
-            "FbgDriver": ".host.driver", "AfferentEncoding": ".host.driver",
-            "SpikeBatch": ".host.transport", "Transport": ".host.transport",
-            "make_transport": ".izhikevich.engines", "run_engine": ".izhikevich.engines",
-            "ENGINES": ".engines.registry"}
-
-__all__ = sorted(_EXPORTS)
-
-
-def __getattr__(name: str):
-    if name in _EXPORTS:
-        return getattr(importlib.import_module(_EXPORTS[name], __name__), name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+__getattr__, __dir__, __all__ = lazy_exports(__name__, {
+    ".scenes.runner": "run_scene",
+    ".scenes.scene": "load_scene parse_scene default_scene",
+    ".host.driver": "FbgDriver AfferentEncoding",
+    ".host.transport": "SpikeBatch Transport",
+    ".izhikevich.engines": "make_transport run_engine",
+    ".engines.registry": "ENGINES"})

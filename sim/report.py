@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 __all__ = ["write_report", "summary_dict", "figure_names", "page_head", "figures_html",
-           "pyplot", "html_table", "fmt"]
+           "pyplot", "html_table", "fmt", "write_page"]
 
 
 def pyplot():
@@ -169,6 +169,15 @@ def page_head(name: str) -> str:
 table{{border-collapse:collapse;margin:.5em 0;}}td,th{{border:1px solid #bbb;padding:2px 8px;}}
 figure{{display:inline-block;margin:4px;}}img{{max-width:520px;}}</style></head><body>
 <h1>{html.escape(name)}</h1>"""
+
+
+def write_page(out: Path, head: str, body: str, figures) -> Path:
+    """``out/index.html``: the page head (:func:`page_head` of ``head``), ``body`` and the
+    figures section; returns its path."""
+    path = Path(out) / "index.html"
+    path.write_text(f"{page_head(head)}\n{body}\n<h2>Figures</h2>\n{figures_html(figures)}\n"
+                    f"</body></html>\n")
+    return path
 
 
 def figures_html(names) -> str:

@@ -28,10 +28,11 @@ import pkgutil
 import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
+from typing import ClassVar
 
 import numpy as np
 
-__all__ = ["SweepSpec", "register_battery", "battery_module", "battery_names",
+__all__ = ["Point", "SweepSpec", "register_battery", "battery_module", "battery_names",
            "reference_trains", "evaluate", "accuracy_row", "ok_row", "same_dt_columns",
            "refused", "point_key", "n_steps", "run_sweep", "pareto_front", "write_sweep",
            "BLOCK_SAME_DT_KEYS", "VP_Q_PER_MS"]
@@ -91,6 +92,29 @@ def point_key(*parts) -> str:
 def n_steps(duration_ms: float, dt_ms: float) -> int:
     """Updates in ``duration_ms`` at a step of ``dt_ms``."""
     return int(round(duration_ms / dt_ms))
+
+
+@dataclass(frozen=True)
+class Point:
+    """What every block's sweep point has: ``engine`` (``fixed``: the block's bit-exact twin,
+    configured from the point's knobs; ``float64``/``float32``: its golden model in that
+    arithmetic), the update rate and, for ``fixed``, the multiplier operand width and the
+    rounding. A block's point adds its own knobs and evaluates itself
+    (``evaluate(spec, ref)``)."""
+
+    engine: str
+    update_hz: float = 16e3
+    operand_width: int = 18
+    rounding: str = "nearest"
+
+    #: prefix of the point's cache key (the block)
+    BLOCK: ClassVar[str] = ""
+
+    def key(self, spec: "SweepSpec") -> str:
+        """Cache key of the point on ``spec`` (its fields, the battery, duration, reference
+        rate and clock)."""
+        return point_key(self.BLOCK, asdict(self), spec.battery, spec.duration_ms,
+                         spec.reference_hz, spec.clock_hz)
 
 
 @dataclass

@@ -85,7 +85,7 @@ def test_installed_wheel_runs_doctor_and_simulate(installed):
     assert r.returncode == 0, r.stdout + r.stderr
     assert json.loads(r.stdout)["ok"] is True
     r = subprocess.run([str(env_dir / "bin" / "python"), "-c",
-                        "import cuneate, cuneate.hdl; print(cuneate.__file__, cuneate.__version__)"],
+                        "import cuneate; print(cuneate.__file__, cuneate.__version__)"],
                        cwd=base, capture_output=True, text=True)
     assert str(env_dir) in r.stdout, r.stdout + r.stderr         # the wheel, not the checkout
     runs = {}

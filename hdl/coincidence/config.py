@@ -67,12 +67,13 @@ class CoincidenceConfig:
         Izhikevich parameter sets of the targets and each target's set (default RS for all).
     clock_hz, update_hz
         Clock and tick rate; a tick needs ``n_targets * (n_sources + 8)`` cycles.
-    weight_bits, trace_frac_bits, operand_width, rounding
-        Weight width, fraction bits of the traces, multiplier operand width, rounding.
     tick_source
         ``"external"`` (``tick`` input, default) or ``"internal"`` (divider).
-    max_decay_error
-        Largest accepted relative error of a trace decay constant.
+    weight_bits, trace_frac_bits, max_decay_error
+        Weight width, fraction bits of the traces, largest accepted relative error of a trace
+        decay constant.
+    operand_width, rounding
+        Multiplier operand width and rounding.
     """
 
     n_sources: int = 4
@@ -86,12 +87,12 @@ class CoincidenceConfig:
     target_sets: Sequence[int] | None = None
     clock_hz: float = 40e6
     update_hz: float = 16e3
+    tick_source: str = "external"
     weight_bits: int = 12
     trace_frac_bits: int = 16
+    max_decay_error: float = 1e-2
     operand_width: int = 18
     rounding: str = "nearest"
-    tick_source: str = "external"
-    max_decay_error: float = 1e-2
 
     iz: IzhikevichConfig = field(init=False, repr=False)
 

@@ -44,7 +44,7 @@ from amaranth.lib import wiring
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
-from ..flow.synth import synthesize
+from ..flow.synth import synthesize_flows
 from ..flow.verilog import verilog_text, write_block
 from ..izhikevich import multiply1, multiply2, operands, update_state
 from ..lib.datapath import lookup
@@ -53,7 +53,8 @@ from ..lib.tick import tick_strobe
 from .config import CLAMP_KINDS, CoincidenceConfig
 from .datapath import accumulate, clamp_bits_hdl, psp_current
 
-__all__ = ["synth_resources", "CoincidenceDetector", "coincidence_verilog", "generate_coincidence", "COUNTER_BITS"]
+__all__ = ["synth_resources", "CoincidenceDetector", "coincidence_verilog", "generate_coincidence",
+           "COUNTER_BITS"]
 
 COUNTER_BITS = 32
 
@@ -262,8 +263,5 @@ def generate_coincidence(out, config: CoincidenceConfig,
 
 
 def synth_resources(cfg, flows=("ecp5", "xc6s"), workdir=None) -> dict:
-    """``{flow: result}`` of :func:`cuneate.hdl.flow.synth.synthesize` for the block built from
-    ``cfg`` (synthesis only: cell counts, no fmax)."""
-    text = coincidence_verilog(cfg)
-    return {f: synthesize(text, "coincidence_detector", f, None if workdir is None else workdir / f)
-            for f in flows}
+    """Synthesis figures (cell counts, no fmax) of the block built from ``cfg`` per flow."""
+    return synthesize_flows(coincidence_verilog(cfg), "coincidence_detector", flows, workdir)

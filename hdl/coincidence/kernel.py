@@ -5,10 +5,11 @@ history ring, sum each target's delayed weighted inputs (``accumulate``), the PS
 trace inputs (``psp_current``), the two trace decays (``trace_products`` / ``trace_update`` of
 :mod:`cuneate.hdl.lib.synapses`) and the Izhikevich update (``operands`` .. ``update_state``) -
 restated per target with the same integer operations in the same order, one compiled loop over a
-whole run. The Izhikevich step is the Izhikevich kernel's (:mod:`cuneate.hdl.izhikevich.kernel`) and the
-trace step the shared one (:mod:`cuneate.hdl.lib.kernel`), so each integer operation is
-restated once. Proven bit-exact against the stage-function twin by property tests (random
-states, traces and input sums) and long runs (``tests/hdl/test_coincidence_kernel.py``).
+whole run. The Izhikevich step is the Izhikevich kernel's
+(:mod:`cuneate.hdl.izhikevich.kernel`) and the trace step the shared one
+(:mod:`cuneate.hdl.lib.kernel`), so each integer operation is restated once. Proven bit-exact
+against the stage-function twin by property tests (random states, traces and input sums) and
+long runs (``tests/hdl/test_coincidence_kernel.py``).
 """
 
 from __future__ import annotations

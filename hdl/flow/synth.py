@@ -22,8 +22,8 @@ from pathlib import Path
 
 from .tools import ToolError, find_tool, tool
 
-__all__ = ["FLOWS", "run_yosys", "cell_counts", "summary", "synthesize", "format_resources",
-           "nextpnr_ecp5", "nextpnr_summary", "SynthError"]
+__all__ = ["FLOWS", "run_yosys", "cell_counts", "summary", "synthesize", "synthesize_flows",
+           "format_resources", "nextpnr_ecp5", "nextpnr_summary", "SynthError", "available"]
 
 FLOWS = {
     "ecp5": "synth_ecp5 -top {top}",
@@ -124,6 +124,14 @@ def synthesize(verilog: str, top: str, flow: str, workdir: Path | None = None,
         raise ValueError("a netlist needs a workdir to live in")
     with tempfile.TemporaryDirectory(prefix=f"cuneate-synth-{flow}-") as d:
         return go(Path(d))
+
+
+def synthesize_flows(verilog: str, top: str, flows=("ecp5", "xc6s"),
+                     workdir: Path | None = None) -> dict:
+    """``{flow: result}`` of :func:`synthesize` for each of ``flows`` (a sub-directory of
+    ``workdir`` each, when given)."""
+    return {f: synthesize(verilog, top, f, None if workdir is None else Path(workdir) / f)
+            for f in flows}
 
 
 def format_resources(res: dict) -> str:

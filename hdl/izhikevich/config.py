@@ -1,7 +1,8 @@
 """Configuration of the Izhikevich core: sizes, rates, parameter sets, and every format and
 constant derived from them, with the refusals of what cannot be held.
 
-The arithmetic is forward Euler, per parameter set ``s`` (see :mod:`cuneate.hdl.izhikevich.datapath`)::
+The arithmetic is forward Euler, per parameter set ``s`` (see
+:mod:`cuneate.hdl.izhikevich.datapath`)::
 
     w   = v + B_s/(2 A_s)                                  (rounded once into the v format)
     v'  = v + (A_s dt) w^2 + dt (C_s - A_s woff_s^2) + dt I - dt u
@@ -37,7 +38,7 @@ from typing import Sequence
 import numpy as np
 
 from ...golden import izhikevich as golden
-from ..lib.config import ConfigError, int_bits_for, shared_exponent
+from ..lib.config import SATURATION, ConfigError, CoreOptions, int_bits_for, shared_exponent
 from ..lib.fixed import FixedConstant, FixedPointError, QFormat, round_shift
 from .range import RangeSearchError, one_step_bound, reachable_ranges
 
@@ -45,7 +46,6 @@ __all__ = ["ConfigError", "IzhikevichConfig", "PIPELINE_DEPTH", "CLAMP_KINDS", "
 
 PIPELINE_DEPTH = 5
 CLAMP_KINDS = ("v_low", "u_high", "u_low", "current", "y")
-SATURATION = ("refuse", "flag")
 _REL = 2.0 ** -12          # largest relative representation error accepted for a constant
 _INT64_GUARD = 1 << 62
 
@@ -57,7 +57,7 @@ def _shared_exponent(name: str, values: Sequence[float], width: int, nominal: fl
 
 
 @dataclass
-class IzhikevichConfig:
+class IzhikevichConfig(CoreOptions):
     """Everything that defines a core: size, rates, formats, constants, parameter sets.
 
     Parameters
@@ -118,11 +118,6 @@ class IzhikevichConfig:
     u_frac_bits: int = 20
     current_format: QFormat = QFormat(10, 8)
     current_range: tuple[float, float] | None = None
-    saturation: str = "refuse"
-    rounding: str = "nearest"
-    tick_source: str = "internal"
-    spike_fifo_depth: int = 64
-    sweep_number_width: int = 16
     y_int_bits: int | None = None
     y_frac_bits: int | None = None
     v0: float = golden.V0
@@ -185,13 +180,7 @@ class IzhikevichConfig:
                 f"{N} neurons do not fit one sweep: at {self.clock_hz:g} Hz and "
                 f"{self.update_hz:g} Hz per neuron the core has {self.cycles_per_tick} cycles "
                 f"per update (at most {self.cycles_per_tick} neurons)")
-        if self.rounding not in ("nearest", "truncate"):
-            raise ConfigError(f"unknown rounding {self.rounding!r}; known: nearest, truncate")
-        if self.tick_source not in ("internal", "external"):
-            raise ConfigError("tick_source must be 'internal' or 'external'")
-        if self.saturation not in SATURATION:
-            raise ConfigError(f"saturation must be one of {SATURATION}, got "
-                              f"{self.saturation!r}")
+        self._check_options()
         if not isinstance(self.operand_width, (int, np.integer)) or self.operand_width < 8:
             raise ConfigError("operand_width must be an integer >= 8")
         for k in ("v_frac_bits", "u_frac_bits"):

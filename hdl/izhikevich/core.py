@@ -13,11 +13,11 @@ from pathlib import Path
 
 from amaranth import Cat, Module, Mux, Signal
 from amaranth.lib import wiring
-from amaranth.lib.memory import Memory
-from amaranth.lib.wiring import In, Out
+from amaranth.lib.wiring import Out
 
 from ..flow.verilog import write_block, verilog_text
-from ..lib.bookkeeping import pipeline_tags, registrar, sweep_bookkeeping, sweep_issue
+from ..lib.bookkeeping import (core_memories, core_ports, pipeline_tags, registrar,
+                               sweep_bookkeeping, sweep_issue)
 from ..lib.tick import tick_strobe
 from .config import CLAMP_KINDS, IzhikevichConfig
 from . import datapath
@@ -72,23 +72,8 @@ class IzhikevichCore(wiring.Component):
 
     def __init__(self, config: IzhikevichConfig | None = None, **kwargs):
         self.cfg = cfg = config or IzhikevichConfig(**kwargs)
-        N = cfg.n_neurons
-        sig = {
-            "i_wr_en": In(1), "i_wr_addr": In(range(N)), "i_wr_data": In(cfg.I.shape()),
-            "sel_wr_en": In(1), "sel_wr_addr": In(range(N)), "sel_wr_data": In(cfg.sel_bits),
-            "spike_valid": Out(1), "spike_ready": In(1), "spike_index": Out(range(N)),
-            "spike_sweep": Out(cfg.sweep_number_width), "spike_overflow": Out(1),
-            "upd_valid": Out(1), "upd_index": Out(range(N)), "upd_v": Out(cfg.V.shape()),
-            "upd_u": Out(cfg.U.shape()), "upd_current": Out(cfg.I.shape()),
-            "upd_spike": Out(1), "upd_clamp": Out(len(CLAMP_KINDS)),
-            "clamp_flags": Out(len(CLAMP_KINDS)), "clamp_clear": In(1),
-            "sweep_done": Out(1), "sweep_count": Out(range(N + 1)),
-            "sweep_number": Out(cfg.sweep_number_width), "overrun": Out(1), "busy": Out(1),
-        }
-        for k in CLAMP_KINDS:
-            sig[f"sweep_clamps_{k}"] = Out(range(N + 1))
-        if cfg.tick_source == "external":
-            sig["tick"] = In(1)
+        sig = core_ports(cfg, CLAMP_KINDS, {"upd_v": Out(cfg.V.shape()),
+                                            "upd_u": Out(cfg.U.shape())})
         super().__init__(sig)
 
     def elaborate(self, platform):
@@ -101,20 +86,8 @@ class IzhikevichCore(wiring.Component):
             return (v & ((1 << V.width) - 1)) | ((u & ((1 << U.width) - 1)) << V.width)
 
         init_state = [pack(int(v), int(u)) for v, u in zip(cfg.v_init_raw, cfg.u_init_raw)]
-        m.submodules.state_mem = state_mem = Memory(shape=V.width + U.width, depth=N,
-                                                    init=init_state)
-        m.submodules.cur_mem = cur_mem = Memory(shape=cfg.I.shape(), depth=N, init=[])
-        m.submodules.sel_mem = sel_mem = Memory(shape=cfg.sel_bits, depth=N,
-                                                init=cfg.neuron_sets)
-        st_rd, st_wr = state_mem.read_port(), state_mem.write_port()
-        cur_rd, cur_wr = cur_mem.read_port(), cur_mem.write_port()
-        sel_rd, sel_wr = sel_mem.read_port(), sel_mem.write_port()
-        m.d.comb += [
-            cur_wr.addr.eq(self.i_wr_addr), cur_wr.data.eq(self.i_wr_data),
-            cur_wr.en.eq(self.i_wr_en),
-            sel_wr.addr.eq(self.sel_wr_addr), sel_wr.data.eq(self.sel_wr_data),
-            sel_wr.en.eq(self.sel_wr_en),
-        ]
+        st_rd, st_wr, cur_rd, sel_rd = core_memories(m, self, cfg, V.width + U.width,
+                                                     init_state)
 
         # --- sweep control and pipeline tags ----------------------------------------------
         tick = tick_strobe(m, cfg, getattr(self, "tick", None))

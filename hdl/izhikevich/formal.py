@@ -1,9 +1,9 @@
 """Formal checks of the Izhikevich block with SymbiYosys (``yowasp-sby``, z3).
 
 **The one-update datapath.** :func:`one_step` builds the datapath as one combinational
-update from the same stage functions as the core and the twin (``operands``, ``multiply1``, ``multiply2``,
-``update_state``), with free inputs ``v``, ``u``, ``I`` (and the parameter-set index) assumed
-inside the configuration's state box (``v_floor <= v <= v_th``, ``u_lo <= u <= u_hi``) and the
+update from the same stage functions as the core and the twin (``operands``,
+``multiply1``, ``multiply2``, ``update_state``), with free inputs ``v``, ``u``, ``I`` (and
+the parameter-set index) assumed inside the configuration's state box (``v_floor <= v <= v_th``, ``u_lo <= u <= u_hi``) and the
 accepted current range. It asserts:
 
 * ``datapath`` (default): every unclamped narrowing of the datapath (:func:`cuneate.hdl.lib.fixed

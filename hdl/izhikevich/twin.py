@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from ...golden import izhikevich as golden
-from ..lib.fixed import check_int64, tally_clamps
+from ..lib.fixed import check_int64, clamp_report, store_raw, tally_clamps
 from .config import CLAMP_KINDS, IzhikevichConfig
 from .datapath import clamp_bits, multiply1, multiply2, operands, update_state
 
@@ -73,12 +73,7 @@ class IzhikevichTwin:
         """Quantize currents (mV/ms) like the host driver does and store them; returns raw.
         Values outside the current format saturate to it; values outside the accepted
         ``current_range`` are clamped (and flagged) by the datapath."""
-        raw = self.cfg.I.to_raw(values_mv_per_ms)
-        if index is None:
-            self.I[:] = raw
-        else:
-            self.I[index] = raw
-        return raw
+        return store_raw(self.I, self.cfg.I, values_mv_per_ms, index)
 
     def update(self, v, u, I, sel):
         """One update of the given neurons (raw int64 arrays); returns the stage-5 dict with
@@ -181,9 +176,7 @@ class IzhikevichTwin:
 
     def clamp_report(self) -> dict:
         """Sticky flags and counts per clamp kind (for reports and ``simulate --json``)."""
-        return {"sticky": {k: bool(self.clamp_sticky >> i & 1)
-                           for i, k in enumerate(CLAMP_KINDS)},
-                "counts": dict(self.clamp_counts)}
+        return clamp_report(self, CLAMP_KINDS)
 
     def v_mv(self):
         return self.cfg.V.to_float(self.v)

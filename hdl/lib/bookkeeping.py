@@ -21,8 +21,58 @@ from __future__ import annotations
 
 from amaranth import Cat, Module, Mux, Signal
 from amaranth.lib.fifo import SyncFIFOBuffered
+from amaranth.lib.memory import Memory
+from amaranth.lib.wiring import In, Out
 
-__all__ = ["SweepIssue", "sweep_issue", "pipeline_tags", "registrar", "sweep_bookkeeping"]
+__all__ = ["SweepIssue", "sweep_issue", "pipeline_tags", "registrar", "sweep_bookkeeping",
+           "core_memories", "core_ports"]
+
+
+def core_ports(cfg, clamp_kinds, state_ports: dict, extra: dict | None = None) -> dict:
+    """The ports every core has (host writes, spike stream, the ``upd_*`` probe, sweep
+    counters, sticky clamp flags, ``overrun``, ``busy``, per-kind clamp counters and, with an
+    external tick, ``tick``), with the block's ``state_ports`` (its ``upd_<state>`` outputs,
+    after ``upd_index``) and ``extra`` ports."""
+    N = cfg.n_neurons
+    sig = {
+        "i_wr_en": In(1), "i_wr_addr": In(range(N)), "i_wr_data": In(cfg.I.shape()),
+        "sel_wr_en": In(1), "sel_wr_addr": In(range(N)), "sel_wr_data": In(cfg.sel_bits),
+        "spike_valid": Out(1), "spike_ready": In(1), "spike_index": Out(range(N)),
+        "spike_sweep": Out(cfg.sweep_number_width), "spike_overflow": Out(1),
+        "upd_valid": Out(1), "upd_index": Out(range(N)), **state_ports,
+        "upd_current": Out(cfg.I.shape()), "upd_spike": Out(1),
+        "upd_clamp": Out(len(clamp_kinds)),
+        "clamp_flags": Out(len(clamp_kinds)), "clamp_clear": In(1),
+        "sweep_done": Out(1), "sweep_count": Out(range(N + 1)),
+        "sweep_number": Out(cfg.sweep_number_width), "overrun": Out(1), "busy": Out(1),
+    }
+    sig.update(extra or {})
+    for k in clamp_kinds:
+        sig[f"sweep_clamps_{k}"] = Out(range(N + 1))
+    if cfg.tick_source == "external":
+        sig["tick"] = In(1)
+    return sig
+
+
+def core_memories(m: Module, core, cfg, state_width: int, state_init: list):
+    """The per-neuron memories every core has: the state (``state_width`` bits, ``state_init``),
+    the host-written current and the parameter-set index, with the host write ports
+    (``i_wr_*``, ``sel_wr_*``) wired. Returns the state read and write ports and the current
+    and set read ports."""
+    N = cfg.n_neurons
+    m.submodules.state_mem = state_mem = Memory(shape=state_width, depth=N, init=state_init)
+    m.submodules.cur_mem = cur_mem = Memory(shape=cfg.I.shape(), depth=N, init=[])
+    m.submodules.sel_mem = sel_mem = Memory(shape=cfg.sel_bits, depth=N, init=cfg.neuron_sets)
+    st_rd, st_wr = state_mem.read_port(), state_mem.write_port()
+    cur_rd, cur_wr = cur_mem.read_port(), cur_mem.write_port()
+    sel_rd, sel_wr = sel_mem.read_port(), sel_mem.write_port()
+    m.d.comb += [
+        cur_wr.addr.eq(core.i_wr_addr), cur_wr.data.eq(core.i_wr_data),
+        cur_wr.en.eq(core.i_wr_en),
+        sel_wr.addr.eq(core.sel_wr_addr), sel_wr.data.eq(core.sel_wr_data),
+        sel_wr.en.eq(core.sel_wr_en),
+    ]
+    return st_rd, st_wr, cur_rd, sel_rd
 
 
 class SweepIssue:

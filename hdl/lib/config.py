@@ -9,16 +9,49 @@ refused later, at elaboration or while simulating.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Sequence
 
-from .fixed import FixedConstant, FixedPointError
+from .fixed import ROUNDINGS, FixedConstant, FixedPointError
 
-__all__ = ["ConfigError", "int_bits_for", "shared_exponent"]
+__all__ = ["ConfigError", "CoreOptions", "SATURATION", "TICK_SOURCES", "int_bits_for",
+           "shared_exponent"]
+
+SATURATION = ("refuse", "flag")
+TICK_SOURCES = ("internal", "external")
 
 
 class ConfigError(FixedPointError):
     """A block configuration that cannot hold; raised at construction (before elaboration),
     with a one-line reason."""
+
+
+@dataclass(kw_only=True)
+class CoreOptions:
+    """The options every time-multiplexed core takes (keywords only).
+
+    ``saturation``: formats narrower than the proven range are refused (``"refuse"``) or
+    accepted with flagged, counted clamps (``"flag"``); ``rounding``: ``"nearest"`` or
+    ``"truncate"``; ``tick_source``: ``"internal"`` (a divider of ``clock_hz / update_hz``) or
+    ``"external"`` (the ``tick`` input); ``spike_fifo_depth`` and ``sweep_number_width``: the
+    spike stream's buffering and the width of the (wrapping) sweep number.
+    """
+
+    saturation: str = "refuse"
+    rounding: str = "nearest"
+    tick_source: str = "internal"
+    spike_fifo_depth: int = 64
+    sweep_number_width: int = 16
+
+    def _check_options(self) -> None:
+        if self.saturation not in SATURATION:
+            raise ConfigError(f"saturation must be one of {SATURATION}, got "
+                              f"{self.saturation!r}")
+        if self.rounding not in ROUNDINGS:
+            raise ConfigError(f"unknown rounding {self.rounding!r}; known: "
+                              f"{', '.join(ROUNDINGS)}")
+        if self.tick_source not in TICK_SOURCES:
+            raise ConfigError("tick_source must be 'internal' or 'external'")
 
 
 def int_bits_for(lo: float, hi: float) -> int:

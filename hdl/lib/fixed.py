@@ -31,7 +31,7 @@ __all__ = [
     "ROUNDINGS", "QFormat", "FixedConstant", "FixedPointError", "is_hdl", "round_shift",
     "round_shift_add",
     "round_shift_select", "saturate", "narrow", "clamp_flagged", "select", "check_int64",
-    "tally_clamps",
+    "tally_clamps", "clamp_report", "store_raw",
 ]
 
 ROUNDINGS = ("nearest", "truncate")
@@ -351,6 +351,25 @@ def tally_clamps(twin, kinds, counts) -> None:
         twin.clamp_counts[k] += n
         if n:
             twin.clamp_sticky |= 1 << i
+
+
+
+def store_raw(dest, fmt: QFormat, values, index=None):
+    """Quantize ``values`` to ``fmt`` (saturating to the format, like the host driver) into the
+    int64 array ``dest`` (all of it, or at ``index``); returns the raw values."""
+    raw = fmt.to_raw(values)
+    if index is None:
+        dest[:] = raw
+    else:
+        dest[index] = raw
+    return raw
+
+
+def clamp_report(twin, kinds) -> dict:
+    """A twin's sticky clamp flags (per kind, from its bit mask) and counts per kind, for
+    reports and ``simulate --json``."""
+    return {"sticky": {k: bool(twin.clamp_sticky >> i & 1) for i, k in enumerate(kinds)},
+            "counts": dict(twin.clamp_counts)}
 
 
 def check_int64(name: str, x) -> None:

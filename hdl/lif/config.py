@@ -30,7 +30,7 @@ from typing import Sequence
 import numpy as np
 
 from ...golden import lif as golden
-from ..lib.config import ConfigError, int_bits_for
+from ..lib.config import SATURATION, ConfigError, CoreOptions, int_bits_for
 from ..lib.fixed import FixedConstant, QFormat
 
 __all__ = ["ConfigError", "LifConfig", "LifSet", "PIPELINE_DEPTH", "CLAMP_KINDS", "FORMS",
@@ -40,7 +40,6 @@ PIPELINE_DEPTH = 5
 CLAMP_KINDS = ("current", "input", "v_low")
 FORMS = ("continuous", "discrete")
 DECAYS = ("multiply", "shift")
-SATURATION = ("refuse", "flag")
 _GRID_EPS = 1e-9
 
 
@@ -106,7 +105,7 @@ class LifSet:
 
 
 @dataclass
-class LifConfig:
+class LifConfig(CoreOptions):
     """A time-multiplexed LIF core (see :class:`cuneate.hdl.lif.LifCore`).
 
     Parameters
@@ -158,11 +157,6 @@ class LifConfig:
     weight_frac_bits: int | None = None
     acc_bits: int | None = None
     input_limit: tuple[float, float] | None = None
-    saturation: str = "refuse"
-    rounding: str = "nearest"
-    tick_source: str = "internal"
-    spike_fifo_depth: int = 64
-    sweep_number_width: int = 16
     v_init: Sequence[float] | None = None
     max_decay_error: float = 1e-2
     synapses: bool = False
@@ -188,12 +182,7 @@ class LifConfig:
             raise ConfigError(f"form must be one of {FORMS}, got {self.form!r}")
         if self.decay not in DECAYS:
             raise ConfigError(f"decay must be one of {DECAYS}, got {self.decay!r}")
-        if self.saturation not in SATURATION:
-            raise ConfigError(f"saturation must be one of {SATURATION}, got {self.saturation!r}")
-        if self.rounding not in ("nearest", "truncate"):
-            raise ConfigError(f"unknown rounding {self.rounding!r}; known: nearest, truncate")
-        if self.tick_source not in ("internal", "external"):
-            raise ConfigError("tick_source must be 'internal' or 'external'")
+        self._check_options()
         if not (isinstance(self.update_hz, (int, float)) and math.isfinite(self.update_hz)
                 and self.update_hz > 0):
             raise ConfigError("update_hz must be a positive finite number")

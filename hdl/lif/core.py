@@ -15,7 +15,8 @@ from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
 from ..flow.verilog import verilog_text, write_block
-from ..lib.bookkeeping import pipeline_tags, registrar, sweep_bookkeeping, sweep_issue
+from ..lib.bookkeeping import (core_memories, core_ports, pipeline_tags, registrar,
+                               sweep_bookkeeping, sweep_issue)
 from ..lib.synapses import trace_products, trace_update
 from ..lib.tick import tick_strobe
 from .config import CLAMP_KINDS, LifConfig
@@ -43,7 +44,8 @@ class LifCore(wiring.Component):
     Input spikes: ``in_valid``/``in_source`` set a source's bit in the pending vector; each
     tick moves the pending vector into the active one (used by every neuron of that sweep)
     and clears it, so a spike arriving during tick t acts on the sweep of tick t + 1. Several
-    spikes of one source in one tick count once and set the sticky ``in_merged`` flag. Other ports are those of
+    spikes of one source in one tick count once and set the sticky ``in_merged`` flag. Other
+    ports are those of
     :class:`cuneate.hdl.izhikevich.IzhikevichCore` (``i_wr_*``, ``sel_wr_*``, spike stream,
     ``upd_*`` probe with ``upd_ref``, ``upd_acc``, sweep counters, sticky clamp flags). With
     ``weights_writable``, ``w_wr_en/w_wr_addr/w_wr_data`` write a neuron's whole weight row
@@ -54,33 +56,16 @@ class LifCore(wiring.Component):
     def __init__(self, config: LifConfig | None = None, **kwargs):
         self.cfg = cfg = config or LifConfig(**kwargs)
         N, F = cfg.n_neurons, cfg.n_inputs
-        sig = {
-            "i_wr_en": In(1), "i_wr_addr": In(range(N)), "i_wr_data": In(cfg.I.shape()),
-            "sel_wr_en": In(1), "sel_wr_addr": In(range(N)), "sel_wr_data": In(cfg.sel_bits),
-            "spike_valid": Out(1), "spike_ready": In(1), "spike_index": Out(range(N)),
-            "spike_sweep": Out(cfg.sweep_number_width), "spike_overflow": Out(1),
-            "upd_valid": Out(1), "upd_index": Out(range(N)), "upd_v": Out(cfg.V.shape()),
-            "upd_ref": Out(max(1, cfg.ref_bits)), "upd_current": Out(cfg.I.shape()),
-            "upd_acc": Out(signed(cfg.acc_bits)), "upd_spike": Out(1),
-            "upd_clamp": Out(len(CLAMP_KINDS)),
-            "clamp_flags": Out(len(CLAMP_KINDS)), "clamp_clear": In(1),
-            "sweep_done": Out(1), "sweep_count": Out(range(N + 1)),
-            "sweep_number": Out(cfg.sweep_number_width), "overrun": Out(1), "busy": Out(1),
-        }
+        extra = {"upd_acc": Out(signed(cfg.acc_bits))}
         for t in cfg.traces:
-            sig[f"upd_{t.name}"] = Out(t.T.shape())
+            extra[f"upd_{t.name}"] = Out(t.T.shape())
         if F:
-            sig["in_valid"] = In(1)
-            sig["in_source"] = In(range(F))
-            sig["in_merged"] = Out(1)
+            extra.update(in_valid=In(1), in_source=In(range(F)), in_merged=Out(1))
             if cfg.weights_writable:
-                sig["w_wr_en"] = In(1)
-                sig["w_wr_addr"] = In(range(N))
-                sig["w_wr_data"] = In(F * cfg.W.width)
-        for k in CLAMP_KINDS:
-            sig[f"sweep_clamps_{k}"] = Out(range(N + 1))
-        if cfg.tick_source == "external":
-            sig["tick"] = In(1)
+                extra.update(w_wr_en=In(1), w_wr_addr=In(range(N)),
+                             w_wr_data=In(F * cfg.W.width))
+        sig = core_ports(cfg, CLAMP_KINDS, {"upd_v": Out(cfg.V.shape()),
+                                            "upd_ref": Out(max(1, cfg.ref_bits))}, extra)
         super().__init__(sig)
 
     def elaborate(self, platform):
@@ -88,14 +73,7 @@ class LifCore(wiring.Component):
         N, F, V, R = cfg.n_neurons, cfg.n_inputs, cfg.V, cfg.ref_bits
         m = Module()
         init_state = [int(v) & ((1 << V.width) - 1) for v in cfg.v_init_raw]
-        m.submodules.state_mem = state_mem = Memory(shape=V.width + R, depth=N,
-                                                    init=init_state)
-        m.submodules.cur_mem = cur_mem = Memory(shape=cfg.I.shape(), depth=N, init=[])
-        m.submodules.sel_mem = sel_mem = Memory(shape=cfg.sel_bits, depth=N,
-                                                init=cfg.neuron_sets)
-        st_rd, st_wr = state_mem.read_port(), state_mem.write_port()
-        cur_rd, cur_wr = cur_mem.read_port(), cur_mem.write_port()
-        sel_rd, sel_wr = sel_mem.read_port(), sel_mem.write_port()
+        st_rd, st_wr, cur_rd, sel_rd = core_memories(m, self, cfg, V.width + R, init_state)
         rd_ports = [st_rd, cur_rd, sel_rd]
         wb = cfg.W.width
         if F:
@@ -112,12 +90,6 @@ class LifCore(wiring.Component):
             m.submodules.trace_mem = tr_mem = Memory(shape=sum(TW), depth=N, init=[])
             tr_rd, tr_wr = tr_mem.read_port(), tr_mem.write_port()
             rd_ports.append(tr_rd)
-        m.d.comb += [
-            cur_wr.addr.eq(self.i_wr_addr), cur_wr.data.eq(self.i_wr_data),
-            cur_wr.en.eq(self.i_wr_en),
-            sel_wr.addr.eq(self.sel_wr_addr), sel_wr.data.eq(self.sel_wr_data),
-            sel_wr.en.eq(self.sel_wr_en),
-        ]
 
         # --- sweep control -----------------------------------------------------------------
         tick = tick_strobe(m, cfg, getattr(self, "tick", None))

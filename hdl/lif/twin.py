@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from ...golden.izhikevich import group_spikes
-from ..lib.fixed import check_int64, tally_clamps
+from ..lib.fixed import check_int64, clamp_report, store_raw, tally_clamps
 from ..lib.synapses import trace_products, trace_update
 from .config import CLAMP_KINDS, LifConfig
 from .datapath import clamp_bits, gather_input, leak_operand, leak_product, update_state
@@ -65,12 +65,7 @@ class LifTwin:
 
     def set_currents(self, values, index=None) -> np.ndarray:
         """Quantize currents like the host does (saturating to the current format)."""
-        raw = self.cfg.I.to_raw(values)
-        if index is None:
-            self.I[:] = raw
-        else:
-            self.I[index] = raw
-        return raw
+        return store_raw(self.I, self.cfg.I, values, index)
 
     def set_weights(self, neuron: int, raw_row) -> None:
         """Host write of a neuron's weight row (raw values of ``config.W``), as ``w_wr_*``;
@@ -203,9 +198,8 @@ class LifTwin:
         return [(np.asarray(h, dtype=np.float64) + 1) * self.cfg.dt_ms for h in hits]
 
     def clamp_report(self) -> dict:
-        return {"sticky": {k: bool(self.clamp_sticky >> i & 1)
-                           for i, k in enumerate(CLAMP_KINDS)},
-                "counts": dict(self.clamp_counts)}
+        """Sticky flags and counts per clamp kind (for reports and ``simulate --json``)."""
+        return clamp_report(self, CLAMP_KINDS)
 
     def v_float(self):
         return self.cfg.V.to_float(self.v)

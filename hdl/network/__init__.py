@@ -15,4 +15,5 @@ from .core import (COUNTER_BITS, AfferentCuneateNetwork, generate_network, netwo
 from .twin import NetworkTwin
 
 __all__ = ["NetworkConfig", "NetworkTwin", "AfferentCuneateNetwork", "ConfigError",
-           "network_verilog", "generate_network", "POPULATIONS", "SWEEP_EXTRA", "COUNTER_BITS", "synth_resources"]
+           "network_verilog", "generate_network", "POPULATIONS", "SWEEP_EXTRA", "COUNTER_BITS",
+           "synth_resources"]

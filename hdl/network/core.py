@@ -39,13 +39,14 @@ from amaranth.lib.fifo import SyncFIFOBuffered
 from amaranth.lib.wiring import In, Out
 
 from ..coincidence.core import CoincidenceDetector
-from ..flow.synth import synthesize
+from ..flow.synth import synthesize_flows
 from ..flow.verilog import verilog_text, write_block
 from ..izhikevich.core import IzhikevichCore
 from ..lib.tick import tick_strobe
 from .config import NetworkConfig
 
-__all__ = ["synth_resources", "AfferentCuneateNetwork", "network_verilog", "generate_network", "COUNTER_BITS"]
+__all__ = ["synth_resources", "AfferentCuneateNetwork", "network_verilog", "generate_network",
+           "COUNTER_BITS"]
 
 COUNTER_BITS = 32
 
@@ -158,8 +159,5 @@ def generate_network(out, cfg: NetworkConfig, name: str = "afferent_cuneate_netw
 
 
 def synth_resources(cfg, flows=("ecp5", "xc6s"), workdir=None) -> dict:
-    """``{flow: result}`` of :func:`cuneate.hdl.flow.synth.synthesize` for the block built from
-    ``cfg`` (synthesis only: cell counts, no fmax)."""
-    text = network_verilog(cfg)
-    return {f: synthesize(text, "afferent_cuneate_network", f, None if workdir is None else workdir / f)
-            for f in flows}
+    """Synthesis figures (cell counts, no fmax) of the block built from ``cfg`` per flow."""
+    return synthesize_flows(network_verilog(cfg), "afferent_cuneate_network", flows, workdir)

@@ -16,7 +16,9 @@ from pathlib import Path
 
 __all__ = ["CliError", "Parser", "CommandGroups", "finite_float", "positive_float",
            "positive_int", "nonneg_int", "output_dir", "input_file", "refuse_long_run",
-           "fmt_time", "engine_choices"]
+           "fmt_time", "engine_choices", "add_run_options", "add_generate_options",
+           "run_ticks", "print_run", "clamp_summary", "build_config", "add_rate_options",
+           "add_block_commands"]
 
 
 class CliError(Exception):
@@ -152,3 +154,109 @@ def refuse_long_run(command: str, block: str, engine: str, work: float, max_minu
                        f"(about {work:.3g} {unit}, ~{fmt_time(secs)}; limit {limit:.0e} "
                        f"{unit} = --max-minutes {max_minutes:g}); shorten --duration-ms")
     return secs
+
+
+def add_run_options(p, max_minutes: bool = True) -> None:
+    """The options every ``simulate`` command shares: ``--build-dir``, ``--max-minutes`` and
+    ``--json``."""
+    p.add_argument("--build-dir", default=None, help="HDL simulator build directory")
+    if max_minutes:
+        p.add_argument("--max-minutes", type=positive_float, default=10.0,
+                       help="refuse runs estimated to take longer (default 10)")
+    p.add_argument("--json", action="store_true", help="print the result as JSON")
+
+
+def add_generate_options(g) -> None:
+    """The options every ``generate`` command shares: ``--tick-source`` and ``--out``."""
+    g.add_argument("--tick-source", choices=("internal", "external"), default="internal",
+                   help="internal divider (default) or the tick input")
+    g.add_argument("--out", required=True, help="output directory")
+
+
+def run_ticks(command: str, block: str, args, dt_ms: float, cycles: float, updates: float,
+              unit: str = "tick") -> int:
+    """The ticks of ``args.duration_ms`` at ``dt_ms``, refused in one line when shorter than
+    one tick or estimated longer than ``args.max_minutes`` on ``args.engine`` (``cycles`` per
+    tick on an HDL simulator, ``updates`` per tick otherwise)."""
+    from ..engines.registry import ENGINES
+    n = int(round(args.duration_ms / dt_ms))
+    if n < 1:
+        raise CliError(f"--duration-ms {args.duration_ms:g} is shorter than one {unit} "
+                       f"(dt = {dt_ms:g} ms)")
+    per_tick = cycles if ENGINES[args.engine].hdl else updates
+    refuse_long_run(command, block, args.engine, n * per_tick, args.max_minutes,
+                    f"{n} {unit}s")
+    return n
+
+
+def clamp_summary(run, engine: str):
+    """The ``saturation`` entry of a ``simulate --json`` result (``None`` for golden)."""
+    return None if engine == "golden" else {"counts": run.clamp_counts,
+                                            "sticky": run.clamp_sticky}
+
+
+def print_run(args, out: dict, header: str, rows) -> None:
+    """A ``simulate`` result: ``out`` as JSON with ``--json``, else ``header`` and one line per
+    ``(label, spike times)`` row with the first six times."""
+    import json
+    if args.json:
+        print(json.dumps(out))
+        return
+    print(header)
+    for label, s in rows:
+        head = ", ".join(f"{t:g}" for t in s[:6]) + (" ..." if len(s) > 6 else "")
+        print(f"  {label}, {len(s)} spikes: {head}")
+
+
+def build_config(cls, kwargs: dict, what: str = ""):
+    """``cls(**kwargs)``, or the one-line refusal every command gives for a configuration the
+    block cannot hold (``ConfigError``; ``what`` names the block for other errors)."""
+    from ...hdl.lib.config import ConfigError
+    try:
+        return cls(**kwargs)
+    except ConfigError as exc:
+        raise CliError(f"cuneate: {exc}") from None
+    except (TypeError, ValueError) as exc:
+        if not what:
+            raise
+        raise CliError(f"cuneate: {what} refused: {exc}") from None
+
+
+def add_rate_options(g, clock_default: float | None, clock_help: str = "") -> None:
+    """``--clock-hz`` and ``--update-hz`` (the per-neuron update rate: dt = 1000/update_hz
+    ms), in a block's option group."""
+    g.add_argument("--clock-hz", type=positive_float, default=clock_default,
+                   help=clock_help or f"core clock (default {clock_default:g})")
+    g.add_argument("--update-hz", type=positive_float, default=16e3,
+                   help="per-neuron update rate; dt = 1000/update_hz ms (default 16e3)")
+
+
+def add_block_commands(groups, block: str, help: str, duration_ms: float, options=None,
+                       simulate=None, generate=None, module: str | None = None,
+                       resources_s: int | None = None):
+    """``cuneate simulate BLOCK`` (``--engine`` from the engine registry, ``--duration-ms``
+    and the run options) and ``cuneate generate BLOCK`` (the generate options, ``--name``
+    when the block names its ``module``, ``--resources`` when it offers synthesis figures);
+    ``options(parser)`` adds the block's own options to both, ``simulate``/``generate`` are
+    the commands. Returns both parsers for more options."""
+    s = groups.simulate.add_parser(block, help=help)
+    engines = engine_choices(block)
+    s.add_argument("--engine", choices=engines, default="golden",
+                   help=f"{', '.join(engines)} (default golden)")
+    s.add_argument("--duration-ms", type=positive_float, default=duration_ms,
+                   help=f"biological time in ms (default {duration_ms:g})")
+    add_run_options(s)
+    g = groups.generate.add_parser(block, help=help)
+    add_generate_options(g)
+    if module:
+        g.add_argument("--name", default=module, help=f"Verilog module name (default {module})")
+    if resources_s:
+        g.add_argument("--resources", action="store_true",
+                       help=f"also run yosys synth_ecp5 and synth_xilinx -family xc6s "
+                            f"(~{resources_s} s)")
+    for p, func in ((s, simulate), (g, generate)):
+        if options is not None:
+            options(p)
+        if func is not None:
+            p.set_defaults(func=func)
+    return s, g

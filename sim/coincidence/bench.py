@@ -11,7 +11,8 @@ Every cycle is watched; every target update is checked when its tick is complete
   the DUT's own previous state (zero mismatches);
 * the float64 golden steps from the same state stay within their derived one-step bounds:
   the traces (:func:`~cuneate.hdl.lib.synapses.trace_golden_check`) and the Izhikevich update
-  (:class:`~cuneate.sim.izhikevich.scoreboard.SweepChecker`, flagged clamps expected, unflagged fail);
+  (:class:`~cuneate.sim.izhikevich.scoreboard.SweepChecker`, flagged clamps expected,
+  unflagged fail);
 * the spike stream equals the updates' spikes, ``merged_count`` the duplicate events and
   ``tick_count`` the ticks.
 
@@ -31,7 +32,7 @@ from cocotb.triggers import FallingEdge, RisingEdge
 
 from cuneate.hdl.coincidence import CoincidenceConfig
 from cuneate.sim.coincidence.scoreboard import CoincidenceChecker
-from cuneate.sim.engines.cocotb import bench_config, bench_report
+from cuneate.sim.engines.bench import bench_config, bench_report
 
 
 async def start_bench(dut):

@@ -21,11 +21,13 @@ import numpy as np
 
 from ..engines.registry import ENGINES as ENGINE_TRAITS
 
-from ..cli.options import (CliError, CommandGroups, engine_choices, finite_float, nonneg_int,
-                           output_dir, positive_float, positive_int, refuse_long_run)
+from ..cli.options import (CliError, CommandGroups, add_block_commands, add_rate_options,
+                           build_config, clamp_summary, engine_choices, finite_float,
+                           nonneg_int, output_dir, positive_float, positive_int, print_run,
+                           run_ticks)
 
 __all__ = ["register", "add_coincidence_options", "coincidence_kwargs",
-           "coincidence_from_args", "parse_matrix", "add_resources_option", "print_resources"]
+           "coincidence_from_args", "parse_matrix", "print_resources"]
 
 
 def parse_matrix(text: str, what: str) -> np.ndarray:
@@ -66,10 +68,7 @@ def add_coincidence_options(p) -> None:
                         "behaviour:LETTER or a,b,c,d...; default RS)")
     g.add_argument("--target-sets", default=None, metavar="LIST",
                    help="set index of each target (comma list; default 0 for all)")
-    g.add_argument("--clock-hz", type=positive_float, default=None,
-                   help="clock (generate: default 40e6; simulate: the engines' own)")
-    g.add_argument("--update-hz", type=positive_float, default=16e3,
-                   help="tick rate; dt = 1000/update_hz ms (default 16e3)")
+    add_rate_options(g, None, "clock (generate: default 40e6; simulate: the engines' own)")
     g.add_argument("--weight-bits", type=positive_int, default=12)
     g.add_argument("--trace-frac-bits", type=positive_int, default=16)
     g.add_argument("--operand-width", type=positive_int, default=18)
@@ -126,13 +125,8 @@ def coincidence_kwargs(args) -> dict:
 
 def coincidence_from_args(kw: dict):
     """The configuration, or the one-line refusal shared by every command."""
-    from ...hdl.coincidence import CoincidenceConfig, ConfigError
-    try:
-        return CoincidenceConfig(**kw)
-    except ConfigError as exc:
-        raise CliError(f"cuneate: {exc}") from None
-    except (TypeError, ValueError) as exc:
-        raise CliError(f"cuneate: coincidence detector refused: {exc}") from None
+    from ...hdl.coincidence import CoincidenceConfig
+    return build_config(CoincidenceConfig, kw, "coincidence detector")
 
 
 def _param_dicts(cfg) -> list:
@@ -181,14 +175,8 @@ def cmd_simulate(args) -> int:
         kw["clock_hz"] = args.update_hz * max(need, 64)
     cfg = coincidence_from_args(kw)
     dt = cfg.dt_ms
-    n_ticks = int(round(args.duration_ms / dt))
-    if n_ticks < 1:
-        raise CliError(f"--duration-ms {args.duration_ms:g} is shorter than one tick "
-                       f"(dt = {dt:g} ms)")
-    hdl = ENGINE_TRAITS[args.engine].hdl
-    refuse_long_run("cuneate simulate coincidence", "coincidence", args.engine,
-                    n_ticks * (cfg.cycles_needed if hdl else cfg.n_targets), args.max_minutes,
-                    f"{n_ticks} ticks")
+    n_ticks = run_ticks("cuneate simulate coincidence", "coincidence", args, dt,
+                        cfg.cycles_needed, cfg.n_targets)
     ins = _input_ticks(args, cfg.n_sources, dt, n_ticks)
     build_dir = output_dir(args.build_dir, "--build-dir") if args.build_dir else None
     try:
@@ -206,33 +194,24 @@ def cmd_simulate(args) -> int:
            "formats": {"weight": str(cfg.W), "xd": str(cfg.traces[0].T),
                        "xr": str(cfg.traces[1].T), "I": str(cfg.iz.I), "V": str(cfg.iz.V),
                        "U": str(cfg.iz.U)},
-           "saturation": None if args.engine == "golden" else
-           {"counts": run.clamp_counts, "sticky": run.clamp_sticky}}
-    if args.json:
-        print(json.dumps(out))
-    else:
-        print(f"coincidence detector on {args.engine}: {cfg.n_sources} sources -> "
-              f"{cfg.n_targets} targets, dt = {dt:g} ms, {n_ticks * dt:g} ms, "
-              f"{sum(map(len, ins))} input spikes")
-        for t, s in enumerate(spikes):
-            head = ", ".join(f"{x:g}" for x in s[:6]) + (" ..." if len(s) > 6 else "")
-            print(f"  target {t}: delays {', '.join(f'{d:g}' for d in cfg.delays[t] * dt)} ms,"
-                  f" {len(s)} spikes: {head}")
+           "saturation": clamp_summary(run, args.engine)}
+    print_run(args, out, f"coincidence detector on {args.engine}: {cfg.n_sources} sources -> "
+                         f"{cfg.n_targets} targets, dt = {dt:g} ms, {n_ticks * dt:g} ms, "
+                         f"{sum(map(len, ins))} input spikes",
+              [(f"target {t}: delays {', '.join(f'{d:g}' for d in cfg.delays[t] * dt)} ms", s)
+               for t, s in enumerate(spikes)])
     return 0
 
 
-def add_resources_option(p, seconds: int) -> None:
-    """``--resources`` on a ``generate`` command."""
-    p.add_argument("--resources", action="store_true",
-                   help=f"also run yosys synth_ecp5 and synth_xilinx -family xc6s (~{seconds} s)")
-
-
-def print_resources(args, cfg, json_path, synth_resources) -> None:
-    """With ``--resources``: yosys synth_ecp5 and synth_xilinx (xc6s) figures of the block
-    (``synth_resources(cfg)``), printed and added to its JSON description under
-    ``resources``."""
+def print_resources(args, cfg, files, synth_resources) -> None:
+    """The generated ``files`` (Verilog, JSON), and with ``--resources`` the yosys synth_ecp5
+    and synth_xilinx (xc6s) figures of the block (``synth_resources(cfg)``), printed and added
+    to its JSON description under ``resources``."""
+    for f in files:
+        print(f)
     if not args.resources:
         return
+    json_path = files[1]
     from ...hdl.flow.synth import format_resources
     try:
         res = synth_resources(cfg)
@@ -251,10 +230,8 @@ def cmd_generate(args) -> int:
     kw = coincidence_kwargs(args) | {"tick_source": args.tick_source}
     kw.setdefault("clock_hz", 40e6)
     cfg = coincidence_from_args(kw)
-    files = generate_coincidence(output_dir(args.out), cfg, name=args.name)
-    for f in files:
-        print(f)
-    print_resources(args, cfg, files[1], synth_resources)
+    print_resources(args, cfg, generate_coincidence(output_dir(args.out), cfg, name=args.name),
+                    synth_resources)
     print(f"coincidence detector: {cfg.n_sources} sources -> {cfg.n_targets} targets, "
           f"{cfg.clock_hz / 1e6:g} MHz, dt = {cfg.dt_ms:g} ms, {cfg.cycles_needed} of "
           f"{cfg.cycles_per_tick} cycles per tick; history {cfg.max_delay_ticks} x "
@@ -290,30 +267,14 @@ def cmd_ridge(args) -> int:
 
 
 def register(groups: CommandGroups) -> None:
-    s = groups.simulate.add_parser("coincidence", help="the coincidence detector (cuneate "
-                                                       "neurons)")
-    s.add_argument("--engine", choices=engine_choices("coincidence"), default="golden")
+    s, _ = add_block_commands(groups, "coincidence", "the coincidence detector (cuneate "
+                                                     "neurons)", 200.0, add_coincidence_options,
+                              cmd_simulate, cmd_generate, "coincidence_detector", 10)
     s.add_argument("--input", action="append", default=None, metavar="MS,MS,...",
                    help="spike times (ms) of one source; give it once per source")
     s.add_argument("--input-rate-hz", type=finite_float, default=40.0,
                    help="Poisson rate of every source when no --input is given (default 40)")
     s.add_argument("--seed", type=nonneg_int, default=0)
-    s.add_argument("--duration-ms", type=positive_float, default=200.0)
-    s.add_argument("--build-dir", default=None, help="HDL simulator build directory")
-    s.add_argument("--max-minutes", type=positive_float, default=10.0,
-                   help="refuse runs estimated to take longer (default 10)")
-    s.add_argument("--json", action="store_true")
-    add_coincidence_options(s)
-    s.set_defaults(func=cmd_simulate)
-
-    g = groups.generate.add_parser("coincidence", help="the coincidence detector (cuneate "
-                                                       "neurons)")
-    add_coincidence_options(g)
-    g.add_argument("--tick-source", choices=("internal", "external"), default="internal")
-    g.add_argument("--name", default="coincidence_detector", help="Verilog module name")
-    add_resources_option(g, 10)
-    g.add_argument("--out", required=True)
-    g.set_defaults(func=cmd_generate)
 
     c = groups.root.add_parser("coincidence", help="coincidence-detector experiments "
                                                    "(ridge angle)")

@@ -97,28 +97,36 @@ def run_coincidence(engine: str, cfg: CoincidenceConfig, input_ticks, n_ticks: i
                      time.perf_counter() - t0, {"merged_count": int(merged)})
 
 
+async def pulse_tick(ctx, dut, sources) -> None:
+    """Input spike events ``sources`` (one per cycle), then one ``tick`` pulse."""
+    for s in sources:
+        ctx.set(dut.in_valid, 1)
+        ctx.set(dut.in_source, s)
+        await ctx.tick()
+    ctx.set(dut.in_valid, 0)
+    ctx.set(dut.tick, 1)
+    await ctx.tick()
+    ctx.set(dut.tick, 0)
+
+
 def _run_amaranth(cfg: CoincidenceConfig, by_tick: dict, n_ticks: int):
     dut = CoincidenceDetector(cfg)
     pairs, out, words = [], {}, []
 
+    def sample(ctx) -> bool:
+        """Record this cycle's output spike and clamp word; False once the tick is done."""
+        if ctx.get(dut.spike_valid):
+            pairs.append((ctx.get(dut.spike_tick), ctx.get(dut.spike_target)))
+        if ctx.get(dut.upd_valid) and ctx.get(dut.upd_clamp):
+            words.append(ctx.get(dut.upd_clamp))
+        return bool(ctx.get(dut.busy) or ctx.get(dut.upd_valid))
+
     async def tb(ctx):
         for k in range(n_ticks):
-            for s in by_tick.get(k, []):
-                ctx.set(dut.in_valid, 1)
-                ctx.set(dut.in_source, s)
-                await ctx.tick()
-            ctx.set(dut.in_valid, 0)
-            ctx.set(dut.tick, 1)
+            await pulse_tick(ctx, dut, by_tick.get(k, []))
             await ctx.tick()
-            ctx.set(dut.tick, 0)
-            while True:
+            while sample(ctx):
                 await ctx.tick()
-                if ctx.get(dut.spike_valid):
-                    pairs.append((ctx.get(dut.spike_tick), ctx.get(dut.spike_target)))
-                if ctx.get(dut.upd_valid) and ctx.get(dut.upd_clamp):
-                    words.append(ctx.get(dut.upd_clamp))
-                if not ctx.get(dut.busy) and not ctx.get(dut.upd_valid):
-                    break
         out["merged"] = ctx.get(dut.merged_count)
 
     simulate(dut, tb, cfg.clock_hz)
@@ -127,10 +135,9 @@ def _run_amaranth(cfg: CoincidenceConfig, by_tick: dict, n_ticks: int):
 
 def _run_cocotb(simulator: str, cfg: CoincidenceConfig, by_tick: dict, n_ticks: int,
                 build_dir: Path | None):
-    from ..engines.cocotb import run_bench
-    rep = run_bench(simulator, coincidence_verilog(cfg, lowered=simulator == "icarus"),
-                    "coincidence_detector", "coincidence",
-                    {"detector": cfg.to_kwargs(), "ticks": n_ticks,
-                     "events": {str(k): v for k, v in by_tick.items()}}, build_dir,
-                    testcase="engine").report
+    from ..engines.cocotb import run_engine_bench
+    rep = run_engine_bench(simulator, lambda low: coincidence_verilog(cfg, lowered=low),
+                           "coincidence_detector", "coincidence",
+                           {"detector": cfg.to_kwargs(), "ticks": n_ticks, "events":
+                            {str(k): v for k, v in by_tick.items()}}, build_dir)
     return [tuple(p) for p in rep["spikes"]], rep["merged"], rep["clamp_words"]

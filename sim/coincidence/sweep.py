@@ -31,6 +31,7 @@ from __future__ import annotations
 import sys
 import time
 from dataclasses import asdict, dataclass, field
+from typing import ClassVar
 from functools import lru_cache
 
 import numpy as np
@@ -39,7 +40,7 @@ from ...golden import coincidence as gcun
 from ...golden import izhikevich as giz
 from ...hdl.coincidence.config import CYCLES_PER_TARGET_EXTRA, CoincidenceConfig
 from ...hdl.lib.fixed import FixedPointError
-from ..sweep import (BLOCK_SAME_DT_KEYS, SweepSpec, ok_row, point_key, refused, register_battery,
+from ..sweep import (BLOCK_SAME_DT_KEYS, Point, SweepSpec, ok_row, refused, register_battery,
                      same_dt_columns)
 from ..sweep import n_steps as n_steps_of
 from .engines import run_coincidence
@@ -148,21 +149,17 @@ def cuneate_reference_trains(spec: SweepSpec) -> list[np.ndarray]:
 
 
 @dataclass(frozen=True)
-class CoincidenceSweepPoint:
+class CoincidenceSweepPoint(Point):
     """One way to simulate the afferent battery: ``engine`` is ``fixed``, ``float64`` or
     ``float32``; the knobs of :class:`~cuneate.hdl.coincidence.config.CoincidenceConfig` apply to
     ``fixed`` only."""
 
-    engine: str
-    update_hz: float = 16e3
     weight_bits: int = 12
+    """width of the ``J w`` weights"""
     trace_frac_bits: int = 16
-    operand_width: int = 18
-    rounding: str = "nearest"
+    """fraction bits of the PSP traces"""
 
-    def key(self, spec: SweepSpec) -> str:
-        return point_key("coincidence", asdict(self), spec.battery, spec.duration_ms,
-                         spec.reference_hz, spec.clock_hz)
+    BLOCK: ClassVar[str] = "coincidence"
 
     def label(self) -> str:
         rate = f"{self.update_hz / 1e3:g} kHz"
@@ -248,7 +245,8 @@ def coincidence_grid(update_hz=(16e3,), weight_bits=(12,), trace_frac_bits=(16,)
             raise ValueError(f"update rate {float(h):g} Hz: the coincidence battery needs a "
                              f"multiple of 4000 Hz (its spike times and delays lie on a "
                              f"{GRID_MS} ms grid)")
-    pts = [CoincidenceSweepPoint("fixed", float(h), int(wb), int(tf), int(ow), r)
+    pts = [CoincidenceSweepPoint("fixed", float(h), int(ow), r, weight_bits=int(wb),
+                                 trace_frac_bits=int(tf))
            for h in update_hz for wb in weight_bits for tf in trace_frac_bits
            for ow in operand_width for r in rounding]
     pts += [CoincidenceSweepPoint(f, float(h)) for f in floats for h in update_hz]

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-__all__ = ["simulate"]
+__all__ = ["simulate", "write_currents"]
 
 
 def simulate(dut, testbench, clock_hz: float = 1e6, vcd: Path | str | None = None,
@@ -25,3 +25,14 @@ def simulate(dut, testbench, clock_hz: float = 1e6, vcd: Path | str | None = Non
     vcd.parent.mkdir(parents=True, exist_ok=True)
     with sim.write_vcd(str(vcd), traces=list(traces)):
         sim.run()
+
+
+async def write_currents(ctx, dut, raw, first: int = 0) -> None:
+    """Drive raw currents through a core's host-write port (``i_wr_*``), one neuron per cycle
+    from ``first`` on, and leave the port idle."""
+    for i, x in enumerate(raw):
+        ctx.set(dut.i_wr_en, 1)
+        ctx.set(dut.i_wr_addr, first + i)
+        ctx.set(dut.i_wr_data, int(x))
+        await ctx.tick()
+    ctx.set(dut.i_wr_en, 0)

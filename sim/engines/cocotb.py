@@ -4,8 +4,8 @@
 Each (simulator, design, parameters) case gets its own build directory. A block's bench is the
 module ``cuneate.sim.<block>.bench``, imported inside the simulator by its dotted name;
 configuration goes in through environment variables (a JSON file path), and results come back as
-JSON written by the bench (:func:`bench_config`, :func:`bench_report`, :func:`bench_progress`
-are the bench side), so the caller can print figures and assert on them. :func:`run_bench`
+JSON written by the bench (:mod:`cuneate.sim.engines.bench` is the bench side), so the caller
+can print figures and assert on them. :func:`run_bench`
 writes a block's Verilog and runs its bench in one call (in a scratch directory unless one is
 given).
 
@@ -33,8 +33,8 @@ from pathlib import Path
 
 from .toolchain import SIMULATORS, apply_simulator_env
 
-__all__ = ["CocotbRun", "run_cocotb", "run_bench", "SimulatorFailed", "sim_cache_root",
-           "CACHE_ENTRIES", "bench_config", "bench_report", "bench_progress"]
+__all__ = ["CocotbRun", "run_cocotb", "run_bench", "run_engine_bench", "SimulatorFailed",
+           "sim_cache_root", "CACHE_ENTRIES"]
 
 #: Verilator builds kept in the cache (least recently used removed first).
 CACHE_ENTRIES = 48
@@ -159,28 +159,13 @@ def run_bench(simulator: str, verilog: str, toplevel: str, block: str, config: d
         return go(Path(tmp))
 
 
-# ----------------------------------------------------------------------------------------------
-# the bench side (inside the simulator process)
-
-def bench_config() -> dict:
-    """The configuration the caller gave :func:`run_cocotb` (inside a bench)."""
-    with open(os.environ["CUNEATE_BENCH_CONFIG"]) as f:
-        return json.load(f)
-
-
-def bench_report(data: dict) -> None:
-    """Hand ``data`` back to the caller as the run's report (inside a bench)."""
-    with open(os.environ["CUNEATE_BENCH_REPORT"], "w") as f:
-        json.dump(data, f, default=float)
-
-
-def bench_progress(config: dict, done: int) -> None:
-    """Tell the caller how far the bench got (the ``progress`` callback of
-    :func:`run_cocotb`)."""
-    path = config.get("progress_file")
-    if path:
-        with open(path, "w") as f:
-            json.dump({"done": int(done)}, f)
+def run_engine_bench(simulator: str, verilog_of, toplevel: str, block: str, config: dict,
+                     build_dir: Path | None = None) -> dict:
+    """The ``engine`` test of a block's bench on its Verilog, ``verilog_of(lowered)``: Icarus
+    runs the yosys-lowered netlist (see :func:`cuneate.hdl.flow.verilog.lowered_verilog`),
+    Verilator the direct output. Returns the bench's report."""
+    return run_bench(simulator, verilog_of(simulator == "icarus"), toplevel, block, config,
+                     build_dir, testcase="engine").report
 
 
 # ----------------------------------------------------------------------------------------------

@@ -7,7 +7,7 @@ from cocotb.clock import Clock
 from cocotb.triggers import FallingEdge, ReadOnly, RisingEdge
 
 from cuneate.hdl.lib.smoke import smoke_reference
-from cuneate.sim.engines.cocotb import bench_config, bench_report
+from cuneate.sim.engines.bench import bench_config, bench_report
 
 
 @cocotb.test()

@@ -5,7 +5,8 @@ figures to ``CUNEATE_BENCH_REPORT``. Two tests:
 
 ``scoreboard``
     Watches every cycle. Each update that leaves the pipeline is collected; when a sweep is
-    complete it is checked by :class:`cuneate.sim.izhikevich.scoreboard.SweepChecker`: (a) the bit-exact
+    complete it is checked by :class:`cuneate.sim.izhikevich.scoreboard.SweepChecker`: (a) the
+    bit-exact
     twin advanced from the DUT's own previous state with the current the DUT reports it used,
     clamp flags included - zero mismatches allowed - and (b) the float64 golden Euler step from
     the same state, within the error bound derived from the formats, for every update no clamp
@@ -28,12 +29,11 @@ import random
 import time
 
 import cocotb
-import numpy as np
 from cocotb.clock import Clock
 from cocotb.triggers import ClockCycles, FallingEdge, RisingEdge
 
 from cuneate.hdl.izhikevich import CLAMP_KINDS, PIPELINE_DEPTH, IzhikevichConfig
-from cuneate.sim.engines.cocotb import bench_config, bench_progress, bench_report
+from cuneate.sim.engines.bench import CoreBench, bench_config, bench_progress, bench_report
 from cuneate.sim.izhikevich.scoreboard import SweepChecker
 
 
@@ -42,55 +42,14 @@ def make_config(core: dict) -> IzhikevichConfig:
     return IzhikevichConfig.from_kwargs(core)
 
 
-class TB:
-    """Owns the clock, reset, host-write driver and the update/spike monitors."""
-
-    def __init__(self, dut, cfg: IzhikevichConfig):
-        self.dut, self.cfg = dut, cfg
-        self.cycle = 0
-        self.writes: dict[int, list[tuple[int, int]]] = {}    # neuron -> [(cycle, raw)]
-
-    async def start(self):
-        cocotb.start_soon(Clock(self.dut.clk, 10, unit="ns").start())
-        d = self.dut
-        d.rst.value = 1
-        for s in (d.i_wr_en, d.sel_wr_en, d.i_wr_addr, d.i_wr_data, d.sel_wr_addr,
-                  d.sel_wr_data, d.clamp_clear):
-            s.value = 0
-        d.spike_ready.value = 1
-        if self.cfg.tick_source == "external":
-            d.tick.value = 0
-        await RisingEdge(d.clk)
-        await RisingEdge(d.clk)
-        await FallingEdge(d.clk)
-        d.rst.value = 0
-
-    async def write_current(self, neuron: int, raw: int):
-        """Drive one host write (call at a falling edge; returns at the next falling edge)."""
-        d = self.dut
-        d.i_wr_addr.value = neuron
-        d.i_wr_data.value = int(raw)
-        d.i_wr_en.value = 1
-        self.writes.setdefault(neuron, []).append((self.cycle, int(raw)))
-        await FallingEdge(d.clk)
-        d.i_wr_en.value = 0
-
-    def allowed_currents(self, neuron: int, fetch_cycle: int) -> set[int]:
-        """Currents the fetch of ``neuron`` at ``fetch_cycle`` may legally have read."""
-        hist = self.writes.get(neuron, [])
-        before = [raw for c, raw in hist if c < fetch_cycle - 2]
-        near = [raw for c, raw in hist if fetch_cycle - 2 <= c <= fetch_cycle + 2]
-        base = before[-1] if before else 0
-        return {base, *near}
-
-
 @cocotb.test()
 async def scoreboard(dut):
     cfgj = bench_config()
     cfg = make_config(cfgj["core"])
     N = cfg.n_neurons
     checker = SweepChecker(cfg)
-    tb = TB(dut, cfg)
+    tb = CoreBench(dut, cfg, CLAMP_KINDS, {"v": lambda d: d.upd_v.value.to_signed(),
+                                           "u": lambda d: d.upd_u.value.to_signed()})
     rng = random.Random(cfgj.get("seed", 1))
     n_sweeps = cfgj["sweeps"]
     lo, hi = cfgj.get("current_range", [0.0, 40.0])
@@ -124,80 +83,28 @@ async def scoreboard(dut):
                 await tb.write_current(n, cfg.I.to_raw(level[n]))
 
     cocotb.start_soon(flipper() if flip_every else driver())
-    buf = {k: np.zeros(N, dtype=np.int64) for k in ("v", "u", "i", "spike", "clamp", "cycle")}
-    fill = 0
-    extra = {"stream_spikes": 0, "current_violations": 0, "count_mismatches": 0,
-             "clamp_counter_mismatches": 0, "sticky_mismatches": 0}
-    stream: list[tuple[int, int]] = []
-    done: list[tuple] = []
-    expected_done: list[tuple] = []
-    expected_stream: list[tuple[int, int]] = []
-    sticky_seen = 0
-    sticky_due = False
+    buf = tb.buf
+    extra = {"stream_spikes": 0, "current_violations": 0}
     t0 = time.perf_counter()
     d = dut
-    counters = [getattr(d, f"sweep_clamps_{k}") for k in CLAMP_KINDS]
     while checker.stats.sweeps_checked < n_sweeps:
         await FallingEdge(d.clk)
         tb.cycle += 1
-        if sticky_due:
-            # one cycle after a sweep's last update the sticky flags hold every clamp so far
-            sticky_due = False
-            if int(d.clamp_flags.value) != sticky_seen:
-                extra["sticky_mismatches"] += 1
-        # sample the outputs registered at the last rising edge
-        if int(d.spike_valid.value):
-            stream.append((int(d.spike_index.value), int(d.spike_sweep.value)))
-        if int(d.sweep_done.value):
-            done.append((int(d.sweep_number.value), int(d.sweep_count.value),
-                         *(int(c.value) for c in counters)))
-        if not int(d.upd_valid.value):
-            continue
-        idx = int(d.upd_index.value)
-        if idx == 0:
-            fill = 0
-        if idx != fill:
-            raise AssertionError(f"update order broken: expected neuron {fill}, got {idx}")
-        buf["v"][idx] = d.upd_v.value.to_signed()
-        buf["u"][idx] = d.upd_u.value.to_signed()
-        buf["i"][idx] = d.upd_current.value.to_signed()
-        buf["spike"][idx] = int(d.upd_spike.value)
-        buf["clamp"][idx] = int(d.upd_clamp.value)
-        buf["cycle"][idx] = tb.cycle
-        fill += 1
-        if idx != N - 1:
+        if not tb.sample():
             continue
         sweep_no = checker.stats.sweeps_checked        # sweeps are numbered from 0 after reset
         # ---- whole sweep collected: vectorized checks ----
         checker.check(buf["v"], buf["u"], buf["i"], buf["spike"], buf["clamp"])
-        spk = buf["spike"].astype(bool)
         # currents used must be the ones the host wrote
-        for n in range(N):
-            fetch = int(buf["cycle"][n]) - PIPELINE_DEPTH
-            if int(buf["i"][n]) not in tb.allowed_currents(n, fetch):
-                extra["current_violations"] += 1
-        sums = SweepChecker.sweep_clamp_sums(buf["clamp"])
-        expected_done.append((sweep_no % (1 << cfg.sweep_number_width), int(spk.sum()),
-                              *(sums[k] for k in CLAMP_KINDS)))
-        expected_stream += [(int(n), sweep_no) for n in np.flatnonzero(spk)]
-        sticky_seen |= checker.stats.clamp_sticky
-        sticky_due = True
-    # drain the spike stream
-    for _ in range(cfg.spike_fifo_depth + 4):
-        await FallingEdge(d.clk)
-        if int(d.spike_valid.value):
-            stream.append((int(d.spike_index.value), int(d.spike_sweep.value)))
-        if int(d.sweep_done.value):
-            done.append((int(d.sweep_number.value), int(d.sweep_count.value),
-                         *(int(c.value) for c in counters)))
+        extra["current_violations"] += tb.current_violations(PIPELINE_DEPTH)
+        tb.expect_sweep(sweep_no, checker.stats.clamp_sticky)
+    await tb.drain()
     elapsed = time.perf_counter() - t0
-    extra["count_mismatches"] = sum(a[:2] != b[:2] for a, b in zip(done, expected_done)) + \
-        max(0, len(expected_done) - len(done))
-    extra["clamp_counter_mismatches"] = sum(a[2:] != b[2:] for a, b in zip(done, expected_done))
-    first = expected_stream[0][1] if expected_stream else 0
-    stream_checked = [s for s in stream if s[1] >= first][:len(expected_stream)]
+    extra.update(tb.mismatches())
+    first = tb.expected_stream[0][1] if tb.expected_stream else 0
+    stream_checked = [s for s in tb.stream if s[1] >= first][:len(tb.expected_stream)]
     extra["stream_spikes"] = len(stream_checked)
-    extra["stream_matches"] = stream_checked == expected_stream
+    extra["stream_matches"] = stream_checked == tb.expected_stream
     # a clear empties the sticky flags except for the clamp registered in the same cycle,
     # which must not be lost; afterwards they accumulate again
     pending = int(d.upd_clamp.value)
@@ -232,7 +139,7 @@ async def engine(dut):
     cfgj = bench_config()
     cfg = make_config(cfgj["core"])
     N = cfg.n_neurons
-    tb = TB(dut, cfg)
+    tb = CoreBench(dut, cfg, CLAMP_KINDS, {})
     await tb.start()
     currents = cfgj["currents"]
     for n in range(N):

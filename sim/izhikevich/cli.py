@@ -14,8 +14,9 @@ import json
 import os
 import sys
 
-from ..cli.options import (CliError, CommandGroups, engine_choices, finite_float, fmt_time,
-                           output_dir, positive_float, positive_int)
+from ..cli.options import (CliError, CommandGroups, add_block_commands, add_rate_options,
+                           build_config, finite_float, fmt_time, output_dir, positive_float,
+                           positive_int)
 
 __all__ = ["register", "add_core_options", "core_from_args", "parse_param_set",
            "estimate_run"]
@@ -64,10 +65,7 @@ def add_core_options(p, *, neurons_default: int) -> None:
     g = p.add_argument_group("core configuration")
     g.add_argument("--neurons", type=positive_int, default=neurons_default,
                    help=f"neurons on the core (default {neurons_default})")
-    g.add_argument("--clock-hz", type=positive_float, default=40e6,
-                   help="core clock (default 40e6)")
-    g.add_argument("--update-hz", type=positive_float, default=16e3,
-                   help="per-neuron update rate; dt = 1000/update_hz ms (default 16e3)")
+    add_rate_options(g, 40e6)
     g.add_argument("--param-set", action="append", default=None, metavar="SPEC",
                    help="a parameter set (repeatable): preset name, behaviour:LETTER, or "
                         "a,b,c,d[,A,B,C[,u_leak,v_u]]")
@@ -130,11 +128,8 @@ def core_kwargs(args, param_sets, n_core: int) -> dict:
 
 def core_from_args(kwargs: dict):
     """The configuration, or the one-line refusal shared by every command."""
-    from ...hdl.izhikevich import ConfigError, IzhikevichConfig
-    try:
-        return IzhikevichConfig(**kwargs)
-    except ConfigError as exc:
-        raise CliError(f"cuneate: {exc}") from None
+    from ...hdl.izhikevich import IzhikevichConfig
+    return build_config(IzhikevichConfig, kwargs)
 
 
 # --------------------------------------------------------------------------------------------
@@ -319,32 +314,21 @@ def cmd_generate(args) -> int:
 
 def register(groups: CommandGroups) -> None:
     from ...golden.izhikevich import PRESETS, SCHEMES
-    s = groups.simulate.add_parser("izhikevich", help="the Izhikevich core")
-    s.add_argument("--engine", choices=engine_choices("izhikevich"), default="golden",
-                   help="golden (float64 model), fixed (bit-exact twin), amaranth, icarus, "
-                        "verilator, verilator-fast (default golden)")
+    s, g = add_block_commands(groups, "izhikevich", "the Izhikevich core", 1000.0)
     s.add_argument("--preset", choices=list(PRESETS), default="RS", type=str.upper)
     for k in "abcd":
         s.add_argument(f"--{k}", type=finite_float, default=None,
                        help=f"override the preset's {k}")
     s.add_argument("--current", type=finite_float, nargs="+", default=[10.0],
                    help="input current (mV/ms): one value, or one per neuron")
-    s.add_argument("--duration-ms", type=positive_float, default=1000.0)
     s.add_argument("--dt-ms", type=positive_float, default=None,
                    help="golden engine step (default: the core's, 1000/update_hz)")
     s.add_argument("--scheme", choices=SCHEMES, default="euler")
-    s.add_argument("--build-dir", default=None, help="HDL simulator build directory")
-    s.add_argument("--max-minutes", type=positive_float, default=10.0,
-                   help="refuse runs estimated to take longer (default 10)")
     s.add_argument("--force", action="store_true",
                    help="run even when estimated to take longer than --max-minutes")
-    s.add_argument("--json", action="store_true")
     add_core_options(s, neurons_default=1)
     s.set_defaults(func=cmd_simulate)
 
-    g = groups.generate.add_parser("izhikevich", help="the Izhikevich core")
     add_core_options(g, neurons_default=2500)
-    g.add_argument("--tick-source", choices=("internal", "external"), default="internal")
-    g.add_argument("--out", required=True)
     g.set_defaults(func=cmd_generate)
 

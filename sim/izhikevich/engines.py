@@ -42,15 +42,15 @@ import numpy as np
 
 from ...hdl.izhikevich import (CLAMP_KINDS, PIPELINE_DEPTH, IzhikevichConfig, IzhikevichCore,
                                IzhikevichTwin, izhikevich_verilog)
-from ..engines.amaranth import simulate
+from ..engines.amaranth import simulate, write_currents
 from ..engines.registry import block_engines, check_engine
 from ..engines.run import EngineRun, TickUnwrap
 from ..host.transport import SpikeBatch, Transport, TransportError
 
 __all__ = ["HARDWARE_ENGINES", "EngineRun", "engine_core", "run_engine", "engine_config",
-           "run_hardware_engine", "run_cocotb_engine", "run_amaranth_sweeps", "MIN_NEURONS", "TwinTransport",
-           "CocotbTransport", "AmaranthTransport", "VerilatorFastTransport", "TRANSPORTS",
-           "make_transport", "PROTOCOL"]
+           "run_hardware_engine", "run_cocotb_engine", "run_amaranth_sweeps", "MIN_NEURONS",
+           "TwinTransport", "CocotbTransport", "AmaranthTransport", "VerilatorFastTransport",
+           "TRANSPORTS", "make_transport", "PROTOCOL"]
 
 #: The engines that run the core's arithmetic (all but golden), from the engine registry.
 HARDWARE_ENGINES = tuple(e for e in block_engines("izhikevich") if e != "golden")
@@ -122,12 +122,7 @@ def run_amaranth_sweeps(cfg: IzhikevichConfig, cur, n_sweeps: int, progress=None
 
     async def bench(ctx):
         ctx.set(dut.spike_ready, 1)
-        for i in range(N):
-            ctx.set(dut.i_wr_en, 1)
-            ctx.set(dut.i_wr_addr, i)
-            ctx.set(dut.i_wr_data, int(raw[i]))
-            await ctx.tick()
-        ctx.set(dut.i_wr_en, 0)
+        await write_currents(ctx, dut, raw[:N])
         unwrap = TickUnwrap(cfg.sweep_number_width)
         for c in range(n_sweeps * N + PIPELINE_DEPTH + cfg.spike_fifo_depth + 4):
             ctx.set(dut.tick, int(c % N == 0 and c // N < n_sweeps))
@@ -386,14 +381,9 @@ class AmaranthTransport(_Batch):
             ctx.set(dut.spike_ready, 0)
             for k in range(n_ticks):
                 for f, r in by_tick.pop(k, []):
-                    for i, x in enumerate(r):
-                        ctx.set(dut.i_wr_en, 1)
-                        ctx.set(dut.i_wr_addr, f + i)
-                        ctx.set(dut.i_wr_data, x)
-                        await ctx.tick()
+                    await write_currents(ctx, dut, r, f)
                     rep["writes"] += 1
                     rep["words"] += len(r)
-                ctx.set(dut.i_wr_en, 0)
                 ctx.set(dut.tick, 1)
                 await ctx.tick()
                 ctx.set(dut.tick, 0)

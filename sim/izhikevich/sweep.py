@@ -33,7 +33,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..sweep import (SweepSpec, n_steps, ok_row, point_key, refused, register_battery,
+from ..sweep import (Point, SweepSpec, n_steps, ok_row, point_key, refused, register_battery,
                      same_dt_columns)
 
 __all__ = ["BATTERIES", "Battery", "battery", "scene_battery", "simulate_float", "SweepPoint",
@@ -162,18 +162,16 @@ def simulate_float(bat: Battery, dt_ms: float, n_steps: int, scheme: str,
 
 
 @dataclass(frozen=True)
-class SweepPoint:
+class SweepPoint(Point):
     """One configuration: ``engine`` is ``fixed``, ``float64`` or ``float32``;
     ``current_frac_bits``: fraction bits of the core's current format (``None``: the
     battery's, by default sQ10.8)."""
 
-    engine: str
-    update_hz: float = 16e3
-    operand_width: int = 18
     v_frac_bits: int = 18
     u_frac_bits: int = 20
-    rounding: str = "nearest"
+    """state fraction bits of v and u"""
     scheme: str = "euler"
+    """the float models' integration scheme: ``euler``, ``izhikevich`` or ``rk4``"""
     current_frac_bits: int | None = None
 
     def key(self, spec: "SweepSpec") -> str:
@@ -227,7 +225,7 @@ def grid(update_hz=(16e3,), operand_width=(18,), frac_bits=((18, 20),),
          current_frac_bits=(None,)) -> list[SweepPoint]:
     """The points of a sweep: every fixed-point combination, and the float models at each
     scheme and update rate."""
-    pts = [SweepPoint("fixed", float(h), int(w), int(fv), int(fu), r,
+    pts = [SweepPoint("fixed", float(h), int(w), r, v_frac_bits=int(fv), u_frac_bits=int(fu),
                       current_frac_bits=None if c is None else int(c))
            for h in update_hz for w in operand_width for fv, fu in frac_bits
            for c in current_frac_bits for r in rounding]

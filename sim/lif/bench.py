@@ -28,53 +28,11 @@ import time
 
 import cocotb
 import numpy as np
-from cocotb.clock import Clock
-from cocotb.triggers import FallingEdge, RisingEdge
+from cocotb.triggers import FallingEdge
 
 from cuneate.hdl.lif import CLAMP_KINDS, PIPELINE_DEPTH, LifConfig, LifTwin
-from cuneate.sim.engines.cocotb import bench_config, bench_progress, bench_report
+from cuneate.sim.engines.bench import CoreBench, bench_config, bench_progress, bench_report
 from cuneate.sim.lif.scoreboard import LifSweepChecker
-
-
-class TB:
-    """Clock, reset and host drivers (current writes, input spikes, ticks)."""
-
-    def __init__(self, dut, cfg: LifConfig):
-        self.dut, self.cfg = dut, cfg
-        self.cycle = 0
-        self.writes: dict[int, list[tuple[int, int]]] = {}
-
-    async def start(self):
-        cocotb.start_soon(Clock(self.dut.clk, 10, unit="ns").start())
-        d = self.dut
-        d.rst.value = 1
-        for s in (d.i_wr_en, d.sel_wr_en, d.i_wr_addr, d.i_wr_data, d.sel_wr_addr,
-                  d.sel_wr_data, d.clamp_clear, d.tick):
-            s.value = 0
-        if self.cfg.n_inputs:
-            d.in_valid.value = 0
-            d.in_source.value = 0
-        d.spike_ready.value = 1
-        await RisingEdge(d.clk)
-        await RisingEdge(d.clk)
-        await FallingEdge(d.clk)
-        d.rst.value = 0
-
-    async def write_current(self, neuron: int, raw: int):
-        d = self.dut
-        d.i_wr_addr.value = neuron
-        d.i_wr_data.value = int(raw)
-        d.i_wr_en.value = 1
-        self.writes.setdefault(neuron, []).append((self.cycle, int(raw)))
-        await FallingEdge(d.clk)
-        self.cycle += 1
-        d.i_wr_en.value = 0
-
-    def allowed_currents(self, neuron: int, fetch_cycle: int) -> set[int]:
-        hist = self.writes.get(neuron, [])
-        before = [raw for c, raw in hist if c < fetch_cycle - 2]
-        near = [raw for c, raw in hist if fetch_cycle - 2 <= c <= fetch_cycle + 2]
-        return {before[-1] if before else 0, *near}
 
 
 @cocotb.test()
@@ -83,7 +41,11 @@ async def scoreboard(dut):
     cfg = LifConfig.from_kwargs(cfgj["core"])
     N, F = cfg.n_neurons, cfg.n_inputs
     checker = LifSweepChecker(cfg)
-    tb = TB(dut, cfg)
+    tr_sigs = [getattr(dut, f"upd_{t.name}") for t in cfg.traces]
+    tb = CoreBench(dut, cfg, CLAMP_KINDS, {
+        "v": lambda d: d.upd_v.value.to_signed(),
+        "ref": lambda d: int(d.upd_ref.value) if cfg.ref_bits else 0,
+        "acc": lambda d: d.upd_acc.value.to_signed() if F else 0})
     rng = random.Random(cfgj.get("seed", 1))
     n_sweeps = cfgj["sweeps"]
     period = cfgj.get("period", N + 8)
@@ -92,23 +54,16 @@ async def scoreboard(dut):
     lo, hi = cfgj.get("current_range", [cfg.I.min_value, cfg.I.max_value])
     writes_per_sweep = cfgj.get("writes_per_sweep", 2)
     spike_p = cfgj.get("input_spike_p", 0.3)
-    await tb.start()
+    await tb.start([dut.tick] + ([dut.in_valid, dut.in_source] if F else []))
     d = dut
     for n in range(N):
-        await tb.write_current(n, cfg.I.to_raw(rng.uniform(lo, hi)))
+        await tb.write_current(n, cfg.I.to_raw(rng.uniform(lo, hi)), count=True)
     # x of sweep k: the sources whose spikes were driven between tick k-1 and tick k
     x_of = [np.zeros(F, dtype=bool) for _ in range(n_sweeps + 2)]
-    buf = {k: np.zeros(N, dtype=np.int64) for k in ("v", "ref", "i", "acc", "spike", "clamp",
-                                                     "cycle")}
-    buf["tr"] = np.zeros((len(cfg.traces), N), dtype=np.int64)
-    tr_sigs = [getattr(dut, f"upd_{t.name}") for t in cfg.traces]
-    extra = {"current_violations": 0, "count_mismatches": 0, "clamp_counter_mismatches": 0,
-             "sticky_mismatches": 0}
-    stream, expected_stream, done, expected_done = [], [], [], []
-    counters = [getattr(d, f"sweep_clamps_{k}") for k in CLAMP_KINDS]
-    sticky_seen, sticky_due = 0, False
+    buf = tb.buf
+    tr = np.zeros((len(cfg.traces), N), dtype=np.int64)
+    extra = {"current_violations": 0}
     tick_no = 0
-    fill = 0
     t0 = time.perf_counter()
     phase = 0
     merged_expected = False
@@ -140,73 +95,31 @@ async def scoreboard(dut):
             merged_expected |= bool(x_of[tick_no][s])
             x_of[tick_no][s] = True            # lands in the sweep of the next tick
         elif not tick and rng.random() < writes_per_sweep / period:
-            n = rng.randrange(N)
-            raw = cfg.I.to_raw(rng.uniform(lo, hi))
-            d.i_wr_addr.value = n
-            d.i_wr_data.value = int(raw)
-            d.i_wr_en.value = 1
-            tb.writes.setdefault(n, []).append((tb.cycle, int(raw)))
+            tb.drive_write(rng.randrange(N), cfg.I.to_raw(rng.uniform(lo, hi)))
         await FallingEdge(d.clk)
         tb.cycle += 1
         phase = (phase + 1) % period
-        if sticky_due:
-            sticky_due = False
-            if int(d.clamp_flags.value) != sticky_seen:
-                extra["sticky_mismatches"] += 1
-        if int(d.spike_valid.value):
-            stream.append((int(d.spike_index.value), int(d.spike_sweep.value)))
-        if int(d.sweep_done.value):
-            done.append((int(d.sweep_number.value), int(d.sweep_count.value),
-                         *(int(c.value) for c in counters)))
-        if not int(d.upd_valid.value):
-            continue
-        idx = int(d.upd_index.value)
-        if idx == 0:
-            fill = 0
-        assert idx == fill, f"update order broken: expected {fill}, got {idx}"
-        buf["v"][idx] = d.upd_v.value.to_signed()
-        buf["ref"][idx] = int(d.upd_ref.value) if cfg.ref_bits else 0
-        buf["i"][idx] = d.upd_current.value.to_signed()
-        buf["acc"][idx] = d.upd_acc.value.to_signed() if F else 0
-        buf["spike"][idx] = int(d.upd_spike.value)
-        buf["clamp"][idx] = int(d.upd_clamp.value)
-        buf["cycle"][idx] = tb.cycle
-        for j, sg in enumerate(tr_sigs):
-            buf["tr"][j, idx] = sg.value.to_signed()
-        fill += 1
-        if idx != N - 1:
+        full = tb.sample()
+        if int(d.upd_valid.value):
+            for j, sg in enumerate(tr_sigs):
+                tr[j, int(d.upd_index.value)] = sg.value.to_signed()
+        if not full:
             continue
         k = checker.stats["sweeps_checked"]
         for n, row in w_writes[k]:
             checker.twin.set_weights(n, row)
         checker.check(buf["v"], buf["ref"], buf["i"], buf["acc"], buf["spike"], buf["clamp"],
-                      x_of[k] if F else None, buf["tr"])
-        for n in range(N):
-            if int(buf["i"][n]) not in tb.allowed_currents(n, int(buf["cycle"][n])
-                                                           - PIPELINE_DEPTH):
-                extra["current_violations"] += 1
-        spk = buf["spike"].astype(bool)
-        sums = [int(((buf["clamp"] >> b) & 1).sum()) for b in range(len(CLAMP_KINDS))]
-        expected_done.append((k % (1 << cfg.sweep_number_width), int(spk.sum()), *sums))
-        expected_stream += [(int(n), k) for n in np.flatnonzero(spk)]
-        sticky_seen |= checker.stats["clamp_sticky"]
-        sticky_due = True
+                      x_of[k] if F else None, tr)
+        extra["current_violations"] += tb.current_violations(PIPELINE_DEPTH)
+        tb.expect_sweep(k, checker.stats["clamp_sticky"])
     d.tick.value = 0
     d.i_wr_en.value = 0
     if F:
         d.in_valid.value = 0
-    for _ in range(cfg.spike_fifo_depth + 4):
-        await FallingEdge(d.clk)
-        if int(d.spike_valid.value):
-            stream.append((int(d.spike_index.value), int(d.spike_sweep.value)))
-        if int(d.sweep_done.value):
-            done.append((int(d.sweep_number.value), int(d.sweep_count.value),
-                         *(int(c.value) for c in counters)))
+    await tb.drain()
     elapsed = time.perf_counter() - t0
-    extra["count_mismatches"] = sum(a[:2] != b[:2] for a, b in zip(done, expected_done)) + \
-        max(0, len(expected_done) - len(done))
-    extra["clamp_counter_mismatches"] = sum(a[2:] != b[2:] for a, b in zip(done, expected_done))
-    extra["stream_matches"] = stream[:len(expected_stream)] == expected_stream
+    extra.update(tb.mismatches())
+    extra["stream_matches"] = tb.stream[:len(tb.expected_stream)] == tb.expected_stream
     extra["input_spikes"] = int(sum(x.sum() for x in x_of))
     extra["merged_expected"] = merged_expected
     extra["weight_writes"] = sum(len(w) for w in w_writes[:n_sweeps])
@@ -232,8 +145,8 @@ async def engine(dut):
     cfgj = bench_config()
     cfg = LifConfig.from_kwargs(cfgj["core"])
     N = cfg.n_neurons
-    tb = TB(dut, cfg)
-    await tb.start()
+    tb = CoreBench(dut, cfg, CLAMP_KINDS, {})
+    await tb.start([dut.tick] + ([dut.in_valid, dut.in_source] if cfg.n_inputs else []))
     d = dut
     spikes: list[list[int]] = [[] for _ in range(N)]
     width, base, last_raw = cfg.sweep_number_width, 0, 0

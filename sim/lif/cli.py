@@ -13,9 +13,9 @@ import json
 
 import numpy as np
 
-from ..cli.options import (CliError, CommandGroups, engine_choices, finite_float, input_file,
-                           nonneg_int, output_dir, positive_float, positive_int,
-                           refuse_long_run)
+from ..cli.options import (CliError, CommandGroups, add_block_commands, add_rate_options,
+                           clamp_summary, engine_choices, finite_float, input_file, nonneg_int,
+                           output_dir, positive_float, positive_int, print_run, run_ticks)
 
 __all__ = ["register", "add_lif_options", "lif_kwargs", "lif_from_kwargs"]
 
@@ -25,10 +25,7 @@ def add_lif_options(p, *, neurons_default: int) -> None:
     g = p.add_argument_group("core configuration")
     g.add_argument("--neurons", type=positive_int, default=neurons_default)
     g.add_argument("--form", choices=("continuous", "discrete"), default="continuous")
-    g.add_argument("--update-hz", type=positive_float, default=16e3,
-                   help="per-neuron update rate; dt = 1000/update_hz ms (default 16e3)")
-    g.add_argument("--clock-hz", type=positive_float, default=None,
-                   help="core clock (generate: default 40e6; simulate: the engines' own)")
+    add_rate_options(g, None, "core clock (generate: default 40e6; simulate: the engines' own)")
     g.add_argument("--decay", choices=("multiply", "shift"), default="multiply",
                    help="leak by a multiplier or by shift-and-subtract (k = 2**-s)")
     g.add_argument("--tau-m-ms", type=positive_float, default=20.0)
@@ -113,12 +110,8 @@ def cmd_simulate(args) -> int:
     if len(cur) not in (1, n):
         raise CliError(f"--current takes one value or one per neuron ({n}), got {len(cur)}")
     cur = [cur[0]] * n if len(cur) == 1 else list(cur)
-    n_sweeps = int(round(args.duration_ms / cfg.dt_ms))
-    if n_sweeps < 1:
-        raise CliError(f"--duration-ms {args.duration_ms:g} is shorter than one update "
-                       f"(dt = {cfg.dt_ms:g} ms)")
-    refuse_long_run("cuneate simulate lif", "lif", args.engine, n_sweeps * cfg.n_neurons,
-                    args.max_minutes, f"{n_sweeps} sweeps of {cfg.n_neurons} neurons")
+    n_sweeps = run_ticks("cuneate simulate lif", "lif", args, cfg.dt_ms, cfg.n_neurons,
+                         cfg.n_neurons, unit="sweep")
     if args.engine != "golden":
         for x in cur:
             if not cfg.I.contains(x):
@@ -143,16 +136,10 @@ def cmd_simulate(args) -> int:
            "accepted_current_range": [cfg.i_lo, cfg.i_hi],
            "formats": {"V": str(cfg.V), "I": str(cfg.I), "W": str(cfg.W),
                        "X": str(cfg.X) if cfg.X else None},
-           "saturation": None if args.engine == "golden" else
-           {"counts": run.clamp_counts, "sticky": run.clamp_sticky}}
-    if args.json:
-        print(json.dumps(out))
-    else:
-        print(f"LIF ({cfg.form}, decay {cfg.decay}) on {args.engine}, dt = {cfg.dt_ms:g} ms, "
-              f"{n_sweeps * cfg.dt_ms:g} ms")
-        for i, s in enumerate(run.spikes_ms):
-            head = ", ".join(f"{t:g}" for t in s[:6]) + (" ..." if len(s) > 6 else "")
-            print(f"  neuron {i}: I = {cur[i]:g}, {len(s)} spikes: {head}")
+           "saturation": clamp_summary(run, args.engine)}
+    print_run(args, out, f"LIF ({cfg.form}, decay {cfg.decay}) on {args.engine}, dt = "
+                         f"{cfg.dt_ms:g} ms, {n_sweeps * cfg.dt_ms:g} ms",
+              [(f"neuron {i}: I = {cur[i]:g}", s) for i, s in enumerate(run.spikes_ms)])
     return 0
 
 
@@ -200,26 +187,17 @@ def cmd_quantization(args) -> int:
 
 
 def register(groups: CommandGroups) -> None:
-    s = groups.simulate.add_parser("lif", help="the LIF core")
-    s.add_argument("--engine", choices=engine_choices("lif"), default="golden")
+    s, g = add_block_commands(groups, "lif", "the LIF core", 200.0)
     s.add_argument("--current", type=finite_float, nargs="+", default=[25.0],
                    help="host current (mV, or u per step for --form discrete): one value or "
                         "one per neuron")
-    s.add_argument("--duration-ms", type=positive_float, default=200.0)
     s.add_argument("--input-rate", type=finite_float, default=0.1,
                    help="probability per tick of each input spike (with --weights)")
     s.add_argument("--seed", type=nonneg_int, default=0)
-    s.add_argument("--build-dir", default=None)
-    s.add_argument("--max-minutes", type=positive_float, default=10.0,
-                   help="refuse runs estimated to take longer (default 10)")
-    s.add_argument("--json", action="store_true")
     add_lif_options(s, neurons_default=1)
     s.set_defaults(func=cmd_simulate)
 
-    g = groups.generate.add_parser("lif", help="the LIF core")
     add_lif_options(g, neurons_default=2500)
-    g.add_argument("--tick-source", choices=("internal", "external"), default="internal")
-    g.add_argument("--out", required=True)
     g.set_defaults(func=cmd_generate)
 
     lif = groups.root.add_parser("lif", help="LIF experiments (3x3 skin, quantization table)")

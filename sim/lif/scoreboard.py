@@ -24,7 +24,8 @@ class LifSweepChecker:
         self.prev_v = cfg.v_init_raw.copy()
         self.prev_ref = np.zeros(cfg.n_neurons, dtype=np.int64)
         self.prev_tr = np.zeros((len(cfg.traces), cfg.n_neurons), dtype=np.int64)
-        self.stats = {"trace_golden_max_ratio": 0.0, "trace_bound_violations": 0,"sweeps_checked": 0, "updates_checked": 0, "twin_mismatches": 0,
+        self.stats = {"trace_golden_max_ratio": 0.0, "trace_bound_violations": 0,
+                      "sweeps_checked": 0, "updates_checked": 0, "twin_mismatches": 0,
                       "golden_bound_violations": 0, "golden_max_ratio": 0.0,
                       "golden_max_err": 0.0, "spike_disagreements": 0,
                       "spike_disagreements_near_threshold": 0, "flagged_updates": 0,

@@ -2,7 +2,8 @@
 
 Registered with the framework (:mod:`cuneate.sim.sweep`: same
 :class:`~cuneate.sim.sweep.SweepSpec`, same :func:`~cuneate.sim.sweep.run_sweep` with its Dask
-pool and per-point cache, same accuracy columns). A :class:`LifSweepPoint` is one way to simulate a LIF battery:
+pool and per-point cache, same accuracy columns). A :class:`LifSweepPoint` is one way to
+simulate a LIF battery:
 
 * ``fixed``: the bit-exact twin of the LIF core (:class:`cuneate.hdl.lif.LifTwin`, run through
   :func:`cuneate.sim.lif.engines.run_lif`) configured from the point's knobs - update rate,
@@ -55,6 +56,7 @@ from __future__ import annotations
 import sys
 import time
 from dataclasses import asdict, dataclass, field
+from typing import ClassVar
 from functools import lru_cache
 
 import numpy as np
@@ -62,7 +64,7 @@ import numpy as np
 from ...golden import lif as golden
 from ...hdl.lib.fixed import ROUNDINGS, FixedPointError
 from ...hdl.lif.config import DECAYS, FORMS, LifSet
-from ..sweep import (BLOCK_SAME_DT_KEYS, SweepSpec, ok_row, point_key, refused, register_battery,
+from ..sweep import (BLOCK_SAME_DT_KEYS, Point, SweepSpec, ok_row, refused, register_battery,
                      same_dt_columns)
 from ..sweep import n_steps as n_steps_of
 from .engines import LifProgram, engine_config, run_lif
@@ -248,7 +250,7 @@ def lif_reference_trains(spec: SweepSpec) -> list[np.ndarray]:
 
 
 @dataclass(frozen=True)
-class LifSweepPoint:
+class LifSweepPoint(Point):
     """One way to simulate a LIF battery: ``engine`` is ``fixed``, ``float64`` or ``float32``.
 
     The fixed-point knobs (ignored by the float engines): ``v_frac_bits`` (state fraction
@@ -258,21 +260,15 @@ class LifSweepPoint:
     represented decay). ``form`` must be the battery's.
     """
 
-    engine: str
-    update_hz: float = 16e3
     form: str = "continuous"
+    """the battery's form: ``continuous`` or ``discrete``"""
     v_frac_bits: int = 16
-    operand_width: int = 18
     weight_bits: int = 8
     decay: str = "multiply"
-    rounding: str = "nearest"
+    """``multiply`` (one multiplier) or ``shift`` (none)"""
     max_decay_error: float = 1e-2
 
-    def key(self, spec: SweepSpec) -> str:
-        """Cache key of the point on ``spec`` (its fields, the battery, duration, reference
-        rate and clock)."""
-        return point_key("lif", asdict(self), spec.battery, spec.duration_ms,
-                         spec.reference_hz, spec.clock_hz)
+    BLOCK: ClassVar[str] = "lif"
 
     def label(self) -> str:
         rate = f"{self.update_hz / 1e3:g} kHz"
@@ -374,12 +370,12 @@ def lif_grid(update_hz=(16e3,), form: str = "continuous", v_frac_bits=(16,),
         bad = [x for x in given if x not in known]
         if bad:
             raise ValueError(f"unknown {what} {bad[0]!r}; known: {', '.join(known)}")
-    pts = [LifSweepPoint("fixed", float(h), form, int(fv),
-                         int(w) if d == "multiply" else int(operand_width[0]), int(wb), d, r,
-                         float(e))
+    pts = [LifSweepPoint("fixed", float(h),
+                         int(w) if d == "multiply" else int(operand_width[0]), r, form=form, v_frac_bits=int(fv), weight_bits=int(wb), decay=d,
+                         max_decay_error=float(e))
            for h in update_hz for fv in v_frac_bits for w in operand_width
            for wb in weight_bits for d in decay for r in rounding for e in max_decay_error]
-    pts += [LifSweepPoint(f, float(h), form) for f in floats for h in update_hz]
+    pts += [LifSweepPoint(f, float(h), form=form) for f in floats for h in update_hz]
     return list(dict.fromkeys(pts))
 
 

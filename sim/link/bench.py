@@ -15,7 +15,7 @@ from cocotb.clock import Clock
 from cocotb.triggers import ClockCycles, RisingEdge
 from cocotbext.uart import UartSink, UartSource
 
-from cuneate.sim.engines.cocotb import bench_config, bench_report
+from cuneate.sim.engines.bench import bench_config, bench_report
 
 CLOCK_NS = 10
 

@@ -12,7 +12,8 @@ taken in the first cycle the sweep boundary allows); host current writes at rand
 outputs (``core.upd_*``, ``det.upd_*``) and the link are watched:
 
 * every afferent sweep is checked against the Izhikevich twin from the DUT's own previous
-  state and the float64 golden one-step bound (:class:`~cuneate.sim.izhikevich.scoreboard.SweepChecker`);
+  state and the float64 golden one-step bound
+  (:class:`~cuneate.sim.izhikevich.scoreboard.SweepChecker`);
 * every detector tick is checked (input sums, traces, current, v, u, spikes, clamps) against
   the coincidence twin with, as its input events, the source spikes of the previous afferent
   sweep as the DUT's core produced them, and against golden
@@ -35,15 +36,12 @@ import numpy as np
 
 from cuneate.hdl.network import NetworkConfig
 from cuneate.sim.coincidence.scoreboard import CoincidenceChecker
-from cuneate.sim.engines.cocotb import bench_config, bench_report
+from cuneate.sim.engines.bench import bench_config, bench_report
 from cuneate.sim.izhikevich.scoreboard import SweepChecker
 
 
-@cocotb.test()
-async def engine(dut):
-    spec = bench_config()
-    n_ticks = spec["ticks"]
-    writes = {int(k): v for k, v in spec["writes"].items()}
+async def _start(dut):
+    """Clock, reset, inputs idle, the spike stream always read."""
     cocotb.start_soon(Clock(dut.clk, 10, unit="ns").start())
     dut.rst.value = 1
     for s in (dut.tick, dut.i_wr_en, dut.i_wr_addr, dut.i_wr_data):
@@ -53,6 +51,14 @@ async def engine(dut):
     await RisingEdge(dut.clk)
     await FallingEdge(dut.clk)
     dut.rst.value = 0
+
+
+@cocotb.test()
+async def engine(dut):
+    spec = bench_config()
+    n_ticks = spec["ticks"]
+    writes = {int(k): v for k, v in spec["writes"].items()}
+    await _start(dut)
     stream = []
     cycles = 0
     t0 = time.perf_counter()
@@ -104,15 +110,7 @@ async def scoreboard(dut):
     core_chk = SweepChecker(cfg.core)
     det_chk = CoincidenceChecker(cfg.det)
     core, det = dut.core, dut.det
-    cocotb.start_soon(Clock(dut.clk, 10, unit="ns").start())
-    dut.rst.value = 1
-    for sig in (dut.tick, dut.i_wr_en, dut.i_wr_addr, dut.i_wr_data):
-        sig.value = 0
-    dut.out_ready.value = 1
-    await RisingEdge(dut.clk)
-    await RisingEdge(dut.clk)
-    await FallingEdge(dut.clk)
-    dut.rst.value = 0
+    await _start(dut)
     crow = {k: np.zeros(N, dtype=np.int64) for k in ("v", "u", "i", "spike", "clamp")}
     drow = {k: np.zeros(M, dtype=np.int64) for k in ("v", "u", "xd", "xr", "a", "i", "spike",
                                                       "clamp")}

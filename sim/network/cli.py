@@ -4,21 +4,19 @@ cuneate network (:mod:`cuneate.hdl.network`), with the coincidence detector's op
 
 from __future__ import annotations
 
-import json
 
 import numpy as np
 
-from ..cli.options import (CliError, CommandGroups, engine_choices, finite_float, nonneg_int,
-                           output_dir, positive_float, positive_int, refuse_long_run)
-from ..coincidence.cli import (add_coincidence_options, add_resources_option, coincidence_kwargs,
-                               print_resources)
-from ..engines.registry import ENGINES as ENGINE_TRAITS
+from ..cli.options import (CliError, CommandGroups, add_block_commands, build_config,
+                           finite_float, nonneg_int, output_dir, positive_int, print_run,
+                           run_ticks)
+from ..coincidence.cli import add_coincidence_options, coincidence_kwargs, print_resources
 
 __all__ = ["register"]
 
 
 def _network_from_args(args, clock_default=None):
-    from ...hdl.network import SWEEP_EXTRA, ConfigError, NetworkConfig
+    from ...hdl.network import SWEEP_EXTRA, NetworkConfig
     from ..izhikevich.cli import parse_param_set
     det = coincidence_kwargs(args)
     det.pop("update_hz")
@@ -38,23 +36,14 @@ def _network_from_args(args, clock_default=None):
                                           for x in args.afferent_param_set)
         kw["afferent_sets"] = [i % len(args.afferent_param_set) for i in range(args.afferents)]
     kw["tick_source"] = getattr(args, "tick_source", None) or "external"   # engines: external
-    try:
-        return NetworkConfig(**kw)
-    except ConfigError as exc:
-        raise CliError(f"cuneate: {exc}") from None
+    return build_config(NetworkConfig, kw)
 
 
 def cmd_simulate_network(args) -> int:
     from .engines import run_network
     cfg = _network_from_args(args)
-    n_ticks = int(round(args.duration_ms / cfg.dt_ms))
-    if n_ticks < 1:
-        raise CliError(f"--duration-ms {args.duration_ms:g} is shorter than one tick "
-                       f"(dt = {cfg.dt_ms:g} ms)")
-    hdl = ENGINE_TRAITS[args.engine].hdl
-    refuse_long_run("cuneate simulate network", "network", args.engine,
-                    n_ticks * (cfg.cycles_needed if hdl else cfg.n_afferents), args.max_minutes,
-                    f"{n_ticks} ticks")
+    n_ticks = run_ticks("cuneate simulate network", "network", args, cfg.dt_ms,
+                        cfg.cycles_needed, cfg.n_afferents)
     N = cfg.n_afferents
     cur = list(args.current)
     if len(cur) not in (1, N):
@@ -79,27 +68,20 @@ def cmd_simulate_network(args) -> int:
            "delays_ms": (cfg.det.delays * cfg.dt_ms).tolist(),
            "weights": cfg.det.weights_real.tolist(), "current": cur, "spikes_ms": spikes,
            "latency": cfg.latency()["text"], "counters": run.counters}
-    if args.json:
-        print(json.dumps(out))
-    else:
-        print(f"afferent -> cuneate network on {args.engine}: {N} afferents (sources "
-              f"{cfg.first_source} .. {cfg.first_source + cfg.n_sources - 1}) -> "
-              f"{cfg.n_targets} cuneate neurons, dt = {cfg.dt_ms:g} ms, "
-              f"{n_ticks * cfg.dt_ms:g} ms")
-        for j, s in enumerate(spikes):
-            name = f"afferent {j}" if j < N else f"cuneate {j - N}"
-            head = ", ".join(f"{x:g}" for x in s[:6]) + (" ..." if len(s) > 6 else "")
-            print(f"  {name}: {len(s)} spikes: {head}")
+    print_run(args, out, f"afferent -> cuneate network on {args.engine}: {N} afferents "
+                         f"(sources {cfg.first_source} .. "
+                         f"{cfg.first_source + cfg.n_sources - 1}) -> {cfg.n_targets} cuneate "
+                         f"neurons, dt = {cfg.dt_ms:g} ms, {n_ticks * cfg.dt_ms:g} ms",
+              [(f"afferent {j}" if j < N else f"cuneate {j - N}", s)
+               for j, s in enumerate(spikes)])
     return 0
 
 
 def cmd_generate_network(args) -> int:
     from ...hdl.network import generate_network, synth_resources
     cfg = _network_from_args(args, clock_default=40e6)
-    files = generate_network(output_dir(args.out), cfg, name=args.name)
-    for f in files:
-        print(f)
-    print_resources(args, cfg, files[1], synth_resources)
+    print_resources(args, cfg, generate_network(output_dir(args.out), cfg, name=args.name),
+                    synth_resources)
     print(f"afferent -> cuneate network: {cfg.n_afferents} afferents, {cfg.n_sources} sources "
           f"-> {cfg.n_targets} cuneate neurons, {cfg.clock_hz / 1e6:g} MHz, "
           f"{cfg.cycles_needed} of {cfg.cycles_per_tick} cycles per tick; latency: "
@@ -120,23 +102,9 @@ def _add_network_options(p) -> None:
 
 
 def register(groups: CommandGroups) -> None:
-    sn = groups.simulate.add_parser("network", help="the afferent -> cuneate network")
-    sn.add_argument("--engine", choices=engine_choices("network"), default="golden")
+    sn, _ = add_block_commands(groups, "network", "the afferent -> cuneate network", 100.0,
+                               _add_network_options, cmd_simulate_network,
+                               cmd_generate_network, "afferent_cuneate_network", 15)
     sn.add_argument("--current", type=finite_float, nargs="+", default=[20.0],
                     help="afferent currents (mV/ms): one value or one per afferent")
-    sn.add_argument("--duration-ms", type=positive_float, default=100.0)
-    sn.add_argument("--build-dir", default=None, help="HDL simulator build directory")
-    sn.add_argument("--max-minutes", type=positive_float, default=10.0,
-                    help="refuse runs estimated to take longer (default 10)")
-    sn.add_argument("--json", action="store_true")
-    _add_network_options(sn)
-    sn.set_defaults(func=cmd_simulate_network)
-
-    gn = groups.generate.add_parser("network", help="the afferent -> cuneate network")
-    _add_network_options(gn)
-    gn.add_argument("--tick-source", choices=("internal", "external"), default="internal")
-    gn.add_argument("--name", default="afferent_cuneate_network", help="Verilog module name")
-    add_resources_option(gn, 15)
-    gn.add_argument("--out", required=True)
-    gn.set_defaults(func=cmd_generate_network)
 

@@ -147,11 +147,10 @@ def _split_stream(cfg, stream, n_ticks):
 def _run_network_cocotb(simulator: str, cfg, writes: dict, n_ticks: int,
                         build_dir: Path | None):
     from ...hdl.network import network_verilog
-    from ..engines.cocotb import run_bench
-    rep = run_bench(simulator, network_verilog(cfg, lowered=simulator == "icarus"),
-                    "afferent_cuneate_network", "network",
-                    {"network": cfg.to_kwargs(), "ticks": n_ticks,
-                     "writes": {str(k): v for k, v in writes.items()}}, build_dir,
-                    testcase="engine").report
+    from ..engines.cocotb import run_engine_bench
+    rep = run_engine_bench(simulator, lambda low: network_verilog(cfg, lowered=low),
+                           "afferent_cuneate_network", "network",
+                           {"network": cfg.to_kwargs(), "ticks": n_ticks,
+                            "writes": {str(k): v for k, v in writes.items()}}, build_dir)
     pa, pc = _split_stream(cfg, [tuple(x) for x in rep["stream"]], n_ticks)
     return pa, pc, rep["counters"]

@@ -12,17 +12,11 @@ The names below load on first use.
 
 from __future__ import annotations
 
-import importlib
+from ... import lazy_exports
 
-_EXPORTS = {"SceneError": ".schema", "Scene": ".scene", "load_scene": ".scene",
-            "parse_scene": ".scene", "default_scene": ".scene", "example_path": ".scene",
-            "example_names": ".scene", "DEFAULT_SCENE_TOML": ".scene", "run_scene": ".runner",
-            "KINDS": ".registry"}
-
-__all__ = sorted(_EXPORTS)
-
-
-def __getattr__(name: str):
-    if name in _EXPORTS:
-        return getattr(importlib.import_module(_EXPORTS[name], __name__), name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+__getattr__, __dir__, __all__ = lazy_exports(__name__, {
+    ".schema": "SceneError",
+    ".scene": "Scene load_scene parse_scene default_scene example_path example_names "
+              "DEFAULT_SCENE_TOML",
+    ".runner": "run_scene",
+    ".registry": "KINDS"})

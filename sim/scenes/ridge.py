@@ -213,7 +213,7 @@ def format_run(run: RidgeSceneRun) -> str:
 
 def write_report(run: RidgeSceneRun, out: Path) -> Path:
     """Write ``index.html``, ``run.json`` and one figure per engine into ``out``."""
-    from ..report import figures_html, html_table, page_head, pyplot
+    from ..report import html_table, pyplot, write_page
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     (out / "run.json").write_text(json.dumps(summary(run), indent=2, default=float))
@@ -244,7 +244,7 @@ def write_report(run: RidgeSceneRun, out: Path) -> Path:
              "yes" if np.array_equal(r.counts, first.counts) else "no"]
             for e, r in run.results.items()]
     cn = run.ran["blocks"][1]
-    page = f"""{page_head(run.scene.name)}
+    body = f"""
 <p>Scene: {html.escape(run.scene.source)}. Two stacked force sensors, SA and FA afferents per
 sensor, {cn['neurons']} cuneate neurons that differ only in their conduction delays.</p>
 <h2>Decoding (lookup table from every other trial of each angle)</h2>
@@ -257,10 +257,5 @@ sensor, {cn['neurons']} cuneate neurons that differ only in their conduction del
 <li>blocks: Izhikevich core (4 afferents), coincidence detector ({cn['neurons']} x
 {cn['sources']}, delays {html.escape(str(cn['delays_ticks']))} ticks)</li>
 <li>engines: {html.escape(', '.join(run.results))}</li></ul>
-<h2>Figures</h2>
-{figures_html(figs)}
-</body></html>
 """
-    path = out / "index.html"
-    path.write_text(page)
-    return path
+    return write_page(out, run.scene.name, body, figs)

@@ -286,7 +286,7 @@ def _figures(run: SkinSceneRun, out: Path) -> list[str]:
 
 def write_report(run: SkinSceneRun, out: Path) -> Path:
     """Write ``index.html``, ``run.json`` and figures into ``out``; returns the HTML path."""
-    from ..report import figures_html, fmt, html_table, page_head
+    from ..report import fmt, html_table, write_page
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     (out / "run.json").write_text(json.dumps(summary(run), indent=2, default=float))
@@ -308,7 +308,7 @@ def write_report(run: SkinSceneRun, out: Path) -> Path:
                  fmt(v["mean_abs_count_diff"]), v["max_abs_count_diff"],
                  fmt(v["fraction_within_1_tick"])] for k, v in run.agreement.items()]
     b = run.block
-    page = f"""{page_head(run.scene.name)}
+    body = f"""
 <p>Scene: {html.escape(run.scene.source)}. A {rows}x{cols} taxel skin, one LIF neuron per
 taxel; taxel {pressed} (row-major) is pressed.</p>
 <h2>Per engine</h2>
@@ -329,10 +329,5 @@ taxel; taxel {pressed} (row-major) is pressed.</p>
                          f"{b['current_format']}, state {b['state_format']}, decay "
                          f"{b['decay']}, dt {b['dt_ms']:g} ms)")}</li>
 <li>engines: {html.escape(', '.join(run.engines))}</li></ul>
-<h2>Figures</h2>
-{figures_html(figs)}
-</body></html>
 """
-    path = out / "index.html"
-    path.write_text(page)
-    return path
+    return write_page(out, run.scene.name, body, figs)

@@ -2,11 +2,11 @@
 
 import numpy as np
 import pytest
-from amaranth.sim import Simulator
 
 from cuneate.golden import coincidence as gcun
 from cuneate.hdl.coincidence import (CoincidenceConfig, CoincidenceDetector, CoincidenceTwin,
                                  ConfigError)
+from cuneate.sim.engines.amaranth import simulate
 
 DELAYS = [[0, 3, 1, 0], [2, 0, 0, 5], [7, 7, 0, 0]]
 
@@ -99,10 +99,7 @@ def _rtl_run(cfg, schedule, overrun_at=()):
                   "clamp_flags"):
             out[k] = ctx.get(getattr(dut, k))
 
-    sim = Simulator(dut)
-    sim.add_clock(1e-6)
-    sim.add_testbench(tb)
-    sim.run()
+    simulate(dut, tb)
     return rows, stream, out
 
 

@@ -5,13 +5,13 @@ import json
 
 import numpy as np
 import pytest
-from amaranth.sim import Simulator
 
 from cuneate.golden import izhikevich as golden
 from cuneate.golden.metrics import compare_populations
 from cuneate.hdl.izhikevich import generate_izhikevich
 from cuneate.hdl.izhikevich import (CLAMP_KINDS, PIPELINE_DEPTH, ConfigError,
                                     IzhikevichConfig, IzhikevichCore, IzhikevichTwin)
+from cuneate.sim.engines.amaranth import simulate
 
 
 # ---------------------------------------------------------------------------------------------
@@ -224,10 +224,7 @@ def _run_rtl(cfg, n_sweeps, rng, writes_per_sweep=3, hold_ready=True, tick_sched
         rec["overrun"] = ctx.get(dut.overrun)
         rec["overflow"] = ctx.get(dut.spike_overflow)
 
-    sim = Simulator(dut)
-    sim.add_clock(1e-6)
-    sim.add_testbench(bench)
-    sim.run()
+    simulate(dut, bench)
     return rec
 
 
@@ -415,10 +412,7 @@ def test_host_parameter_set_write_takes_effect_from_the_next_fetch():
                 ups.append((ctx.get(dut.upd_index), ctx.get(dut.upd_v), ctx.get(dut.upd_u),
                             ctx.get(dut.upd_current)))
 
-    sim = Simulator(dut)
-    sim.add_clock(1e-6)
-    sim.add_testbench(bench)
-    sim.run()
+    simulate(dut, bench)
     ups = np.array(ups, dtype=np.int64).reshape(120, N, 4)
     twin = IzhikevichTwin(cfg)
     v, u = twin.v.copy(), twin.u.copy()

@@ -16,12 +16,12 @@ forward Euler). Two panels differ from the published figure, and the tests say w
 
 import numpy as np
 import pytest
-from amaranth.sim import Simulator
 
 from cuneate.golden import izhikevich as golden
 from cuneate.golden.behaviours import BEHAVIOURS, Behaviour
 from cuneate.golden.behaviours import pulses as _pulses
 from cuneate.hdl.izhikevich import ConfigError, IzhikevichConfig, IzhikevichCore, IzhikevichTwin
+from cuneate.sim.engines.amaranth import simulate, write_currents
 
 DT = 1.0 / 16.0
 N = 8
@@ -179,12 +179,7 @@ def _run_rtl_schedule(cfg: IzhikevichConfig, currents: np.ndarray):
     async def bench(ctx):
         ctx.set(dut.spike_ready, 1)
         for k in range(len(raw)):
-            for n in range(Nn):
-                ctx.set(dut.i_wr_en, 1)
-                ctx.set(dut.i_wr_addr, n)
-                ctx.set(dut.i_wr_data, int(raw[k]))
-                await ctx.tick()
-            ctx.set(dut.i_wr_en, 0)
+            await write_currents(ctx, dut, [raw[k]] * Nn)
             ctx.set(dut.tick, 1)
             await ctx.tick()
             ctx.set(dut.tick, 0)
@@ -196,10 +191,7 @@ def _run_rtl_schedule(cfg: IzhikevichConfig, currents: np.ndarray):
                     rec["spike"].append(ctx.get(dut.upd_spike))
         rec["clamp"] = ctx.get(dut.clamp_flags)
 
-    sim = Simulator(dut)
-    sim.add_clock(1e-6)
-    sim.add_testbench(bench)
-    sim.run()
+    simulate(dut, bench)
     return rec
 
 

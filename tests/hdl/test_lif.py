@@ -5,11 +5,11 @@ import math
 
 import numpy as np
 import pytest
-from amaranth.sim import Simulator
 
 from cuneate.golden import lif as golden
 from cuneate.hdl.lif import (CLAMP_KINDS, PIPELINE_DEPTH, ConfigError, LifConfig, LifCore,
                              LifTwin)
+from cuneate.sim.engines.amaranth import simulate, write_currents
 
 
 # ---------------------------------------------------------------------------------- refusals
@@ -116,13 +116,7 @@ def _run_rtl(cfg: LifConfig, currents, n_sweeps, inputs=None, sel_writes=None, p
 
     async def bench(ctx):
         ctx.set(dut.spike_ready, 1)
-        raw = cfg.I.to_raw(currents)
-        for n in range(N):
-            ctx.set(dut.i_wr_en, 1)
-            ctx.set(dut.i_wr_addr, n)
-            ctx.set(dut.i_wr_data, int(raw[n]))
-            await ctx.tick()
-        ctx.set(dut.i_wr_en, 0)
+        await write_currents(ctx, dut, cfg.I.to_raw(currents)[:N])
         sweep = -1
         total = n_sweeps * period + PIPELINE_DEPTH + 4
         for c in range(total):
@@ -171,10 +165,7 @@ def _run_rtl(cfg: LifConfig, currents, n_sweeps, inputs=None, sel_writes=None, p
                     rec["tr"][s, j, n] = ctx.get(getattr(dut, f"upd_{t.name}"))
 
     state = {"sweep": -1}
-    sim = Simulator(dut)
-    sim.add_clock(1e-6)
-    sim.add_testbench(bench)
-    sim.run()
+    simulate(dut, bench)
     return rec, stream, done
 
 
@@ -328,10 +319,7 @@ def test_second_spike_of_a_source_in_one_tick_is_flagged():
         await spike(0)                 # twice within one tick: merged, flagged
         seen.append(ctx.get(dut.in_merged))
 
-    sim = Simulator(dut)
-    sim.add_clock(1e-6)
-    sim.add_testbench(bench)
-    sim.run()
+    simulate(dut, bench)
     assert seen == [0, 0, 1]
 
 
@@ -379,10 +367,7 @@ def test_host_weight_writes():
                     got[k, i] = ctx.get(dut.upd_acc)
                 await ctx.tick()
 
-    sim = Simulator(dut)
-    sim.add_clock(1e-6)
-    sim.add_testbench(bench)
-    sim.run()
+    simulate(dut, bench)
     twin = LifTwin(cfg)
     for k in range(n_sweeps):
         if k in writes:

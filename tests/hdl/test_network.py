@@ -6,9 +6,9 @@ from collections import Counter
 
 import numpy as np
 import pytest
-from amaranth.sim import Simulator
 
 from cuneate.hdl.network import AfferentCuneateNetwork, ConfigError, NetworkConfig, NetworkTwin
+from cuneate.sim.engines.amaranth import simulate
 
 DET = dict(n_sources=4, n_targets=3, delays_ticks=[[0, 0, 3, 3], [0, 0, 0, 0], [3, 3, 0, 0]],
            max_delay_ticks=8, weights=[[6.0] * 4] * 3)
@@ -95,10 +95,7 @@ def _rtl(cfg, currents, n_ticks, tick_mode="asap", ready_p=1.0, seed=0):
                   "merged_count"):
             rec[k] = ctx.get(getattr(dut, k))
 
-    sim = Simulator(dut)
-    sim.add_clock(1e-6)
-    sim.add_testbench(tb)
-    sim.run()
+    simulate(dut, tb)
     return rec
 
 

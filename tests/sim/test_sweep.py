@@ -97,7 +97,9 @@ def test_the_price_of_float32_parity_on_the_behaviours():
     sQ10.12 with 24-bit operands keeps every count and is at least float32's equal."""
     from cuneate.golden.metrics import compare_populations
     from cuneate.hdl.izhikevich import IzhikevichTwin
-    from cuneate.sim.izhikevich.sweep import fixed_config as _fixed_config, run_fixed as _run_fixed, simulate_float
+    from cuneate.sim.izhikevich.sweep import fixed_config as _fixed_config
+    from cuneate.sim.izhikevich.sweep import run_fixed as _run_fixed
+    from cuneate.sim.izhikevich.sweep import simulate_float
     bat = battery("behaviours")
     dt, n = 1.0 / 16.0, 16000
     euler = simulate_float(bat, dt, n, "euler")
@@ -128,7 +130,9 @@ def test_a_scene_is_a_battery_of_the_sweep(tmp_path):
     from cuneate.hdl.izhikevich import IzhikevichTwin
     from cuneate.sim.scenes import run_scene
     from cuneate.sim.scenes import example_path, load_scene
-    from cuneate.sim.izhikevich.sweep import fixed_config as _fixed_config, run_fixed as _run_fixed, simulate_float
+    from cuneate.sim.izhikevich.sweep import fixed_config as _fixed_config
+    from cuneate.sim.izhikevich.sweep import run_fixed as _run_fixed
+    from cuneate.sim.izhikevich.sweep import simulate_float
     run = run_scene(load_scene(example_path("pulse_amplitudes")), engines=["golden", "fixed"])
     bat = battery("scene:pulse_amplitudes")
     assert bat.n == len(run.neurons) and bat.duration_ms == 400.0
