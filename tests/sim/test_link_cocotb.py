@@ -5,7 +5,9 @@ the spike frames equal the protocol model's byte for byte and the twin's spikes 
 change at its sweep; a corrupted, a truncated, a late, an out-of-range, a runt and an unknown
 frame and a missing sequence number are each counted in the right counter; and a burst that
 overruns the receive FIFO while a write waits for its sweep (back-pressure) is counted as
-dropped bytes, with every frame it damaged missing from the accepted count (no silent loss).
+dropped bytes, with every frame it damaged missing from the accepted count (no silent loss);
+and damaged frames of every corruption class (:mod:`cuneate.boards.link_faults`) are each
+counted, never accepted, while the core's write port receives only intact currents.
 Icarus 11 runs the yosys-lowered netlist of the same design (``link_verilog(lowered=True)``):
 it mis-schedules some combinational processes of the transmit FSM in the direct output.
 """
