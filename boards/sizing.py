@@ -13,6 +13,7 @@ import math
 
 from ..hdl.izhikevich.config import ConfigError, IzhikevichConfig
 from ..hdl.link import LinkConfig
+from ..hdl.link.codec import HEADER_BYTES, MAX_FRAME
 from .top import ClockPlan
 
 __all__ = ["size_core", "estimate"]
@@ -36,8 +37,8 @@ def estimate(lcfg: LinkConfig, target: dict) -> dict:
     N = cfg.n_neurons
     mems = [(N, cfg.V.width + cfg.U.width), (N, cfg.I.width), (N, max(cfg.sel_bits, 1)),
             (cfg.spike_fifo_depth, 16 + cfg.sweep_number_width),
-            (lcfg.rx_fifo_depth, 8), (2 * lcfg.batch_capacity, 24), (254, 8),
-            ((254 - 8) // lcfg.current_bytes + 1, cfg.I.width)]
+            (lcfg.rx_fifo_depth, 8), (2 * lcfg.batch_capacity, 24), (MAX_FRAME, 8),
+            ((MAX_FRAME - HEADER_BYTES - 2) // lcfg.current_bytes + 1, cfg.I.width)]
     bram = sum(_blocks(d, w, target) for d, w in mems if d * w > target.get("lutram_bits", 0))
     dsp = MULTIPLIERS * math.ceil(cfg.operand_width / target["dsp_width"]) ** 2
     return {"BRAM": bram, "DSP": dsp}

@@ -11,7 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from amaranth.lib import io
-from amaranth import ClockDomain, ClockSignal, Elaboratable, Module, ResetSignal, Signal
+from amaranth import ClockDomain, ClockSignal, Elaboratable, Module, ResetSignal
 
 from ..hdl.izhikevich.config import ConfigError
 from ..hdl.link import LinkConfig, LinkedCore

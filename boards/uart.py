@@ -9,8 +9,12 @@ Lockstep: the core is stopped between calls. ``write_currents`` queues writes by
 for that sweep (the device holds each until the core stands exactly between the sweeps, so the
 currents are in effect from their sweep on), and a final ``STEP`` to the end. ``collect`` reads
 spike frames until they cover every sweep run. Loss is never silent: a device sequence gap, a
-gap in the ticks of spike batches, dropped spikes, a damaged frame from the device, or any
-non-zero device error counter raises :class:`~cuneate.sim.host.transport.TransportError`.
+gap in the ticks of spike batches, dropped spikes or a damaged or malformed frame from the
+device raises :class:`~cuneate.sim.host.transport.TransportError` where it is seen; damaged and
+malformed frames are also counted (``rx_*_errors`` in :meth:`UartTransport.counters`), and
+:meth:`UartTransport.check` fails on any of them and on any non-zero device error counter. A
+damaged frame is never accepted: every frame is checked (COBS, size, CRC-32, version, length,
+layout) before anything in it is used.
 """
 
 from __future__ import annotations
@@ -19,17 +23,21 @@ import time
 
 import numpy as np
 
-from ..hdl.link.codec import (COUNTER_NAMES, MSG_COUNTERS, MSG_SPIKES, OP_CLEAR_COUNTERS,
-                              OP_READ_COUNTERS, OP_STEP, OP_STOP, FrameDecoder, LinkModel,
-                              control_message, current_bytes, encode_frame, parse_counters,
-                              parse_spikes, write_message)
+from ..hdl.link.codec import (COUNTER_NAMES, FRAME_ERRORS, MSG_COUNTERS, MSG_SPIKES,
+                              OP_CLEAR_COUNTERS, OP_READ_COUNTERS, OP_STEP, OP_STOP,
+                              FrameDecoder, FrameError, control_message, current_bytes,
+                              encode_frame, parse_counters, parse_spikes, write_message)
+from ..hdl.link.twin import LinkModel
 from ..hdl.link.codec import MAX_FRAME, MIN_FRAME
 from ..sim.host.transport import SpikeBatch, Transport, TransportError
 
-__all__ = ["UartTransport", "ModelSerial", "DEVICE_ERRORS"]
+__all__ = ["UartTransport", "ModelSerial", "DEVICE_ERRORS", "HOST_ERRORS"]
 
 #: Device counters that mean something was lost or refused.
 DEVICE_ERRORS = tuple(n for n in COUNTER_NAMES if n != "frames_ok")
+#: Host counters of frames from the device refused as damaged or malformed, by kind
+#: (``rx_length_errors`` includes intact frames whose payload does not fit their type).
+HOST_ERRORS = tuple(f"rx_{k}_errors" for k in FRAME_ERRORS)
 
 
 class ModelSerial:
@@ -128,7 +136,8 @@ class UartTransport(Transport):
         self._counts["frames_sent"] += 1
 
     def _receive(self, until, what: str):
-        """Read frames until ``until()`` is true; raise on timeout or any damaged frame."""
+        """Read frames until ``until()`` is true; raise on timeout or on a frame damaged or
+        refused while waiting (it is counted first)."""
         deadline = time.monotonic() + self.timeout_s
         while not until():
             data = self.port.read(max(1, getattr(self.port, "in_waiting", 0) or 1))
@@ -137,11 +146,15 @@ class UartTransport(Transport):
                     raise TransportError(f"uart: no answer from the device while waiting for "
                                          f"{what} ({self.timeout_s:g} s)")
                 continue
-            for msg in self._dec.feed(data):
+            before = dict(self._dec.errors)
+            msgs = self._dec.feed(data)
+            new = {k: v - before[k] for k, v in self._dec.errors.items() if v != before[k]}
+            if new:
+                raise TransportError(
+                    f"uart: damaged frames from the device while waiting for {what}: " +
+                    ", ".join(f"{k}={v}" for k, v in new.items()))
+            for msg in msgs:
                 self._accept(msg)
-            bad = {k: v for k, v in self._dec.errors.items() if v}
-            if bad:
-                raise TransportError(f"uart: damaged frames from the device: {bad}")
 
     def _accept(self, msg):
         self._counts["frames_received"] += 1
@@ -149,6 +162,13 @@ class UartTransport(Transport):
             raise TransportError(f"uart: device frame sequence gap: expected "
                                  f"{(self._dev_seq + 1) & 0xFF}, got {msg.seq}")
         self._dev_seq = msg.seq
+        try:
+            self._use(msg)
+        except FrameError as exc:
+            self._dec.errors["length"] += 1
+            raise TransportError(f"uart: malformed frame from the device: {exc}") from None
+
+    def _use(self, msg):
         if msg.type == MSG_SPIKES:
             dropped, sweeps, spikes = parse_spikes(msg)
             if msg.tick != self._covered:
@@ -165,7 +185,7 @@ class UartTransport(Transport):
         elif msg.type == MSG_COUNTERS:
             self._last_counters = parse_counters(msg)
         else:
-            raise TransportError(f"uart: unexpected frame type {msg.type:#x} from the device")
+            raise FrameError(f"unexpected frame type {msg.type:#x}")
 
     # -- transport interface -----------------------------------------------------------------
     def write_currents(self, tick: int, first: int, raw) -> None:
@@ -214,11 +234,17 @@ class UartTransport(Transport):
         self._send(control_message(0, OP_READ_COUNTERS))
         self._receive(lambda: self._last_counters is not None, "the device counters")
         dev = self._last_counters
-        return dict(self._counts, **{f"device_{k}": v for k, v in dev.items()})
+        host = {f"rx_{k}_errors": v for k, v in self._dec.errors.items()}
+        return dict(self._counts, **host, **{f"device_{k}": v for k, v in dev.items()})
 
     def check(self) -> dict[str, int]:
-        """Counters, raising :class:`TransportError` naming every device error counted."""
+        """Counters, raising :class:`TransportError` naming every error counted: frames from the
+        device the host refused (:data:`HOST_ERRORS`) and the device's own error counters."""
         c = self.counters()
+        bad = {k: c[k] for k in HOST_ERRORS if c[k]}
+        if bad:
+            raise TransportError("uart: the host refused damaged frames from the device: " +
+                                 ", ".join(f"{k}={v}" for k, v in bad.items()))
         bad = {k: c[f"device_{k}"] for k in DEVICE_ERRORS if c[f"device_{k}"]}
         if bad:
             raise TransportError("uart: the device counted errors: " +

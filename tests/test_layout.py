@@ -169,7 +169,11 @@ def test_one_configuration_error():
     from cuneate.hdl.lib.config import ConfigError
     for block in (izhikevich, lif, coincidence, network):
         assert block.ConfigError is ConfigError
-    assert link.core.ConfigError is ConfigError
+    assert link.config.ConfigError is ConfigError
+    defined = [p.relative_to(ROOT).as_posix() for p in MODULES.values()
+               if any(isinstance(n, ast.ClassDef) and n.name == "ConfigError"
+                      for n in ast.walk(ast.parse(p.read_text())))]
+    assert defined == ["hdl/lib/config.py"]
 
 
 @pytest.mark.parametrize("block,names", [

@@ -1,13 +1,18 @@
-"""The link block: the host link over a UART (COBS frames with a CRC and sequence numbers)
-between a host and a core on the board.
+"""The link block: the host link over a UART (COBS frames with a CRC-32, a version and
+sequence numbers) between a host and a core on the board.
 
-``codec``  the wire format: frames, CRC, COBS, messages (host codec and bit-exact model)
-``core``   :class:`HostLink` and :class:`LinkedCore` (Amaranth) and their Verilog
+``config``    :class:`LinkConfig`: link parameters checked against the core they serve
+``codec``     the wire format: frames, COBS, messages (the host's codec)
+``datapath``  the CRC-32 step, one definition for ints and Amaranth values
+``twin``      :class:`LinkModel`: the device's answers on the bit-exact Izhikevich twin
+``core``      :class:`HostLink` and :class:`LinkedCore` (Amaranth) and their Verilog
 """
 
 from .codec import (COUNTER_NAMES, MAX_FRAME, MIN_FRAME, CobsError, FrameDecoder, FrameError,
-                    LinkModel, Message, decode_frame, encode_frame)
-from .core import HostLink, LinkConfig, LinkedCore, link_config, link_verilog
+                    Message, decode_frame, encode_frame)
+from .config import LinkConfig, link_config
+from .core import HostLink, LinkedCore, link_verilog
+from .twin import LinkModel
 
 __all__ = ["LinkConfig", "link_config", "HostLink", "LinkedCore", "link_verilog",
            "COUNTER_NAMES", "MAX_FRAME", "MIN_FRAME", "CobsError", "FrameError", "FrameDecoder",

@@ -1,18 +1,33 @@
-"""The host link's wire format: COBS framing, CRC-16/CCITT and the message layout.
+"""The host link's wire format: COBS framing, CRC-32 and the message layout (format version 1).
 
-This module is the bit-exact model of the link gateware (:mod:`cuneate.hdl.link.core`) and the codec
-of the host side (:mod:`cuneate.boards.link`). One frame on the wire is::
+This module is the codec of the host side (:mod:`cuneate.boards.uart`) and of the device
+model (:mod:`cuneate.hdl.link.twin`); the gateware (:mod:`cuneate.hdl.link.core`) shares its
+constants and its CRC step (:mod:`cuneate.hdl.link.datapath`). One frame on the wire is::
 
-    COBS( type u8 | seq u8 | tick u32 LE | payload ... | crc u16 BE )  0x00
+    COBS( version u8 | type u8 | seq u8 | len u8 | tick u32 LE | payload (len bytes)
+          | crc u32 LE )  0x00
 
-* **CRC-16/CCITT** (poly 0x1021, init 0xFFFF, no reflection, no final xor; check value 0x29B1
-  for ``b"123456789"``) over ``type .. payload``, appended big-endian, so the CRC of the whole
-  decoded frame is 0.
+* ``version`` is :data:`VERSION` (1). Every later format keeps the version byte first and the
+  CRC-32 trailer, so a receiver can tell an intact frame of another version from a damaged
+  one: an intact frame (CRC good) whose version differs is refused and counted as a version
+  error. Earlier builds sent unversioned CRC-16 frames; to this format they are CRC errors.
+* ``len`` is the number of payload bytes; a frame whose decoded size is not
+  ``len + ``:data:`MIN_FRAME` is refused (length error). The length is inside the CRC, so a
+  lost or an added byte is refused twice over: by the length and by the CRC.
+* **CRC-32** (ISO-HDLC: the CRC of Ethernet and zlib; poly 0x04C11DB7 reflected (0xEDB88320),
+  init 0xFFFFFFFF, final xor 0xFFFFFFFF; check value 0xCBF43926 for ``b"123456789"``) over
+  ``version .. payload``, appended little-endian. The register run over a whole intact frame,
+  CRC included, ends at :data:`CRC_RESIDUE` (0xDEBB20E3), not at zero: zero bytes appended to or
+  removed from the end of a frame change it.
 * **COBS** (Cheshire and Baker, 1999) removes every zero byte; a zero byte ends a frame. A zero
   in the middle of a COBS block (a truncated frame) or a frame that decodes to fewer than
-  :data:`MIN_FRAME` or more than :data:`MAX_FRAME` bytes is a framing error.
+  :data:`MIN_FRAME` or more than :data:`MAX_FRAME` bytes is a framing or length error.
 * **Sequence numbers** count frames per direction modulo 256; a gap is counted (device) or
   raised (host).
+
+Checks, in the order both ends apply them (the first failure names the error; nothing of a
+refused frame acts): COBS framing, decoded size (:data:`MIN_FRAME` .. :data:`MAX_FRAME`), CRC,
+version, ``len``; then (device) the sequence number and the type's payload layout.
 
 Messages, host to device:
 
@@ -43,32 +58,41 @@ from __future__ import annotations
 
 import struct
 
-import numpy as np
 from dataclasses import dataclass, field
 
+from .datapath import crc32_table
+
 __all__ = [
-    "crc16_update", "crc16", "cobs_encode", "cobs_decode", "CobsError", "FrameError",
-    "Message", "encode_frame", "decode_frame", "FrameDecoder", "write_message",
-    "control_message", "parse_spikes", "parse_counters", "current_bytes",
+    "crc32", "cobs_encode", "cobs_decode", "CobsError", "FrameError",
+    "Message", "encode_frame", "decode_frame", "FrameDecoder", "FRAME_ERRORS",
+    "write_message", "control_message", "parse_spikes", "parse_counters", "current_bytes",
     "MSG_WRITE", "MSG_CONTROL", "MSG_SPIKES", "MSG_COUNTERS", "OP_START", "OP_STOP",
-    "OP_STEP", "OP_READ_COUNTERS", "OP_CLEAR_COUNTERS", "SPIKE_HEADER", "CONTROL_PAYLOAD", "COUNTER_NAMES", "HEADER_BYTES", "MIN_FRAME",
-    "MAX_FRAME", "LinkModel",
+    "OP_STEP", "OP_READ_COUNTERS", "OP_CLEAR_COUNTERS", "SPIKE_HEADER", "CONTROL_PAYLOAD",
+    "COUNTER_NAMES", "VERSION", "HEADER_BYTES", "CRC_BYTES", "CRC_INIT", "CRC_RESIDUE",
+    "MIN_FRAME", "MAX_FRAME", "MAX_PAYLOAD",
 ]
 
+VERSION = 1               # frame format version (byte 0 of every frame)
 MSG_WRITE, MSG_CONTROL, MSG_SPIKES, MSG_COUNTERS = 0x01, 0x02, 0x81, 0x82
 OP_START, OP_STOP, OP_STEP, OP_READ_COUNTERS, OP_CLEAR_COUNTERS = 1, 2, 3, 4, 5
 SPIKE_HEADER = 3          # dropped u16, sweeps u8
 CONTROL_PAYLOAD = 5
-HEADER_BYTES = 6            # type, seq, tick u32
-MIN_FRAME = HEADER_BYTES + 2
-MAX_FRAME = 254             # decoded bytes, CRC included (one COBS block at most + 1)
+HEADER_BYTES = 8          # version, type, seq, len, tick u32
+CRC_BYTES = 4             # CRC-32, little-endian
+CRC_INIT = 0xFFFFFFFF     # CRC register before the first byte
+CRC_RESIDUE = 0xDEBB20E3  # CRC register after an intact frame, its CRC included
+MIN_FRAME = HEADER_BYTES + CRC_BYTES
+MAX_FRAME = 254           # decoded bytes, CRC included (one COBS block at most)
+MAX_PAYLOAD = MAX_FRAME - MIN_FRAME
 
 #: Device counters, in the order of the ``COUNTERS`` payload.
 COUNTER_NAMES = (
     "frames_ok",        # frames accepted (CRC good, well formed)
     "crc_errors",       # frames whose CRC failed
     "framing_errors",   # truncated COBS blocks, UART stop-bit errors
-    "length_errors",    # frames too short, too long, unknown type or payload size
+    "length_errors",    # frames too short or too long, a len field that disagrees with the
+                        # frame's size, an unknown type or a payload size wrong for the type
+    "version_errors",   # intact frames (CRC good) of another format version
     "seq_gaps",         # host frames missing between two accepted ones (sum of gaps)
     "late_writes",      # writes refused because their sweep had started
     "range_errors",     # writes past the last neuron
@@ -83,52 +107,34 @@ class CobsError(ValueError):
     """A byte sequence that is not valid COBS."""
 
 
+#: Kinds of damaged or refused frames a receiver counts (:attr:`FrameDecoder.errors`).
+FRAME_ERRORS = ("framing", "length", "crc", "version")
+
+
 class FrameError(ValueError):
-    """A frame that fails its CRC, its length or its layout."""
+    """A frame that fails its CRC, its version, its length or its layout; ``kind`` is one of
+    :data:`FRAME_ERRORS` (``"length"`` for layout errors)."""
+
+    def __init__(self, message: str, kind: str = "length"):
+        super().__init__(message)
+        self.kind = kind
 
 
 # ----------------------------------------------------------------------------------------------
-# CRC-16/CCITT, one byte at a time, written once for ints and Amaranth values.
+# CRC-32 (ISO-HDLC) over whole frames, by the table of the shared step
 
-def _crc16_step_int(crc: int, byte: int) -> int:
-    crc ^= byte << 8
-    for _ in range(8):
-        crc = ((crc << 1) ^ 0x1021 if crc & 0x8000 else crc << 1) & 0xFFFF
-    return crc
-
-
-# The step is linear over GF(2) in (crc, byte): output bit i is the XOR of the input bits in
-# _CRC_TAPS[i] (bits 0-15 of crc, then bits 0-7 of the byte as 16-23), derived from the
-# bitwise definition above so that the RTL cannot disagree with it.
-_CRC_TAPS = tuple(
-    tuple(j for j in range(24)
-          if (_crc16_step_int(1 << j if j < 16 else 0, 1 << (j - 16) if j >= 16 else 0)
-              >> i) & 1)
-    for i in range(16))
-
-
-def crc16_update(crc, byte):
-    """CRC-16/CCITT register after one more byte (MSB first). On ints: the bitwise definition;
-    on Amaranth values: one XOR tree per output bit from the same definition (the gateware
-    uses this function)."""
-    from amaranth.hdl import Cat
-    from ..lib.fixed import is_hdl
-    if not (is_hdl(crc) or is_hdl(byte)):
-        return _crc16_step_int(int(crc), int(byte))
-    bits = Cat(crc, byte)
-    out = []
-    for taps in _CRC_TAPS:
-        x = bits[taps[0]]
-        for t in taps[1:]:
-            x = x ^ bits[t]
-        out.append(x)
-    return Cat(*out)
-
-
-def crc16(data: bytes, crc: int = 0xFFFF) -> int:
+def _crc32_register(data: bytes, crc: int = CRC_INIT) -> int:
+    """The register after ``data`` (:func:`crc32_update` byte by byte, by its table)."""
+    table = crc32_table()
     for b in data:
-        crc = crc16_update(crc, b)
+        crc = (crc >> 8) ^ table[(crc ^ b) & 0xFF]
     return crc
+
+
+def crc32(data: bytes) -> int:
+    """CRC-32 of ``data`` as appended to a frame (init 0xFFFFFFFF, final xor 0xFFFFFFFF; equal
+    to :func:`zlib.crc32`)."""
+    return _crc32_register(data) ^ 0xFFFFFFFF
 
 
 # ----------------------------------------------------------------------------------------------
@@ -184,68 +190,91 @@ def cobs_decode(data: bytes) -> bytes:
 
 @dataclass(frozen=True)
 class Message:
+    """One frame's content: ``type``, ``seq`` and ``tick`` of the header and the payload (the
+    version, ``len`` and CRC are the frame's, added by :meth:`raw`)."""
+
     type: int
     seq: int
     tick: int
     payload: bytes = b""
 
-    def raw(self) -> bytes:
-        """The decoded frame, CRC appended."""
-        if not (0 <= self.type < 256 and 0 <= self.seq < 256 and 0 <= self.tick < 1 << 32):
-            raise FrameError(f"message header out of range: type {self.type}, seq {self.seq}, "
-                             f"tick {self.tick}")
-        body = struct.pack("<BBI", self.type, self.seq, self.tick) + bytes(self.payload)
-        if len(body) + 2 > MAX_FRAME:
-            raise FrameError(f"frame of {len(body) + 2} bytes exceeds {MAX_FRAME}")
-        return body + struct.pack(">H", crc16(body))
+    def raw(self, version: int = VERSION) -> bytes:
+        """The decoded frame: ``version type seq len tick payload`` and the CRC-32 (LE).
+        ``version`` other than :data:`VERSION` only to test receivers."""
+        if not (0 <= self.type < 256 and 0 <= self.seq < 256 and 0 <= self.tick < 1 << 32
+                and 0 <= version < 256):
+            raise FrameError(f"message header out of range: version {version}, type "
+                             f"{self.type}, seq {self.seq}, tick {self.tick}")
+        n = len(self.payload)
+        if n > MAX_PAYLOAD:
+            raise FrameError(f"frame of {n + MIN_FRAME} bytes exceeds {MAX_FRAME}")
+        body = struct.pack("<BBBBI", version, self.type, self.seq, n, self.tick) + \
+            bytes(self.payload)
+        return body + struct.pack("<I", crc32(body))
 
 
-def encode_frame(msg: Message) -> bytes:
+def encode_frame(msg: Message, version: int = VERSION) -> bytes:
     """Bytes on the wire: COBS of the raw frame and the 0x00 delimiter."""
-    return cobs_encode(msg.raw()) + b"\x00"
+    return cobs_encode(msg.raw(version)) + b"\x00"
 
 
 def decode_frame(raw: bytes) -> Message:
-    """A message from a decoded (un-COBSed) frame; :class:`FrameError` names what is wrong."""
-    if len(raw) < MIN_FRAME:
-        raise FrameError(f"frame of {len(raw)} bytes is shorter than {MIN_FRAME}")
-    if len(raw) > MAX_FRAME:
-        raise FrameError(f"frame of {len(raw)} bytes exceeds {MAX_FRAME}")
-    if crc16(raw) != 0:
-        raise FrameError(f"CRC error in a {len(raw)}-byte frame")
-    t, seq, tick = struct.unpack_from("<BBI", raw)
-    return Message(t, seq, tick, bytes(raw[HEADER_BYTES:-2]))
+    """A message from a decoded (un-COBSed) frame; :class:`FrameError` names what is wrong
+    (its ``kind``: ``"length"``, ``"crc"`` or ``"version"``), checked in this order: size,
+    CRC, version, ``len``."""
+    n = len(raw)
+    if n < MIN_FRAME:
+        raise FrameError(f"frame of {n} bytes is shorter than {MIN_FRAME}", "length")
+    if n > MAX_FRAME:
+        raise FrameError(f"frame of {n} bytes exceeds {MAX_FRAME}", "length")
+    if _crc32_register(raw) != CRC_RESIDUE:
+        raise FrameError(f"CRC error in a {n}-byte frame", "crc")
+    version, t, seq, length, tick = struct.unpack_from("<BBBBI", raw)
+    if version != VERSION:
+        raise FrameError(f"frame of format version {version}, this end speaks {VERSION}",
+                         "version")
+    if length != n - MIN_FRAME:
+        raise FrameError(f"frame of {n} bytes says {length} payload bytes, "
+                         f"not {n - MIN_FRAME}", "length")
+    return Message(t, seq, tick, bytes(raw[HEADER_BYTES:-CRC_BYTES]))
 
 
 @dataclass
 class FrameDecoder:
-    """Incremental receiver: feed bytes, get messages; every bad frame is counted by kind."""
+    """Incremental receiver: feed bytes, get the intact messages; every damaged or refused
+    frame is counted in :attr:`errors` by kind (:data:`FRAME_ERRORS`), never raised.
 
-    errors: dict = field(default_factory=lambda: {"framing": 0, "crc": 0, "length": 0})
+    A run of more than ``2 * MAX_FRAME`` bytes without a delimiter is dropped and counted as a
+    length error (the bytes after it start a new frame)."""
+
+    errors: dict = field(default_factory=lambda: {k: 0 for k in FRAME_ERRORS})
     _buf: bytearray = field(default_factory=bytearray)
 
     def feed(self, data: bytes) -> list[Message]:
         out = []
-        for b in data:
-            if b != 0:
-                self._buf.append(b)
-                if len(self._buf) > 2 * MAX_FRAME:       # no delimiter for far too long
-                    self._buf.clear()
-                    self.errors["length"] += 1
-                continue
-            chunk, self._buf = bytes(self._buf), bytearray()
+        *chunks, rest = bytes(data).split(b"\x00")
+        for part in chunks:
+            chunk = self._trim(bytes(self._buf) + part)
+            self._buf = bytearray()
             if not chunk:
                 continue
             try:
-                raw = cobs_decode(chunk)
+                out.append(decode_frame(cobs_decode(chunk)))
             except CobsError:
                 self.errors["framing"] += 1
-                continue
-            try:
-                out.append(decode_frame(raw))
             except FrameError as exc:
-                self.errors["crc" if "CRC" in str(exc) else "length"] += 1
+                self.errors[exc.kind] += 1
+        self._buf = bytearray(self._trim(bytes(self._buf) + rest))
         return out
+
+    def _trim(self, buf: bytes) -> bytes:
+        """Drop (and count) each leading run of ``2 * MAX_FRAME + 1`` bytes without a
+        delimiter, as a byte-by-byte receiver with a buffer of ``2 * MAX_FRAME`` does."""
+        limit = 2 * MAX_FRAME + 1
+        while len(buf) >= limit:
+            buf = buf[limit:]
+            self.errors["length"] += 1
+        return buf
 
 
 def current_bytes(width: int) -> int:
@@ -288,134 +317,3 @@ def parse_counters(msg: Message) -> dict[str, int]:
         raise FrameError(f"not a counters message: type {msg.type:#x}, "
                          f"{len(msg.payload)} payload bytes")
     return dict(zip(COUNTER_NAMES, struct.unpack(f"<{n}I", msg.payload)))
-
-
-# ----------------------------------------------------------------------------------------------
-# Device model: what the link gateware answers, sweep for sweep, when no timing loss occurs
-
-class LinkModel:
-    """Behavioural model of :class:`cuneate.hdl.link.LinkedCore` on the bit-exact twin.
-
-    Feed it the host's bytes (:meth:`feed`); it returns the bytes the device sends. It follows
-    the gateware's rules (CRC, framing, length, sequence, range and late-write checks, the same
-    counters; writes take effect exactly at their sweep; one ``SPIKES`` frame per batch) for a
-    device fast enough that no tick, batch or FIFO is lost. A ``WRITE`` for a future sweep runs
-    the core up to that sweep when steps allow it (as the device does while stepping).
-    """
-
-    def __init__(self, lcfg):
-        from ..izhikevich import IzhikevichTwin
-        self.lcfg = lcfg
-        self.twin = IzhikevichTwin(lcfg.core)
-        self.counters = {n: 0 for n in COUNTER_NAMES}
-        self.S = 0
-        self.free = False
-        self.steps = 0
-        self.exp_seq = 0
-        self.tx_seq = 0
-        self._rx = bytearray()
-        self._batch: list[tuple[int, int]] = []
-        self._batch_tick = 0
-        self._in_batch = 0
-        self._dropped = 0
-        self._out = bytearray()
-
-    def _send(self, typ: int, tick: int, payload: bytes):
-        self._out += encode_frame(Message(typ, self.tx_seq, tick & 0xFFFFFFFF, payload))
-        self.tx_seq = (self.tx_seq + 1) & 0xFF
-
-    def _sweep(self):
-        spk = np.flatnonzero(self.twin.sweep())
-        cap = self.lcfg.batch_capacity
-        for n in spk:
-            if len(self._batch) < cap:
-                self._batch.append((self.S - self._batch_tick, int(n)))
-            else:
-                self._dropped += 1
-                self.counters["spikes_dropped"] += 1
-        self.S += 1
-        if not self.free:
-            self.steps -= 1
-        self._in_batch += 1
-        if self._in_batch == self.lcfg.batch_sweeps or (not self.free and self.steps == 0):
-            payload = struct.pack("<HB", min(self._dropped, 0xFFFF), self._in_batch)
-            for off, n in self._batch:
-                payload += struct.pack("<BH", off, n)
-            self._send(MSG_SPIKES, self._batch_tick, payload)
-            self._batch_tick += self._in_batch
-            self._batch, self._in_batch, self._dropped = [], 0, 0
-
-    def advance(self, n: int):
-        """Run ``n`` sweeps (free running or within the current step)."""
-        for _ in range(n):
-            if not (self.free or self.steps > 0):
-                break
-            self._sweep()
-
-    def feed(self, data: bytes) -> bytes:
-        for b in data:
-            if b:
-                self._rx.append(b)
-                continue
-            chunk, self._rx = bytes(self._rx), bytearray()
-            if chunk:
-                self._frame(chunk)
-        out, self._out = bytes(self._out), bytearray()
-        return out
-
-    def _frame(self, chunk: bytes):
-        c = self.counters
-        try:
-            raw = cobs_decode(chunk)
-        except CobsError:
-            c["framing_errors"] += 1
-            return
-        if not MIN_FRAME <= len(raw) <= MAX_FRAME:
-            c["length_errors"] += 1
-            return
-        if crc16(raw) != 0:
-            c["crc_errors"] += 1
-            return
-        msg = decode_frame(raw)
-        c["seq_gaps"] += (msg.seq - self.exp_seq) & 0xFF
-        self.exp_seq = (msg.seq + 1) & 0xFF
-        W = self.lcfg.current_bytes
-        n = len(msg.payload) - 2
-        if msg.type == MSG_WRITE and n >= 0 and n % W == 0:
-            first = struct.unpack_from("<H", msg.payload)[0]
-            vals = [int.from_bytes(msg.payload[2 + i:2 + i + W], "little")
-                    for i in range(0, n, W)]
-            w = self.lcfg.current_width
-            vals = [((v & ((1 << w) - 1)) ^ (1 << (w - 1))) - (1 << (w - 1)) for v in vals]
-            if first + len(vals) > self.lcfg.core.n_neurons:
-                c["range_errors"] += 1
-                return
-            c["frames_ok"] += 1
-            while self.S < msg.tick:
-                if not (self.free or self.steps > 0):
-                    raise RuntimeError(f"write for sweep {msg.tick} waits forever: the core is "
-                                       f"stopped at sweep {self.S}")
-                self._sweep()
-            if self.S > msg.tick:
-                c["late_writes"] += 1
-                return
-            self.twin.I[first:first + len(vals)] = vals
-        elif (msg.type == MSG_CONTROL and len(msg.payload) == CONTROL_PAYLOAD
-              and OP_START <= msg.payload[0] <= OP_CLEAR_COUNTERS):
-            c["frames_ok"] += 1
-            op, arg = struct.unpack("<BI", msg.payload)
-            if op == OP_START:
-                self.free = True
-            elif op == OP_STOP:
-                self.free, self.steps = False, 0
-            elif op == OP_STEP:
-                self.free, self.steps = False, arg
-            elif op == OP_READ_COUNTERS:
-                self._send(MSG_COUNTERS, self.S,
-                           struct.pack(f"<{len(COUNTER_NAMES)}I",
-                                       *(min(c[k], 0xFFFFFFFF) for k in COUNTER_NAMES)))
-            elif op == OP_CLEAR_COUNTERS:
-                for k in c:
-                    c[k] = 0
-        else:
-            c["length_errors"] += 1

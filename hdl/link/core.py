@@ -8,14 +8,15 @@ is the same function in RTL and host, the COBS encoder scans as the model does).
 
 Receive path
     UART -> FIFO (``rx_fifo_depth`` bytes; a byte arriving when it is full is dropped and
-    counted ``rx_overflows``) -> streaming COBS decoder with running CRC; the header is kept in
-    registers and the currents are assembled into a value RAM as they arrive, so nothing acts
-    before the frame's CRC is checked. A good frame is then executed while the FIFO holds
-    further bytes (back-pressure). ``WRITE`` waits until the core is between sweep
-    ``tick - 1`` and sweep ``tick`` and writes one current per cycle; the tick generator holds
-    the next tick while a write is in progress (jitter of at most ``count + 1`` cycles, no
-    drift), so the currents are in effect exactly from sweep ``tick``. A write whose sweep has
-    started is refused (``late_writes``).
+    counted ``rx_overflows``) -> streaming COBS decoder with running CRC-32; the header is kept
+    in registers and the currents are assembled into a value RAM as they arrive, so nothing
+    acts before the frame is checked (size, CRC residue, version, ``len`` against the size, in
+    that order, then the sequence number and the type's layout). A good frame is then executed
+    while the FIFO holds further bytes (back-pressure). ``WRITE`` waits until the core is
+    between sweep ``tick - 1`` and sweep ``tick`` and writes one current per cycle; the tick
+    generator holds the next tick while a write is in progress (jitter of at most ``count + 1``
+    cycles, no drift), so the currents are in effect exactly from sweep ``tick``. A write whose
+    sweep has started is refused (``late_writes``).
 Tick generator
     Divider of ``cycles_per_tick``; runs freely (``OP_START``), for ``arg`` sweeps
     (``OP_STEP``) or not at all (``OP_STOP``, the state after reset). A tick due while the
@@ -27,9 +28,10 @@ Transmit path
     frame, empty or not; spikes that do not fit are counted in the frame and in
     ``spikes_dropped``; a batch that closes while both buffers are busy is dropped whole and
     counted ``batches_dropped`` (the host sees the gap in ticks). Frames are built into a byte
-    RAM with their CRC, then COBS-encoded by scanning, into a small FIFO feeding the UART.
+    RAM with their CRC-32, then COBS-encoded by scanning, into a small FIFO feeding the UART.
 
-Counters (32 bits, saturating, never wrapping): :data:`~cuneate.hdl.link.codec.COUNTER_NAMES`.
+Counters (``counter_width`` bits, 32 by default, saturating, never wrapping):
+:data:`~cuneate.hdl.link.codec.COUNTER_NAMES`.
 """
 
 from __future__ import annotations
@@ -40,14 +42,17 @@ from amaranth.lib.fifo import SyncFIFOBuffered
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
-from ..izhikevich import ConfigError, IzhikevichConfig, IzhikevichCore
+from ..izhikevich import IzhikevichCore
+from ..flow.verilog import verilog_text
 from ..lib.uart import UartRx, UartTx
-from .codec import (COUNTER_NAMES, MAX_FRAME, MIN_FRAME, MSG_CONTROL, MSG_COUNTERS,
+from .codec import (COUNTER_NAMES, CRC_BYTES, CRC_INIT, CRC_RESIDUE, MAX_FRAME, MIN_FRAME, MSG_CONTROL, MSG_COUNTERS,
                          MSG_SPIKES, MSG_WRITE, OP_CLEAR_COUNTERS, OP_READ_COUNTERS,
                          OP_START, OP_STEP, OP_STOP, SPIKE_HEADER, CONTROL_PAYLOAD,
-                         HEADER_BYTES, crc16_update, current_bytes)
+                         HEADER_BYTES, VERSION)
+from .config import LinkConfig
+from .datapath import crc32_update
 
-__all__ = ["HostLink", "LinkedCore", "LinkConfig", "link_config", "link_verilog"]
+__all__ = ["HostLink", "LinkedCore", "link_verilog"]
 
 
 def _pick(options, index):
@@ -56,61 +61,6 @@ def _pick(options, index):
     for i in range(len(options) - 2, -1, -1):
         out = Mux(index == i, options[i], out)
     return out
-
-
-class LinkConfig:
-    """Link parameters checked against the core they serve."""
-
-    def __init__(self, core: IzhikevichConfig, clocks_per_bit: int = 16, batch_sweeps: int = 16,
-                 batch_capacity: int = 80, rx_fifo_depth: int = 512, tx_fifo_depth: int = 16,
-                 counter_width: int = 32):
-        if core.tick_source != "external":
-            raise ConfigError("the host link drives the core's ticks: the core needs "
-                              "tick_source='external'")
-        if core.n_neurons > 1 << 16:
-            raise ConfigError(f"the link addresses at most 65536 neurons, "
-                              f"not {core.n_neurons}")
-        if not 1 <= batch_sweeps <= 255:
-            raise ConfigError(f"batch_sweeps must be 1..255, not {batch_sweeps}")
-        max_spikes = (MAX_FRAME - MIN_FRAME - SPIKE_HEADER) // 3
-        if not 1 <= batch_capacity <= max_spikes:
-            raise ConfigError(f"batch_capacity must be 1..{max_spikes} (one frame), "
-                              f"not {batch_capacity}")
-        if core.cycles_per_tick < 10:
-            raise ConfigError("the link needs sweeps at least 10 cycles apart (a spike batch "
-                              "closes within 9 cycles of its last sweep)")
-        if core.sweep_number_width < 9:
-            raise ConfigError("the link needs sweep numbers of at least 9 bits")
-        if not 8 <= counter_width <= 32:
-            raise ConfigError(f"counter_width must be 8..32, not {counter_width}")
-        self.counter_width = int(counter_width)
-        self.core = core
-        self.clocks_per_bit = int(clocks_per_bit)
-        self.batch_sweeps = int(batch_sweeps)
-        self.batch_capacity = int(batch_capacity)
-        self.rx_fifo_depth = int(rx_fifo_depth)
-        self.tx_fifo_depth = int(tx_fifo_depth)
-        self.current_width = core.I.width
-        self.current_bytes = current_bytes(core.I.width)
-        self.max_currents = (MAX_FRAME - MIN_FRAME - 2) // self.current_bytes
-
-    @property
-    def baud(self) -> float:
-        return self.core.clock_hz / self.clocks_per_bit
-
-    def to_dict(self) -> dict:
-        return {"clocks_per_bit": self.clocks_per_bit, "baud": self.baud,
-                "batch_sweeps": self.batch_sweeps, "batch_capacity": self.batch_capacity,
-                "rx_fifo_depth": self.rx_fifo_depth, "tx_fifo_depth": self.tx_fifo_depth,
-                "current_bytes": self.current_bytes, "max_currents": self.max_currents,
-                "counter_width": self.counter_width}
-
-
-def link_config(core_kwargs: dict | None = None, **link_kwargs) -> LinkConfig:
-    """A :class:`LinkConfig` for a core built from ``core_kwargs`` (external tick forced)."""
-    kw = dict(core_kwargs or {})
-    kw["tick_source"] = "external"
-    return LinkConfig(IzhikevichConfig(**kw), **link_kwargs)
 
 
 class HostLink(wiring.Component):
@@ -182,6 +132,8 @@ class HostLink(wiring.Component):
             m.d.sync += pending.eq(0)
 
         # --- receive: COBS decoder, CRC, header registers, value RAM -----------------------
+        # values assembled from every byte after ``first`` (the CRC's bytes included, then
+        # discounted): one more than the longest write holds
         max_vals = (MAX_FRAME - HEADER_BYTES - 2) // W + 1
         m.submodules.vmem = vmem = Memory(shape=cfg.I.width, depth=max_vals, init=[])
         vwr, vrd = vmem.write_port(), vmem.read_port()
@@ -190,22 +142,22 @@ class HostLink(wiring.Component):
         zero_pending = Signal()
         started = Signal()
         overlong = Signal()
-        crc = Signal(16, init=0xFFFF)
+        crc = Signal(32, init=CRC_INIT)
         hdr = Array(Signal(8, name=f"hdr{i}") for i in range(HEADER_BYTES + CONTROL_PAYLOAD))
         acc = Signal(8 * W)
         phase = Signal(range(W))
         nvals = Signal(range(max_vals + 1))
-        typ, seq = hdr[0], hdr[1]
-        ftick = Cat(hdr[2], hdr[3], hdr[4], hdr[5])
-        first = Cat(hdr[6], hdr[7])
-        op = hdr[6]
-        arg = Cat(hdr[7], hdr[8], hdr[9], hdr[10])
+        ver, typ, seq, plen = hdr[0], hdr[1], hdr[2], hdr[3]
+        ftick = Cat(hdr[4], hdr[5], hdr[6], hdr[7])
+        first = Cat(hdr[8], hdr[9])
+        op = hdr[8]
+        arg = Cat(hdr[9], hdr[10], hdr[11], hdr[12])
         exp_seq = Signal(8)
 
         emit = Signal()
         ebyte = Signal(8)
         with m.If(emit):
-            m.d.sync += crc.eq(crc16_update(crc, ebyte))
+            m.d.sync += crc.eq(crc32_update(crc, ebyte))
             with m.If(flen == MAX_FRAME):
                 m.d.sync += overlong.eq(1)
             with m.Else():
@@ -225,11 +177,10 @@ class HostLink(wiring.Component):
 
         def frame_reset():
             return [flen.eq(0), remain.eq(0), zero_pending.eq(0), started.eq(0),
-                    overlong.eq(0), crc.eq(0xFFFF), phase.eq(0), nvals.eq(0)]
+                    overlong.eq(0), crc.eq(CRC_INIT), phase.eq(0), nvals.eq(0)]
 
         count = Signal(range(max_vals + 1))
         widx = Signal(range(max_vals + 1))
-        wvalid = Signal()
         seq_gap = Signal(8)
         m.d.comb += seq_gap.eq(seq - exp_seq)
         counters_req = Signal()
@@ -257,16 +208,20 @@ class HostLink(wiring.Component):
             with m.State("CHECK"):
                 m.d.sync += frame_reset()
                 m.next = "RECV"
-                values = nvals - (2 // W)
+                values = nvals - (CRC_BYTES // W)
                 with m.If(overlong | (flen < MIN_FRAME)):
                     m.d.comb += inc["length_errors"].eq(1)
-                with m.Elif(crc != 0):
+                with m.Elif(crc != CRC_RESIDUE):
                     m.d.comb += inc["crc_errors"].eq(1)
+                with m.Elif(ver != VERSION):
+                    m.d.comb += inc["version_errors"].eq(1)
+                with m.Elif(flen != plen + MIN_FRAME):
+                    m.d.comb += inc["length_errors"].eq(1)
                 with m.Else():
                     m.d.comb += inc["seq_gaps"].eq(seq_gap)
                     m.d.sync += exp_seq.eq(seq + 1)
                     with m.If((typ == MSG_WRITE) & (flen >= MIN_FRAME + 2)
-                              & (phase == (2 % W))):
+                              & (phase == (CRC_BYTES % W))):
                         with m.If(first + values > N):
                             m.d.comb += inc["range_errors"].eq(1)
                         with m.Else():
@@ -378,7 +333,8 @@ class HostLink(wiring.Component):
         kind_spikes = Signal()
         j = Signal(range(MAX_FRAME + 1))                  # bytes built
         k = Signal(range(CAP + 1))                        # spike index
-        tcrc = Signal(16)
+        tcrc = Signal(32)
+        cb = Signal(range(CRC_BYTES))                     # CRC byte being written
         L = Signal(range(MAX_FRAME + 1))
         start = Signal(range(MAX_FRAME + 1))
         p = Signal(range(MAX_FRAME + 1))
@@ -393,15 +349,18 @@ class HostLink(wiring.Component):
         with m.If(put):
             m.d.sync += j.eq(j + 1)
         with m.If(put_r):
-            m.d.sync += tcrc.eq(crc16_update(tcrc, pbyte_r))
+            m.d.sync += tcrc.eq(crc32_update(tcrc, pbyte_r))
         # selections by explicit multiplexers (continuous assignments in the Verilog)
         h_tick = Mux(tx_half, half_tick[1], half_tick[0])
         h_count = Mux(tx_half, half_count[1], half_count[0])
         h_drop = Mux(tx_half, half_drop[1], half_drop[0])
         h_sweeps = Mux(tx_half, half_sweeps[1], half_sweeps[0])
         cur_tick = Mux(kind_spikes, h_tick, S)
-        head = [Const(MSG_SPIKES, 8), tx_seq, cur_tick[0:8], cur_tick[8:16],
-                cur_tick[16:24], cur_tick[24:32]]
+        # payload bytes: the spike header and three bytes per spike, or the counters
+        tx_len = Mux(kind_spikes, SPIKE_HEADER + (h_count << 1) + h_count,
+                     4 * len(COUNTER_NAMES))
+        head = [Const(VERSION, 8), Mux(kind_spikes, MSG_SPIKES, MSG_COUNTERS), tx_seq,
+                tx_len[0:8], cur_tick[0:8], cur_tick[8:16], cur_tick[16:24], cur_tick[24:32]]
         head_spk = [h_drop[0:8], h_drop[8:16], h_sweeps]
         ctr_all = Cat(*[Cat(ctr[n], Const(0, 32 - cw)) for n in COUNTER_NAMES])
         hi = Signal(range(4 * len(COUNTER_NAMES)))       # byte index after the header
@@ -415,7 +374,7 @@ class HostLink(wiring.Component):
 
         with m.FSM(name="tx_fsm") as tx_fsm:
             with m.State("IDLE"):
-                m.d.sync += [j.eq(0), k.eq(0), tcrc.eq(0xFFFF), hi.eq(0)]
+                m.d.sync += [j.eq(0), k.eq(0), tcrc.eq(CRC_INIT), hi.eq(0), cb.eq(0)]
                 with m.If(half_pending.bit_select(tx_half, 1)):
                     m.d.sync += kind_spikes.eq(1)
                     m.next = "HEAD"
@@ -423,9 +382,7 @@ class HostLink(wiring.Component):
                     m.d.sync += [kind_spikes.eq(0), counters_req.eq(0)]
                     m.next = "HEAD"
             with m.State("HEAD"):
-                m.d.comb += [put.eq(1),
-                             pbyte.eq(Mux(j == 0, Mux(kind_spikes, MSG_SPIKES, MSG_COUNTERS),
-                                          _pick(head, j)))]
+                m.d.comb += [put.eq(1), pbyte.eq(_pick(head, j))]
                 with m.If(j == HEADER_BYTES - 1):
                     m.next = "HEAD2"
             with m.State("HEAD2"):
@@ -451,13 +408,13 @@ class HostLink(wiring.Component):
                 m.d.sync += k.eq(k + 1)
                 m.next = "SPK_READ"
             with m.State("CRC_WAIT"):
-                m.next = "CRC_HI"
-            with m.State("CRC_HI"):
-                m.d.sync += j.eq(j + 1)
-                m.next = "CRC_LO"
-            with m.State("CRC_LO"):
-                m.d.sync += [L.eq(j + 1), start.eq(0), p.eq(0)]
-                m.next = "SCAN"
+                m.next = "CRC"
+            with m.State("CRC"):
+                # the CRC's bytes, inverted (final xor), least significant first
+                m.d.sync += [j.eq(j + 1), cb.eq(cb + 1)]
+                with m.If(cb == CRC_BYTES - 1):
+                    m.d.sync += [L.eq(j + 1), start.eq(0), p.eq(0)]
+                    m.next = "SCAN"
             # COBS encoder: find the block [start, p), emit p - start + 1, then the block
             with m.State("SCAN"):
                 m.next = "SCAN_CHK"
@@ -499,10 +456,10 @@ class HostLink(wiring.Component):
                                      tx_half.eq(~tx_half)]
                     m.next = "IDLE"
         # frame RAM ports as continuous assignments (see rx_fifo.r_en above)
-        crc_hi, crc_lo = tx_fsm.ongoing("CRC_HI"), tx_fsm.ongoing("CRC_LO")
+        crc_st = tx_fsm.ongoing("CRC")
         m.d.comb += [
-            twr.en.eq(put_r | crc_hi | crc_lo), twr.addr.eq(Mux(crc_hi | crc_lo, j, jw)),
-            twr.data.eq(Mux(crc_hi, tcrc[8:16], Mux(crc_lo, tcrc[0:8], pbyte_r))),
+            twr.en.eq(put_r | crc_st), twr.addr.eq(Mux(crc_st, j, jw)),
+            twr.data.eq(Mux(crc_st, ~tcrc.word_select(cb, 8), pbyte_r)),
             trd.addr.eq(Mux(tx_fsm.ongoing("EMIT_RD") | tx_fsm.ongoing("EMIT"), q, p)),
         ]
         return m
@@ -510,17 +467,21 @@ class HostLink(wiring.Component):
 
 class LinkedCore(wiring.Component):
     """An Izhikevich core behind a :class:`HostLink`: the pins are ``rx`` and ``tx``; status
-    outputs ``running`` and ``overflow`` (core spike FIFO or overrun flag) for LEDs."""
+    outputs ``running`` and ``overflow`` (core spike FIFO or overrun flag) for LEDs. The two
+    parts are the attributes ``core`` and ``link``."""
 
     def __init__(self, lcfg: LinkConfig):
         self.lcfg = lcfg
         super().__init__({"rx": In(1, init=1), "tx": Out(1, init=1), "running": Out(1),
                           "overflow": Out(1)})
+        # built here so that a simulation can watch the writes toward the core
+        self.core = IzhikevichCore(lcfg.core)
+        self.link = HostLink(lcfg)
 
     def elaborate(self, platform):
         m = Module()
-        m.submodules.core = core = IzhikevichCore(self.lcfg.core)
-        m.submodules.link = link = HostLink(self.lcfg)
+        m.submodules.core = core = self.core
+        m.submodules.link = link = self.link
         m.d.comb += [
             link.rx.eq(self.rx), self.tx.eq(link.tx), self.running.eq(link.running),
             self.overflow.eq(core.spike_overflow | core.overrun),
@@ -538,8 +499,4 @@ def link_verilog(lcfg: LinkConfig, name: str = "linked_core", lowered: bool = Fa
     """Verilog of :class:`LinkedCore`; ``lowered`` gives the yosys-lowered netlist for Icarus 11
     (see :func:`cuneate.hdl.flow.verilog.lowered_verilog`: it mis-schedules some combinational
     processes of the link's transmit FSM in the direct output)."""
-    from amaranth.back import verilog
-    if not lowered:
-        return verilog.convert(LinkedCore(lcfg), name=name, emit_src=False)
-    from ..flow.verilog import lowered_verilog
-    return lowered_verilog(LinkedCore(lcfg), name)
+    return verilog_text(LinkedCore(lcfg), name, lowered)

@@ -3,8 +3,10 @@
 A UART model (cocotbext-uart) plays the host: the test ``play`` sends each chunk of bytes given
 in the configuration (hex strings, each followed by a gap in clock cycles) on ``rx`` at the
 link's baud rate, records every byte the device sends on ``tx`` for ``total_cycles`` cycles, and
-reports them (hex) with the cycle counts. The caller decodes the frames and checks them
-against the protocol model and the bit-exact twin (tests/sim/test_link_cocotb.py).
+reports them (hex) with the cycle counts. With ``watch_writes`` it also reports every current
+the link writes toward the core (``[neuron, raw unsigned]`` per cycle the link's ``i_wr_en`` is
+set). The caller decodes the frames and checks them against the protocol model and the
+bit-exact twin (tests/sim/test_link_cocotb.py).
 """
 
 from __future__ import annotations
@@ -12,7 +14,7 @@ from __future__ import annotations
 
 import cocotb
 from cocotb.clock import Clock
-from cocotb.triggers import ClockCycles, RisingEdge
+from cocotb.triggers import ClockCycles, ReadOnly, RisingEdge
 from cocotbext.uart import UartSink, UartSource
 
 from cuneate.sim.engines.bench import bench_config, bench_report
@@ -50,6 +52,22 @@ async def play(dut):
             received.extend(await tb.sink.read())
 
     cocotb.start_soon(drain())
+    writes = []
+
+    async def watch_writes():
+        # the link's write port is registered: after each clock edge it holds the write the
+        # core takes at the next one; woken only when a burst of writes starts
+        link = dut.link
+        while True:
+            await RisingEdge(link.i_wr_en)
+            await ReadOnly()
+            while int(link.i_wr_en.value):
+                writes.append([int(link.i_wr_addr.value), int(link.i_wr_data.value)])
+                await RisingEdge(dut.clk)
+                await ReadOnly()
+
+    if cfg.get("watch_writes"):
+        cocotb.start_soon(watch_writes())
     cycles = 0
     for hexdata, gap in cfg["chunks"]:
         await tb.source.write(bytes.fromhex(hexdata))
@@ -60,4 +78,4 @@ async def play(dut):
     received.extend(tb.sink.read_nowait())
     cycles += remaining
     bench_report({"received": bytes(received).hex(), "overflow_pin": int(dut.overflow.value),
-             "running_pin": int(dut.running.value)})
+             "running_pin": int(dut.running.value), "writes": writes})

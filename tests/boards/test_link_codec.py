@@ -1,43 +1,105 @@
-"""Wire format: COBS, CRC-16/CCITT and messages (properties with Hypothesis)."""
+"""Wire format: COBS, CRC-32, the versioned frame layout and messages (properties with
+Hypothesis). The exhaustive and sampled corruption tests are in test_link_errors.py."""
 
 import binascii
 import struct
+import zlib
 
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from cuneate.hdl.link.codec import (MAX_FRAME, MSG_SPIKES, CobsError, FrameDecoder,
-                                    FrameError, Message, cobs_decode, cobs_encode, crc16,
+from cuneate.hdl.link.codec import (CRC_RESIDUE, MAX_FRAME, MAX_PAYLOAD, MSG_CONTROL,
+                                    MSG_SPIKES, MSG_WRITE, VERSION, CobsError, FrameDecoder,
+                                    FrameError, Message, cobs_decode, cobs_encode, crc32,
                                     decode_frame, encode_frame, parse_spikes, write_message)
+from cuneate.hdl.link.datapath import crc32_update
 
 frames = st.builds(Message, st.integers(0, 255), st.integers(0, 255),
-                   st.integers(0, (1 << 32) - 1), st.binary(max_size=MAX_FRAME - 8))
+                   st.integers(0, (1 << 32) - 1), st.binary(max_size=MAX_PAYLOAD))
 
 
-def test_crc_catalogue_check_value_and_python_stdlib():
-    # CRC-16/CCITT-FALSE check value from the CRC catalogue, and binascii's CRC-CCITT
-    assert crc16(b"123456789") == 0x29B1
-    assert crc16(b"\x00\xff" * 40) == binascii.crc_hqx(b"\x00\xff" * 40, 0xFFFF)
+def test_crc_catalogue_check_value_residue_and_python_stdlib():
+    # CRC-32/ISO-HDLC from the CRC catalogue: check 0xCBF43926, residue 0xDEBB20E3
+    assert crc32(b"123456789") == 0xCBF43926
+    reg = 0xFFFFFFFF
+    for b in b"123456789" + (0xCBF43926).to_bytes(4, "little"):
+        reg = crc32_update(reg, b)
+    assert reg == 0xDEBB20E3 == CRC_RESIDUE
+    assert crc32(b"\x00\xff" * 40) == binascii.crc32(b"\x00\xff" * 40)
 
 
 @given(st.binary(max_size=600))
 def test_crc_matches_stdlib(data):
-    assert crc16(data) == binascii.crc_hqx(data, 0xFFFF)
+    assert crc32(data) == zlib.crc32(data)
 
 
-def test_cobs_published_examples():
-    # examples of the COBS paper / common reference
-    cases = {b"\x00": b"\x01\x01", b"\x00\x00": b"\x01\x01\x01",
-             b"\x11\x22\x00\x33": b"\x03\x11\x22\x02\x33",
-             b"\x11\x22\x33\x44": b"\x05\x11\x22\x33\x44",
-             b"\x11\x00\x00\x00": b"\x02\x11\x01\x01\x01",
-             bytes(range(1, 255)): b"\xff" + bytes(range(1, 255)),
-             bytes(range(0, 255)): b"\x01\xff" + bytes(range(1, 255)),
-             bytes(range(1, 256)): b"\xff" + bytes(range(1, 255)) + b"\x02\xff"}
-    for raw, enc in cases.items():
-        assert cobs_encode(raw) == enc
-        assert cobs_decode(enc) == raw
+def test_crc_step_on_amaranth_values_equals_the_int_step():
+    """The gateware's XOR trees (the same function on Amaranth values) give zlib's CRC."""
+    from amaranth.sim import Simulator
+    from amaranth.hdl import Module, Signal
+    m = Module()
+    crc, byte, out = Signal(32), Signal(8), Signal(32)
+    m.d.comb += out.eq(crc32_update(crc, byte))
+    sim = Simulator(m)
+    data = b"123456789" + bytes(range(0, 256, 7))
+    got = []
+
+    async def bench(ctx):
+        reg = 0xFFFFFFFF
+        for b in data:
+            ctx.set(crc, reg)
+            ctx.set(byte, b)
+            reg = ctx.get(out)
+        got.append(reg ^ 0xFFFFFFFF)
+
+    sim.add_testbench(bench)
+    sim.run()
+    assert got == [zlib.crc32(data)]
+
+
+def test_frame_layout_by_hand():
+    """version 1 | type | seq | len | tick u32 LE | payload | CRC-32 LE (zlib's CRC), then COBS:
+    ten non-zero bytes (code 0x0B), two zeros (codes 0x01), the CRC (code 0x05), delimiter."""
+    msg = Message(MSG_CONTROL, 0x2A, 0x01020304, b"\x03\x10\x00\x00\x00")
+    body = bytes([1, 0x02, 0x2A, 5, 0x04, 0x03, 0x02, 0x01, 0x03, 0x10, 0, 0, 0])
+    crc = zlib.crc32(body).to_bytes(4, "little")
+    assert crc == bytes.fromhex("a3a4da24")
+    assert msg.raw() == body + crc
+    assert encode_frame(msg) == bytes.fromhex("0b 0102 2a05 0403 0201 0310 01 01 05 a3a4da24 00")
+    assert VERSION == 1
+    assert decode_frame(body + crc) == msg
+
+
+def test_version_and_length_field_are_checked_after_the_crc():
+    """An intact frame of another version is a version error; an intact frame whose ``len``
+    disagrees with its size is a length error; the same frames damaged are CRC errors."""
+    def frame(body):
+        return body + zlib.crc32(body).to_bytes(4, "little")
+    good = bytes([1, MSG_WRITE, 7, 3, 9, 0, 0, 0, 0, 0, 0x55])
+    assert decode_frame(frame(good)) == Message(MSG_WRITE, 7, 9, b"\x00\x00\x55")
+    cases = {"version": frame(bytes([2]) + good[1:]),
+             "length": frame(good[:3] + bytes([2]) + good[4:]),
+             "crc": frame(good)[:-1] + b"\x00"}
+    for kind, raw in cases.items():
+        with pytest.raises(FrameError) as exc:
+            decode_frame(raw)
+        assert exc.value.kind == kind
+        dec = FrameDecoder()
+        assert dec.feed(cobs_encode(raw) + b"\x00") == []
+        assert dec.errors == dict({"framing": 0, "length": 0, "crc": 0, "version": 0},
+                                  **{kind: 1})
+    with pytest.raises(FrameError, match="version 2, this end speaks 1"):
+        decode_frame(cases["version"])
+    assert FrameDecoder().feed(encode_frame(Message(1, 2, 3, b"x"), version=7)) == []
+
+
+def test_a_long_run_without_delimiter_is_dropped_and_counted():
+    dec = FrameDecoder()
+    msg = Message(MSG_WRITE, 1, 2, b"ab")
+    assert dec.feed(b"\x01" * (2 * MAX_FRAME + 1)) == []
+    assert dec.errors["length"] == 1
+    assert dec.feed(encode_frame(msg)) == [msg]     # what follows the dropped run still counts
 
 
 @given(st.binary(max_size=800))
@@ -58,11 +120,12 @@ def test_frame_round_trip(msg):
 @settings(max_examples=300)
 @given(frames, st.data())
 def test_any_bit_error_is_detected(msg, data):
-    """Flip 1..3 bits of the decoded frame: CRC-16/CCITT detects every error of up to three
-    bits in frames this short (Hamming distance 4 below 32751 bits)."""
+    """Flip 1..4 bits of the decoded frame: CRC-32 detects every error of up to four bits in
+    frames this short (Hamming distance 5 up to 2974 bits, Koopman 2002; a frame has at most
+    2032)."""
     raw = bytearray(msg.raw())
     nbits = len(raw) * 8
-    flips = data.draw(st.sets(st.integers(0, nbits - 1), min_size=1, max_size=3))
+    flips = data.draw(st.sets(st.integers(0, nbits - 1), min_size=1, max_size=4))
     for b in flips:
         raw[b // 8] ^= 1 << (b % 8)
     with pytest.raises(FrameError, match="CRC"):
@@ -101,7 +164,8 @@ def test_write_message_layout_and_refusals():
     with pytest.raises(FrameError, match="does not fit 18"):
         write_message(0, 0, 0, [1 << 17], 18)
     with pytest.raises(FrameError, match="exceeds 254"):
-        write_message(0, 0, 0, [0] * 90, 18).raw()
+        write_message(0, 0, 0, [0] * 81, 18).raw()          # 12 + 2 + 243 bytes
+    assert len(write_message(0, 0, 0, [0] * 80, 18).raw()) == MAX_FRAME
 
 
 def test_parse_spikes():

@@ -10,10 +10,10 @@ import pytest
 from amaranth.sim import Simulator
 
 from cuneate.hdl.link import LinkedCore, link_config
-from cuneate.hdl.link.codec import (COUNTER_NAMES, MSG_COUNTERS, MSG_SPIKES, OP_CLEAR_COUNTERS,
-                                    OP_READ_COUNTERS, OP_STEP, FrameDecoder, LinkModel,
-                                    Message, cobs_encode, control_message, encode_frame,
-                                    parse_counters, parse_spikes, write_message)
+from cuneate.hdl.link.codec import (COUNTER_NAMES, MSG_COUNTERS, MSG_SPIKES, OP_READ_COUNTERS, OP_STEP, FrameDecoder, Message,
+                                    cobs_encode, control_message, encode_frame, parse_counters,
+                                    parse_spikes, write_message)
+from cuneate.hdl.link.twin import LinkModel
 
 CPB = 4
 CORE = dict(n_neurons=8, clock_hz=16e3 * 32, update_hz=16e3, spike_fifo_depth=16)
@@ -75,20 +75,21 @@ def test_currents_in_spikes_out_and_every_fault_counted():
     bad_crc = bytearray(write_message(3, 200, 0, cur0, W).raw())
     bad_crc[9] ^= 0x10                                             # one bit: CRC must see it
     bad_crc = cobs_encode(bytes(bad_crc)) + b"\x00"
-    truncated = cobs_encode(write_message(4, 200, 0, cur0, W).raw())[:9] + b"\x00"
+    truncated = cobs_encode(write_message(4, 200, 0, cur0, W).raw())[:12] + b"\x00"  # in a block
     late = encode_frame(write_message(6, 10, 0, cur0, W))          # seq 5 missing: gap 1
     beyond = encode_frame(write_message(7, 97, 6, cur0[:3], W))    # neurons 6..8 of 8
     runt = encode_frame(Message(0x01, 8, 0, b""))                  # too short for a write
     unknown = encode_frame(Message(0x33, 9, 0, b"\x01"))
-    read = encode_frame(control_message(10, OP_READ_COUNTERS))
+    other_version = encode_frame(write_message(10, 200, 0, cur0, W), version=2)  # intact
+    read = encode_frame(control_message(11, OP_READ_COUNTERS))
     chunks = [(good[0], 10), (good[1], 10), (good[2], 7000),
               (bad_crc, 20), (truncated, 20), (late, 20), (beyond, 20), (runt, 20),
-              (unknown, 20), (read, 2000)]
+              (unknown, 20), (other_version, 20), (read, 2000)]
     out = run_link(chunks, 26000, lc)
 
     dec = FrameDecoder()
     msgs = dec.feed(out)
-    assert dec.errors == {"framing": 0, "crc": 0, "length": 0}
+    assert dec.errors == {"framing": 0, "crc": 0, "length": 0, "version": 0}
     assert [m.seq for m in msgs] == list(range(len(msgs)))
     spikes = [m for m in msgs if m.type == MSG_SPIKES]
     counters = [m for m in msgs if m.type == MSG_COUNTERS]
@@ -119,10 +120,108 @@ def test_currents_in_spikes_out_and_every_fault_counted():
     c = parse_counters(counters[0])
     assert counters[0].tick == 96
     # accepted: the three good frames, the late write (well formed, refused at its sweep) and
-    # the read; seq 3 (CRC), 4 (truncated) and 5 (never sent) are missing before seq 6
+    # the read; seq 3 (CRC), 4 (truncated) and 5 (never sent) are missing before seq 6, and
+    # seq 10 (another format version) before the read
     assert c == dict({n: 0 for n in COUNTER_NAMES}, frames_ok=5, crc_errors=1,
-                     framing_errors=1, length_errors=2, seq_gaps=3, late_writes=1,
-                     range_errors=1)
+                     framing_errors=1, length_errors=2, version_errors=1, seq_gaps=4,
+                     late_writes=1, range_errors=1)
     # the model counts the same faults
     model.feed(b"".join(x for x, _ in chunks[3:]))
     assert model.counters == c
+
+
+# ----------------------------------------------------------------------------------------------
+# Damaged frames on the gateware: every one counted, none accepted, no current changed
+
+ERR_CORE = dict(n_neurons=80, clock_hz=16e3 * 96, update_hz=16e3, spike_fifo_depth=16)
+
+
+def run_watching_writes(lc, stream: bytes, tail_cycles: int):
+    """Send ``stream`` over rx; return the bytes seen on tx and every ``(neuron, raw current)``
+    the link wrote toward the core, in order."""
+    dut = LinkedCore(lc)
+    sim = Simulator(dut)
+    sim.add_clock(1e-6)
+    received, writes = bytearray(), []
+    link = dut.link
+
+    async def host(ctx):
+        ctx.set(dut.rx, 1)
+        await ctx.tick().repeat(20)
+        for b in stream:
+            for bit in [0] + [(b >> i) & 1 for i in range(8)] + [1]:
+                ctx.set(dut.rx, bit)
+                await ctx.tick().repeat(CPB)
+        await ctx.tick().repeat(tail_cycles)
+
+    async def watch_writes(ctx):
+        # the write port's registers change only at clock edges, and the address steps on
+        # every write of a burst: each change with the enable set is one write
+        async for en, addr, data in ctx.changed(link.i_wr_en, link.i_wr_addr,
+                                                link.i_wr_data):
+            if en:
+                writes.append((addr, data))
+
+    async def monitor(ctx):
+        while True:
+            await ctx.negedge(dut.tx)
+            await ctx.tick().repeat(CPB // 2)
+            b = 0
+            for i in range(8):
+                await ctx.tick().repeat(CPB)
+                b |= ctx.get(dut.tx) << i
+            await ctx.tick().repeat(CPB)
+            assert ctx.get(dut.tx) == 1, "stop bit"
+            received.append(b)
+
+    sim.add_testbench(host)
+    sim.add_testbench(watch_writes, background=True)
+    sim.add_testbench(monitor, background=True)
+    sim.run()
+    return bytes(received), writes
+
+
+@pytest.mark.parametrize("structured", [True, False], ids=["structured", "sampled"])
+def test_damaged_frames_are_counted_never_accepted(structured):
+    """Every damaged frame is refused, every damaged run (a damaged delimiter merges a frame
+    with the next) counted exactly once, as the split of the stream at its zero bytes says;
+    intact frames are accepted, and the core receives exactly the intact frames' currents.
+    Structured: every bit of the first and last code bytes and the delimiter of a frame that
+    ends in 0x00 (the truncating flip among them) and the 254-byte one-block frame; sampled:
+    four of every corruption class (:data:`~cuneate.boards.link_faults.KINDS`)."""
+    import random
+    from cuneate.boards.link_faults import fault_plan, plan_outcome
+    lc = link_config(ERR_CORE, clocks_per_bit=CPB, batch_sweeps=16, batch_capacity=20)
+    if structured:
+        plan = fault_plan(lc.current_width, lc.core.n_neurons, random.Random("amaranth"),
+                          per_kind=0, code_bytes=("first", "last", "delimiter"),
+                          big_frames=True)
+    else:
+        plan = fault_plan(lc.current_width, lc.core.n_neurons, random.Random("amaranth"),
+                          per_kind=4)
+    stream = b"".join(p.wire for p in plan)
+    arrived, damaged_runs = plan_outcome(plan)
+    n_bad = sum(p.msg is None for p in plan)
+    out, writes = run_watching_writes(lc, stream, 3000)
+
+    dec = FrameDecoder()
+    msgs = dec.feed(out)
+    assert sum(dec.errors.values()) == 0
+    assert [m.type for m in msgs] == [MSG_COUNTERS]
+    c = parse_counters(msgs[0])
+    assert msgs[0].tick == 0                      # no damaged STEP or START ran the core
+    refused = sum(c[k] for k in ("framing_errors", "crc_errors", "length_errors",
+                                 "version_errors"))
+    assert refused == damaged_runs and c["version_errors"] == 1
+    assert c["frames_ok"] == len(arrived) > 10
+    assert c["range_errors"] == c["late_writes"] == c["rx_overflows"] == 0
+    assert c["frames_ok"] + c["seq_gaps"] == len(plan)        # every lost frame a gap
+    mask = (1 << lc.current_width) - 1                 # the write port is unsigned
+    assert writes == [(n, v & mask) for p in arrived for n, v in p.writes]
+    # the model counts the same
+    model = LinkModel(lc)
+    model.feed(stream)
+    assert model.counters == c
+    print(f"\nAmaranth {'structured' if structured else 'sampled'}: {n_bad} damaged frames "
+          f"sent ({len(stream)} bytes), {damaged_runs} damaged runs, counted {refused} "
+          f"({', '.join(f'{k}={c[k]}' for k in COUNTER_NAMES if c[k])}), 0 accepted")

@@ -1,13 +1,17 @@
 """UartTransport on the simulated serial path (the protocol model on the twin) and on a
 pyserial URL: lockstep spikes equal the twin's, and every loss or refusal raises."""
 
+import random
+import struct
+
 import numpy as np
 import pytest
 
-from cuneate.boards.uart import ModelSerial, UartTransport
+from cuneate.boards.uart import HOST_ERRORS, ModelSerial, UartTransport
+from cuneate.boards.link_faults import KINDS, corrupt
 from cuneate.hdl.izhikevich import IzhikevichTwin
 from cuneate.hdl.link import link_config
-from cuneate.hdl.link.codec import MSG_WRITE, Message, encode_frame
+from cuneate.hdl.link.codec import MSG_SPIKES, MSG_WRITE, Message, encode_frame
 from cuneate.sim.host.transport import TransportError
 
 CORE = dict(n_neurons=100, clock_hz=16e3 * 128, update_hz=16e3)
@@ -72,6 +76,54 @@ def test_damaged_device_frame_raises():
     t.run(16)
     with pytest.raises(TransportError, match="damaged frames"):
         t.collect()
+
+
+def test_truncated_spike_frame_is_a_counted_loss_not_an_exception():
+    """A SPIKES frame ending in 0x00 is encoded ending ``0x01 0x00``; one flipped bit turns the
+    code byte into a delimiter and drops the frame's last byte. The host refuses it (no
+    FrameError escapes), counts it, and ``check`` fails naming the count."""
+    payload = bytearray(struct.pack("<HB", 0, 16) + struct.pack("<BH", 3, 0))
+    for n in range(1, 1 << 16):                     # the spike's neuron sets the CRC
+        payload[4:6] = struct.pack("<H", n)
+        wire = encode_frame(Message(MSG_SPIKES, 0, 0, bytes(payload)))
+        if wire[-2:] == b"\x01\x00":
+            break
+    damaged = wire[:-2] + b"\x00\x00"
+    sent = []
+
+    def device(data):
+        if data and not sent:
+            sent.append(data)
+            return damaged                           # in place of the device's first batch
+        return data
+    lc, t = make(corrupt=device)
+    t.run(16)
+    with pytest.raises(TransportError, match="damaged frames from the device .*crc=1"):
+        t.collect()
+    c = t.counters()
+    assert c["rx_crc_errors"] == 1 and c["spikes_received"] == 0
+    assert sum(c[k] for k in HOST_ERRORS) == 1
+    with pytest.raises(TransportError, match="host refused damaged frames .*rx_crc_errors=1"):
+        t.check()
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_any_damaged_device_frame_is_counted_and_check_fails(kind):
+    rng = random.Random(kind)
+    hit = []
+
+    def damage(data):
+        if data and not hit:
+            hit.append(1)
+            first = data.index(0) + 1               # the first frame only
+            return corrupt(data[:first], kind, rng) + data[first:]
+        return data
+    lc, t = make(corrupt=damage)
+    t.run(64)
+    with pytest.raises(TransportError, match="damaged frames|sequence gap|batches lost"):
+        t.collect()
+    with pytest.raises(TransportError, match="host refused damaged frames"):
+        t.check()
 
 
 def test_dropped_spikes_raise():

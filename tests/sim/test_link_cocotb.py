@@ -5,7 +5,9 @@ the spike frames equal the protocol model's byte for byte and the twin's spikes 
 change at its sweep; a corrupted, a truncated, a late, an out-of-range, a runt and an unknown
 frame and a missing sequence number are each counted in the right counter; and a burst that
 overruns the receive FIFO while a write waits for its sweep (back-pressure) is counted as
-dropped bytes, with every frame it damaged missing from the accepted count (no silent loss).
+dropped bytes, with every frame it damaged missing from the accepted count (no silent loss);
+and damaged frames of every corruption class (:mod:`cuneate.boards.link_faults`) are each
+counted, never accepted, while the core's write port receives only intact currents.
 Icarus 11 runs the yosys-lowered netlist of the same design (``link_verilog(lowered=True)``):
 it mis-schedules some combinational processes of the transmit FSM in the direct output.
 """
@@ -18,9 +20,10 @@ import pytest
 from cuneate.hdl.izhikevich import IzhikevichTwin
 from cuneate.hdl.link import link_config, link_verilog
 from cuneate.hdl.link.codec import (COUNTER_NAMES, MSG_COUNTERS, MSG_SPIKES, OP_READ_COUNTERS,
-                                    OP_STEP, FrameDecoder, LinkModel, Message, cobs_encode,
-                                    control_message, encode_frame, parse_counters,
-                                    parse_spikes, write_message)
+                                    OP_STEP, FrameDecoder, Message, cobs_encode,
+                                    control_message, encode_frame, parse_counters, parse_spikes,
+                                    write_message)
+from cuneate.hdl.link.twin import LinkModel
 from cuneate.sim.engines.cocotb import run_cocotb
 from cuneate.sim.engines.toolchain import SIMULATORS
 
@@ -38,15 +41,15 @@ def build(lc, build_dir, simulator):
     return src
 
 
-def play(simulator, lc, chunks, total_cycles, build_dir):
+def play(simulator, lc, chunks, total_cycles, build_dir, watch_writes=False):
     src = build(lc, build_dir, simulator)
-    cfg = {"clocks_per_bit": CPB, "total_cycles": total_cycles,
+    cfg = {"clocks_per_bit": CPB, "total_cycles": total_cycles, "watch_writes": watch_writes,
            "chunks": [[bytes(c).hex(), g] for c, g in chunks]}
     run = run_cocotb(simulator, [src], "linked_core", "cuneate.sim.link.bench",
                      build_dir, config=cfg, testcase="play")
     dec = FrameDecoder()
     msgs = dec.feed(bytes.fromhex(run.report["received"]))
-    assert dec.errors == {"framing": 0, "crc": 0, "length": 0}
+    assert dec.errors == {"framing": 0, "crc": 0, "length": 0, "version": 0}
     assert [m.seq for m in msgs] == list(range(len(msgs)))   # device sequence unbroken
     return msgs, run.report
 
@@ -140,3 +143,54 @@ def test_link_receive_overflow_is_counted(simulator, build_root):
     got = [s for m in msgs if m.type == MSG_SPIKES for s in parse_spikes(m)[2]]
     assert got == expect and len(got) > 0
     print(f"\n{simulator}: sent {sent_bytes} bytes, counters {json.dumps(c)}")
+
+
+@pytest.mark.cocotb
+@pytest.mark.parametrize("simulator", SIMULATORS)
+def test_link_damaged_frames_counted_never_accepted(simulator, build_root):
+    """Damaged host frames between intact writes (two of every corruption class, every bit of
+    the last COBS code byte 0x01 of a frame ending in 0x00, an intact frame of another format
+    version), then a STEP: every damaged run is refused and counted once, the core receives
+    exactly the intact frames' currents (watched at its write port) and spikes as the twin
+    with those currents says."""
+    import random
+    from cuneate.boards.link_faults import fault_plan, plan_outcome, wire_of
+    lc = link_config(CORE, clocks_per_bit=CPB, batch_sweeps=16, batch_capacity=60)
+    N, W = lc.core.n_neurons, lc.current_width
+    plan = fault_plan(W, N, random.Random("cocotb"), per_kind=2, code_bytes=("last",),
+                      read_counters=False)
+    arrived, damaged_runs = plan_outcome(plan)
+    n_bad = sum(p.msg is None for p in plan)
+    tail = [wire_of(control_message(len(plan), OP_STEP, 32)),
+            wire_of(control_message(len(plan) + 1, OP_READ_COUNTERS))]
+    stream = b"".join(p.wire for p in plan)
+    msgs, rep = play(simulator, lc, [(stream, 0), (tail[0], 32 * CPT + 1000), (tail[1], 0)],
+                     8000, build_root / f"link_damage_{simulator}", watch_writes=True)
+
+    mask = (1 << W) - 1
+    assert rep["writes"] == [[n, v & mask] for p in arrived for n, v in p.writes]
+    counters = [m for m in msgs if m.type == MSG_COUNTERS]
+    assert len(counters) == 1 and counters[0].tick == 32
+    c = parse_counters(counters[0])
+    refused = sum(c[k] for k in ("framing_errors", "crc_errors", "length_errors",
+                                 "version_errors"))
+    assert refused == damaged_runs and c["version_errors"] == 1
+    assert c["frames_ok"] == len(arrived) + 2 and len(arrived) > 10
+    assert c["frames_ok"] + c["seq_gaps"] == len(plan) + 2
+    assert c == dict({n: 0 for n in COUNTER_NAMES}, frames_ok=c["frames_ok"],
+                     seq_gaps=c["seq_gaps"], framing_errors=c["framing_errors"],
+                     crc_errors=c["crc_errors"], length_errors=c["length_errors"],
+                     version_errors=1)
+    twin = IzhikevichTwin(lc.core)
+    for p in arrived:
+        for n, v in p.writes:
+            twin.I[n] = v
+    expect = [(k, int(n)) for k in range(32) for n in np.flatnonzero(twin.sweep())]
+    got = [s for m in msgs if m.type == MSG_SPIKES for s in parse_spikes(m)[2]]
+    assert got == expect and len(got) > 0
+    model = LinkModel(lc)
+    model.feed(stream + b"".join(tail))
+    assert model.counters == c
+    print(f"\n{simulator}: {n_bad} damaged frames sent, {damaged_runs} damaged runs, counted "
+          f"{refused} ({', '.join(f'{k}={c[k]}' for k in COUNTER_NAMES if c[k])}), "
+          f"0 accepted, {len(rep['writes'])} currents written (all intact)")

@@ -1,0 +1,64 @@
+"""Link parameters (:class:`LinkConfig`), checked against the core they serve: the frame
+sizes of :mod:`cuneate.hdl.link.codec` bound the batch capacity and the currents per write."""
+
+from __future__ import annotations
+
+from ..izhikevich import ConfigError, IzhikevichConfig
+from .codec import MAX_FRAME, MIN_FRAME, SPIKE_HEADER, current_bytes
+
+__all__ = ["LinkConfig", "link_config"]
+
+
+class LinkConfig:
+    """Link parameters checked against the core they serve."""
+
+    def __init__(self, core: IzhikevichConfig, clocks_per_bit: int = 16, batch_sweeps: int = 16,
+                 batch_capacity: int = 79, rx_fifo_depth: int = 512, tx_fifo_depth: int = 16,
+                 counter_width: int = 32):
+        if core.tick_source != "external":
+            raise ConfigError("the host link drives the core's ticks: the core needs "
+                              "tick_source='external'")
+        if core.n_neurons > 1 << 16:
+            raise ConfigError(f"the link addresses at most 65536 neurons, "
+                              f"not {core.n_neurons}")
+        if not 1 <= batch_sweeps <= 255:
+            raise ConfigError(f"batch_sweeps must be 1..255, not {batch_sweeps}")
+        max_spikes = (MAX_FRAME - MIN_FRAME - SPIKE_HEADER) // 3
+        if not 1 <= batch_capacity <= max_spikes:
+            raise ConfigError(f"batch_capacity must be 1..{max_spikes} (one frame), "
+                              f"not {batch_capacity}")
+        if core.cycles_per_tick < 10:
+            raise ConfigError("the link needs sweeps at least 10 cycles apart (a spike batch "
+                              "closes within 9 cycles of its last sweep)")
+        if core.sweep_number_width < 9:
+            raise ConfigError("the link needs sweep numbers of at least 9 bits")
+        if not 8 <= counter_width <= 32:
+            raise ConfigError(f"counter_width must be 8..32, not {counter_width}")
+        self.counter_width = int(counter_width)
+        self.core = core
+        self.clocks_per_bit = int(clocks_per_bit)
+        self.batch_sweeps = int(batch_sweeps)
+        self.batch_capacity = int(batch_capacity)
+        self.rx_fifo_depth = int(rx_fifo_depth)
+        self.tx_fifo_depth = int(tx_fifo_depth)
+        self.current_width = core.I.width
+        self.current_bytes = current_bytes(core.I.width)
+        self.max_currents = (MAX_FRAME - MIN_FRAME - 2) // self.current_bytes
+
+    @property
+    def baud(self) -> float:
+        return self.core.clock_hz / self.clocks_per_bit
+
+    def to_dict(self) -> dict:
+        return {"clocks_per_bit": self.clocks_per_bit, "baud": self.baud,
+                "batch_sweeps": self.batch_sweeps, "batch_capacity": self.batch_capacity,
+                "rx_fifo_depth": self.rx_fifo_depth, "tx_fifo_depth": self.tx_fifo_depth,
+                "current_bytes": self.current_bytes, "max_currents": self.max_currents,
+                "counter_width": self.counter_width}
+
+
+def link_config(core_kwargs: dict | None = None, **link_kwargs) -> LinkConfig:
+    """A :class:`LinkConfig` for a core built from ``core_kwargs`` (external tick forced)."""
+    kw = dict(core_kwargs or {})
+    kw["tick_source"] = "external"
+    return LinkConfig(IzhikevichConfig(**kw), **link_kwargs)
