@@ -67,7 +67,8 @@ def _yosys_estimate(out: Path, top: str, target: dict) -> dict:
 
 def build_target(board: str, out: Path, n_neurons: int | None = None,
                  clock_hz: float | None = None, update_hz: float | None = None,
-                 bitstream: bool = True, seed: int = 1, name: str | None = None) -> dict:
+                 bitstream: bool = True, seed: int = 1, name: str | None = None,
+                 pipeline_stages: int | None = None) -> dict:
     """Size the core for ``board``, write its Verilog (``<name>.v`` of the linked core, the
     board top's ``<name>.debug.v``), build the bitstream when the board supports it and
     ``bitstream`` is true, and write ``<name>.report.json`` / ``.txt``. Returns the report.
@@ -76,7 +77,9 @@ def build_target(board: str, out: Path, n_neurons: int | None = None,
     if board not in TARGETS:
         raise ConfigError(f"unknown board {board!r}; known: {', '.join(TARGETS)}")
     target = TARGETS[board]
-    sized = size_core(target, n_neurons=n_neurons, clock_hz=clock_hz, update_hz=update_hz)
+    depth = {} if pipeline_stages is None else {"pipeline_stages": pipeline_stages}
+    sized = size_core(target, n_neurons=n_neurons, clock_hz=clock_hz, update_hz=update_hz,
+                      **depth)
     lcfg = sized["link"]
     name = name or f"cuneate_{board}"
     out = Path(out).resolve()

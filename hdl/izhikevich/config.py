@@ -42,9 +42,18 @@ from ..lib.config import SATURATION, ConfigError, CoreOptions, int_bits_for, sha
 from ..lib.fixed import FixedConstant, FixedPointError, QFormat, round_shift
 from .range import RangeSearchError, one_step_bound, reachable_ranges
 
-__all__ = ["ConfigError", "IzhikevichConfig", "PIPELINE_DEPTH", "CLAMP_KINDS", "SATURATION"]
+__all__ = ["ConfigError", "IzhikevichConfig", "PIPELINE_DEPTH", "PIPELINE_STAGES", "PIPELINE_CUTS",
+           "CLAMP_KINDS", "SATURATION"]
 
+#: The default pipeline depth (the reference core's): fetch, read, three datapath stages.
 PIPELINE_DEPTH = 5
+#: Registered cuts of the datapath (after step ``k`` of :data:`~cuneate.hdl.izhikevich.datapath
+#: .STEPS`: 0 operands, 1 multiply 1, 2 align, 3 multiply 2, 4 sums; step 5, select, ends in
+#: the write-back) for each ``pipeline_stages``: each added stage adds the cut that shortens
+#: the longest remaining path (see :mod:`cuneate.hdl.izhikevich.core`).
+PIPELINE_CUTS = {5: (2, 3), 6: (2, 3, 4), 7: (1, 2, 3, 4), 8: (0, 1, 2, 3, 4)}
+#: The pipeline depths offered (``pipeline_stages``).
+PIPELINE_STAGES = tuple(PIPELINE_CUTS)
 CLAMP_KINDS = ("v_low", "u_high", "u_low", "current", "y")
 _REL = 2.0 ** -12          # largest relative representation error accepted for a constant
 _INT64_GUARD = 1 << 62
@@ -96,6 +105,12 @@ class IzhikevichConfig(CoreOptions):
         ``"internal"`` (divider of ``clock_hz / update_hz``) or ``"external"`` (``tick`` input).
     spike_fifo_depth, sweep_number_width
         Spike stream buffering and the width of the (wrapping) sweep number.
+    pipeline_stages
+        Pipeline depth, one of :data:`PIPELINE_STAGES` (default 5, the reference core's):
+        cycles from a neuron's fetch to its result on ``upd_*``. Deeper pipelines register more
+        cuts of the same datapath (the arithmetic does not change); a neuron's state is read
+        again at the earliest ``n_neurons`` cycles after its fetch, so ``n_neurons`` must be at
+        least the depth (its write-back lands in the cycle before).
     y_int_bits
         Integer bits of the ``b v - u`` operand. Default: the fewest that provably hold every
         state (no clamp); fewer bits add a flagged clamp.
@@ -124,6 +139,7 @@ class IzhikevichConfig(CoreOptions):
     v_th: float = golden.V_TH
     v_init: Sequence[float] | None = None
     u_init: Sequence[float] | None = None
+    pipeline_stages: int = PIPELINE_DEPTH
 
     # derived (filled by __post_init__)
     sets: list = field(init=False, repr=False)
@@ -160,10 +176,16 @@ class IzhikevichConfig(CoreOptions):
 
     def _check_sizes(self):
         N = self.n_neurons
-        if not isinstance(N, (int, np.integer)) or N < PIPELINE_DEPTH:
-            raise ConfigError(f"n_neurons must be an integer >= {PIPELINE_DEPTH} (the pipeline "
-                              f"depth; a neuron must leave the pipeline before it is read "
-                              f"again), got {N!r}")
+        D = self.pipeline_stages
+        if isinstance(D, bool) or D not in PIPELINE_STAGES:
+            raise ConfigError(f"pipeline_stages must be one of "
+                              f"{', '.join(map(str, PIPELINE_STAGES))}, got {D!r}")
+        self.pipeline_stages = D = int(D)
+        self.cuts = PIPELINE_CUTS[D]
+        if not isinstance(N, (int, np.integer)) or N < D:
+            raise ConfigError(f"n_neurons must be an integer >= {D} (the pipeline depth; a "
+                              f"neuron must leave the pipeline before it is read again), "
+                              f"got {N!r}")
         if not (isinstance(self.clock_hz, (int, float)) and isinstance(self.update_hz,
                                                                         (int, float))
                 and self.clock_hz > 0 and self.update_hz > 0 and math.isfinite(self.clock_hz)
@@ -419,6 +441,19 @@ class IzhikevichConfig(CoreOptions):
                   for i in (self.i_lo_raw, self.i_hi_raw)]
             self.bounds_x = (round_shift(xi[0] - self.u_hi_raw, sx, r),
                              round_shift(xi[1] - self.u_lo_raw, sx, r))
+        # the pipelined datapath multiplies floors (slices of registers) and adds the rounding
+        # increments separately: their proven bounds and the formats that hold them
+        sh = (lambda x, k: x >> k if k >= 0 else x << -k)
+        self.bounds_vsq = (sh(lo, svq), sh(hi, svq))
+        self.bounds_vsw = (sh(lo, sv), sh(hi, sv))
+        self.bounds_qqf = (min(q_ends) >> self.shift_q, max(q_ends) >> self.shift_q)
+        self.VSQ = QFormat.for_raw(*self.bounds_vsq, self.VQ.frac_bits)
+        self.VSW = QFormat.for_raw(*self.bounds_vsw, self.W.frac_bits)
+        self.QQF = QFormat.for_raw(*self.bounds_qqf, self.Q.frac_bits)
+        # y wider than a multiplier operand: y = y_hi 2**k + y_lo, the y_lo (a dt) term added
+        # beside the product (k <= 3: a choice of 2**k constants)
+        k = self.Y.width - self.operand_width
+        self.y_split = k if 0 < k <= 3 else 0
         # every unflagged narrowing must be proven: refuse here rather than build a silent clamp
         for name, b, fmt in (("v operand", self.bounds_vq, self.VQ),
                              ("w operand", self.bounds_wq, self.W),
@@ -460,6 +495,7 @@ class IzhikevichConfig(CoreOptions):
             "y_int_bits": self.y_int_bits, "y_frac_bits": self.y_frac_bits,
             "v0": float(self.v0), "v_th": float(self.v_th),
             "v_init": [float(x) for x in self._v_init], "u_init": [float(x) for x in self._u_init],
+            "pipeline_stages": int(self.pipeline_stages),
         }
         kw.update(override)
         return kw
@@ -520,8 +556,9 @@ class IzhikevichConfig(CoreOptions):
         return {
             "block": "IzhikevichCore", "scheme": "euler", "n_neurons": self.n_neurons,
             "clock_hz": self.clock_hz, "update_hz": self.update_hz, "dt_ms": self.dt_ms,
-            "cycles_per_tick": self.cycles_per_tick, "pipeline_depth": PIPELINE_DEPTH,
-            "latency_cycles": PIPELINE_DEPTH, "throughput": "one neuron update per cycle",
+            "cycles_per_tick": self.cycles_per_tick, "pipeline_depth": self.pipeline_stages,
+            "latency_cycles": self.pipeline_stages, "throughput": "one neuron update per cycle",
+            "pipeline_cuts": list(self.cuts),
             "rounding": self.rounding, "tick_source": self.tick_source,
             "saturation": self.saturation,
             "dt_is_shift": self.dt_shift is not None,

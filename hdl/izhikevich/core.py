@@ -1,10 +1,10 @@
 """The Izhikevich core's RTL: a time-multiplexed, pipelined Amaranth component built from the
-datapath's stage functions (:mod:`cuneate.hdl.izhikevich.datapath`), one pipeline register after
-each, and its Verilog.
+datapath's pipelined steps (:data:`cuneate.hdl.izhikevich.datapath.STEPS`), registered at the
+cuts its depth chooses, and its Verilog.
 
-Latency 5 cycles (fetch, registered read, operands and first multipliers, second multipliers,
-update and write-back), then one neuron update per clock; formats from
-:class:`~cuneate.hdl.izhikevich.config.IzhikevichConfig`.
+Latency ``pipeline_stages`` cycles (5 by default: fetch, registered read, operands and first
+multipliers, second multipliers, update and write-back), then one neuron update per clock;
+formats from :class:`~cuneate.hdl.izhikevich.config.IzhikevichConfig`.
 """
 
 from __future__ import annotations
@@ -16,8 +16,9 @@ from amaranth.lib import wiring
 from amaranth.lib.wiring import Out
 
 from ..flow.verilog import write_block, verilog_text
-from ..lib.bookkeeping import (core_memories, core_ports, pipeline_tags, registrar,
-                               sweep_bookkeeping, sweep_issue)
+from ..lib.bookkeeping import (core_memories, core_ports, pipeline_tags, sweep_bookkeeping,
+                               sweep_issue)
+from ..lib.fixed import is_hdl
 from ..lib.tick import tick_strobe
 from .config import CLAMP_KINDS, IzhikevichConfig
 from . import datapath
@@ -26,20 +27,44 @@ __all__ = ["IzhikevichCore", "izhikevich_verilog", "generate_izhikevich"]
 
 
 class IzhikevichCore(wiring.Component):
-    """Time-multiplexed Izhikevich core: one neuron update per clock, 5-stage pipeline.
+    """Time-multiplexed Izhikevich core: one neuron update per clock, a pipeline of
+    ``config.pipeline_stages`` stages (5 by default, up to 8).
 
-    Pipeline (a neuron's index enters at cycle t; its result is on ``upd_*`` at t+5):
+    Pipeline (a neuron's index enters at cycle t; its result is on ``upd_*`` at t + D, D the
+    depth):
 
     1. **Fetch** - the sweep counter addresses the state (v, u), current and set-select RAMs
        (synchronous read).
-    2. **Read** - the RAM outputs are registered (no logic after the block RAM).
-    3. **Operands, multiply 1** - ``w = v + 62.5`` and ``v`` rounded to multiplier width, then
-       ``(A dt) w`` and ``b v``; ``dt I - dt u`` by shifts (or ``I - u`` rounded and
-       multiplied by ``dt`` when dt is not a power of two).
-    4. **Multiply 2** - ``((A dt) w) w`` and ``(a dt)(b v - u)``; meanwhile
-       ``v + dt (I - u) + dt (C - B^2/4A)`` is summed.
-    5. **Update** - add the products into ``v'`` and ``u'`` (rounding as a carry-in),
-       threshold, reset, saturate; write back to the state RAM and register the outputs.
+    2. **Read** - the RAM outputs are registered (``v3``, ``u3``, ``i3``, ``sel3``: no logic
+       after the block RAM).
+    3. .. D. **Datapath** - the six steps of :data:`~cuneate.hdl.izhikevich.datapath.STEPS`
+       (0 operands, 1 multiply 1, 2 align, 3 multiply 2, 4 sums, 5 select), with a register
+       after each step listed in ``config.cuts`` (:data:`~cuneate.hdl.izhikevich.config
+       .PIPELINE_CUTS`):
+
+       ======  ===================================================  ==========================
+       depth   stages 3 .. D                                        cuts (after step)
+       ======  ===================================================  ==========================
+       5       operands+multiply1+align | multiply2 | sums+select   2, 3
+       6       operands+multiply1+align | multiply2 | sums | select 2, 3, 4
+       7       operands+multiply1 | align | multiply2 | sums | sel. 1, 2, 3, 4
+       8       operands | multiply1 | align | multiply2 | sums |sel 0, 1, 2, 3, 4
+       ======  ===================================================  ==========================
+
+       Every multiplier takes registers (floors: slices, no adder in front) and at the deeper
+       depths is alone between two registers, so that the ECP5 flow can move those registers
+       into the MULT18X18D. The last stage writes the new state back and registers ``upd_*``.
+
+    **Registers and hazards.** A value computed in stage ``s`` and still read later is
+    registered at each cut as ``<name><s+1>`` (reset-less: data registers; the valid bit,
+    index and sweep number of each stage are the tags ``valid<s>``, ``idx<s>``, ``swp<s>``
+    of :func:`~cuneate.hdl.lib.bookkeeping.pipeline_tags`, with reset). The neuron in stage
+    ``s`` at cycle ``c`` is the one fetched at ``c - s + 1``; its state is read at its fetch
+    and written in stage D (cycle ``fetch + D - 1``), so the next read of that neuron, at the
+    earliest ``n_neurons`` cycles after its fetch (back-to-back sweeps), sees the write when
+    ``n_neurons >= D`` (the configuration refuses less). The host writes only the current and
+    set RAMs, which the pipeline never writes: a neuron's current and set are read once, at
+    its fetch, and travel with it.
 
     Sweeps start on a tick (internal divider of ``clock_hz / update_hz`` cycles, or the ``tick``
     input with ``tick_source="external"``). A tick that arrives while a sweep is still being
@@ -68,6 +93,15 @@ class IzhikevichCore(wiring.Component):
     ``clamp_flags/clamp_clear``
         Sticky clamp flags (bit per kind), set by any clamp since reset; ``clamp_clear`` clears
         them (a clamp in the same cycle keeps its flag set: nothing is lost).
+
+    Attributes
+    ----------
+    probes
+        After elaboration: the stage-3 registers (``valid``, ``index``, ``v``, ``u``, ``i``,
+        ``sel``: the state, current and set an update starts from) and ``latency``, the cycles
+        from them to ``upd_*`` (``pipeline_stages - 2``), for the formal harness.
+    stages
+        After elaboration: ``{stage: {name: register}}`` of every datapath register.
     """
 
     def __init__(self, config: IzhikevichConfig | None = None, **kwargs):
@@ -78,7 +112,7 @@ class IzhikevichCore(wiring.Component):
 
     def elaborate(self, platform):
         cfg = self.cfg
-        N = cfg.n_neurons
+        N, D = cfg.n_neurons, cfg.pipeline_stages
         m = Module()
         V, U = cfg.V, cfg.U
 
@@ -86,59 +120,73 @@ class IzhikevichCore(wiring.Component):
             return (v & ((1 << V.width) - 1)) | ((u & ((1 << U.width) - 1)) << V.width)
 
         init_state = [pack(int(v), int(u)) for v, u in zip(cfg.v_init_raw, cfg.u_init_raw)]
+        # a neuron's state is never read in the cycle it is written (n_neurons >= D): the
+        # read-during-write behaviour needs no logic
         st_rd, st_wr, cur_rd, sel_rd = core_memories(m, self, cfg, V.width + U.width,
-                                                     init_state)
+                                                     init_state,
+                                                     state_attrs={"no_rw_check": 1})
 
         # --- sweep control and pipeline tags ----------------------------------------------
         tick = tick_strobe(m, cfg, getattr(self, "tick", None))
         issue = sweep_issue(m, self, N, tick, cfg.sweep_number_width)
         for port in (st_rd, cur_rd, sel_rd):
             m.d.comb += [port.addr.eq(issue.addr), port.en.eq(1)]
-        tags = pipeline_tags(m, N, cfg.sweep_number_width, issue)
-        t3, t5 = tags[3], tags[5]
-        reg = registrar(m)
+        tags = pipeline_tags(m, N, cfg.sweep_number_width, issue, last_stage=D)
+        tD = tags[D]
+
+        def reg(name, value, stage):
+            s = Signal(value.shape(), name=f"{name}{stage}", reset_less=True)
+            m.d.sync += s.eq(value)
+            return s
 
         # --- stage 2: the RAM outputs go straight into registers -------------------------
-        v3 = reg("v", st_rd.data[:V.width].as_signed(), 3)
-        u3 = reg("u", st_rd.data[V.width:].as_signed(), 3)
-        i3, sel3 = reg("i", cur_rd.data, 3), reg("sel", sel_rd.data, 3)
+        vals = {"v": reg("v", st_rd.data[:V.width].as_signed(), 3),
+                "u": reg("u", st_rd.data[V.width:].as_signed(), 3),
+                "i": reg("i", cur_rd.data, 3), "sel": reg("sel", sel_rd.data, 3)}
+        t3 = tags[3]
         # what an update starts from, for the formal harness (hdl/izhikevich/formal.py)
-        self.probes = {"valid": t3[0], "index": t3[1], "v": v3, "u": u3, "i": i3, "sel": sel3}
-        # --- stage 3: operands and the first multipliers ----------------------------------
-        # the stage functions are looked up in their module at elaboration, so a fault
+        self.probes = {"valid": t3[0], "index": t3[1], **{k: vals[k] for k in vals},
+                       "latency": D - 2}
+        if len(cfg.params) == 1:
+            vals["sel"] = 0
+        self.stages = {3: dict(vals)}
+        # --- stages 3 .. D: the datapath steps, registered at the cuts -------------------
+        # the step functions are looked up in their module at elaboration, so a fault
         # injected there (tests) reaches the RTL and not the twin
-        s2 = datapath.operands(cfg, v3, u3, i3, sel3)
-        wq3, vq3, x3 = s2["wq"], s2["vq"], s2["x"]
-        s3 = datapath.multiply1(cfg, wq3, vq3, x3, u3, sel3)
-        v4, u4, i4, sel4, wq4 = (reg(n, x, 4) for n, x in
-                                 (("v", v3), ("u", u3), ("i", i3), ("sel", sel3), ("wq", wq3)))
-        q4, bvp4, x4 = reg("q", s3["q"], 4), reg("bvp", s3["bvp"], 4), reg("x", s3["x"], 4)
-        uy4 = reg("uy", s3["uy"], 4)
-        fi4 = reg("flag_current", s2["i_flag"], 4)
-        # --- stage 4 ----------------------------------------------------------------------
-        s4 = datapath.multiply2(cfg, q4, bvp4, uy4, wq4, v4, u4, x4, sel4)
-        i5, sel5 = reg("i", i4, 5), reg("sel", sel4, 5)
-        p5, m5 = reg("p", s4["p"], 5), reg("m", s4["m"], 5)
-        sums5 = [reg(n, s4[n], 5) for n in ("vb_sh", "vb_th", "vb_lo", "u_sh", "ud_sh")]
-        fi5, fy5 = reg("flag_current", fi4, 5), reg("flag_y", s4["y_flag"], 5)
-        # --- stage 5 ----------------------------------------------------------------------
-        s5 = datapath.update_state(cfg, *sums5, p5, m5, sel5)
+        stage = 3
+        for k, step in enumerate(datapath.STEPS):
+            vals.update(step.fn(cfg, {n: vals[n] for n in step.reads}))
+            for n in datapath.KEPT:
+                if n in vals and is_hdl(vals[n]) and not isinstance(vals[n], Signal):
+                    kept = Signal(vals[n].shape(), name=f"{n}_sum", attrs={"keep": 1})
+                    m.d.comb += kept.eq(vals[n])
+                    vals[n] = kept
+            if k in cfg.cuts:
+                live = set(datapath.CARRIED)
+                for later in datapath.STEPS[k + 1:]:
+                    live.update(later.reads)
+                stage += 1
+                vals = {n: (reg(n, x, stage) if is_hdl(x) else x)
+                        for n, x in vals.items() if n in live}
+                self.stages[stage] = {n: x for n, x in vals.items() if is_hdl(x)}
+        assert stage == D, (stage, D)
         v_out = Signal(V.shape())
         u_out = Signal(U.shape())
         spike = Signal()
         clamp = Signal(len(CLAMP_KINDS))
-        flags = {"v_low": s5["v_low"], "u_high": s5["u_high"], "u_low": s5["u_low"],
-                 "current": fi5, "y": fy5}
-        m.d.comb += [v_out.eq(s5["v"]), u_out.eq(s5["u"]), spike.eq(s5["spike"] & t5[0]),
-                     clamp.eq(Mux(t5[0], Cat(*(flags[k] for k in CLAMP_KINDS)), 0))]
-        m.d.comb += [st_wr.addr.eq(t5[1]), st_wr.data.eq(Cat(v_out, u_out)),
-                     st_wr.en.eq(t5[0])]
-        m.d.sync += [self.upd_valid.eq(t5[0]), self.upd_index.eq(t5[1]), self.upd_v.eq(v_out),
-                     self.upd_u.eq(u_out), self.upd_current.eq(i5), self.upd_spike.eq(spike),
-                     self.upd_clamp.eq(clamp)]
+        flags = {"v_low": vals["v_low"], "u_high": vals["u_high"], "u_low": vals["u_low"],
+                 "current": vals["i_flag"], "y": vals["y_flag"]}
+        m.d.comb += [v_out.eq(vals["v_next"]), u_out.eq(vals["u_next"]),
+                     spike.eq(vals["spike"] & tD[0]),
+                     clamp.eq(Mux(tD[0], Cat(*(flags[k] for k in CLAMP_KINDS)), 0))]
+        m.d.comb += [st_wr.addr.eq(tD[1]), st_wr.data.eq(Cat(v_out, u_out)),
+                     st_wr.en.eq(tD[0])]
+        m.d.sync += [self.upd_valid.eq(tD[0]), self.upd_index.eq(tD[1]), self.upd_v.eq(v_out),
+                     self.upd_u.eq(u_out), self.upd_current.eq(vals["i"]),
+                     self.upd_spike.eq(spike), self.upd_clamp.eq(clamp)]
 
         # --- bookkeeping from the registered outputs (off the datapath's critical path) -----
-        sweep_bookkeeping(m, self, N, cfg.sweep_number_width, t5, CLAMP_KINDS,
+        sweep_bookkeeping(m, self, N, cfg.sweep_number_width, tD, CLAMP_KINDS,
                           cfg.spike_fifo_depth)
         return m
 

@@ -33,7 +33,9 @@ from ..lib.datapath import const_like, false_like, lookup, select_by
 from ..lib.fixed import clamp_flagged, is_hdl, narrow, round_shift, round_shift_add, select
 from .config import CLAMP_KINDS, IzhikevichConfig
 
-__all__ = ["operands", "multiply1", "multiply2", "update_state", "clamp_bits"]
+__all__ = ["operands", "multiply1", "multiply2", "update_state", "clamp_bits", "Step", "STEPS",
+           "CARRIED", "U_SUMS", "operand_step", "product1_step", "align_step", "product2_step",
+           "sum_step", "select_step", "one_update"]
 
 
 # ----------------------------------------------------------------------------------------------
@@ -85,19 +87,21 @@ def multiply1(cfg: IzhikevichConfig, wq, vq, x, u, sel):
         uy = select_by(sel, [((u << cfg.shift_b) + es) if lam else const_like(u, es)
                               for lam, es in zip(cfg.u_leak, e_sh)])
     out["uy"] = uy
-    if cfg.dt_shift is not None:
-        s, r = cfg.dt_shift, cfg.rounding
-        dti = round_shift(x, cfg.I.frac_bits + s - cfg.V.frac_bits, r)
-        su = cfg.U.frac_bits + s - cfg.V.frac_bits
-        if su > 0 and r == "nearest":
-            # dti - ((u >> su) + bit) == dti + ~(u >> su) + ~bit   (two's complement)
-            bit_n = ~u[su - 1] if is_hdl(u) else 1 - ((u >> (su - 1)) & 1)
-            out["x"] = dti + ~(u >> su) + bit_n
-        else:
-            out["x"] = dti - round_shift(u, su, r)
-    else:
-        out["x"] = x * cfg.KDT.raw
+    out["x"] = _dt_x(cfg, x, u) if cfg.dt_shift is not None else x * cfg.KDT.raw
     return out
+
+
+def _dt_x(cfg: IzhikevichConfig, i, u):
+    """``dt I - dt u`` by shifts (dt a power of two), the rounding of ``dt u`` folded into the
+    subtraction."""
+    s, r = cfg.dt_shift, cfg.rounding
+    dti = round_shift(i, cfg.I.frac_bits + s - cfg.V.frac_bits, r)
+    su = cfg.U.frac_bits + s - cfg.V.frac_bits
+    if su > 0 and r == "nearest":
+        # dti - ((u >> su) + bit) == dti + ~(u >> su) + ~bit   (two's complement)
+        bit_n = ~u[su - 1] if is_hdl(u) else 1 - ((u >> (su - 1)) & 1)
+        return dti + ~(u >> su) + bit_n
+    return dti - round_shift(u, su, r)
 
 
 def multiply2(cfg: IzhikevichConfig, q, bvp, uy, wq, v, u, x, sel):
@@ -164,3 +168,248 @@ def clamp_bits(flags: dict):
     """Pack the per-update clamp flags into the bit order of :data:`CLAMP_KINDS`
     (twin: an int64 array)."""
     return sum((np.asarray(flags[k], dtype=np.int64) << i) for i, k in enumerate(CLAMP_KINDS))
+
+
+# ----------------------------------------------------------------------------------------------
+# The same update as six pipelined steps (the core's and the twin's). Each multiplier sees a
+# register (a floor: a slice of the state, no adder in front) and nothing follows it in its
+# step: the rounding increments that :func:`operands` and :func:`multiply2` add before the
+# products are added as ``increment * operand`` terms beside them, and the clamp tests of
+# :func:`update_state` become signs of sums formed in parallel. The integers are the same
+# (``round(x) * c == floor(x) * c + bit * c``); ``test_izhikevich_datapath`` proves the two
+# forms equal over the state box.
+#
+# Every step is ``f(cfg, x) -> dict`` over a mapping ``x`` of named values; :data:`STEPS` lists
+# them with the names each reads, so that the RTL registers exactly the values still needed at
+# each cut of the pipeline (``IzhikevichConfig.cuts``).
+
+def _carry(x, t_low, shift: int):
+    """``((x mod 2**shift) + t_low) >> shift``: the carry out of the dropped bits."""
+    if is_hdl(x):
+        return (x[:shift] + t_low)[shift]
+    return ((np.asarray(x) & ((1 << shift) - 1)) + t_low) >> shift
+
+
+def _floor_split(x, consts, sel, shift: int, rounding: str):
+    """``round_shift(x + consts[sel], shift)`` as ``(x >> shift, K, carry)``: the floor of
+    ``x`` (a slice), the constant part ``K`` (per set) and the 0/1 carry of the dropped bits
+    (``carry`` is a Python 0 when it cannot be 1)."""
+    h = (1 << (shift - 1)) if (rounding == "nearest" and shift > 0) else 0
+    if shift <= 0:
+        return x << -shift, [c << -shift for c in consts], 0
+    t = [c + h for c in consts]
+    lows = [tt & ((1 << shift) - 1) for tt in t]
+    carry = 0 if not any(lows) else _carry(x, lookup(lows, sel), shift)
+    return x >> shift, [tt >> shift for tt in t], carry
+
+
+def _pick(flag, if_set, if_clear, sel):
+    """Per-set constant ``if_set[sel]`` where ``flag`` else ``if_clear[sel]`` (``flag`` may be
+    the Python int 0)."""
+    if isinstance(flag, int) and not is_hdl(flag):
+        return lookup(if_set if flag else if_clear, sel)
+    return select(flag, lookup(if_set, sel), lookup(if_clear, sel))
+
+
+def operand_step(cfg: IzhikevichConfig, x):
+    """Step 0: the current (clamped and flagged when the host wrote one outside the accepted
+    range), the floors ``v >> s`` that the first multipliers take with their rounding carries,
+    the ``w`` operand for the second, ``dt (I - u)`` (or the ``I - u`` operand) and the ``u``
+    side of ``b v - u``, its rounding carry folded in."""
+    v, u, sel, r = x["v"], x["u"], x["sel"], cfg.rounding
+    s2 = operands(cfg, v, u, x["i"], sel)
+    sw = cfg.V.frac_bits - cfg.W.frac_bits
+    vs_w, kw, cw = _floor_split(v, [w.raw for w in cfg.woff], sel, sw, r)
+    vs_q, kq, cq = _floor_split(v, [0] * len(cfg.params), sel, cfg.V.frac_bits -
+                                cfg.VQ.frac_bits, r)
+    betas = [b.raw for b in cfg.beta]
+    half_y = (1 << (cfg.shift_y - 1)) if r == "nearest" else 0
+    # b v - uy = vs_q b - (uy - (kq + cq) b): the increment's product joins the u side
+    e0 = [(e.raw << cfg.shift_b) - half_y - k * b for e, k, b in zip(cfg.E, kq, betas)]
+    e1 = [e - b for e, b in zip(e0, betas)]
+    e_sel = _pick(cq, e1, e0, sel)
+    if all(cfg.u_leak):
+        uyp = (u << cfg.shift_b) + e_sel
+    else:
+        uyp = select_by(sel, [((u << cfg.shift_b) if lam else const_like(u, 0)) + e_sel
+                              for lam in cfg.u_leak])
+    kas = [k.raw for k in cfg.KA]
+    x_dt = _dt_x(cfg, s2["x"], u) if cfg.dt_shift is not None else s2["x"]
+    return {"ic": s2["i"], "i_flag": s2["i_flag"], "wq": s2["wq"],
+            "vs_w": narrow(vs_w, cfg.VSW, cfg.bounds_vsw, "w floor"),
+            "vs_q": narrow(vs_q, cfg.VSQ, cfg.bounds_vsq, "v floor"),
+            "q_inc": _pick(cw, [(k + 1) * a for k, a in zip(kw, kas)],
+                           [k * a for k, a in zip(kw, kas)], sel),
+            "ka": lookup(kas, sel), "beta": lookup(betas, sel), "uyp": uyp, "x": x_dt}
+
+
+def product1_step(cfg: IzhikevichConfig, x):
+    """Step 1: the first multipliers, on registers: ``floor(w) (A dt)``, ``floor(v) b`` (and
+    ``(I - u) dt`` when dt is not a power of two)."""
+    out = {"pq": x["vs_w"] * x["ka"], "pb": x["vs_q"] * x["beta"]}
+    out["px"] = x["x"] * cfg.KDT.raw if cfg.dt_shift is None else x["x"]
+    return out
+
+
+def align_step(cfg: IzhikevichConfig, x):
+    """Step 2: ``q = (A dt) w`` completed and split into its floor and rounding bit for the
+    second multiplier, ``y = (b v - u) >> shift_y`` (clamped and flagged only where its format
+    is narrowed) split into the operand ``y_hi`` and the low bits ``y_lo``, and the ``v`` sums
+    ``v + dt (I - u) + K0`` pre-shifted (plain, less ``v_th``, less ``v_floor``)."""
+    v, sel, r = x["v"], x["sel"], cfg.rounding
+    q = x["pq"] + x["q_inc"]
+    qq_f, qq_k, qbit = _floor_split(q, [0], 0, cfg.shift_q, r)
+    y_full = (x["pb"] - x["uyp"]) >> cfg.shift_y
+    y, y_low, y_high = clamp_flagged(y_full, cfg.Y.min_raw, cfg.Y.max_raw, cfg.Y, cfg.bounds_y)
+    k = cfg.y_split
+    if cfg.dt_shift is not None:
+        dx = x["px"]
+    else:
+        dx = round_shift(x["px"], cfg.X.frac_bits + cfg.KDT.frac_bits - cfg.V.frac_bits, r)
+    half = (1 << (cfg.shift_p - 1)) if r == "nearest" else 0
+    k0 = [c.raw for c in cfg.K0]
+    sums = {}
+    for name, off in (("vb", 0), ("vb_th", cfg.VTH.raw), ("vb_lo", cfg.v_floor_raw)):
+        sums[name] = ((v + dx + lookup([c - off for c in k0], sel)) << cfg.shift_p) + half
+    return {"qq_f": narrow(qq_f, cfg.QQF, cfg.bounds_qqf, "q floor"), "qbit": qbit,
+            "y_hi": y >> k if k else y, "y_lo": (y[:k] if is_hdl(y) else y & ((1 << k) - 1))
+            if k else 0, "y_flag": y_low | y_high,
+            "alpha": lookup([a.raw for a in cfg.alpha], sel), **sums}
+
+
+def _u_constants(cfg: IzhikevichConfig, y_lo: int) -> dict:
+    """Per sum of :data:`U_SUMS`, per set: the constant added to ``u << shift_a`` when the low
+    bits of ``y`` are ``y_lo``: the rounding half, ``d << shift_a`` for the sums after a spike,
+    the clamp levels for the sign tests and ``y_lo (a dt)``."""
+    near = cfg.rounding == "nearest"
+    out = {}
+    for name in U_SUMS:
+        row = []
+        for sa, d, a in zip(cfg.shift_a, cfg.d, cfg.alpha):
+            c = ((1 << (sa - 1)) if near else 0) + y_lo * a.raw
+            if name.startswith("ub"):
+                c += d.raw << sa
+            if name.endswith("_hi"):
+                c -= (cfg.u_hi_raw + 1) << sa
+            elif name.endswith("_lo"):
+                c -= cfg.u_lo_raw << sa
+            row.append(c)
+        out[name] = row
+    return out
+
+
+#: The ``u`` sums: ``ua`` (no spike) and ``ub`` (spike, ``u + d``), each plain, less the ceiling
+#: (``_hi``: ``u' > u_hi`` is its sign) and less the floor (``_lo``: ``u' < u_lo``).
+U_SUMS = ("ua", "ua_hi", "ua_lo", "ub", "ub_hi", "ub_lo")
+
+
+def _u_sum(cfg: IzhikevichConfig, u, sel, y_lo, tables: list, name: str):
+    """``(u << shift_a[sel]) + constant[name][sel, y_lo]``: one adder when the sets share the
+    shift, else one per set and a multiplexer."""
+    shifts = cfg.shift_a
+    n = len(shifts)
+    if len(set(shifts)) == 1:
+        per_lo = [lookup([t[name][s] for s in range(n)], sel) for t in tables]
+        c = per_lo[0] if len(tables) == 1 else select_by(y_lo, per_lo)
+        return (u << shifts[0]) + c
+    opts = []
+    for s, sa in enumerate(shifts):
+        c = [t[name][s] for t in tables]
+        opts.append((u << sa) + (c[0] if len(set(c)) == 1 else select_by(y_lo, c)))
+    return select_by(sel, opts)
+
+
+def product2_step(cfg: IzhikevichConfig, x):
+    """Step 3: the second multipliers, on registers: ``floor(q) w`` and ``y_hi (a dt)``;
+    beside them the ``v`` sums take the ``q`` rounding bit's ``w`` and the six ``u`` sums are
+    formed with the ``y_lo (a dt)`` term."""
+    u, sel, wq, qbit = x["u"], x["sel"], x["wq"], x["qbit"]
+    out = {"p2": x["qq_f"] * wq, "m2": x["y_hi"] * x["alpha"]}
+    for name in ("vb", "vb_th", "vb_lo"):
+        out[name] = x[name] if (not is_hdl(qbit) and isinstance(qbit, int)) else \
+            x[name] + select(qbit, wq, 0)
+    tables = [_u_constants(cfg, j) for j in range(1 << cfg.y_split)]
+    for name in U_SUMS:
+        out[name] = _u_sum(cfg, u, sel, x["y_lo"], tables, name)
+    return out
+
+
+def sum_step(cfg: IzhikevichConfig, x):
+    """Step 4: every sum with the products: the three ``v`` sums with ``floor(q) w`` and the
+    six ``u`` sums with ``y_hi (a dt) << k``."""
+    p, m = x["p2"], x["m2"] << cfg.y_split if cfg.y_split else x["m2"]
+    out = {f"t_{n}": x[n] + p for n in ("vb", "vb_th", "vb_lo")}
+    out.update({f"t_{n}": x[n] + m for n in U_SUMS})
+    return out
+
+
+def select_step(cfg: IzhikevichConfig, x):
+    """Step 5: threshold, reset, floor of ``v``, ``u`` clamped into ``[u_lo, u_hi]``, all from
+    the signs of the sums; returns the new state, the spike and this update's clamp flags
+    (keys of :func:`update_state`, plus ``under``)."""
+    sel = x["sel"]
+    spike = x["t_vb_th"] >= 0
+    under = x["t_vb_lo"] < 0
+    v_pre = x["t_vb"] >> cfg.shift_p
+    u_sum = select(spike, x["t_ub"], x["t_ua"])
+    high = select(spike, x["t_ub_hi"] >= 0, x["t_ua_hi"] >= 0)
+    low = select(spike, x["t_ub_lo"] < 0, x["t_ua_lo"] < 0)
+    shifts = cfg.shift_a
+    u_pre = u_sum >> shifts[0] if len(set(shifts)) == 1 else \
+        select_by(sel, [u_sum >> sa for sa in shifts])
+    U = cfg.U
+    u_out = select(high, cfg.u_hi_raw, select(low, cfg.u_lo_raw, u_pre))
+    if is_hdl(u_out):
+        u_out = u_out[:U.width].as_signed()
+    v_keep = select(under, cfg.v_floor_raw,
+                    narrow(v_pre, cfg.V, (cfg.v_floor_raw, cfg.VTH.raw), "v below threshold"))
+    v_out = select(spike, lookup([c.raw for c in cfg.c], sel), v_keep)
+    if is_hdl(v_out):
+        v_out = v_out[:cfg.V.width].as_signed()
+    return {"v_next": v_out, "u_next": u_out, "spike": spike, "v_pre": v_pre,
+            "v_low": under & ~spike, "u_high": high, "u_low": low, "under": under}
+
+
+class Step:
+    """One step of the pipelined datapath: its name, the values it reads and its function,
+    looked up in this module by name when used (so that a fault injected into the module's
+    function reaches the RTL built afterwards; the formal reference binds them at import)."""
+
+    def __init__(self, name: str, fn_name: str, reads: tuple):
+        self.name, self.fn_name, self.reads = name, fn_name, reads
+
+    @property
+    def fn(self):
+        return globals()[self.fn_name]
+
+
+#: The pipelined datapath: step ``k`` of the update; the core registers the live values at
+#: the cuts ``IzhikevichConfig.cuts`` (after step ``k``).
+STEPS = (
+    Step("operands", "operand_step", ("v", "u", "i", "sel")),
+    Step("multiply1", "product1_step", ("vs_w", "ka", "vs_q", "beta", "x")),
+    Step("align", "align_step", ("v", "sel", "pq", "q_inc", "pb", "uyp", "px")),
+    Step("multiply2", "product2_step", ("u", "sel", "wq", "qq_f", "qbit", "y_hi", "y_lo",
+                                      "alpha", "vb", "vb_th", "vb_lo")),
+    Step("sums", "sum_step", ("p2", "m2", "vb", "vb_th", "vb_lo") + U_SUMS),
+    Step("select", "select_step", ("sel", "t_vb", "t_vb_th", "t_vb_lo")
+         + tuple(f"t_{n}" for n in U_SUMS)),
+)
+#: Sums kept as wires of their own in the RTL, so that synthesis does not merge them into the
+#: adder after a multiplier (``b v - u``: the product then meets a two-input subtraction).
+KEPT = ("uyp",)
+#: Values the pipeline delivers beside the new state: the current as written, the set, and the
+#: flags of the clamps that act before the last step.
+CARRIED = ("i", "sel", "i_flag", "y_flag")
+
+
+def one_update(cfg: IzhikevichConfig, v, u, I, sel) -> dict:
+    """The update as one composition of :data:`STEPS` (the twin's and the formal reference's);
+    returns every value formed, the results under the keys of :func:`update_state` (``v``,
+    ``u``, ``spike``, ``v_pre``, ``v_low``, ``u_high``, ``u_low``, ``under``) and the flags
+    ``current`` and ``y``."""
+    vals = {"v": v, "u": u, "i": I, "sel": sel}
+    for step in STEPS:
+        vals.update(step.fn(cfg, {k: vals[k] for k in step.reads}))
+    vals.update(v=vals["v_next"], u=vals["u_next"], current=vals["i_flag"], y=vals["y_flag"])
+    return vals

@@ -1,8 +1,9 @@
 """Formal checks of the Izhikevich block with SymbiYosys (``yowasp-sby``, z3).
 
 **The one-update datapath.** :func:`one_step` builds the datapath as one combinational
-update from the same stage functions as the core and the twin (``operands``,
-``multiply1``, ``multiply2``, ``update_state``), with free inputs ``v``, ``u``, ``I`` (and
+update from the same pipelined steps as the core and the twin
+(:func:`~cuneate.hdl.izhikevich.datapath.one_update` of :data:`~cuneate.hdl.izhikevich.datapath
+.STEPS`), with free inputs ``v``, ``u``, ``I`` (and
 the parameter-set index) assumed inside the configuration's state box (``v_floor <= v <= v_th``, ``u_lo <= u <= u_hi``) and the
 accepted current range. It asserts:
 
@@ -22,14 +23,13 @@ core (external tick) beside a reference written against the core's documented co
 registers:
 
 * **host writes**: a write to the current or set RAM in cycle ``c`` is in the RAM from
-  ``c + 1``; the update fetched in cycle ``f`` sees the RAM as it was ``PIPELINE_DEPTH`` cycles
+  ``c + 1``; the update fetched in cycle ``f`` sees the RAM as it was ``pipeline_stages`` cycles
   before its result leaves (a write in the fetch cycle counts from the next sweep);
 * **sweeps**: a tick starts a sweep when none is being issued or in its last issuing cycle,
   otherwise it is ignored and sets ``overrun``; the update fetched in cycle ``f`` leaves on
-  ``upd_*`` in cycle ``f + 5``, in index order;
-* **each update** is one combinational step of the stage functions (``operands``,
-  ``multiply1``, ``multiply2``, ``update_state``, bound at import so a fault injected into the
-  core's copy does not reach the reference) from the state the update read;
+  ``upd_*`` in cycle ``f + pipeline_stages``, in index order;
+* **each update** is one combinational step of the pipelined steps (bound at import so a fault
+  injected into the core's copy does not reach the reference) from the state the update read;
 * **state**: the state an update of neuron ``n`` reads is the state the previous update of
   ``n`` produced - across sweep boundaries, with back-to-back sweeps on the smallest core
   (5 neurons for a 5-stage pipeline: the read of a neuron's next update follows its write-back
@@ -61,7 +61,7 @@ from amaranth.hdl import Assert, Assume
 
 from ..flow.sby import FormalError, run_sby, signed_bits
 from . import datapath as izh
-from .config import CLAMP_KINDS, PIPELINE_DEPTH, IzhikevichConfig
+from .config import CLAMP_KINDS, IzhikevichConfig
 from .core import IzhikevichCore
 
 __all__ = ["PROPERTIES", "one_step", "prove", "FormalError", "core_vs_one_step", "prove_core"]
@@ -99,11 +99,7 @@ class _OneStep(Elaboratable):
         sel = self.sel if n_sets > 1 else 0
         checks: list = []
         with _recording_narrows(checks):
-            s2 = izh.operands(cfg, v, u, I, sel)
-            s3 = izh.multiply1(cfg, s2["wq"], s2["vq"], s2["x"], u, sel)
-            s4 = izh.multiply2(cfg, s3["q"], s3["bvp"], s3["uy"], s2["wq"], v, u, s3["x"], sel)
-            out = izh.update_state(cfg, *(s4[k] for k in ("vb_sh", "vb_th", "vb_lo", "u_sh",
-                                                          "ud_sh", "p", "m")), sel)
+            out = izh.one_update(cfg, v, u, I, sel)
         m.d.comb += [Assume((v >= cfg.v_floor_raw) & (v <= cfg.VTH.raw)),
                      Assume((u >= cfg.u_lo_raw) & (u <= cfg.u_hi_raw)),
                      Assume((I >= cfg.i_lo_raw) & (I <= cfg.i_hi_raw))]
@@ -112,9 +108,9 @@ class _OneStep(Elaboratable):
         for x, (lo, hi), name in checks:
             ok = (x >= lo) & (x <= hi)
             if name == "v below threshold":     # used only when neither spike nor floor
-                ok = ok | out["spike"] | ((s4["vb_lo"] + s4["p"]) < 0)
+                ok = ok | out["spike"] | out["under"]
             m.d.comb += Assert(ok, name)
-        m.d.comb += Assert(~s4["y_flag"], "y clamp")
+        m.d.comb += Assert(~out["y_flag"], "y clamp")
         if self.prop == "state_box":
             m.d.comb += Assert(~out["u_low"] & ~out["u_high"] & ~out["v_low"], "state clamp")
         return m
@@ -153,17 +149,25 @@ def prove(cfg: IzhikevichConfig, workdir: Path, prop: str = "datapath",
 # ----------------------------------------------------------------------------------------------
 # the pipelined core against the one-step datapath
 
-_STAGES = (izh.operands, izh.multiply1, izh.multiply2, izh.update_state)
-#: cycles from the stage-3 registers (the state an update read) to the ``upd_*`` outputs
-_PROBE_TO_OUTPUT = 3
+#: the pipelined steps (function and the values it reads), bound at import
+_STEPS = tuple((s.fn, s.reads) for s in izh.STEPS)
+
+
+def _reference_update(cfg, v, u, I, sel) -> dict:
+    """One combinational update by the steps bound at import (:func:`izh.one_update`)."""
+    vals = {"v": v, "u": u, "i": I, "sel": sel}
+    for fn, reads in _STEPS:
+        vals.update(fn(cfg, {k: vals[k] for k in reads}))
+    return vals
 
 
 class _CoreVsOneStep(Elaboratable):
-    def __init__(self, cfg: IzhikevichConfig, write_latency: int = PIPELINE_DEPTH):
+    def __init__(self, cfg: IzhikevichConfig, write_latency: int | None = None):
         if cfg.tick_source != "external":
             raise ValueError("the equivalence harness drives the tick: use tick_source='external'")
         self.cfg = cfg
-        self.write_latency = write_latency              # != 5 only to show the check is tight
+        # != the depth only to show the check is tight
+        self.write_latency = cfg.pipeline_stages if write_latency is None else write_latency
         N = cfg.n_neurons
         self.core = IzhikevichCore(cfg)
         self.core._MustUse__silence = True     # elaborated by hand in elaborate()
@@ -183,7 +187,7 @@ class _CoreVsOneStep(Elaboratable):
 
     def elaborate(self, platform):
         cfg, m, core = self.cfg, Module(), self.core
-        N, n_sets, L = cfg.n_neurons, len(cfg.params), PIPELINE_DEPTH
+        N, n_sets, L = cfg.n_neurons, len(cfg.params), cfg.pipeline_stages
         # no reset input: step 0 is power-up; a later reset would clear registers, not RAMs
         m.domains.sync = self.cd
         m.submodules.core = core.elaborate(platform)    # elaborated here to reach its probes
@@ -231,20 +235,16 @@ class _CoreVsOneStep(Elaboratable):
         i_ref, sel_ref = exp_cur[exp_idx], exp_sel[exp_idx]
 
         # one combinational step from the state the update read, computed in the cycle it is
-        # read (the stage-3 registers) and held for the 3 cycles until the result leaves
-        operands, multiply1, multiply2, update_state = _STAGES
+        # read (the stage-3 registers) and held until the result leaves (depth - 2 cycles)
         pv0, pi0, v0, u0, i0, sel0 = (probe[k] for k in ("valid", "index", "v", "u", "i", "sel"))
         sel_arg = sel0 if n_sets > 1 else 0
-        s2 = operands(cfg, v0, u0, i0, sel_arg)
-        s3 = multiply1(cfg, s2["wq"], s2["vq"], s2["x"], u0, sel_arg)
-        s4 = multiply2(cfg, s3["q"], s3["bvp"], s3["uy"], s2["wq"], v0, u0, s3["x"], sel_arg)
-        o = update_state(cfg, *(s4[k] for k in ("vb_sh", "vb_th", "vb_lo", "u_sh", "ud_sh",
-                                                "p", "m")), sel_arg)
+        o = _reference_update(cfg, v0, u0, i0, sel_arg)
         flags = {"v_low": o["v_low"], "u_high": o["u_high"], "u_low": o["u_low"],
-                 "current": s2["i_flag"], "y": s4["y_flag"]}
-        now = {"valid": pv0, "index": pi0, "i": i0, "sel": sel0, "v": o["v"], "u": o["u"],
-               "spike": o["spike"], "clamp": Cat(*(flags[k] for k in CLAMP_KINDS))}
-        later = {k: delayed(x, _PROBE_TO_OUTPUT, f"ref_step_{k}") for k, x in now.items()}
+                 "current": o["i_flag"], "y": o["y_flag"]}
+        now = {"valid": pv0, "index": pi0, "i": i0, "sel": sel0, "v": o["v_next"],
+               "u": o["u_next"], "spike": o["spike"],
+               "clamp": Cat(*(flags[k] for k in CLAMP_KINDS))}
+        later = {k: delayed(x, probe["latency"], f"ref_step_{k}") for k, x in now.items()}
         pv, pi, i_in, sel_in = (later[k] for k in ("valid", "index", "i", "sel"))
         out, clamp_ref = later, later["clamp"]
 

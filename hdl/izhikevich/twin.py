@@ -9,7 +9,7 @@ import numpy as np
 from ...golden import izhikevich as golden
 from ..lib.fixed import check_int64, clamp_report, store_raw, tally_clamps
 from .config import CLAMP_KINDS, IzhikevichConfig
-from .datapath import clamp_bits, multiply1, multiply2, operands, update_state
+from .datapath import clamp_bits, one_update
 
 __all__ = ["IzhikevichTwin"]
 
@@ -95,21 +95,18 @@ class IzhikevichTwin:
             raise ValueError(f"parameter-set index out of range 0..{len(self.cfg.params) - 1}")
 
     def update_stages(self, v, u, I, sel):
-        """:meth:`update` by the stage functions (the reference implementation)."""
+        """:meth:`update` by the pipelined steps of the core (the reference implementation:
+        :func:`~cuneate.hdl.izhikevich.datapath.one_update`)."""
         cfg = self.cfg
         v, u, I, sel = (np.asarray(x, dtype=np.int64) for x in (v, u, I, sel))
-        s2 = operands(cfg, v, u, I, sel)
-        s3 = multiply1(cfg, s2["wq"], s2["vq"], s2["x"], u, sel)
-        s4 = multiply2(cfg, s3["q"], s3["bvp"], s3["uy"], s2["wq"], v, u, s3["x"], sel)
+        vals = one_update(cfg, v, u, I, sel)
         if self.check:
-            for k in ("q", "bvp", "x", "uy"):
-                check_int64(k, s3[k])
-            for k in ("p", "m", "vb_sh", "vb_th", "vb_lo", "u_sh", "ud_sh"):
-                check_int64(k, s4[k])
-        out = update_state(cfg, *(s4[k] for k in ("vb_sh", "vb_th", "vb_lo", "u_sh", "ud_sh",
-                                                  "p", "m")), sel)
-        out["current"] = np.broadcast_to(s2["i_flag"], v.shape)
-        out["y"] = np.broadcast_to(s4["y_flag"], v.shape)
+            for k, x in vals.items():
+                if isinstance(x, np.ndarray) and x.dtype.kind == "i":
+                    check_int64(k, x)
+        out = {k: vals[k] for k in ("v", "u", "spike", "v_pre", "v_low", "u_high", "u_low")}
+        out["current"] = np.broadcast_to(vals["i_flag"], v.shape)
+        out["y"] = np.broadcast_to(vals["y_flag"], v.shape)
         out["clamp"] = clamp_bits(out)
         return out
 

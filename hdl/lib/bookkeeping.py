@@ -54,13 +54,15 @@ def core_ports(cfg, clamp_kinds, state_ports: dict, extra: dict | None = None) -
     return sig
 
 
-def core_memories(m: Module, core, cfg, state_width: int, state_init: list):
-    """The per-neuron memories every core has: the state (``state_width`` bits, ``state_init``),
-    the host-written current and the parameter-set index, with the host write ports
-    (``i_wr_*``, ``sel_wr_*``) wired. Returns the state read and write ports and the current
-    and set read ports."""
+def core_memories(m: Module, core, cfg, state_width: int, state_init: list,
+                  state_attrs: dict | None = None):
+    """The per-neuron memories every core has: the state (``state_width`` bits, ``state_init``,
+    ``state_attrs`` for synthesis), the host-written current and the parameter-set index, with
+    the host write ports (``i_wr_*``, ``sel_wr_*``) wired. Returns the state read and write
+    ports and the current and set read ports."""
     N = cfg.n_neurons
-    m.submodules.state_mem = state_mem = Memory(shape=state_width, depth=N, init=state_init)
+    m.submodules.state_mem = state_mem = Memory(shape=state_width, depth=N, init=state_init,
+                                                attrs=state_attrs)
     m.submodules.cur_mem = cur_mem = Memory(shape=cfg.I.shape(), depth=N, init=[])
     m.submodules.sel_mem = sel_mem = Memory(shape=cfg.sel_bits, depth=N, init=cfg.neuron_sets)
     st_rd, st_wr = state_mem.read_port(), state_mem.write_port()

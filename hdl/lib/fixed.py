@@ -124,6 +124,13 @@ class QFormat:
         raise FixedPointError(f"no {width}-bit {'signed' if signed_ else 'unsigned'} format "
                               f"holds [{lo:g}, {hi:g}]")
 
+    @staticmethod
+    def for_raw(lo: int, hi: int, frac_bits: int) -> "QFormat":
+        """The narrowest signed format with ``frac_bits`` fraction bits holding the raw
+        integers ``lo .. hi`` (at least one integer bit)."""
+        width = max(x.bit_length() if x >= 0 else (-x - 1).bit_length() for x in (lo, hi)) + 1
+        return QFormat(max(width - frac_bits, 1), frac_bits)
+
 
 @dataclass(frozen=True)
 class FixedConstant:

@@ -40,7 +40,8 @@ def cmd_build(args) -> int:
     try:
         report = build_target(args.board, out, n_neurons=args.neurons,
                               clock_hz=args.clock_hz, update_hz=args.update_hz,
-                              bitstream=not args.no_bitstream, seed=args.seed)
+                              bitstream=not args.no_bitstream, seed=args.seed,
+                              pipeline_stages=args.pipeline_stages)
     except ConfigError as exc:
         raise CliError(f"cuneate build: {exc}") from None
     except BuildError as exc:
@@ -99,6 +100,8 @@ def register(groups: CommandGroups) -> None:
     c.add_argument("--update-hz", type=float, default=None)
     c.add_argument("--out", required=True)
     c.add_argument("--seed", type=positive_int, default=1, help="nextpnr placement seed")
+    from ..izhikevich.cli import add_pipeline_option
+    add_pipeline_option(c)
     c.add_argument("--no-bitstream", action="store_true",
                    help="Verilog and estimate only (no place and route)")
     c.add_argument("--json", action="store_true")

@@ -30,7 +30,11 @@
 #include "Vizhikevich_core.h"
 #include "verilated.h"
 
-static const int PIPELINE_DEPTH = 5;
+// the core's pipeline depth (pipeline_stages), set by the build
+#ifndef CUNEATE_PIPELINE_DEPTH
+#define CUNEATE_PIPELINE_DEPTH 5
+#endif
+static const int PIPELINE_DEPTH = CUNEATE_PIPELINE_DEPTH;
 
 static int64_t sext(uint64_t x, int width) {
     uint64_t m = 1ULL << (width - 1);

@@ -105,7 +105,8 @@ def build_harness(cfg: IzhikevichConfig, build_root: Path | None = None,
     cmd = [_verilator(), "--cc", "--exe", "--build", "-j", str(jobs), "-O3", "--x-assign",
            "fast", "--x-initial", "fast", "--noassert", "-Wno-fatal", "-Wno-WIDTHEXPAND",
            "-Wno-WIDTHTRUNC", "--top-module", TOP, "--Mdir", "obj", "-o", "Vharness",
-           "-CFLAGS", "-O2", f"{TOP}.v", str(HARNESS_SOURCE)]
+           "-CFLAGS", f"-O2 -DCUNEATE_PIPELINE_DEPTH={cfg.pipeline_stages}", f"{TOP}.v",
+           str(HARNESS_SOURCE)]
     proc = subprocess.run(cmd, cwd=out, capture_output=True, text=True)
     if proc.returncode != 0 or not exe.is_file():
         tail = (proc.stderr or proc.stdout).strip().splitlines()[-12:]

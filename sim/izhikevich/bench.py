@@ -32,7 +32,7 @@ import cocotb
 from cocotb.clock import Clock
 from cocotb.triggers import ClockCycles, FallingEdge, RisingEdge
 
-from cuneate.hdl.izhikevich import CLAMP_KINDS, PIPELINE_DEPTH, IzhikevichConfig
+from cuneate.hdl.izhikevich import CLAMP_KINDS, IzhikevichConfig
 from cuneate.sim.engines.bench import CoreBench, bench_config, bench_progress, bench_report
 from cuneate.sim.izhikevich.scoreboard import SweepChecker
 
@@ -96,7 +96,7 @@ async def scoreboard(dut):
         # ---- whole sweep collected: vectorized checks ----
         checker.check(buf["v"], buf["u"], buf["i"], buf["spike"], buf["clamp"])
         # currents used must be the ones the host wrote
-        extra["current_violations"] += tb.current_violations(PIPELINE_DEPTH)
+        extra["current_violations"] += tb.current_violations(cfg.pipeline_stages)
         tb.expect_sweep(sweep_no, checker.stats.clamp_sticky)
     await tb.drain()
     elapsed = time.perf_counter() - t0
@@ -154,7 +154,7 @@ async def engine(dut):
     cycles = 0
     clamps = {k: 0 for k in CLAMP_KINDS}
     counters = {k: getattr(d, f"sweep_clamps_{k}") for k in CLAMP_KINDS}
-    total = n_sweeps * period + PIPELINE_DEPTH + cfg.spike_fifo_depth + 4
+    total = n_sweeps * period + cfg.pipeline_stages + cfg.spike_fifo_depth + 4
     swept = 0
     for c in range(total):
         d.tick.value = int(c % period == 0 and c // period < n_sweeps)
@@ -212,7 +212,7 @@ async def play(dut):
            "spike_tick": [], "spike_neuron": []}
     counters = {k: getattr(d, f"sweep_clamps_{k}") for k in CLAMP_KINDS}
     mask = (1 << cfg.sweep_number_width) - 1
-    wait = N + PIPELINE_DEPTH + 4
+    wait = N + cfg.pipeline_stages + 4
     w = 0
     t0 = time.perf_counter()
     for k in range(n_ticks):

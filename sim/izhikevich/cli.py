@@ -18,8 +18,8 @@ from ..cli.options import (CliError, CommandGroups, add_block_commands, add_rate
                            build_config, finite_float, fmt_time, output_dir, positive_float,
                            positive_int)
 
-__all__ = ["register", "add_core_options", "core_from_args", "parse_param_set",
-           "estimate_run"]
+__all__ = ["register", "add_core_options", "add_pipeline_option", "core_from_args",
+           "parse_param_set", "estimate_run"]
 
 #: Memory per neuron (bytes) of each engine, used to estimate a run before starting it (the
 #: speeds are the engine registry's).
@@ -92,6 +92,16 @@ def add_core_options(p, *, neurons_default: int) -> None:
     g.add_argument("--y-int-bits", type=positive_int, default=None,
                    help="integer bits of b v - u (default: proven; fewer add a flagged clamp)")
     g.add_argument("--rounding", choices=("nearest", "truncate"), default="nearest")
+    add_pipeline_option(g)
+
+
+def add_pipeline_option(g) -> None:
+    """``--pipeline-stages``: the core's pipeline depth (generate, simulate, build)."""
+    from ...hdl.izhikevich.config import PIPELINE_DEPTH, PIPELINE_STAGES
+    g.add_argument("--pipeline-stages", type=int, choices=PIPELINE_STAGES,
+                   default=PIPELINE_DEPTH,
+                   help=f"pipeline depth of the core (default {PIPELINE_DEPTH}; deeper "
+                        f"registers more of the datapath for a faster clock, same arithmetic)")
 
 
 def _neuron_sets(spec: str, n: int, n_sets: int) -> list[int]:
@@ -121,7 +131,7 @@ def core_kwargs(args, param_sets, n_core: int) -> dict:
           "v_frac_bits": args.v_frac_bits, "u_frac_bits": args.u_frac_bits,
           "operand_width": args.operand_width, "y_frac_bits": args.y_frac_bits,
           "y_int_bits": args.y_int_bits, "rounding": args.rounding,
-          "saturation": args.saturation,
+          "saturation": args.saturation, "pipeline_stages": args.pipeline_stages,
           "current_range": tuple(args.current_range) if args.current_range else None}
     return kw
 

@@ -40,7 +40,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ...hdl.izhikevich import (CLAMP_KINDS, PIPELINE_DEPTH, IzhikevichConfig, IzhikevichCore,
+from ...hdl.izhikevich import (CLAMP_KINDS, IzhikevichConfig, IzhikevichCore,
                                IzhikevichTwin, izhikevich_verilog)
 from ..engines.amaranth import simulate, write_currents
 from ..engines.registry import block_engines, check_engine
@@ -124,7 +124,7 @@ def run_amaranth_sweeps(cfg: IzhikevichConfig, cur, n_sweeps: int, progress=None
         ctx.set(dut.spike_ready, 1)
         await write_currents(ctx, dut, raw[:N])
         unwrap = TickUnwrap(cfg.sweep_number_width)
-        for c in range(n_sweeps * N + PIPELINE_DEPTH + cfg.spike_fifo_depth + 4):
+        for c in range(n_sweeps * N + cfg.pipeline_stages + cfg.spike_fifo_depth + 4):
             ctx.set(dut.tick, int(c % N == 0 and c // N < n_sweeps))
             await ctx.tick()
             if ctx.get(dut.sweep_done):
@@ -387,7 +387,7 @@ class AmaranthTransport(_Batch):
                 ctx.set(dut.tick, 1)
                 await ctx.tick()
                 ctx.set(dut.tick, 0)
-                await ctx.tick().repeat(N + PIPELINE_DEPTH + 4)
+                await ctx.tick().repeat(N + cfg.pipeline_stages + 4)
                 rep["sweeps"] += 1
                 counted = ctx.get(dut.sweep_count)
                 if ctx.get(dut.sweep_number) != k % (1 << width):

@@ -38,12 +38,12 @@ def test_a_host_write_timing_fault_is_caught(tmp_path):
 def test_a_datapath_fault_in_the_core_is_caught(tmp_path, monkeypatch):
     """The core built with a faulty last stage (v one LSB high; the
     reference keeps the true stage functions) fails at its first update."""
-    true_update = izh.update_state
+    true_select = izh.select_step
 
-    def faulty(cfg, *args):
-        out = dict(true_update(cfg, *args))
-        out["v"] = out["v"] + 1
+    def faulty(cfg, x):
+        out = dict(true_select(cfg, x))
+        out["v_next"] = out["v_next"] + 1
         return out
-    monkeypatch.setattr(izh, "update_state", faulty)
+    monkeypatch.setattr(izh, "select_step", faulty)
     r = prove_core(_cfg(), tmp_path, depth=8, timeout_s=600)
     assert r["status"] == "fail" and r["step"] == 6, r
