@@ -125,6 +125,8 @@ class SweepSpec:
     clock_hz: float = 40e6
     synth: bool = False
     fmax: bool = False
+    pipeline_stages: int = 5
+    seeds: tuple = (1,)
 
 
 def reference_trains(spec: SweepSpec) -> list[np.ndarray]:

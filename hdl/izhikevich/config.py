@@ -454,6 +454,9 @@ class IzhikevichConfig(CoreOptions):
         # beside the product (k <= 3: a choice of 2**k constants)
         k = self.Y.width - self.operand_width
         self.y_split = k if 0 < k <= 3 else 0
+        # y = floor(bv / 2**shift_y) - floor(uy / 2**shift_y) - borrow: where no y clamp can act
+        # and y + borrow fits Y, the borrow's (a dt) term joins the u sums' constants
+        self.y_borrow = self.Y.min_raw <= self.bounds_y[0] and self.bounds_y[1] < self.Y.max_raw
         # every unflagged narrowing must be proven: refuse here rather than build a silent clamp
         for name, b, fmt in (("v operand", self.bounds_vq, self.VQ),
                              ("w operand", self.bounds_wq, self.W),

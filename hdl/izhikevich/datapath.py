@@ -28,6 +28,7 @@ stage) and by the twin (composed directly).
 from __future__ import annotations
 
 import numpy as np
+from amaranth.hdl import Cat
 
 from ..lib.datapath import const_like, false_like, lookup, select_by
 from ..lib.fixed import clamp_flagged, is_hdl, narrow, round_shift, round_shift_add, select
@@ -259,9 +260,24 @@ def align_step(cfg: IzhikevichConfig, x):
     v, sel, r = x["v"], x["sel"], cfg.rounding
     q = x["pq"] + x["q_inc"]
     qq_f, qq_k, qbit = _floor_split(q, [0], 0, cfg.shift_q, r)
-    y_full = (x["pb"] - x["uyp"]) >> cfg.shift_y
-    y, y_low, y_high = clamp_flagged(y_full, cfg.Y.min_raw, cfg.Y.max_raw, cfg.Y, cfg.bounds_y)
-    k = cfg.y_split
+    k, sy = cfg.y_split, cfg.shift_y
+    if cfg.y_borrow:
+        # y = yd - borrow with yd the difference of the floors (an adder as wide as y after
+        # the product) and borrow of the dropped bits; y (a dt) = yd_hi (a dt) 2**k +
+        # (yd_lo - borrow) (a dt): the multiplier takes yd_hi, the u sums the rest
+        pb, uyp = x["pb"], x["uyp"]
+        yd = narrow((pb >> sy) - (uyp >> sy), cfg.Y, (cfg.bounds_y[0], cfg.bounds_y[1] + 1),
+                    "y operand")
+        if is_hdl(yd):
+            borrow = pb[:sy] < uyp[:sy]
+        else:
+            borrow = ((pb & ((1 << sy) - 1)) < (uyp & ((1 << sy) - 1))).astype(np.int64)
+        y, y_low, y_high = yd, false_like(yd), false_like(yd)
+    else:
+        y_full = (x["pb"] - x["uyp"]) >> sy
+        y, y_low, y_high = clamp_flagged(y_full, cfg.Y.min_raw, cfg.Y.max_raw, cfg.Y,
+                                         cfg.bounds_y)
+        borrow = 0
     if cfg.dt_shift is not None:
         dx = x["px"]
     else:
@@ -271,9 +287,11 @@ def align_step(cfg: IzhikevichConfig, x):
     sums = {}
     for name, off in (("vb", 0), ("vb_th", cfg.VTH.raw), ("vb_lo", cfg.v_floor_raw)):
         sums[name] = ((v + dx + lookup([c - off for c in k0], sel)) << cfg.shift_p) + half
+    y_lo = (y[:k] if is_hdl(y) else y & ((1 << k) - 1)) if k else 0
+    if cfg.y_borrow:        # the index of (y_lo - borrow) in _y_low_terms
+        y_lo = (Cat(y_lo, borrow) if k else borrow) if is_hdl(y) else y_lo + (borrow << k)
     return {"qq_f": narrow(qq_f, cfg.QQF, cfg.bounds_qqf, "q floor"), "qbit": qbit,
-            "y_hi": y >> k if k else y, "y_lo": (y[:k] if is_hdl(y) else y & ((1 << k) - 1))
-            if k else 0, "y_flag": y_low | y_high,
+            "y_hi": y >> k if k else y, "y_lo": y_lo, "y_flag": y_low | y_high,
             "alpha": lookup([a.raw for a in cfg.alpha], sel), **sums}
 
 
@@ -319,6 +337,14 @@ def _u_sum(cfg: IzhikevichConfig, u, sel, y_lo, tables: list, name: str):
     return select_by(sel, opts)
 
 
+def _y_low_terms(cfg: IzhikevichConfig) -> list[int]:
+    """The multiples of ``a dt`` added to the u sums beside ``y_hi (a dt) 2**k``, by the
+    ``y_lo`` index of :func:`align_step`: the low bits of y, less the borrow with
+    ``y_borrow``."""
+    lows = list(range(1 << cfg.y_split))
+    return lows + [j - 1 for j in lows] if cfg.y_borrow else lows
+
+
 def product2_step(cfg: IzhikevichConfig, x):
     """Step 3: the second multipliers, on registers: ``floor(q) w`` and ``y_hi (a dt)``;
     beside them the ``v`` sums take the ``q`` rounding bit's ``w`` and the six ``u`` sums are
@@ -328,7 +354,7 @@ def product2_step(cfg: IzhikevichConfig, x):
     for name in ("vb", "vb_th", "vb_lo"):
         out[name] = x[name] if (not is_hdl(qbit) and isinstance(qbit, int)) else \
             x[name] + select(qbit, wq, 0)
-    tables = [_u_constants(cfg, j) for j in range(1 << cfg.y_split)]
+    tables = [_u_constants(cfg, j) for j in _y_low_terms(cfg)]
     for name in U_SUMS:
         out[name] = _u_sum(cfg, u, sel, x["y_lo"], tables, name)
     return out

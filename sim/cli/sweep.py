@@ -37,9 +37,12 @@ def cmd_sweep(args) -> int:
     if set(rnd) - {"nearest", "truncate"}:
         raise CliError("--rounding: nearest and/or truncate")
     floats = [] if args.no_float else ["float64", "float32"]
+    seeds = _list(args.seeds, int, "--seeds")
+    if any(s < 1 for s in seeds):
+        raise CliError("--seeds: placement seeds must be >= 1")
     spec = SweepSpec(battery=args.battery, duration_ms=duration,
                      reference_hz=args.reference_hz, clock_hz=args.clock_hz, synth=args.synth,
-                     fmax=args.fmax)
+                     fmax=args.fmax, pipeline_stages=args.pipeline_stages, seeds=tuple(seeds))
     try:
         pts, columns = block.points_from_args(args, rates, widths, rnd, floats, _list)
     except ValueError as exc:
@@ -108,6 +111,11 @@ def register(groups: CommandGroups) -> None:
     p.add_argument("--fmax", action="store_true",
                    help="also nextpnr-ecp5 place and route per fixed point for its fmax on the "
                         "ULX3S's LFE5U-85F (implies --synth; ~35 s a point)")
+    p.add_argument("--seeds", default="1",
+                   help="with --fmax: comma-separated nextpnr placement seeds; the lowest fmax "
+                        "is reported (e.g. 1,2,3)")
+    from ..izhikevich.cli import add_pipeline_option
+    add_pipeline_option(p)
     p.add_argument("--scheduler", default=None,
                    help="dask.distributed address; 'sync' runs in this process (default: a "
                         "local cluster)")

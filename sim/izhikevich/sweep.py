@@ -177,7 +177,9 @@ class SweepPoint(Point):
     def key(self, spec: "SweepSpec") -> str:
         fields = {k: v for k, v in asdict(self).items() if v is not None}
         return point_key(fields, spec.battery, spec.duration_ms, spec.reference_hz,
-                         spec.clock_hz, spec.synth or spec.fmax, spec.fmax)
+                         spec.clock_hz, spec.synth or spec.fmax, spec.fmax,
+                         *(() if spec.pipeline_stages == 5 and tuple(spec.seeds) == (1,) else
+                           (spec.pipeline_stages, tuple(spec.seeds))))
 
     def label(self) -> str:
         if self.engine == "fixed":
@@ -284,7 +286,9 @@ def run_fixed(twin, bat: Battery, dt_ms: float, n_steps: int) -> list[np.ndarray
 def synth_point(p: SweepPoint, spec: SweepSpec) -> dict:
     """yosys synth_ecp5 of the core with as many neurons as the clock allows at this rate;
     with ``spec.fmax`` also nextpnr-ecp5 place and route of the bare core on the ULX3S's
-    LFE5U-85F (CABGA381, speed grade 6, seed 1, ports on free pins): ``fmax_mhz``."""
+    LFE5U-85F (CABGA381, speed grade 6, ports on free pins) at each of ``spec.seeds``:
+    ``fmax_mhz`` (the lowest) and ``fmax_mhz_per_seed``; the core has
+    ``spec.pipeline_stages`` stages."""
     import tempfile
 
     from ...hdl.flow.synth import nextpnr_ecp5, synthesize
@@ -293,16 +297,19 @@ def synth_point(p: SweepPoint, spec: SweepSpec) -> dict:
     cfg = IzhikevichConfig(n_neurons=n, clock_hz=n * p.update_hz, update_hz=p.update_hz,
                            operand_width=p.operand_width, v_frac_bits=p.v_frac_bits,
                            u_frac_bits=p.u_frac_bits, rounding=p.rounding,
-                           current_format=current_format(p))
+                           current_format=current_format(p),
+                           pipeline_stages=spec.pipeline_stages)
     out = {}
     with tempfile.TemporaryDirectory(prefix="cuneate-sweep-") as d:
         r = synthesize(izhikevich_verilog(cfg, "izhikevich_core"), "izhikevich_core", "ecp5",
                        Path(d), netlist=spec.fmax)
         if spec.fmax:
-            pnr = nextpnr_ecp5(Path(d), r["netlist"], device="85k", package="CABGA381",
-                               speed=6, seed=1, freq_mhz=spec.clock_hz / 1e6,
-                               out_of_context=False, timeout=3600)
-            out["fmax_mhz"] = pnr["min_fmax_mhz"]
+            per_seed = [nextpnr_ecp5(Path(d), r["netlist"], device="85k", package="CABGA381",
+                                     speed=6, seed=s, freq_mhz=spec.clock_hz / 1e6,
+                                     out_of_context=False, timeout=3600)["min_fmax_mhz"]
+                        for s in spec.seeds]
+            out["fmax_mhz"] = min(per_seed)
+            out["fmax_mhz_per_seed"] = per_seed
     for cell in ("LUT4", "CCU2C", "TRELLIS_FF", "DP16KD", "MULT18X18D"):
         out[cell] = int(r["cells"].get(cell, 0))
     return out
