@@ -45,8 +45,7 @@ from .range import RangeSearchError, one_step_bound, reachable_ranges
 __all__ = ["ConfigError", "IzhikevichConfig", "PIPELINE_DEPTH", "PIPELINE_STAGES", "PIPELINE_CUTS",
            "CLAMP_KINDS", "SATURATION"]
 
-#: The default pipeline depth (the reference core's): fetch, read, three datapath stages.
-PIPELINE_DEPTH = 5
+PIPELINE_DEPTH = 5      # the default (the reference core's): fetch, read, 3 datapath stages
 #: Registered cuts of the datapath (after step ``k`` of :data:`~cuneate.hdl.izhikevich.datapath
 #: .STEPS`: 0 operands, 1 multiply 1, 2 align, 3 multiply 2, 4 sums; step 5, select, ends in
 #: the write-back) for each ``pipeline_stages``: each added stage adds the cut that shortens
@@ -447,6 +446,10 @@ class IzhikevichConfig(CoreOptions):
         self.bounds_vsq = (sh(lo, svq), sh(hi, svq))
         self.bounds_vsw = (sh(lo, sv), sh(hi, sv))
         self.bounds_qqf = (min(q_ends) >> self.shift_q, max(q_ends) >> self.shift_q)
+        qd = (self.bounds_qqf[0] - 1, self.bounds_qqf[1])    # floors' sum (datapath: q_split)
+        self.q_split = QFormat.for_raw(*qd, self.Q.frac_bits).width <= self.operand_width
+        if self.q_split:
+            self.bounds_qqf = qd
         self.VSQ = QFormat.for_raw(*self.bounds_vsq, self.VQ.frac_bits)
         self.VSW = QFormat.for_raw(*self.bounds_vsw, self.W.frac_bits)
         self.QQF = QFormat.for_raw(*self.bounds_qqf, self.Q.frac_bits)
@@ -454,8 +457,7 @@ class IzhikevichConfig(CoreOptions):
         # beside the product (k <= 3: a choice of 2**k constants)
         k = self.Y.width - self.operand_width
         self.y_split = k if 0 < k <= 3 else 0
-        # y = floor(bv / 2**shift_y) - floor(uy / 2**shift_y) - borrow: where no y clamp can act
-        # and y + borrow fits Y, the borrow's (a dt) term joins the u sums' constants
+        # y + borrow fits Y and no y clamp can act (datapath: y_borrow)
         self.y_borrow = self.Y.min_raw <= self.bounds_y[0] and self.bounds_y[1] < self.Y.max_raw
         # every unflagged narrowing must be proven: refuse here rather than build a silent clamp
         for name, b, fmt in (("v operand", self.bounds_vq, self.VQ),

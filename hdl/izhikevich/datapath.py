@@ -254,12 +254,26 @@ def product1_step(cfg: IzhikevichConfig, x):
 
 def align_step(cfg: IzhikevichConfig, x):
     """Step 2: ``q = (A dt) w`` completed and split into its floor and rounding bit for the
-    second multiplier, ``y = (b v - u) >> shift_y`` (clamped and flagged only where its format
+    second multiplier (with ``cfg.q_split`` the floor is the sum of the floors of the product
+    and its increment, an operand-wide adder after the multiplier, and the rounding "bit" counts
+    0..2 carries of the dropped bits; with ``cfg.y_borrow`` likewise for ``y``, its borrow
+    joining the low bits), ``y = (b v - u) >> shift_y`` (clamped and flagged only where its format
     is narrowed) split into the operand ``y_hi`` and the low bits ``y_lo``, and the ``v`` sums
     ``v + dt (I - u) + K0`` pre-shifted (plain, less ``v_th``, less ``v_floor``)."""
     v, sel, r = x["v"], x["sel"], cfg.rounding
-    q = x["pq"] + x["q_inc"]
-    qq_f, qq_k, qbit = _floor_split(q, [0], 0, cfg.shift_q, r)
+    sq = cfg.shift_q
+    if cfg.q_split:
+        # round(q) = (pq >> sq) + (q_inc >> sq) + qbit, qbit in 0..2 the carries of the
+        # dropped bits and the rounding half: the adder after the product is operand-wide
+        pq, qi = x["pq"], x["q_inc"]
+        h = (1 << (sq - 1)) if r == "nearest" else 0
+        qq_f = (pq >> sq) + (qi >> sq)
+        if is_hdl(pq):
+            qbit = (pq[:sq] + qi[:sq] + h)[sq:]
+        else:
+            qbit = ((pq & ((1 << sq) - 1)) + (qi & ((1 << sq) - 1)) + h) >> sq
+    else:
+        qq_f, _, qbit = _floor_split(x["pq"] + x["q_inc"], [0], 0, sq, r)
     k, sy = cfg.y_split, cfg.shift_y
     if cfg.y_borrow:
         # y = yd - borrow with yd the difference of the floors (an adder as wide as y after
@@ -351,9 +365,14 @@ def product2_step(cfg: IzhikevichConfig, x):
     formed with the ``y_lo (a dt)`` term."""
     u, sel, wq, qbit = x["u"], x["sel"], x["wq"], x["qbit"]
     out = {"p2": x["qq_f"] * wq, "m2": x["y_hi"] * x["alpha"]}
+    if not is_hdl(qbit) and isinstance(qbit, int):
+        extra = 0           # no rounding bit (truncation, no dropped constant bits)
+    elif is_hdl(qbit) and len(qbit) > 1:      # 0, 1 or 2 (q_split)
+        extra = select(qbit[1], wq << 1, select(qbit[0], wq, 0))
+    else:
+        extra = qbit * wq if not is_hdl(qbit) else select(qbit, wq, 0)
     for name in ("vb", "vb_th", "vb_lo"):
-        out[name] = x[name] if (not is_hdl(qbit) and isinstance(qbit, int)) else \
-            x[name] + select(qbit, wq, 0)
+        out[name] = x[name] + extra if not isinstance(extra, int) else x[name]
     tables = [_u_constants(cfg, j) for j in _y_low_terms(cfg)]
     for name in U_SUMS:
         out[name] = _u_sum(cfg, u, sel, x["y_lo"], tables, name)

@@ -11,7 +11,7 @@ from ..lib.fixed import check_int64, clamp_report, store_raw, tally_clamps
 from .config import CLAMP_KINDS, IzhikevichConfig
 from .datapath import clamp_bits, one_update
 
-__all__ = ["IzhikevichTwin"]
+__all__ = ["IzhikevichTwin", "IzhikevichArrayTwin"]
 
 
 class IzhikevichTwin:
@@ -180,3 +180,22 @@ class IzhikevichTwin:
 
     def u_mv(self):
         return self.cfg.U.to_float(self.u)
+
+
+class IzhikevichArrayTwin:
+    """The bit-exact model of :class:`~cuneate.hdl.izhikevich.array.IzhikevichArray`: one
+    :class:`IzhikevichTwin` per core (``twins[k]`` holds the global ids ``k * n_neurons ..
+    (k + 1) * n_neurons - 1``), all swept by the one tick."""
+
+    def __init__(self, config: IzhikevichConfig, n_cores: int, **kwargs):
+        self.cfg, self.n_cores = config, n_cores
+        self.twins = [IzhikevichTwin(config, **kwargs) for _ in range(n_cores)]
+
+    def set_current_raw(self, neuron: int, raw: int) -> None:
+        """Store the raw current of global neuron ``neuron`` (a host write)."""
+        core, local = divmod(int(neuron), self.cfg.n_neurons)
+        self.twins[core].I[local] = raw
+
+    def sweep(self) -> np.ndarray:
+        """One tick of every core; returns the spike vector over the global ids."""
+        return np.concatenate([t.sweep() for t in self.twins])
