@@ -51,9 +51,12 @@ class IzhikevichCore(wiring.Component):
        8       operands | multiply1 | align | multiply2 | sums |sel 0, 1, 2, 3, 4
        ======  ===================================================  ==========================
 
-       Every multiplier takes registers (floors: slices, no adder in front) and at the deeper
-       depths is alone between two registers, so that the ECP5 flow can move those registers
-       into the MULT18X18D. The last stage writes the new state back and registers ``upd_*``.
+       Every multiplier takes registers (floors: slices, no adder in front) and is followed
+       by at most one operand-wide adder (at depth 8 by none). The last stage writes the new
+       state back and registers ``upd_*``. Measured out of context on the LFE5U-85F -6
+       (docs/architecture.md): depth 5 at about 91-99 MHz (a multiplier, its routing and
+       one adder in a stage), depth 8 at about 107-111 MHz, there limited by the block RAM's
+       read into the stage-3 registers (yosys maps the DP16KD without its output register).
 
     **Registers and hazards.** A value computed in stage ``s`` and still read later is
     registered at each cut as ``<name><s+1>`` (reset-less: data registers; the valid bit,

@@ -6,7 +6,9 @@ for every unflagged update), while the host rewrites currents during sweeps. Two
 enough to reach the extremes: the full-scale case holds the default formats at +-512 mV/ms
 (u reaches its ceiling, then the flip drives v to its deepest transient) with no clamp acting;
 the clamp case narrows the formats (saturation="flag") so that every clamp kind acts, and checks
-the flags, counters and sticky bits.
+the flags, counters and sticky bits. Every pipeline depth (``pipeline_stages``) runs on its
+smallest core with back-to-back sweeps (a neuron's next read one cycle after its write-back)
+and host writes in flight; the deepest also with every clamp acting.
 """
 
 import json
