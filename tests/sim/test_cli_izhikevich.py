@@ -125,3 +125,16 @@ def test_generate_prints_formats_and_range(capsys, tmp_path):
     data = json.loads((tmp_path / "izhikevich_core.json").read_text())
     assert data["accepted_current_range"] == [-512.0, 511.99609375]
     assert set(data["clamps"]) >= {"v_low", "u_high", "u_low", "current", "y"}
+
+
+def test_generate_takes_the_pipeline_depth(capsys, tmp_path):
+    rc, out, err = run_cli(capsys, ["generate", "izhikevich", "--out", str(tmp_path),
+                                    "--pipeline-stages", "7"])
+    assert rc == 0, err
+    data = json.loads((tmp_path / "izhikevich_core.json").read_text())
+    assert data["pipeline_depth"] == 7 and data["latency_cycles"] == 7
+    assert data["pipeline_cuts"] == [1, 2, 3, 4]
+    rc, out, err = run_cli(capsys, ["generate", "izhikevich", "--out", str(tmp_path),
+                                    "--pipeline-stages", "4"])
+    assert rc == 2 and "--pipeline-stages" in err
+
