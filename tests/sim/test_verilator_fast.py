@@ -45,8 +45,9 @@ def twin_updates(cfg, segments, n_sweeps):
     return np.concatenate(rows).astype(np.int64)
 
 
-def test_verilator_fast_equals_twin_every_update_with_a_schedule(tmp_path):
-    cfg = flag_config()
+@pytest.mark.parametrize("depth", [5, 8])
+def test_verilator_fast_equals_twin_every_update_with_a_schedule(tmp_path, depth):
+    cfg = IzhikevichConfig.from_kwargs(flag_config().to_kwargs(pipeline_stages=depth))
     rng = np.random.default_rng(5)
     segs = schedule(cfg, rng, [0, 120, 121, 300])
     run = run_harness(cfg, segs, 400, dump=True, build_root=tmp_path)
