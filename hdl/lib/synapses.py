@@ -36,7 +36,7 @@ from .config import ConfigError, int_bits_for
 from .fixed import FixedConstant, QFormat, narrow, round_shift, select
 
 __all__ = ["TRACE_NAMES", "TraceSpec", "TraceView", "trace_spec", "scale_weights",
-           "derive_traces", "trace_inputs", "trace_products", "trace_update",
+           "derive_traces", "derive_cuba_trace", "cuba_input", "CUBA_TRACE", "trace_inputs", "trace_products", "trace_update",
            "trace_golden_check"]
 
 #: trace order everywhere (state word, probe ports, twin arrays)
@@ -73,11 +73,13 @@ class TraceView:
 
 
 def trace_spec(name: str, tau_ms: float, dt_ms: float, operand_width: int, frac_bits: int,
-               input_max: float, max_decay_error: float, what: str = "trace") -> TraceSpec:
-    """One trace's formats: ``x' = y - round(k round(y))``, ``y = x + a`` with ``a`` at most
-    ``input_max`` per tick, ``k = 1 - exp(-dt/tau)`` in ``operand_width`` bits (refused when its
+               input_max: float, max_decay_error: float, what: str = "trace",
+               input_min: float = 0.0) -> TraceSpec:
+    """One trace's formats: ``x' = y - round(k round(y))``, ``y = x + a`` with ``a`` in
+    ``[input_min, input_max]`` per tick (``input_min < 0``: a signed trace, as the LIF core's
+    current-based synapse), ``k = 1 - exp(-dt/tau)`` in ``operand_width`` bits (refused when its
     representation error exceeds ``max_decay_error``), the stored trace in ``frac_bits``
-    fraction bits and integer bits proven from the steady state of the largest input."""
+    fraction bits and integer bits proven from the steady states of the extreme inputs."""
     lsb = 2.0 ** -frac_bits
     k = -math.expm1(-dt_ms / tau_ms)
     K = FixedConstant.normalized(f"k_{name}", k, operand_width)
@@ -86,17 +88,18 @@ def trace_spec(name: str, tau_ms: float, dt_ms: float, operand_width: int, frac_
                           f"{tau_ms:g} ms at dt {dt_ms:g} ms) is represented as "
                           f"{K.quantized:.6g} in {operand_width} bits")
     y_max = input_max / K.quantized + 8 * lsb
-    Y = QFormat.for_range(-4 * lsb, y_max, operand_width)
+    y_min = min(0.0, input_min) / K.quantized - (8 * lsb if input_min < 0 else 0.0)
+    Y = QFormat.for_range(y_min - 4 * lsb, y_max, operand_width)
     if Y.frac_bits > frac_bits:
         Y = QFormat(Y.int_bits, frac_bits)
-    # the stored trace: y - round(k round(y)) can dip below 0 by the operand rounding
-    t_lo = -(Y.lsb + 2 * lsb) / K.quantized - 4 * lsb
+    # the stored trace: y - round(k round(y)) can pass 0 (or y_min) by the operand rounding
+    t_lo = y_min - (Y.lsb + 2 * lsb) / K.quantized - 4 * lsb
     t_hi = y_max + (Y.lsb + 2 * lsb) / K.quantized
     T = QFormat(int_bits_for(t_lo, t_hi), frac_bits)
     t_bounds = (int(math.floor(t_lo / lsb)), int(math.ceil(t_hi / lsb)))
 
     def y_bounds(Y):
-        return (int(math.floor(t_lo / Y.lsb)) - 1,
+        return (int(math.floor((t_lo + min(0.0, input_min)) / Y.lsb)) - 1,
                 int(math.ceil((t_hi + input_max) / Y.lsb)) + 1)
     lo_r, hi_r = y_bounds(Y)
     while not (Y.min_raw <= lo_r and hi_r <= Y.max_raw):
@@ -153,6 +156,36 @@ def derive_traces(cfg) -> tuple[list[TraceSpec], tuple[int, int]]:
     lo = -(max(0.0, sg) + marg)
     hi = max(0.0, sa) + marg
     return specs, (int(math.floor(lo / lsb)), int(math.ceil(hi / lsb)))
+
+
+#: the LIF core's current-based synapse: one signed trace per neuron
+CUBA_TRACE = "x_syn"
+
+
+def derive_cuba_trace(cfg) -> tuple[list[TraceSpec], tuple[int, int]]:
+    """The current-based synapse of a discrete LIF core (``syn_alpha``, NIR's ``CubaLIF``):
+    one signed trace ``x`` per neuron, per tick ``y = x + a`` (``a = sum_i w_i x_i``, the
+    weighted input spikes of the tick), ``D = I + y`` and ``x' = y - k y`` with
+    ``k = 1 - syn_alpha``. So the synaptic current of a spike enters the membrane in its own
+    tick and decays by ``syn_alpha`` per tick after (snnTorch's ``Synaptic``; the exact
+    integration of NIR's CubaLIF for spikes on the tick grid once the weights carry the
+    factor of :mod:`cuneate.sim.nir.discretize`). Returns the spec and the raw bounds of
+    ``y`` (state fraction bits), the synaptic part of ``D``."""
+    fv, lsb = cfg.v_frac_bits, 2.0 ** -cfg.v_frac_bits
+    wsh = fv - cfg.W.frac_bits
+    a_lo = float(int(cfg.syn_lo_raw.min()) << wsh) * lsb if cfg.n_inputs else 0.0
+    a_hi = float(int(cfg.syn_hi_raw.max()) << wsh) * lsb if cfg.n_inputs else 0.0
+    tau_ms = -cfg.dt_ms / math.log(cfg.syn_alpha)
+    spec = trace_spec(CUBA_TRACE, tau_ms, cfg.dt_ms, cfg.operand_width, fv, a_hi,
+                      cfg.max_decay_error, "current-based synapse", input_min=a_lo)
+    lo = spec.t_bounds[0] + (int(cfg.syn_lo_raw.min()) << wsh if cfg.n_inputs else 0)
+    hi = spec.t_bounds[1] + (int(cfg.syn_hi_raw.max()) << wsh if cfg.n_inputs else 0)
+    return [spec], (lo, hi)
+
+
+def cuba_input(cfg, traces, acc):
+    """Stage 3 of the current-based synapse: ``y = x + a`` (``a`` in weight LSBs)."""
+    return traces[0] + (acc << (cfg.V.frac_bits - cfg.W.frac_bits))
 
 
 # ----------------------------------------------------------------------------------------------
