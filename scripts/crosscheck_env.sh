@@ -6,7 +6,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 VENV="${CROSSCHECK_VENV:-build/crosscheck-venv}"
 PYTHON="${PYTHON:-python3}"
-if [ -x "$VENV/bin/python" ] && "$VENV/bin/python" -c "import snntorch, nir, torch" 2>/dev/null; then
+if [ -x "$VENV/bin/python" ] && "$VENV/bin/python" -c "import snntorch, nirtorch, nir, torch" 2>/dev/null; then
     echo "$VENV/bin/python"
     exit 0
 fi
@@ -18,6 +18,6 @@ pip_quiet() {
 pip_quiet install -q --upgrade pip
 # torch first, pinned to the CPU build (a bare "torch" would pull a multi-GB CUDA build)
 pip_quiet install -q "torch==2.13.0"
-pip_quiet install -q "snntorch==1.0.0" "nir>=1.0.8,<2" "torch==2.13.0"
-"$VENV/bin/python" -c "import snntorch, nir, torch" >&2
+pip_quiet install -q "snntorch==1.0.0" "nirtorch==2.6" "nir>=1.0.8,<2" "torch==2.13.0"
+"$VENV/bin/python" -c "import snntorch, nirtorch, nir, torch" >&2
 echo "$VENV/bin/python"

@@ -36,7 +36,8 @@ from .config import ConfigError, int_bits_for
 from .fixed import FixedConstant, QFormat, narrow, round_shift, select
 
 __all__ = ["TRACE_NAMES", "TraceSpec", "TraceView", "trace_spec", "scale_weights",
-           "derive_traces", "derive_cuba_trace", "cuba_input", "CUBA_TRACE", "trace_inputs", "trace_products", "trace_update",
+           "derive_traces", "derive_cuba_trace", "cuba_input", "CUBA_TRACE", "trace_inputs",
+           "trace_products", "trace_update",
            "trace_golden_check"]
 
 #: trace order everywhere (state word, probe ports, twin arrays)
@@ -164,28 +165,27 @@ CUBA_TRACE = "x_syn"
 
 def derive_cuba_trace(cfg) -> tuple[list[TraceSpec], tuple[int, int]]:
     """The current-based synapse of a discrete LIF core (``syn_alpha``, NIR's ``CubaLIF``):
-    one signed trace ``x`` per neuron, per tick ``y = x + a`` (``a = sum_i w_i x_i``, the
-    weighted input spikes of the tick), ``D = I + y`` and ``x' = y - k y`` with
-    ``k = 1 - syn_alpha``. So the synaptic current of a spike enters the membrane in its own
-    tick and decays by ``syn_alpha`` per tick after (snnTorch's ``Synaptic``; the exact
-    integration of NIR's CubaLIF for spikes on the tick grid once the weights carry the
-    factor of :mod:`cuneate.sim.nir.discretize`). Returns the spec and the raw bounds of
-    ``y`` (state fraction bits), the synaptic part of ``D``."""
+    one signed trace ``x`` per neuron; per tick ``y = x + I + a`` (the host current ``I`` and
+    ``a = sum_i w_i x_i``, the weighted input spikes of the tick), ``D = y`` and ``x' = y - k y``
+    with ``k = 1 - syn_alpha``. The synaptic current of a spike enters the membrane in its own
+    tick and decays by ``syn_alpha`` per tick after (snnTorch's ``Synaptic``; the schemes of
+    :mod:`cuneate.sim.nir.discretize` put their factors into the weights). Returns the spec
+    and the raw bounds of ``y`` (state fraction bits), which is all of ``D``."""
     fv, lsb = cfg.v_frac_bits, 2.0 ** -cfg.v_frac_bits
-    wsh = fv - cfg.W.frac_bits
-    a_lo = float(int(cfg.syn_lo_raw.min()) << wsh) * lsb if cfg.n_inputs else 0.0
-    a_hi = float(int(cfg.syn_hi_raw.max()) << wsh) * lsb if cfg.n_inputs else 0.0
+    wsh, ish = fv - cfg.W.frac_bits, fv - cfg.I.frac_bits
+    lo_raw = (int(cfg.syn_lo_raw.min()) << wsh if cfg.n_inputs else 0) + (cfg.i_lo_raw << ish)
+    hi_raw = (int(cfg.syn_hi_raw.max()) << wsh if cfg.n_inputs else 0) + (cfg.i_hi_raw << ish)
     tau_ms = -cfg.dt_ms / math.log(cfg.syn_alpha)
-    spec = trace_spec(CUBA_TRACE, tau_ms, cfg.dt_ms, cfg.operand_width, fv, a_hi,
-                      cfg.max_decay_error, "current-based synapse", input_min=a_lo)
-    lo = spec.t_bounds[0] + (int(cfg.syn_lo_raw.min()) << wsh if cfg.n_inputs else 0)
-    hi = spec.t_bounds[1] + (int(cfg.syn_hi_raw.max()) << wsh if cfg.n_inputs else 0)
-    return [spec], (lo, hi)
+    spec = trace_spec(CUBA_TRACE, tau_ms, cfg.dt_ms, cfg.operand_width, fv, hi_raw * lsb,
+                      cfg.max_decay_error, "current-based synapse", input_min=lo_raw * lsb)
+    return [spec], (spec.t_bounds[0] + lo_raw, spec.t_bounds[1] + hi_raw)
 
 
-def cuba_input(cfg, traces, acc):
-    """Stage 3 of the current-based synapse: ``y = x + a`` (``a`` in weight LSBs)."""
-    return traces[0] + (acc << (cfg.V.frac_bits - cfg.W.frac_bits))
+def cuba_input(cfg, traces, I, acc):
+    """Stage 3 of the current-based synapse: ``y = x + I + a`` (``I`` in current LSBs, ``a``
+    in weight LSBs, ``y`` in state LSBs)."""
+    fv = cfg.V.frac_bits
+    return traces[0] + (I << (fv - cfg.I.frac_bits)) + (acc << (fv - cfg.W.frac_bits))
 
 
 # ----------------------------------------------------------------------------------------------

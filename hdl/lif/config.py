@@ -140,9 +140,8 @@ class LifConfig(CoreOptions):
     max_decay_error
         Largest accepted relative error of ``k`` (and of ``1 - k``) as represented.
     syn_alpha, input_delays
-        Discrete form: a current-based synapse (NIR's CubaLIF, see ``derive_cuba_trace`` in
-        :mod:`cuneate.hdl.lib.synapses`); per source a delay in ticks (``0 ..
-        MAX_INPUT_DELAY``, a shift register: a spike before tick T acts at T + d).
+        Discrete form: a current-based synapse (NIR's CubaLIF, :mod:`~cuneate.hdl.lib.synapses`);
+        per source a delay in ticks (<= MAX_INPUT_DELAY; a spike before tick T acts at T + d).
     """
 
     n_neurons: int = 8
@@ -318,8 +317,9 @@ class LifConfig(CoreOptions):
             self.traces = []
             s_lo = int(self.syn_lo_raw.min()) << (fv - W.frac_bits)
             s_hi = int(self.syn_hi_raw.max()) << (fv - W.frac_bits)
-        d_lo = (self.i_lo_raw << (fv - I.frac_bits)) + s_lo
-        d_hi = (self.i_hi_raw << (fv - I.frac_bits)) + s_hi
+        cur = self.syn_alpha is None            # (the current-based synapse: D = y)
+        d_lo = (self.i_lo_raw << (fv - I.frac_bits)) * cur + s_lo
+        d_hi = (self.i_hi_raw << (fv - I.frac_bits)) * cur + s_hi
         self.d_proven_raw = (int(d_lo), int(d_hi))
         if self.input_limit is None:
             self.d_lo_raw, self.d_hi_raw = self.d_proven_raw

@@ -44,7 +44,8 @@ class LifCore(wiring.Component):
     Input spikes: ``in_valid``/``in_source`` set a source's bit in the pending vector; each
     tick moves the pending vector into the active one (used by every neuron of that sweep;
     with ``input_delays`` source ``i`` comes from the pending vector of ``d_i`` ticks before,
-    through a shift register of pending vectors) and clears it, so a spike arriving during tick t acts on the sweep of tick t + 1. Several
+    through a shift register of pending vectors) and clears it, so a spike arriving during
+    tick t acts on the sweep of tick t + 1. Several
     spikes of one source in one tick count once and set the sticky ``in_merged`` flag. Other
     ports are those of
     :class:`cuneate.hdl.izhikevich.IzhikevichCore` (``i_wr_*``, ``sel_wr_*``, spike stream,

@@ -23,8 +23,9 @@ register after each stage) and by the twin (composed directly).
 With ``synapses=True`` the weighted input spikes drive four per-neuron AMPA/GABA traces instead
 (:mod:`cuneate.hdl.lib.synapses`): ``D = clamp(I) + I_syn``, the traces in their own block RAM,
 their decays (one multiplier each) in stage 4 and their write-back in stage 5. With
-``syn_alpha`` (discrete form) one signed current-based trace does the same: ``D = clamp(I) + y``,
-``y = x + sum w x_in``, ``x' = y - (1 - syn_alpha) y``.
+``syn_alpha`` (discrete form) one signed current-based trace takes the whole input:
+``D = y = x + clamp(I) + sum w x_in``, ``x' = y - (1 - syn_alpha) y`` (the host current is a
+per-tick input of the synapse, as an Affine bias before NIR's CubaLIF).
 
 Every clamp that can act is flagged and counted (:data:`CLAMP_KINDS`): ``current`` (host wrote
 outside ``current_range``), ``input`` (the total input left ``input_limit``; only built with
@@ -74,9 +75,9 @@ def gather_input(cfg: LifConfig, I, x: Sequence, w: Sequence, traces=None):
             acc = acc + select(xi, wi, 0)
         if not cfg.n_inputs:
             acc = Const(0, 1) if is_hdl(I) else np.zeros(np.shape(I), dtype=np.int64)
-        if cfg.syn_alpha is not None:       # current-based synapse: D = I + (x + a)
-            ys = [cuba_input(cfg, traces, acc)]
-            D = (I << (fv - cfg.I.frac_bits)) + ys[0]
+        if cfg.syn_alpha is not None:       # current-based synapse: D = y = x + I + a
+            ys = [cuba_input(cfg, traces, I, acc)]
+            D = ys[0]
         else:
             D = (I << (fv - cfg.I.frac_bits)) + (acc << (fv - cfg.W.frac_bits))
     if cfg.input_clamp:
