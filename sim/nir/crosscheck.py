@@ -40,8 +40,9 @@ __all__ = ["peer_python", "run_peer", "crosscheck_graph", "compare", "TOLERANCE"
 #: per-neuron |count difference| allowed against snnTorch: the measured worst cases with margin
 #: (docs/nir.md gives the measurements)
 TOLERANCE = {"golden-euler": {"abs": 1, "rel": 0.0},
-             "golden-exact": {"abs": 3, "rel": 0.15},
-             "fixed-euler": {"abs": 2, "rel": 0.05}}
+             "fixed-euler": {"abs": 3, "rel": 0.15},
+             "golden-exact": {"abs": 3, "rel": 0.25},
+             "fixed-exact": {"abs": 3, "rel": 0.3}}
 
 ROOT = Path(__file__).resolve().parents[2]
 

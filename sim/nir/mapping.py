@@ -88,6 +88,9 @@ def _quant(name: str, x: np.ndarray, fmt: QFormat) -> dict:
 
 def _weight_format(node, W, bits, frac_bits, v_frac) -> QFormat:
     if frac_bits is not None:
+        if not 0 <= frac_bits < bits:
+            raise NirError(f"node {node!r}: {frac_bits} fraction bits leave no sign bit in "
+                           f"{bits}-bit weights")
         fmt = QFormat(bits - frac_bits, frac_bits)
         big = W[np.abs(W) > fmt.max_value + fmt.lsb / 2] if W.size else W
         if big.size:
