@@ -131,7 +131,8 @@ def _v_float(mapped: MappedNetwork, v_raw) -> np.ndarray:
     n = mapped.n_outputs
     leak = mapped.chain.layers[-1].v_leak
     leak = np.zeros(n) if leak is None else np.asarray(leak)
-    return cfg.V.to_float(np.asarray(v_raw)[:, :n]) + leak[None, :]
+    sc = mapped.report[-1].get("state_scale", 1.0)
+    return cfg.V.to_float(np.asarray(v_raw)[:, :n]) / sc + leak[None, :]
 
 
 def host_program(mapped: MappedNetwork, x: np.ndarray) -> dict:

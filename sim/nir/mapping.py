@@ -13,6 +13,9 @@ constants ``alpha_m, g_m`` (and ``alpha_s, g_s`` with a synapse), ``u = v - v_le
   the core's parameter sets (one per distinct triple), ``v_init = -v_leak``; the synapse's
   ``syn_alpha`` (one per layer); the Delay as input delays in ticks.
 * **Readout** (LI, CubaLI; last layer only): the threshold above the proven state range.
+* **Scale** (``weight_scale="max"``): the layer's state (weights, bias, threshold, reset,
+  initial value) multiplied by ``s = (2**(bits-1) - 1) / max |g W|``, exact for LIF dynamics
+  (linear between spikes, the next layer sees only spikes); a readout's membrane is divided back.
 
 Refused, naming the node: IF and I (no leak: the core's decay lies in (0, 1)); a non-spiking
 layer anywhere but last (a core passes spikes, not values); a synapse decay that differs
@@ -111,6 +114,12 @@ def _layer_core(li, layer, c, chain, n_src, update_hz, opts, readout):
     name, kind, n = layer.name, layer.kind, layer.n_out
     N = max(n, MIN_CORE)
     g = c.g_m * (c.g_s if c.g_s is not None else 1.0)
+    # weight_scale "max": the layer's state is scaled by s so that its largest weight is the
+    # weight format's largest integer (symmetric per-tensor INT weights then map exactly)
+    big = float(np.abs(g[:, None] * layer.weight).max(initial=0))
+    qmax = 2 ** (opts["weight_bits"] - 1) - 1
+    sc = qmax / big if opts.get("weight_scale") == "max" and big > 0 else 1.0
+    g = g * sc
     Whw = np.zeros((N, n_src))
     Whw[:n, :layer.n_in] = g[:, None] * layer.weight
     bias = np.zeros(N)
@@ -123,6 +132,7 @@ def _layer_core(li, layer, c, chain, n_src, update_hz, opts, readout):
     if If.frac_bits > v_frac:
         If = QFormat(CURRENT_BITS - v_frac, v_frac)
     rep = {"layer": li, "node": name, "kind": kind, "nodes": dict(layer.nodes), "neurons": n,
+           "state_scale": sc,
            "core_neurons": N, "inputs": layer.n_in,
            "weights": _quant("weights g W", Whw[:n, :layer.n_in], W),
            "bias": _quant("bias g b (host current)", bias[:n], If)}
@@ -132,7 +142,7 @@ def _layer_core(li, layer, c, chain, n_src, update_hz, opts, readout):
             raise NirError(f"node {name!r} ({kind}): tau_syn differs between its neurons; the "
                            f"LIF core's synapse has one decay per layer")
     # parameter sets: one per distinct (alpha_m, u_th, u_reset)
-    u_th = c.u_th if c.u_th is not None else None
+    u_th = c.u_th * sc if c.u_th is not None else None
     if readout:
         # above any state the layer can reach: |u| <= |u0| + sum |input| / (1 - alpha)
         reach = np.abs(c.u0) + (np.abs(Whw[:n]).sum(1) + np.abs(bias[:n])) / \
@@ -141,7 +151,7 @@ def _layer_core(li, layer, c, chain, n_src, update_hz, opts, readout):
         top = float(2 ** math.ceil(math.log2(max(1.0, float(reach.max()) + 1.0))))
         u_th, u_reset = np.full(n, top), np.zeros(n)
     else:
-        u_reset = c.u_reset
+        u_reset = c.u_reset * sc
     keys = [(float(c.alpha_m[i]), float(u_th[i]), float(u_reset[i])) for i in range(n)]
     sets = sorted(set(keys))
     if len(sets) > 64:
@@ -149,7 +159,7 @@ def _layer_core(li, layer, c, chain, n_src, update_hz, opts, readout):
                        f"combinations; the core holds at most 64 parameter sets")
     ps = [{"alpha": a, "u_th": t, "u_rest": r} for a, t, r in sets]
     ns = [sets.index(k) for k in keys] + [0] * (N - n)
-    v_init = list(c.u0) + [0.0] * (N - n)
+    v_init = list(c.u0 * sc) + [0.0] * (N - n)
     delays = None
     if c.delay_steps is not None and np.any(c.delay_steps):
         d = np.zeros(n_src, dtype=np.int64)
@@ -173,14 +183,20 @@ def _layer_core(li, layer, c, chain, n_src, update_hz, opts, readout):
 def map_graph(chain: GraphChain, update_hz: float = DEFAULT_UPDATE_HZ, scheme: str = "exact",
               weight_bits: int = 8, weight_frac_bits: int | None = None, v_frac_bits: int = 16,
               operand_width: int = 18, max_decay_error: float = 1e-2,
-              rounding: str = "nearest") -> MappedNetwork:
+              rounding: str = "nearest", weight_scale: str = "pow2") -> MappedNetwork:
     """Map ``chain`` onto LIF cores at ``update_hz`` (dt = 1 / update_hz) under ``scheme``;
-    :class:`NirError` naming the node for what the hardware cannot hold."""
+    :class:`NirError` naming the node for what the hardware cannot hold. ``weight_scale``:
+    ``"pow2"`` (the weights' scale a power of two) or ``"max"`` (each layer's state scaled so
+    that its largest weight is the format's largest integer: symmetric per-tensor INT weights
+    map exactly; the report gives the scale)."""
+    if weight_scale not in ("pow2", "max"):
+        raise NirError(f"weight_scale must be 'pow2' or 'max', got {weight_scale!r}")
     from ...hdl.lif import LifConfig
     dt = 1.0 / float(update_hz)
     opts = {"weight_bits": int(weight_bits), "weight_frac_bits": weight_frac_bits,
             "v_frac_bits": int(v_frac_bits), "operand_width": int(operand_width),
-            "max_decay_error": float(max_decay_error), "rounding": rounding}
+            "max_decay_error": float(max_decay_error), "rounding": rounding,
+            "weight_scale": weight_scale}
     layers = chain.layers
     cores, currents, report = [], [], []
     n_src = chain.n_inputs
