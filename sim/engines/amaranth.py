@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-__all__ = ["simulate", "write_currents"]
+__all__ = ["simulate", "write_currents", "spikes_then_tick"]
 
 
 def simulate(dut, testbench, clock_hz: float = 1e6, vcd: Path | str | None = None,
@@ -36,3 +36,17 @@ async def write_currents(ctx, dut, raw, first: int = 0) -> None:
         ctx.set(dut.i_wr_data, int(x))
         await ctx.tick()
     ctx.set(dut.i_wr_en, 0)
+
+
+async def spikes_then_tick(ctx, dut, sources, step, has_inputs: bool) -> None:
+    """Present each input spike source on ``in_valid``/``in_source`` for one ``step``, then one
+    ``tick`` pulse (the order every core with an input port expects within a sweep)."""
+    for s in sources:
+        ctx.set(dut.in_valid, 1)
+        ctx.set(dut.in_source, int(s))
+        await step()
+    if has_inputs:
+        ctx.set(dut.in_valid, 0)
+    ctx.set(dut.tick, 1)
+    await step()
+    ctx.set(dut.tick, 0)

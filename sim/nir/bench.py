@@ -28,7 +28,7 @@ from cocotb.clock import Clock
 from cocotb.triggers import FallingEdge, RisingEdge
 
 from cuneate.hdl.nir import NirNetworkConfig
-from cuneate.sim.engines.bench import bench_config, bench_progress, bench_report
+from cuneate.sim.engines.bench import bench_config, bench_progress, bench_report, spikes_then_tick
 from cuneate.sim.engines.run import TickUnwrap
 from cuneate.sim.lif.scoreboard import LifSweepChecker
 
@@ -87,7 +87,6 @@ async def _run(dut, check: bool):
     layers = [_Layer(getattr(dut, f"layer{i}"), c) for i, c in enumerate(cfg.layers)]
     checkers = [LifSweepChecker(c) for c in cfg.layers] if check else []
     # x[l][k]: the input vector layer l's sweep k uses (before its input delays)
-    xs = [[] for _ in cfg.layers]
     out_spikes, out_v = [], []
     vrow = np.zeros(last.n_neurons, dtype=np.int64)
     unwrap = TickUnwrap(last.sweep_number_width)
@@ -138,15 +137,7 @@ async def _run(dut, check: bool):
     for k, srcs in enumerate(spec["inputs"]):
         while int(dut.busy.value):
             await step()
-        for s in srcs:
-            dut.in_valid.value = 1
-            dut.in_source.value = int(s)
-            await step()
-        if cfg.n_inputs:
-            dut.in_valid.value = 0
-        dut.tick.value = 1
-        await step()
-        dut.tick.value = 0
+        await spikes_then_tick(dut, srcs, step, bool(cfg.n_inputs))
         if (k + 1) % 200 == 0:
             bench_progress(spec, k + 1)
     for _ in range(cfg.settle_cycles + last.spike_fifo_depth + 8):

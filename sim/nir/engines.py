@@ -29,7 +29,7 @@ import numpy as np
 
 from ...golden.nir import simulate_layers
 from ...hdl.nir import NirNetwork, NirNetworkTwin, nir_network_verilog
-from ..engines.amaranth import simulate
+from ..engines.amaranth import simulate, spikes_then_tick
 from ..engines.registry import check_engine
 from ..engines.run import TickUnwrap
 from .graph import NirError
@@ -175,15 +175,7 @@ def _run_amaranth(mapped: MappedNetwork, prog: dict) -> dict:
         for k in range(T):
             while ctx.get(dut.busy):
                 await step()
-            for s in prog["inputs"][k]:
-                ctx.set(dut.in_valid, 1)
-                ctx.set(dut.in_source, s)
-                await step()
-            if cfg.n_inputs:
-                ctx.set(dut.in_valid, 0)
-            ctx.set(dut.tick, 1)
-            await step()
-            ctx.set(dut.tick, 0)
+            await spikes_then_tick(ctx, dut, prog["inputs"][k], step, bool(cfg.n_inputs))
         for _ in range(cfg.settle_cycles + last.spike_fifo_depth + 8):
             await step()
         state["overflow"] = ctx.get(dut.spike_overflow)
