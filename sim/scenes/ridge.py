@@ -213,7 +213,7 @@ def format_run(run: RidgeSceneRun) -> str:
 
 def write_report(run: RidgeSceneRun, out: Path) -> Path:
     """Write ``index.html``, ``run.json`` and one figure per engine into ``out``."""
-    from ..report import html_table, pyplot, write_page
+    from ..report import DPI, html_table, pyplot, write_page
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     (out / "run.json").write_text(json.dumps(summary(run), indent=2, default=float))
@@ -233,7 +233,7 @@ def write_report(run: RidgeSceneRun, out: Path) -> Path:
                yticks=range(len(r.angles)), yticklabels=[f"{a:+g} deg" for a in r.angles],
                title=f"{e}: mean spikes per trial ({100 * r.accuracy:.0f} % decoded)")
         fig.tight_layout()
-        fig.savefig(out / f"ridge_{e}.png", dpi=90)
+        fig.savefig(out / f"ridge_{e}.png", dpi=DPI)
         plt.close(fig)
         figs.append(f"ridge_{e}.png")
     acc_rows = [[e, f"{100 * r.accuracy:.1f}", len(r.trial_angle),
