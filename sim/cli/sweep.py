@@ -48,7 +48,8 @@ def cmd_sweep(args) -> int:
     izhikevich = block.__name__.endswith(".izhikevich.sweep")
     out = output_dir(args.out)
     start_progress(args)
-    rows = run_sweep(pts, spec, out / "cache", scheduler=args.scheduler, workers=args.workers)
+    rows = run_sweep(pts, spec, out / "cache", scheduler=args.scheduler, workers=args.workers,
+                     repeats=args.repeat)
     with progress.step("writing the sweep report"):
         page = write_sweep(rows, spec, out, columns)
     print(f"error against the reference (spike-count error, mean VP at q = 5/s); within one tick "
@@ -126,5 +127,8 @@ def register(groups: CommandGroups) -> None:
                    help="local cluster processes (host seconds of points run in parallel are "
                         "marked: not comparable between runs; --workers 1 or --scheduler sync "
                         "for comparable ones)")
+    p.add_argument("--repeat", type=positive_int, default=1, metavar="N",
+                   help="run each point N times and keep the fastest host time (with "
+                        "--scheduler sync: the host cost measured in isolation)")
     add_quiet_option(p)
     p.set_defaults(func=cmd_sweep)

@@ -224,3 +224,15 @@ def test_hardcases_summary_prints_the_records(tmp_path, capsys):
     record("c_case", 1, 10, 2, path=tmp_path)            # a mismatch makes it fail
     assert main(["hardcases", "summary", "--dir", str(tmp_path)]) == 1
     assert main(["hardcases", "summary", "--dir", str(tmp_path / "none")]) == 2
+
+
+def test_repeats_keep_the_fastest_host_time_and_the_same_accuracy(tmp_path):
+    spec = SweepSpec(duration_ms=100.0)
+    pts = grid(update_hz=(16e3,), operand_width=(18,), floats=())
+    once = run_sweep(pts, spec, tmp_path / "a", scheduler="sync")[0]
+    rep = run_sweep(pts, spec, tmp_path / "b", scheduler="sync", repeats=3)[0]
+    runs = rep["host_s_per_bio_s_runs"]
+    assert len(runs) == 3 and rep["host_s_per_bio_s"] == min(runs)
+    assert rep["host_time"] == "one point at a time, fastest of 3 runs"
+    for k in ("count_error", "mean_vp", "fraction_within_tick", "vs_euler_fraction_within_tick"):
+        assert rep[k] == once[k]
