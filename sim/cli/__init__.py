@@ -16,7 +16,7 @@ import importlib.util
 import pkgutil
 import sys
 
-from .options import CliError, CommandGroups, Parser
+from .options import CliError, CommandGroups, Parser, add_quiet_option
 
 __all__ = ["main", "build_parser", "COMMAND_MODULES", "CliError", "block_command_modules"]
 
@@ -48,6 +48,7 @@ def version() -> str:
 def build_parser() -> Parser:
     p = Parser(prog="cuneate", description=__doc__.splitlines()[0])
     p.add_argument("--version", action="version", version=f"cuneate {version()}")
+    add_quiet_option(p, root=True)
     sub = p.add_subparsers(dest="command", required=True, parser_class=Parser)
     s = sub.add_parser("simulate", help="simulate a hardware block on an engine")
     s_models = s.add_subparsers(dest="model", required=True, parser_class=Parser,
@@ -73,6 +74,9 @@ def main(argv=None) -> int:
         return 2
     except KeyboardInterrupt:
         return 130
+    finally:
+        from .. import progress
+        progress.configure("quiet")      # the library is quiet again once a command is over
 
 
 if __name__ == "__main__":

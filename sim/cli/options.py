@@ -18,18 +18,95 @@ __all__ = ["CliError", "Parser", "CommandGroups", "finite_float", "positive_floa
            "positive_int", "nonneg_int", "output_dir", "input_file", "refuse_long_run",
            "fmt_time", "engine_choices", "add_run_options", "add_generate_options",
            "run_ticks", "print_run", "clamp_summary", "build_config", "add_rate_options",
-           "add_block_commands"]
+           "add_block_commands", "HelpFormatter", "add_quiet_option", "start_progress",
+           "add_waves_options", "waves_from_args", "add_spikes_option", "write_simulate_spikes"]
 
 
 class CliError(Exception):
     """A user error: printed as one line, exit status 2."""
 
 
+class HelpFormatter(argparse.ArgumentDefaultsHelpFormatter):
+    """Help with every option's default, unless its help already states it or it has none
+    worth stating (``None``, a flag's ``False``)."""
+
+    def _get_help_string(self, action):
+        text = action.help or ""
+        d = action.default
+        if "default" in text.lower() or d is None or d is False or d is argparse.SUPPRESS:
+            return text
+        return super()._get_help_string(action)
+
+
 class Parser(argparse.ArgumentParser):
-    """An argument parser whose errors are one line (no usage dump)."""
+    """An argument parser whose errors are one line (no usage dump) and whose help states the
+    defaults."""
+
+    def __init__(self, *args, **kwargs):
+        kwargs.setdefault("formatter_class", HelpFormatter)
+        super().__init__(*args, **kwargs)
 
     def error(self, message):
         raise CliError(f"{self.prog}: {message}")
+
+
+def add_quiet_option(p, root: bool = False) -> None:
+    """``-q/--quiet``: no progress bars or progress lines (on the command or, with ``root``,
+    before it: ``cuneate -q run``)."""
+    p.add_argument("-q", "--quiet", action="store_true",
+                   default=False if root else argparse.SUPPRESS,
+                   help="no progress bars or progress lines on stderr")
+
+
+def start_progress(args, verbose: bool = False) -> str:
+    """Show what the command does (:mod:`cuneate.sim.progress`): bars in a terminal,
+    timestamped lines otherwise, nothing with ``-q``; returns the mode."""
+    from .. import progress
+    if getattr(args, "quiet", False):
+        return progress.configure("quiet")
+    return progress.configure("auto", verbose=verbose or getattr(args, "verbose", False))
+
+
+def add_waves_options(p) -> None:
+    """``--waves DIR`` and its window (``--waves-start``, ``--waves-ticks``)."""
+    from ..engines.waves import DEFAULT_TICKS
+    p.add_argument("--waves", default=None, metavar="DIR",
+                   help="write the RTL engines' waveforms (amaranth: VCD, icarus: FST, "
+                        "verilator: VCD) and GTKWave save files into DIR")
+    p.add_argument("--waves-start", type=nonneg_int, default=0, metavar="TICK",
+                   help="first tick (sweep) of the waveform window")
+    p.add_argument("--waves-ticks", type=positive_int, default=DEFAULT_TICKS, metavar="N",
+                   help="ticks in the waveform window (a long run does not write gigabytes)")
+
+
+def waves_from_args(args, relative_to: Path | None = None):
+    """The :class:`~cuneate.sim.engines.waves.Waves` window of ``--waves``, or ``None``."""
+    if not getattr(args, "waves", None):
+        return None
+    from ..engines.waves import Waves
+    d = output_dir(args.waves, "--waves")
+    return Waves(d, args.waves_start, args.waves_ticks)
+
+
+def add_spikes_option(p) -> None:
+    """``--spikes FILE``: the spikes in the spike-file format (:mod:`cuneate.sim.spikes`)."""
+    p.add_argument("--spikes", default=None, metavar="FILE.npz",
+                   help="also write the spikes as a spike file (NPZ; cuneate.sim.spikes)")
+
+
+def write_simulate_spikes(args, trains, block: str, t_stop_ms: float, dt_ms: float | None,
+                          populations=None) -> None:
+    """``--spikes``: write a ``simulate`` command's trains (one neuron per train, population
+    ``block`` unless ``populations`` names each) and say where."""
+    if not getattr(args, "spikes", None):
+        return
+    from ..spikes import write_spikes
+    path = Path(args.spikes)
+    try:
+        write_spikes(path, trains, args.engine, t_stop_ms,
+                     populations or [block] * len(trains), dt_ms=dt_ms)
+    except OSError as exc:
+        raise CliError(f"--spikes {str(path)!r}: cannot write: {exc.strerror or exc}") from None
 
 
 @dataclass
@@ -197,8 +274,16 @@ def clamp_summary(run, engine: str):
 
 def print_run(args, out: dict, header: str, rows) -> None:
     """A ``simulate`` result: ``out`` as JSON with ``--json``, else ``header`` and one line per
-    ``(label, spike times)`` row with the first six times."""
+    ``(label, spike times)`` row with the first six times; with ``--spikes`` also the spike
+    file (population: ``out["populations"]`` when it names them, else the block)."""
     import json
+    trains = out["spikes_ms"]
+    pops = None
+    for pop in out.get("populations", []):
+        pops = (pops or [out["model"]] * len(trains))
+        pops[pop["first"]:pop["first"] + pop["count"]] = [pop["name"]] * pop["count"]
+    write_simulate_spikes(args, trains, out["model"], out["duration_ms"], out.get("dt_ms"),
+                          pops)
     if args.json:
         print(json.dumps(out))
         return
@@ -254,9 +339,19 @@ def add_block_commands(groups, block: str, help: str, duration_ms: float, option
         g.add_argument("--resources", action="store_true",
                        help=f"also run yosys synth_ecp5 and synth_xilinx -family xc6s "
                             f"(~{resources_s} s)")
+    add_quiet_option(s)
+    add_spikes_option(s)
     for p, func in ((s, simulate), (g, generate)):
         if options is not None:
             options(p)
         if func is not None:
-            p.set_defaults(func=func)
+            p.set_defaults(func=_with_progress(func) if p is s else func)
     return s, g
+
+
+def _with_progress(func):
+    def run(args):
+        start_progress(args)
+        return func(args)
+    run.__doc__ = func.__doc__
+    return run

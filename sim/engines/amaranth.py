@@ -1,7 +1,8 @@
 """Running a block's RTL in Amaranth's simulator: one helper for every block's engine.
 
 :func:`simulate` elaborates ``dut``, adds a clock and an async testbench, and runs it, optionally
-writing a VCD of the run (``vcd``: a path; ``traces``: extra signals to include).
+writing a VCD of the run (``vcd``: a path, or a file object such as the window of
+:class:`cuneate.sim.engines.waves.WindowedVcd`; ``traces``: extra signals to include).
 """
 
 from __future__ import annotations
@@ -21,9 +22,11 @@ def simulate(dut, testbench, clock_hz: float = 1e6, vcd: Path | str | None = Non
     if vcd is None:
         sim.run()
         return
-    vcd = Path(vcd)
-    vcd.parent.mkdir(parents=True, exist_ok=True)
-    with sim.write_vcd(str(vcd), traces=list(traces)):
+    if isinstance(vcd, (str, Path)):
+        vcd = Path(vcd)
+        vcd.parent.mkdir(parents=True, exist_ok=True)
+        vcd = str(vcd)
+    with sim.write_vcd(vcd, traces=list(traces)):
         sim.run()
 
 

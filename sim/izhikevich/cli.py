@@ -15,8 +15,9 @@ import os
 import sys
 
 from ..cli.options import (CliError, CommandGroups, add_block_commands, add_rate_options,
-                           build_config, finite_float, fmt_time, output_dir, positive_float,
-                           positive_int)
+                           add_waves_options, build_config, finite_float, fmt_time, output_dir,
+                           positive_float, positive_int, start_progress, waves_from_args,
+                           write_simulate_spikes)
 
 __all__ = ["register", "add_core_options", "core_from_args", "parse_param_set",
            "estimate_run"]
@@ -181,20 +182,9 @@ def estimate_run(engine: str, n: int, n_sweeps: int, rate_hz: float = 50.0) -> d
     return {"updates": work, "seconds": seconds, "bytes": mem}
 
 
-def _progress_bar(total: int, label: str, show: bool):
-    if not show:
-        return None, None
-    from tqdm import tqdm
-    bar = tqdm(total=total, unit="upd", unit_scale=True, desc=label, file=sys.stderr,
-               leave=False)
-
-    def update(done):
-        bar.update(done - bar.n)
-    return bar, update
-
-
 def cmd_simulate(args) -> int:
     import numpy as np
+    start_progress(args)
     from ...golden import izhikevich as gz
     from .engines import MIN_NEURONS, run_engine
 
@@ -236,10 +226,19 @@ def cmd_simulate(args) -> int:
                        f"({est['updates']:.3g} updates at ~{rate:.2g}/s), more than "
                        f"--max-minutes {args.max_minutes:g}; shorten the run, pick a faster "
                        f"engine, or pass --force to run it with a progress bar")
-    bar, progress = _progress_bar(n_sweeps, f"{args.engine} sweeps",
-                                  args.force or est["seconds"] > 10)
+    from ..engines.waves import FORMATS
+    waves = waves_from_args(args)
+    if waves is not None and args.engine not in FORMATS:
+        raise CliError(f"--waves: engine {args.engine!r} writes no waveforms (those that do: "
+                       f"{', '.join(FORMATS)})")
+    build_dir = None
+    if not golden_run and args.build_dir:
+        build_dir = output_dir(args.build_dir, "--build-dir")
+    from .. import progress as prog
     saturation = None
-    try:
+    with prog.step(f"simulating {n} neuron(s) on {args.engine} (~{fmt_time(est['seconds'])} "
+                   f"estimated)", total=n_sweeps, unit="sweep") as st:
+        progress = st.set
         if golden_run:
             try:
                 cur = np.asarray(currents, dtype=float)
@@ -254,17 +253,14 @@ def cmd_simulate(args) -> int:
                 raise CliError(f"cuneate simulate: {exc}") from None
             spikes = [s.tolist() for s in res.spikes_ms]
         else:
-            build_dir = output_dir(args.build_dir, "--build-dir") if args.build_dir else None
             try:
                 run = run_engine(args.engine, kw, currents, n_sweeps * dt_ms, build_dir,
-                                 progress)
+                                 progress, waves)
             except ValueError as exc:
                 raise CliError(f"cuneate simulate: {exc}") from None
             spikes = run.spikes_ms
             saturation = {"counts": run.clamp_counts, "sticky": run.clamp_sticky}
-    finally:
-        if bar is not None:
-            bar.close()
+    write_simulate_spikes(args, spikes, "izhikevich", n_sweeps * dt_ms, dt_ms)
     params = sets[0].to_dict() if len(sets) == 1 else [s.to_dict() for s in sets]
     if isinstance(params, dict):
         params = {k: v for k, v in params.items() if k in "abcd"} | \
@@ -275,6 +271,12 @@ def cmd_simulate(args) -> int:
            "accepted_current_range": [cfg.i_lo, cfg.i_hi],
            "formats": {k: str(getattr(cfg, k)) for k in ("V", "U", "I", "W", "VQ", "Q", "Y")},
            "saturation": saturation}
+    if waves is not None:
+        dump = waves.path(args.engine)
+        out["waves"] = waves.to_dict() | {"dump": str(dump),
+                                          "gtkw": str(dump.with_suffix(".gtkw"))}
+    if args.spikes:
+        out["spike_file"] = str(args.spikes)
     if args.json:
         print(json.dumps(out))
     else:
@@ -290,6 +292,11 @@ def cmd_simulate(args) -> int:
             acted = {k: c for k, c in saturation["counts"].items() if c}
             print("  clamps: " + (", ".join(f"{k} {c}" for k, c in acted.items())
                                   if acted else "none acted"))
+        if waves is not None:
+            print(f"  waves: {out['waves']['dump']} (ticks {waves.start}.."
+                  f"{waves.start + waves.ticks - 1}; GTKWave: {out['waves']['gtkw']})")
+        if args.spikes:
+            print(f"  spikes: {args.spikes}")
     return 0
 
 
@@ -326,6 +333,7 @@ def register(groups: CommandGroups) -> None:
     s.add_argument("--scheme", choices=SCHEMES, default="euler")
     s.add_argument("--force", action="store_true",
                    help="run even when estimated to take longer than --max-minutes")
+    add_waves_options(s)
     add_core_options(s, neurons_default=1)
     s.set_defaults(func=cmd_simulate)
 

@@ -17,6 +17,7 @@ engines computed, with wall time per stage and per engine.
 
 from __future__ import annotations
 
+import os
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -29,7 +30,7 @@ from ...golden.tactile import (MATERIALS, GraspSpec, Material, Pad, PulseSpec, S
                               apply_effects, synthesize_grasp, synthesize_pulse,
                               synthesize_slide)
 from ...hdl.lib.fixed import QFormat
-from ..decode import decode, isi_samples, trial_features
+from ..decode import decode_trials
 from ..engines.registry import ENGINES as ENGINE_TRAITS
 from ..engines.registry import block_engines
 from ..host.driver import AfferentEncoding, FbgDriver
@@ -37,7 +38,8 @@ from .runner import agreement as train_agreement
 from .scene import Scene
 
 __all__ = ["SceneRun", "run", "BLOCKS", "ENGINES", "synthesize", "build_neurons",
-           "front_end", "summary", "write_report", "format_run"]
+           "front_end", "summary", "write_report", "format_run", "write_spike_files",
+           "waves_request"]
 
 
 @dataclass
@@ -76,6 +78,7 @@ class SceneRun:
     ran: dict
     timing: dict
     decode_agreement: dict = field(default_factory=dict)
+    files: dict = field(default_factory=dict)   # "spikes": engine -> file, "waves": window
     kind: str = "afferent"
 
 
@@ -250,10 +253,13 @@ def run_golden(ctx) -> tuple[list, dict]:
 def _run_transport(engine):
     def run(ctx):
         from ..izhikevich.engines import make_transport
+        from ..engines.waves import FORMATS
         kw = {"progress": ctx.get("progress")}
         if engine != "fixed":
             bd = ctx.get("build_dir")
             kw["build_dir"] = (Path(bd) / engine) if bd else None
+        if engine in FORMATS and ctx.get("waves"):
+            kw["waves"] = ctx["waves"]
         tr = make_transport(engine, **kw)
         tr.open(ctx["config"])
         res = ctx["driver"].stream(tr, None, ctx["n_ticks"], raw=ctx["raw"])
@@ -290,49 +296,63 @@ def _front_end_detail(scene: Scene, neurons: Neurons) -> list[str]:
     return out
 
 
+def waves_request(scene: Scene, waves=None):
+    """The waveform window of a run: ``waves`` when given, else the scene's ``run.waves``
+    (a directory; relative to the current one), ``run.waves_start_tick`` and
+    ``run.waves_ticks``; ``None`` when neither asks for waveforms."""
+    if waves is not None or not scene["run"]["waves"]:
+        return waves
+    from ..engines.waves import Waves
+    r = scene["run"]
+    return Waves(Path(r["waves"]), r["waves_start_tick"], r["waves_ticks"])
+
+
 def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None = None,
-        progress: bool = False, log=None) -> SceneRun:
-    """Run an afferent ``scene`` on its engines (or ``engines``)."""
+        progress: bool = False, log=None, waves=None) -> SceneRun:
+    """Run an afferent ``scene`` on its engines (or ``engines``); each stage reports through
+    :mod:`cuneate.sim.progress` (and ``log``, if given, gets one line per stage). ``waves``
+    (a :class:`~cuneate.sim.engines.waves.Waves` window, or the scene's ``run.waves``): the
+    RTL engines (amaranth, icarus, verilator) dump it."""
+    from .. import progress as prog
     timing: dict = {}
-    say = log or (lambda msg: None)
+
+    def say(msg):
+        prog.say(msg)
+        if log is not None:
+            log(msg)
     t0 = time.perf_counter()
-    classes, trial_class, traces, infos, effect_counts = synthesize(scene)
+    n_grasps = scene["scene"]["trials"] * len(scene.classes())
+    with prog.step(f"synthesizing the stimulus ({n_grasps} trial(s))"):
+        classes, trial_class, traces, infos, effect_counts = synthesize(scene)
     timing["stimulus_s"] = time.perf_counter() - t0
     say(f"stimulus: {len(traces)} trial(s) of {traces[0].shape[0]} samples x "
         f"{traces[0].shape[1]} grating(s) ({timing['stimulus_s']:.2f} s)")
     t0 = time.perf_counter()
-    neurons = build_neurons(scene, len(traces))
-    models = sorted({p["model"] for p in scene.populations})
-    blocks, cfg = [], None
-    for m in models:
-        cfg_m, desc = BLOCKS[m](scene, neurons)
-        blocks.append(desc)
-        cfg = cfg_m
-    drv, currents, gaps = front_end(scene, neurons, traces, infos, cfg)
-    raw, sat = drv.quantize(currents)
+    with prog.step("front end: filtering and quantizing the currents"):
+        neurons = build_neurons(scene, len(traces))
+        models = sorted({p["model"] for p in scene.populations})
+        blocks, cfg = [], None
+        for m in models:
+            cfg_m, desc = BLOCKS[m](scene, neurons)
+            blocks.append(desc)
+            cfg = cfg_m
+        drv, currents, gaps = front_end(scene, neurons, traces, infos, cfg)
+        raw, sat = drv.quantize(currents)
     sat["gaps_held"] = gaps
     n_ticks = currents.shape[0] * drv.hold_ticks
     timing["front_end_s"] = time.perf_counter() - t0
     ctx = {"config": cfg, "driver": drv, "neurons": neurons, "currents": currents, "raw": raw,
-           "n_ticks": n_ticks, "build_dir": build_dir}
+           "n_ticks": n_ticks, "build_dir": build_dir, "waves": waves_request(scene, waves)}
     names = list(engines or scene.engines)
     for e in names:
         if e not in ENGINES:
             raise ValueError(f"unknown engine {e!r}; known: {', '.join(ENGINES)}")
     results: dict = {}
 
-    def one(e, position):
+    def one(e):
         t0 = time.perf_counter()
-        bar = None
-        if progress:
-            from tqdm import tqdm
-            bar = tqdm(total=n_ticks, desc=e, unit="tick", leave=False, position=position)
-        c = dict(ctx, progress=(lambda k, b=bar: b.update(k - b.n)) if bar else None)
-        try:
-            sp, cnt = ENGINES[e](c)
-        finally:
-            if bar:
-                bar.close()
+        with prog.step(f"engine {e}", total=n_ticks, unit="tick") as st:
+            sp, cnt = ENGINES[e](dict(ctx, progress=st.set, step=st))
         results[e] = (sp, cnt, time.perf_counter() - t0)
         say(f"engine {e}: {sum(len(x) for x in sp)} spikes ({results[e][2]:.1f} s)")
 
@@ -346,14 +366,14 @@ def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None =
         from concurrent.futures import ThreadPoolExecutor
 
         def hdl():
-            for i, e in enumerate(background):
-                one(e, 1 + i)
+            for e in background:
+                one(e)
         pool = ThreadPoolExecutor(max_workers=1)
         fut = pool.submit(hdl)
     try:
         for e in names:
             if e not in background:
-                one(e, 0)
+                one(e)
     finally:
         if pool is not None:
             try:
@@ -369,12 +389,14 @@ def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None =
     dec = scene["decoder"]
     decoded = {}
     if dec["kind"] != "none":
-        window = dec["window_ms"]
         for e, sp in spikes.items():
-            fn = isi_samples if dec["features"] == "isi" else trial_features
-            X, y = fn(sp, neurons.trial, neurons.grating, trial_class, window)
-            decoded[e] = decode(X, y, classes, dec["kind"], dec["cv_folds"], dec["max_depth"],
-                                dec["neighbours"], scene["scene"]["seed"], dec["features"])
+            with prog.step(f"decoding {e} ({dec['kind']} on {dec['features']} features, "
+                           f"grasp-grouped and published protocols)"):
+                decoded[e] = decode_trials(
+                    sp, neurons.trial, neurons.grating, trial_class, classes, dec["kind"],
+                    dec["features"], dec["cv_folds"], dec["max_depth"], dec["neighbours"],
+                    scene["scene"]["seed"], dec["window_ms"], dec["decision"],
+                    dec["permutations"])
     timing["decode_s"] = time.perf_counter() - t0
     agreement = {}
     names = list(spikes)
@@ -402,9 +424,19 @@ def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None =
            "front_end": sorted({f"{e.mode}" for e in neurons.encoding}),
            "front_end_detail": _front_end_detail(scene, neurons),
            "stimulus": scene["stimulus"]["kind"]}
+    files = {}
+    wv = ctx["waves"]
+    if wv:
+        from ..engines.waves import FORMATS
+        wrote = [e for e in names if e in FORMATS]
+        files["waves"] = wv.to_dict() | {
+            "files": {e: {"dump": str(wv.path(e)), "gtkw": str(wv.path(e).with_suffix(".gtkw"))}
+                      for e in wrote},
+            "note": "" if wrote else " (no engine of this run writes waveforms: amaranth, "
+                                     "icarus or verilator do)"}
     return SceneRun(scene, classes, trial_class, traces, infos, neurons, currents, sat, cfg,
                     cfg.dt_ms, n_ticks, spikes, counters, decoded, agreement, ran, timing,
-                    dec_agree)
+                    dec_agree, files=files)
 
 
 # --------------------------------------------------------------------------- results
@@ -414,9 +446,32 @@ def summary(run: SceneRun) -> dict:
     return summary_dict(run)
 
 
+def write_spike_files(run: SceneRun, out: Path) -> dict:
+    """Write ``spikes_<engine>.npz`` per engine into ``out`` (:mod:`cuneate.sim.spikes`:
+    neuron table population, trial, grating, class); returns ``{engine: file name}``."""
+    from ..spikes import write_spikes
+    nn = run.neurons
+    files = {}
+    for e, trains in run.spikes.items():
+        name = f"spikes_{e}.npz"
+        write_spikes(Path(out) / name, trains, e, run.n_ticks * run.dt_ms, nn.population,
+                     nn.trial, nn.grating, [run.trial_class[t] for t in nn.trial], run.dt_ms)
+        files[e] = name
+    return files
+
+
 def write_report(run: SceneRun, out: Path) -> Path:
-    """Write ``index.html``, ``run.json`` and figures into ``out``; returns the HTML path."""
+    """Write the spike files, ``index.html``, ``run.json`` and figures into ``out``; returns
+    the HTML path."""
     from ..report import write_report as write
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    run.files["spikes"] = write_spike_files(run, out)
+    w = run.files.get("waves")
+    if w:
+        for x in w["files"].values():
+            for k in ("dump", "gtkw"):
+                x[k] = os.path.relpath(x[k], out.resolve())
     return write(run, out)
 
 
@@ -425,14 +480,31 @@ def format_run(run: SceneRun) -> str:
     scene = run.scene
     out = [f"{scene.name}: {len(run.trial_class)} trials, {len(run.neurons)} neurons, "
            f"engines {', '.join(run.spikes)}"]
+    first = next((d for d in run.decoded.values() if d.rows), None)
+    if first is not None:
+        h = first.headline
+        out.append(f"  decoding: balanced accuracy of the per-grasp decision ({first.decision} "
+                   f"vote), {h.cv} (chance {100 * h.chance_balanced:.0f} %); published "
+                   f"protocol (per ISI, shuffled k-fold) beside it")
     for e, t in run.timing["engines_s"].items():
         d = run.decoded.get(e)
-        acc = "-" if d is None else (f"{100 * d.accuracy:.1f} %" if d.accuracy is not None
-                                     else d.reason)
-        out.append(f"  {e:10s} accuracy {acc:>8s}  ({t:.1f} s)")
+        if d is None:
+            out.append(f"  {e:10s} not decoded  ({t:.1f} s)")
+            continue
+        if d.accuracy is None:
+            out.append(f"  {e:10s} {d.reason}  ({t:.1f} s)")
+            continue
+        rec = ", ".join(f"{c} {'-' if v is None else f'{100 * v:.0f}'}"
+                        for c, v in d.headline.recall.items())
+        pub = d.row("published")
+        pub = (f"; published {100 * pub.accuracy:.1f} % (balanced "
+               f"{100 * pub.balanced_accuracy:.1f} %)") if pub else ""
+        out.append(f"  {e:10s} balanced accuracy {100 * d.accuracy:5.1f} %  recall % "
+                   f"{rec}{pub}  ({t:.1f} s)")
     for k, v in run.decode_agreement.items():
-        out.append(f"  accuracy {k}: differs by {100 * v['difference']:.1f} points (tolerance "
-                   f"{100 * v['tolerance']:.1f}): {'within' if v['within'] else 'OUTSIDE'}")
+        out.append(f"  balanced accuracy {k}: differs by {100 * v['difference']:.1f} points "
+                   f"(tolerance {100 * v['tolerance']:.1f}): "
+                   f"{'within' if v['within'] else 'OUTSIDE'}")
     s = run.saturations
     for e, sp in run.spikes.items():
         if not any(len(x) for x in sp):

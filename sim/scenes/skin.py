@@ -245,7 +245,7 @@ def format_run(run: SkinSceneRun) -> str:
 
 
 def _figures(run: SkinSceneRun, out: Path) -> list[str]:
-    from ..report import pyplot
+    from ..report import DPI, pyplot
     plt = pyplot()
     names = []
     first = next(iter(run.results.values()))
@@ -259,7 +259,7 @@ def _figures(run: SkinSceneRun, out: Path) -> list[str]:
     ax[1].set(xlabel="time (ms)", ylabel="current (mV)", title="taxel currents")
     ax[1].legend(fontsize=6, ncol=3)
     fig.tight_layout()
-    fig.savefig(out / "press.png", dpi=90)
+    fig.savefig(out / "press.png", dpi=DPI)
     plt.close(fig)
     names.append("press.png")
     for e, r in run.results.items():
@@ -278,7 +278,7 @@ def _figures(run: SkinSceneRun, out: Path) -> list[str]:
             ax[1].axvspan(p["start_ms"], p["start_ms"] + p["width_ms"], color="0.9", zorder=0)
         ax[1].set(xlabel="time (ms)", ylabel="taxel", title=f"spikes: {e} (grey: pulses)")
         fig.tight_layout()
-        fig.savefig(out / f"skin_{e}.png", dpi=90)
+        fig.savefig(out / f"skin_{e}.png", dpi=DPI)
         plt.close(fig)
         names.append(f"skin_{e}.png")
     return names
