@@ -101,7 +101,8 @@ def parse_sby_log(log: str) -> dict:
     """What a SymbiYosys log says about a failure: ``failed`` (the names of the failed
     assertions, as given to ``Assert(..., name)``), ``step`` (the step of the counterexample,
     or None) and ``phase`` (``"basecase"``, ``"induction"`` or None)."""
-    failed = set(re.findall(r"Assert failed in \S+: (.+?)(?: \(|$)", log, re.M))
+    failed = {re.sub(r":0$", "", f) for f in
+              re.findall(r"Assert failed in \S+: (.+?)(?: \(_witness_\S*\))?$", log, re.M)}
     failed |= {m.strip() for m in re.findall(r"failed assertion \S+ (?:at \S+ )?\(?(.+?)\)?$",
                                              log, re.M) if " " not in m.strip()}
     phase = None

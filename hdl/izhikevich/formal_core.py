@@ -25,11 +25,11 @@ from ..flow.sby import SOLVER
 from ..lib.formal import ProofResult, free_memories, run_proof
 from . import core as core_module
 from . import datapath
-from .config import CLAMP_KINDS, IzhikevichConfig
+from .config import CLAMP_KINDS, ConfigError, IzhikevichConfig
 from .core import IzhikevichCore
 from .datapath import multiply1, multiply2, operands, update_state
 
-__all__ = ["IzhikevichCoreProof", "core_harness", "prove_core", "MUTANTS", "ABSTRACTIONS"]
+__all__ = ["IzhikevichCoreProof", "core_harness", "prove_core", "proof_config", "induction_depth", "MUTANTS", "ABSTRACTIONS"]
 
 #: what the proof abstracts, for reports
 ABSTRACTIONS = ["products of the datapath uninterpreted (same function per multiplier in core "
@@ -65,6 +65,24 @@ class IzhikevichCoreProof(SweepCoreProof):
                 "ports": {"upd_v": v_new, "upd_u": u_new, "upd_spike": o["spike"],
                           "upd_clamp": Cat(*(flags[k] for k in CLAMP_KINDS)),
                           "upd_current": i}}
+
+
+def proof_config(n_neurons: int | None = None, **kwargs) -> IzhikevichConfig:
+    """The configuration a core proof runs on: external tick (the harness drives it freely,
+    which covers the internal divider), ``n_neurons`` neurons or, by default, the fewest the
+    configuration accepts (one per pipeline stage: the smallest core is the hardest, a neuron
+    is fetched again right after its write-back), ``kwargs`` passed on (``pipeline_stages``,
+    formats ...)."""
+    if n_neurons is not None:
+        return IzhikevichConfig(n_neurons=n_neurons, clock_hz=n_neurons * 16e3,
+                                update_hz=16e3, tick_source="external", **kwargs)
+    last = None
+    for n in range(1, 65):
+        try:
+            return proof_config(n, **kwargs)
+        except ConfigError as exc:
+            last = exc
+    raise last
 
 
 def core_harness(cfg: IzhikevichConfig, mutant: str | None = None) -> str:

@@ -19,7 +19,8 @@ against the block's one-step reference, for every input sequence of every length
 
 **Why the induction step closes** - the invariants asserted in every cycle:
 
-* the issue counter agrees with the contract's sweep model (issuing, address, sweep number);
+* the contract's sweep model counts at most ``N`` neurons left (its counter is wider than that),
+  and the issue counter agrees with it (issuing, address, sweep number);
 * each stage's tag (valid, index, sweep; ``pipeline_tags``) holds the fetch of ``k - 1`` cycles
   before, for every stage ``k`` of the core's own tag list (``L`` is its last stage);
 * every tracked memory word of ``t`` equals the reference's copy: the host memories the host's
@@ -243,7 +244,8 @@ class SweepCoreProof(Elaboratable):
         di = delay_line(m, fetch_idx, L, "ref_idx")
         dn = delay_line(m, number, L, "ref_no")
         core_started = signal_named(frag, "started")
-        assert_all(m, [(issue.issuing == fetch_valid, "issue: busy as the sweep model"),
+        assert_all(m, [(left <= N, "sweep model: at most N neurons left"),
+                       (issue.issuing == fetch_valid, "issue: busy as the sweep model"),
                        (~fetch_valid | (issue.addr == fetch_idx), "issue: neuron fetched"),
                        (core_started == started, "issue: first sweep"),
                        (issue.sweep_no == number, "issue: sweep number")])

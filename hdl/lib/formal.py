@@ -39,7 +39,7 @@ from amaranth.hdl._ast import AnySeq, Assign, Switch
 from ..flow.sby import SOLVER, FormalError, parse_sby_log, run_sby
 
 __all__ = ["UninterpretedProducts", "patched", "signal_named", "delay_line", "free_memories",
-           "ProofResult", "run_proof", "assert_all", "assume_all", "FormalError"]
+           "ProofResult", "run_proof", "assert_all", "check_id", "assume_all", "FormalError"]
 
 
 # ----------------------------------------------------------------------------------------------
@@ -185,9 +185,20 @@ def delay_line(m, sig, n: int, name: str) -> list:
     return out
 
 
+def check_id(name: str) -> str:
+    """``name`` as the proofs report it: every run of characters other than letters, digits
+    and ``_`` replaced by one ``_`` (``"stage 5: neuron"`` -> ``"stage_5_neuron"``)."""
+    return re.sub(r"[^A-Za-z0-9_]+", "_", name).strip("_")
+
+
 def assert_all(m, checks) -> None:
-    """``Assert`` each ``(condition, name)``."""
-    m.d.comb += [Assert(c, name) for c, name in checks]
+    """``Assert`` each ``(condition, name)``; the name stands in the assertion's source location,
+    which is what SymbiYosys reports of a failed assertion (:func:`parse_sby_log`), as its
+    :func:`check_id` (smtbmc cuts a location at the first space)."""
+    for c, name in checks:
+        check = Assert(c, name)
+        check.src_loc = (check_id(name), 0)
+        m.d.comb += check
 
 
 def assume_all(m, conditions) -> None:
