@@ -219,7 +219,7 @@ class SweepCoreProof(Elaboratable):
             m.d.comb += [getattr(core, f"{prefix}_{x}").eq(AnySeq(len(getattr(core, f"{prefix}_{x}"))))
                          for x in ("en", "addr", "data")]
             assume_all(m, [addr < N])
-        n_sets = len(cfg.params)
+        n_sets = len(cfg.param_sets)
         assume_all(m, [core.sel_wr_data < n_sets])
         for name in ("clamp_clear", "spike_ready"):
             m.d.comb += getattr(core, name).eq(AnySeq(1))

@@ -1,7 +1,7 @@
 """``cuneate prove``: SymbiYosys checks of the Izhikevich datapath
-(:mod:`cuneate.hdl.izhikevich.formal`) and ``cuneate prove core``: the pipelined core against
-its one-step datapath (:mod:`cuneate.hdl.izhikevich.formal_core`; k-induction with
-``--unbounded``)."""
+(:mod:`cuneate.hdl.izhikevich.formal`) and ``cuneate prove core|lif``: the pipelined Izhikevich or LIF core
+against its one-step datapath (:mod:`cuneate.hdl.izhikevich.formal_core`,
+:mod:`cuneate.hdl.lif.formal_core`; k-induction with ``--unbounded``)."""
 
 from __future__ import annotations
 
@@ -13,24 +13,27 @@ __all__ = ["register", "cmd_prove"]
 
 
 def cmd_prove_core(args) -> int:
-    """``cuneate prove core``: bounded (``--depth``, default the induction depth) or, with
+    """``cuneate prove core|lif``: bounded (``--depth``, default the induction depth) or, with
     ``--unbounded``, k-induction; PASS/FAIL with mode, depth, solver and time."""
     import json
     import tempfile
     from ...hdl.izhikevich import ConfigError
     from ...hdl.izhikevich.formal import FormalError
     from ...hdl.izhikevich.formal_core import proof_config, prove_core
+    from ...hdl.lif.formal_core import lif_proof_config, prove_lif
+    configure, prove = ((proof_config, prove_core) if args.target == "core"
+                        else (lif_proof_config, prove_lif))
     try:
-        cfg = proof_config(args.neurons)
+        cfg = configure(args.neurons) if args.neurons else configure()
     except ConfigError as exc:
-        raise CliError(f"cuneate prove core: {exc}") from None
+        raise CliError(f"cuneate prove {args.target}: {exc}") from None
     with tempfile.TemporaryDirectory(prefix="cuneate-prove-") as d:
         try:
-            r = prove_core(cfg, Path(args.work_dir) if args.work_dir else Path(d),
+            r = prove(cfg, Path(args.work_dir) if args.work_dir else Path(d),
                            mode="prove" if args.unbounded else "bmc", depth=args.depth,
                            mutant=args.mutant, timeout_s=args.timeout_s, solver=args.solver)
         except FormalError as exc:
-            raise CliError(f"cuneate prove core: {exc}") from None
+            raise CliError(f"cuneate prove {args.target}: {exc}") from None
     out = r.to_dict() | {"n_neurons": cfg.n_neurons, "mutant": args.mutant}
     if args.json:
         print(json.dumps(out))
@@ -47,7 +50,7 @@ def cmd_prove_core(args) -> int:
 
 
 def cmd_prove(args) -> int:
-    if args.target == "core":
+    if args.target in ("core", "lif"):
         return cmd_prove_core(args)
     import json
     import tempfile
@@ -88,9 +91,10 @@ def register(groups: CommandGroups) -> None:
     from ...hdl.lib.core_proof import MUTANTS
     f = groups.root.add_parser("prove", help="SymbiYosys checks of the one-update datapath "
                                "and of the pipelined core")
-    f.add_argument("target", nargs="?", choices=("datapath", "core"), default="datapath",
-                   help="datapath (default): one update's range properties; core: the "
-                   "pipelined core equals its one-step datapath")
+    f.add_argument("target", nargs="?", choices=("datapath", "core", "lif"),
+                   default="datapath",
+                   help="datapath (default): one update's range properties; core, lif: the "
+                   "pipelined Izhikevich or LIF core equals its one-step datapath")
     f.add_argument("--unbounded", action="store_true",
                    help="core: k-induction (every input sequence of every length)")
     f.add_argument("--depth", type=positive_int, default=None,

@@ -11,10 +11,10 @@ from cuneate.sim.hardcases import record
 
 #: the assertion each fault breaks first
 EXPECTED = {
-    "skipped_write": "memory_state_mem_tracked_word",   # the tracked neuron's word went stale
-    "stage_off_by_one": "tracked_update_upd_u",         # stage 4's u is the previous neuron's
-    "late_host_write": "memory_cur_mem_tracked_word",   # the current lands a cycle late
-    "tag_off_by_one": "stage_5_neuron",                 # the write-back addressed one off
+    "skipped_write": ("memory_state_mem_tracked_word", 6),   # the tracked neuron's word went stale
+    "stage_off_by_one": ("tracked_update_upd_u", 7),         # stage 4's u is the previous neuron's
+    "late_host_write": ("memory_cur_mem_tracked_word", 1),   # the current lands a cycle late
+    "tag_off_by_one": ("stage_5_neuron", 5),                 # the write-back addressed one off
 }
 
 
@@ -29,12 +29,13 @@ def cfg():
 
 @pytest.mark.parametrize("mutant", sorted(EXPECTED))
 def test_the_proof_catches_the_fault(cfg, mutant, tmp_path):
-    """A bounded run one step past the induction depth finds a counterexample from the initial
-    state, naming the broken invariant (so the unbounded proof cannot pass either)."""
-    r = prove_core(cfg, tmp_path, mode="bmc", depth=induction_depth(cfg) + 1, mutant=mutant,
-                   timeout_s=600)
-    assert r.status == "fail" and r.phase == "basecase", r
-    assert EXPECTED[mutant] in r.failed, r
+    """A bounded run from the initial state, just deep enough, finds a counterexample in the
+    first step where the fault can show, naming the broken invariant (so the unbounded proof
+    cannot pass either)."""
+    check, step = EXPECTED[mutant]
+    r = prove_core(cfg, tmp_path, mode="bmc", depth=step + 1, mutant=mutant, timeout_s=600)
+    assert r.status == "fail" and r.phase == "basecase" and r.step == step, r
+    assert check in r.failed, r
 
 
 def test_a_datapath_fault_in_the_core_is_caught(cfg, tmp_path, monkeypatch):
