@@ -24,7 +24,12 @@ def cmd_prove_core(args) -> int:
     configure, prove = ((proof_config, prove_core) if args.target == "core"
                         else (lif_proof_config, prove_lif))
     try:
-        cfg = configure(args.neurons) if args.neurons else configure()
+        if args.default_config:
+            from ...hdl.izhikevich import IzhikevichConfig
+            from ...hdl.lif import LifConfig
+            cfg = IzhikevichConfig() if args.target == "core" else LifConfig()
+        else:
+            cfg = configure(args.neurons) if args.neurons else configure()
     except ConfigError as exc:
         raise CliError(f"cuneate prove {args.target}: {exc}") from None
     with tempfile.TemporaryDirectory(prefix="cuneate-prove-") as d:
@@ -101,6 +106,9 @@ def register(groups: CommandGroups) -> None:
                    help="core: steps (default the core's latency + 2)")
     f.add_argument("--neurons", type=positive_int, default=None,
                    help="core: neurons (default the fewest accepted, one per stage)")
+    f.add_argument("--default-config", action="store_true",
+                   help="core, lif: the block's default configuration (e.g. 2500 neurons, "
+                   "internal tick) instead of the smallest core")
     f.add_argument("--mutant", choices=MUTANTS, default=None,
                    help="core: build this fault into the core (the proof must fail)")
     f.add_argument("--solver", choices=SOLVERS, default=SOLVER)

@@ -4,7 +4,7 @@ each found by a shallow bounded run from the initial state (default lane, second
 
 import pytest
 
-from cuneate.hdl.izhikevich import datapath
+from cuneate.hdl.izhikevich import IzhikevichConfig, datapath
 from cuneate.hdl.izhikevich.formal_core import (MUTANTS, induction_depth, proof_config,
                                                 prove_core)
 from cuneate.sim.hardcases import record
@@ -55,11 +55,16 @@ def test_a_datapath_fault_in_the_core_is_caught(cfg, tmp_path, monkeypatch):
 
 
 @pytest.mark.long
-def test_the_pipelined_core_equals_the_one_step_datapath_for_every_input_sequence(cfg, tmp_path):
+@pytest.mark.parametrize("n_neurons", [None, 8], ids=["smallest", "N=8-counter-wraps"])
+def test_the_pipelined_core_equals_the_one_step_datapath_for_every_input_sequence(n_neurons,
+                                                                                   tmp_path):
     """k-induction: the base case and the induction step both pass at the core's latency + 2,
-    so the core equals its one-step datapath for every input sequence of every length."""
+    so the core equals its one-step datapath for every input sequence of every length; on the
+    smallest core and on one whose issue counter wraps to 0 (a power of two, see
+    docs/formal.md)."""
+    cfg = proof_config(n_neurons)
     r = prove_core(cfg, tmp_path, mode="prove", timeout_s=2400)
-    record("formal_core_k_induction", 1, 0, int(not r.passed),
+    record(f"formal_core_k_induction_n{cfg.n_neurons}", 1, 0, int(not r.passed),
            f"SymbiYosys prove, k={r.depth}, {r.solver}, {r.seconds:.0f} s, N={cfg.n_neurons}")
     assert r.passed and r.mode == "prove", r
 
@@ -76,3 +81,14 @@ def test_cuneate_prove_core_reports_a_caught_fault_as_json(capsys):
     assert (rec["status"], rec["mode"], rec["depth"]) == ("fail", "bmc", 3), rec
     assert rec["solver"] == "yices" and rec["n_neurons"] == proof_config().n_neurons, rec
     assert "memory_cur_mem_tracked_word" in rec["failed"], rec
+
+
+@pytest.mark.long
+def test_the_default_configuration_core_equals_the_one_step_datapath(tmp_path):
+    """The default configuration itself (2500 neurons, internal tick divider - the harness
+    drives the tick freely, which covers the divider): k-induction closes at the same k."""
+    cfg = IzhikevichConfig()
+    r = prove_core(cfg, tmp_path, mode="prove", timeout_s=2400)
+    record("formal_core_k_induction_default", 1, 0, int(not r.passed),
+           f"SymbiYosys prove, k={r.depth}, {r.solver}, {r.seconds:.0f} s, N={cfg.n_neurons}")
+    assert cfg.n_neurons == 2500 and r.passed and r.mode == "prove", r
