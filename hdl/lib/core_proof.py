@@ -99,6 +99,11 @@ class SweepCoreProof(Elaboratable):
         """``{memory: port prefix}`` of the host-written memories this core has."""
         return dict(self.host_memories)
 
+    def read_only_memories(self, core) -> tuple:
+        """Per-neuron memories neither the host nor the pipeline writes (LIF: fixed weights);
+        their tracked word is whatever the memory starts with."""
+        return ()
+
     def fetched_inputs(self, m, core, frag, fetch) -> dict:
         """Inputs of an update besides the tracked memories' words, as the contract gives
         them in the fetch cycle (LIF: the tick's input spikes)."""
@@ -202,7 +207,8 @@ class SweepCoreProof(Elaboratable):
         core, core_m, rec = self._elaborate_core(platform, tick)
         # one asynchronous read port at the tracked neuron on each memory (observation only)
         mems = {name: core_m.submodules[name]
-                for name in (*self.state_memories, *self.host_write_ports(core))}
+                for name in (*self.state_memories, *self.host_write_ports(core),
+                             *self.read_only_memories(core))}
         seen = {}
         for name, mem in mems.items():
             port = mem.read_port(domain="comb")
@@ -230,6 +236,7 @@ class SweepCoreProof(Elaboratable):
         number = Signal(cfg.sweep_number_width, name="ref_sweep_no")
         started = Signal(name="ref_started")
         start = tick & (left <= 1)
+        self.sweep_start = start
         with m.If(start):
             m.d.sync += [left.eq(N), started.eq(1), number.eq(Mux(started, number + 1, 0))]
         with m.Else():
@@ -284,6 +291,9 @@ class SweepCoreProof(Elaboratable):
             r, now = words[name]
             en, addr, data = (getattr(core, f"{prefix}_{x}") for x in ("en", "addr", "data"))
             m.d.sync += r.eq(Mux(en & (addr == t), data, now))
+        for name in self.read_only_memories(core):
+            r, now = words[name]
+            m.d.sync += r.eq(now)
         for name in self.state_memories:
             r, now = words[name]
             m.d.sync += r.eq(Mux(flight[L - 1], exp["words"][name], now))

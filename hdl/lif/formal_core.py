@@ -7,23 +7,23 @@ module gives it the LIF core and the reference: one combinational step of the st
 (``gather_input``, ``leak_operand``, ``leak_product``, ``update_state``, bound at import) from
 the tracked neuron's state word (``v`` and the refractory counter), current and set.
 
-Covered: cores without input spikes and without synaptic traces (``n_inputs == 0``,
-``synapses=False``), any form, decay, refractory period and parameter sets. Cores with input
-spikes need the contract's pending/active spike vectors as a fetched input of the update
-(:meth:`SweepCoreProof.fetched_inputs`) and the weight memory as a tracked memory; that is not
-done yet.
+Covered: cores without synaptic traces, with or without input spikes (the contract's pending
+and active spike vectors are modelled in :meth:`LifCoreProof.fetched_inputs`; weights fixed,
+with any contents, or host-written). Cores with traces are refused.
 """
 
 from __future__ import annotations
 
 from pathlib import Path
 
-from amaranth import Cat, Const
+from amaranth import Cat, Const, Mux, Signal
+from amaranth.hdl._ast import AnySeq
 
 from ..flow.sby import SOLVER
 from ..lib.config import ConfigError
 from ..lib.core_proof import MUTANTS, SweepCoreProof
-from ..lib.formal import ProofResult, free_memories, run_proof
+from ..lib.formal import (ProofResult, assert_all, assume_all, free_memories, run_proof,
+                          signal_named)
 from . import core as core_module
 from . import datapath
 from .config import CLAMP_KINDS, LifConfig
@@ -40,7 +40,7 @@ ABSTRACTIONS = ["products of the datapath uninterpreted (same function per multi
 
 
 class LifCoreProof(SweepCoreProof):
-    """The LIF core without input spikes or traces (see
+    """The LIF core without synaptic traces (see
     :class:`~cuneate.hdl.lib.core_proof.SweepCoreProof`)."""
 
     core_module = core_module
@@ -49,14 +49,48 @@ class LifCoreProof(SweepCoreProof):
     off_by_one_register = ("v", 4)          # stage 4's v: the previous neuron's
 
     def __init__(self, cfg: LifConfig, mutant: str | None = None):
-        if cfg.n_inputs or cfg.traces:
-            raise ConfigError("the LIF core proof covers cores without input spikes and "
-                              f"synaptic traces; got {cfg.n_inputs} inputs, "
+        if cfg.traces:
+            raise ConfigError("the LIF core proof covers cores without synaptic traces; got "
                               f"{len(cfg.traces)} traces")
         super().__init__(cfg, mutant)
 
     def make_core(self):
         return LifCore(self.cfg)
+
+    def host_write_ports(self, core) -> dict:
+        ports = dict(self.host_memories)
+        if self.cfg.n_inputs and self.cfg.weights_writable:
+            ports["weight_mem"] = "w_wr"
+        return ports
+
+    def read_only_memories(self, core) -> tuple:
+        return ("weight_mem",) if self.cfg.n_inputs and not self.cfg.weights_writable else ()
+
+    def fetched_inputs(self, m, core, frag, fetch) -> dict:
+        """The contract's input spikes: events (free) set a source's bit in the pending
+        vector; a sweep's start moves it into the active vector (and the event of that cycle
+        into the new pending one); a second event of a source within one tick sets
+        ``in_merged``. The core's vectors and flag must equal the model's in every cycle; an
+        update uses the active vector of its fetch cycle."""
+        F = self.cfg.n_inputs
+        if not F:
+            return {}
+        m.d.comb += [core.in_valid.eq(AnySeq(1)), core.in_source.eq(AnySeq(len(core.in_source)))]
+        assume_all(m, [core.in_source < F])
+        pending, active = Signal(F, name="ref_pending"), Signal(F, name="ref_active")
+        merged = Signal(name="ref_in_merged")
+        event = Mux(core.in_valid, Const(1, F) << core.in_source, 0)
+        start = self.sweep_start
+        with m.If(start):
+            m.d.sync += [active.eq(pending), pending.eq(event)]
+        with m.Else():
+            m.d.sync += pending.eq(pending | event)
+            with m.If(core.in_valid & (pending & (Const(1, F) << core.in_source)).any()):
+                m.d.sync += merged.eq(1)
+        assert_all(m, [(signal_named(frag, "pending") == pending, "input spikes: pending"),
+                       (signal_named(frag, "active") == active, "input spikes: active"),
+                       (core.in_merged == merged, "input spikes: in_merged")])
+        return {"x": active}
 
     def reference(self, words, inputs):
         cfg = self.cfg
@@ -65,7 +99,11 @@ class LifCoreProof(SweepCoreProof):
         v = st[:V.width].as_signed()
         ref = st[V.width:] if R else Const(0, 1)
         i, sel = words["cur_mem"], words["sel_mem"]
-        g = gather_input(cfg, i, [], [], None)
+        F, wb = cfg.n_inputs, cfg.W.width
+        x = inputs.get("x")
+        w = words.get("weight_mem")
+        g = gather_input(cfg, i, [x[k] for k in range(F)],
+                         [w[wb * k: wb * (k + 1)].as_signed() for k in range(F)], None)
         p = leak_product(cfg, leak_operand(cfg, v, g["d"], sel), sel)
         o = update_state(cfg, v, p, g["d"], ref, sel)
         flags = {"current": g["current"], "input": g["input"], "v_low": o["v_low"]}
@@ -91,7 +129,7 @@ def lif_harness(cfg: LifConfig, mutant: str | None = None) -> tuple[str, int]:
     from amaranth.back import rtlil
     top = LifCoreProof(cfg, mutant)
     il = rtlil.convert(top, name="lif_eq", ports=top.ports)
-    return free_memories(il, ("state_mem", "cur_mem", "sel_mem")), top.latency
+    return free_memories(il, ("state_mem", "cur_mem", "sel_mem", "weight_mem")), top.latency
 
 
 def prove_lif(cfg: LifConfig, workdir: Path, mode: str = "prove", depth: int | None = None,

@@ -55,6 +55,32 @@ def test_a_datapath_fault_in_the_lif_core_is_caught(tmp_path, monkeypatch):
     assert r.status == "fail" and "tracked_update_upd_v" in r.failed, r
 
 
-def test_cores_with_input_spikes_are_refused_not_half_proven():
-    with pytest.raises(ConfigError, match="without input spikes"):
-        LifCoreProof(lif_proof_config(form="discrete", weights=[[0.5]] * 8))
+INPUTS = {"form": "discrete", "weights": [[0.5, -0.25, 0.125]] * 8, "current_format": (4, 12)}
+
+
+def test_cores_with_traces_are_refused_not_half_proven():
+    with pytest.raises(ConfigError, match="without synaptic traces"):
+        LifCoreProof(lif_proof_config(weights=[[0.5, 0.25]] * 8, synapses=True))
+
+
+@pytest.mark.long
+@pytest.mark.parametrize("writable", [False, True], ids=["fixed-weights", "host-weights"])
+def test_the_lif_core_with_input_spikes_equals_the_one_step_datapath(writable, tmp_path):
+    """Three input sources, weights any contents of the weight memory (fixed) or written by
+    the host: k-induction with the contract's pending/active spike vectors (30-45 s)."""
+    r = prove_lif(lif_proof_config(**INPUTS, weights_writable=writable), tmp_path,
+                  mode="prove", timeout_s=1800)
+    assert r.passed and r.mode == "prove", r
+
+
+def test_an_input_spike_fault_is_caught(tmp_path, monkeypatch):
+    """The core ignores source 0's spikes (the reference keeps the true ``gather_input``):
+    the first update of a sweep with that spike active breaks the tracked update."""
+    true_gather = lif_core.gather_input
+
+    def faulty(cfg, I, x, w, traces=None):
+        return true_gather(cfg, I, [x[0] & 0] + list(x[1:]), w, traces)
+    monkeypatch.setattr(lif_core, "gather_input", faulty)
+    r = prove_lif(lif_proof_config(**INPUTS), tmp_path, mode="bmc", depth=8, timeout_s=600)
+    assert r.status == "fail" and r.step == 7, r
+    assert "tracked_update_upd_acc" in r.failed, r
