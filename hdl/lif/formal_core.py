@@ -50,6 +50,7 @@ class LifCoreProof(SweepCoreProof):
 
     def __init__(self, cfg: LifConfig, mutant: str | None = None):
         if cfg.traces:
+            self._MustUse__silence = True        # refused: never elaborated, nothing to warn of
             raise ConfigError("the LIF core proof covers cores without synaptic traces; got "
                               f"{len(cfg.traces)} traces")
         super().__init__(cfg, mutant)
