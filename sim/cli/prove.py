@@ -1,5 +1,7 @@
 """``cuneate prove``: SymbiYosys checks of the Izhikevich datapath
-(:mod:`cuneate.hdl.izhikevich.formal`)."""
+(:mod:`cuneate.hdl.izhikevich.formal`) and ``cuneate prove core|lif``: the pipelined Izhikevich or LIF core
+against its one-step datapath (:mod:`cuneate.hdl.izhikevich.formal_core`,
+:mod:`cuneate.hdl.lif.formal_core`; k-induction with ``--unbounded``)."""
 
 from __future__ import annotations
 
@@ -10,7 +12,51 @@ from .options import CliError, CommandGroups, positive_float, positive_int
 __all__ = ["register", "cmd_prove"]
 
 
+def cmd_prove_core(args) -> int:
+    """``cuneate prove core|lif``: bounded (``--depth``, default the induction depth) or, with
+    ``--unbounded``, k-induction; PASS/FAIL with mode, depth, solver and time."""
+    import json
+    import tempfile
+    from ...hdl.izhikevich import ConfigError
+    from ...hdl.izhikevich.formal import FormalError
+    from ...hdl.izhikevich.formal_core import proof_config, prove_core
+    from ...hdl.lif.formal_core import lif_proof_config, prove_lif
+    configure, prove = ((proof_config, prove_core) if args.target == "core"
+                        else (lif_proof_config, prove_lif))
+    try:
+        if args.default_config:
+            from ...hdl.izhikevich import IzhikevichConfig
+            from ...hdl.lif import LifConfig
+            cfg = IzhikevichConfig() if args.target == "core" else LifConfig()
+        else:
+            cfg = configure(args.neurons) if args.neurons else configure()
+    except ConfigError as exc:
+        raise CliError(f"cuneate prove {args.target}: {exc}") from None
+    with tempfile.TemporaryDirectory(prefix="cuneate-prove-") as d:
+        try:
+            r = prove(cfg, Path(args.work_dir) if args.work_dir else Path(d),
+                           mode="prove" if args.unbounded else "bmc", depth=args.depth,
+                           mutant=args.mutant, timeout_s=args.timeout_s, solver=args.solver)
+        except FormalError as exc:
+            raise CliError(f"cuneate prove {args.target}: {exc}") from None
+    out = r.to_dict() | {"n_neurons": cfg.n_neurons, "mutant": args.mutant}
+    if args.json:
+        print(json.dumps(out))
+    else:
+        what = "k-induction" if r.mode == "prove" else "bounded from the initial state"
+        print(f"{r.property}: {r.status.upper()} ({what}, depth {r.depth}, {r.engine} "
+              f"{r.solver}, {r.seconds:.1f} s, N = {cfg.n_neurons}"
+              + (f", mutant {args.mutant}" if args.mutant else "") + ")")
+        if r.failed:
+            print(f"  failed in step {r.step} ({r.phase}): {', '.join(r.failed)}")
+        for a in r.abstractions:
+            print(f"  abstraction: {a}")
+    return 0 if r.passed else 1
+
+
 def cmd_prove(args) -> int:
+    if args.target in ("core", "lif"):
+        return cmd_prove_core(args)
     import json
     import tempfile
     from ...hdl.izhikevich import ConfigError, IzhikevichConfig
@@ -46,7 +92,26 @@ def cmd_prove(args) -> int:
 
 
 def register(groups: CommandGroups) -> None:
-    f = groups.root.add_parser("prove", help="SymbiYosys checks of the one-update datapath")
+    from ...hdl.flow.sby import SOLVER, SOLVERS
+    from ...hdl.lib.core_proof import MUTANTS
+    f = groups.root.add_parser("prove", help="SymbiYosys checks of the one-update datapath "
+                               "and of the pipelined core")
+    f.add_argument("target", nargs="?", choices=("datapath", "core", "lif"),
+                   default="datapath",
+                   help="datapath (default): one update's range properties; core, lif: the "
+                   "pipelined Izhikevich or LIF core equals its one-step datapath")
+    f.add_argument("--unbounded", action="store_true",
+                   help="core: k-induction (every input sequence of every length)")
+    f.add_argument("--depth", type=positive_int, default=None,
+                   help="core: steps (default the core's latency + 2)")
+    f.add_argument("--neurons", type=positive_int, default=None,
+                   help="core: neurons (default the fewest accepted, one per stage)")
+    f.add_argument("--default-config", action="store_true",
+                   help="core, lif: the block's default configuration (e.g. 2500 neurons, "
+                   "internal tick) instead of the smallest core")
+    f.add_argument("--mutant", choices=MUTANTS, default=None,
+                   help="core: build this fault into the core (the proof must fail)")
+    f.add_argument("--solver", choices=SOLVERS, default=SOLVER)
     f.add_argument("--preset", action="append", default=None,
                    help="parameter set(s) (repeat for a mix; default RS)")
     f.add_argument("--property", choices=("datapath", "state_box"), default="datapath")
