@@ -61,7 +61,7 @@ def train(data_path, out_dir, bits, qat, seed, hidden, epochs):
     from snntorch import surrogate
     from snntorch.export_nir import export_to_nir
     torch.manual_seed(seed)
-    torch.set_num_threads(2)
+    torch.set_num_threads(1)   # tiny tensors: extra threads only spin
     d = np.load(data_path)
     xtr = torch.from_numpy(d["x_train"].astype(np.float32))
     ytr = torch.from_numpy(d["y_train"].astype(np.int64))
