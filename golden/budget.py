@@ -159,13 +159,14 @@ def check(what: str, nbytes: float = 0.0, seconds: float = 0.0, hint: str = "") 
     lim = limits()
     room = available_memory()
     mem_limit = lim.memory_bytes if lim.memory_bytes is not None else MEMORY_FRACTION * room
-    tail = f"; {hint}" if hint else ""
+    over = []
     if not nbytes <= mem_limit:
-        raise BudgetError(f"{what} needs about {fmt_bytes(nbytes)} of memory, more than the "
-                          f"{fmt_bytes(mem_limit)} this machine can give it now{tail}")
+        over.append(f"needs about {fmt_bytes(nbytes)} of memory, more than the "
+                    f"{fmt_bytes(mem_limit)} this machine can give it now")
     if lim.max_seconds is not None and not seconds <= lim.max_seconds:
-        raise BudgetError(f"{what} would take about {fmt_time(seconds)}, more than the "
-                          f"limit of {fmt_time(lim.max_seconds)} (--max-minutes "
-                          f"{lim.max_seconds / 60:g}){tail}")
+        over.append(f"would take about {fmt_time(seconds)}, more than the limit of "
+                    f"{fmt_time(lim.max_seconds)} (--max-minutes {lim.max_seconds / 60:g})")
+    if over:
+        raise BudgetError(f"{what} {' and '.join(over)}" + (f"; {hint}" if hint else ""))
     return {"bytes": float(nbytes), "seconds": float(seconds), "memory_limit": mem_limit,
             "max_seconds": lim.max_seconds}

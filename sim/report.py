@@ -12,12 +12,13 @@ from __future__ import annotations
 
 import html
 import json
+import re
 from pathlib import Path
 
 import numpy as np
 
 __all__ = ["write_report", "summary_dict", "figure_names", "page_head", "figures_html",
-           "pyplot", "html_table", "fmt", "write_page"]
+           "pyplot", "html_table", "fmt", "write_page", "printable"]
 
 
 def pyplot():
@@ -152,6 +153,15 @@ def summary_dict(run) -> dict:
     }
 
 
+#: Control characters no HTML page may hold (all but tab, line feed and carriage return).
+_CONTROL = re.compile(r"[\x00-\x08\x0b\x0c\x0e-\x1f\x7f]")
+
+
+def printable(page: str) -> str:
+    """``page`` with every control character (a NUL from a scene's name, say) shown as U+FFFD."""
+    return _CONTROL.sub("\ufffd", page)
+
+
 def html_table(rows, head) -> str:
     """An HTML table of ``rows`` under the header ``head`` (cells escaped)."""
     h = "".join(f"<th>{html.escape(str(x))}</th>" for x in head)
@@ -175,8 +185,8 @@ def write_page(out: Path, head: str, body: str, figures) -> Path:
     """``out/index.html``: the page head (:func:`page_head` of ``head``), ``body`` and the
     figures section; returns its path."""
     path = Path(out) / "index.html"
-    path.write_text(f"{page_head(head)}\n{body}\n<h2>Figures</h2>\n{figures_html(figures)}\n"
-                    f"</body></html>\n")
+    path.write_text(printable(f"{page_head(head)}\n{body}\n<h2>Figures</h2>\n"
+                              f"{figures_html(figures)}\n</body></html>\n"))
     return path
 
 
@@ -245,7 +255,9 @@ classes, {len(run.neurons)} neurons, {run.n_ticks} ticks of {run.dt_ms:g} ms.</p
 <h2>Currents per class (mV/ms) and saturation</h2>
 {html_table(cur_rows, ["class", "lowest peak", "highest peak", "minimum"])}
 <p>Format {html.escape(str(s.get('format')))}: {n_sat} of {s.get('values')} values saturated by
-the driver; {n_range} outside the accepted range; {s.get('gaps_held', 0)} missing samples held.</p>
+the driver; {n_range} outside the accepted range; {s.get('gaps_held', 0)} missing samples held;
+{s.get('samples_past_end', 0)} of {s.get('samples', '-')} samples past the run's end (latency),
+never applied.</p>
 <h2>What ran</h2>
 <ul><li>stimulus: {html.escape(ran['stimulus'])}</li>
 <li>effects: {html.escape(', '.join(ran['effects']) or 'none')}</li>
@@ -258,5 +270,5 @@ the driver; {n_range} outside the accepted range; {s.get('gaps_held', 0)} missin
 </body></html>
 """
     path = out / "index.html"
-    path.write_text(page)
+    path.write_text(printable(page))
     return path

@@ -12,7 +12,7 @@ import json
 import sys
 from pathlib import Path
 
-from .options import CliError, CommandGroups, output_dir
+from .options import CliError, CommandGroups, add_max_minutes, output_dir
 
 __all__ = ["register", "cmd_run", "resolve_scene"]
 
@@ -84,5 +84,6 @@ def register(groups: CommandGroups) -> None:
                    help="comma-separated engines overriding the scene's run.engines")
     p.add_argument("--list-examples", action="store_true", help="list the shipped scenes")
     p.add_argument("--json", action="store_true", help="print the run summary as JSON")
+    add_max_minutes(p, 60.0)
     p.add_argument("-v", "--verbose", action="store_true", help="log each stage")
     p.set_defaults(func=cmd_run)

@@ -3,9 +3,11 @@ fraction bits, rounding, the golden model's scheme; see :mod:`cuneate.sim.sweep`
 
 from __future__ import annotations
 
+import math
 import sys
 
-from .options import CliError, CommandGroups, output_dir, positive_float, positive_int
+from .options import (CliError, CommandGroups, add_max_minutes, output_dir, positive_float,
+                      positive_int)
 
 __all__ = ["register", "cmd_sweep"]
 
@@ -17,11 +19,15 @@ def _list(text: str, conv, what: str) -> list:
         raise CliError(f"{what}: expected a comma-separated list, got {text!r}") from None
     if not out:
         raise CliError(f"{what}: empty list")
+    for x in out:
+        if isinstance(x, float) and not math.isfinite(x):
+            raise CliError(f"{what}: not a finite number: {x!r} (in {text!r})")
     return out
 
 
 def cmd_sweep(args) -> int:
-    from ..sweep import SweepSpec, battery_module, run_sweep, write_sweep
+    from ...golden import budget
+    from ..sweep import SweepSpec, battery_module, estimate_sweep, run_sweep, write_sweep
     try:
         block = battery_module(args.battery)
         duration = args.duration_ms or block.default_duration_ms(args.battery) or 1000.0
@@ -44,10 +50,25 @@ def cmd_sweep(args) -> int:
         pts, columns = block.points_from_args(args, rates, widths, rnd, floats, _list)
     except ValueError as exc:
         raise CliError(f"cuneate sweep: {exc}") from None
+    if args.reference_hz < max(p.update_hz for p in pts):
+        raise CliError(f"--reference-hz {args.reference_hz:g} is coarser than the point at "
+                       f"{max(p.update_hz for p in pts):g} Hz: the reference must be at least "
+                       f"as fine as every point")
+    try:
+        est = estimate_sweep(pts, spec, 1 if args.scheduler == "sync" else args.workers)
+        budget.check(est["what"], est["bytes"], est["seconds"],
+                     "shorten --duration-ms, lower --reference-hz or sweep fewer points")
+    except ValueError as exc:
+        raise CliError(f"cuneate sweep: {exc}") from None
     izhikevich = block.__name__.endswith(".izhikevich.sweep")
     out = output_dir(args.out)
-    rows = run_sweep(pts, spec, out / "cache", scheduler=args.scheduler, workers=args.workers,
-                     progress=sys.stderr.isatty(), log=lambda m: print(m, file=sys.stderr))
+    try:
+        rows = run_sweep(pts, spec, out / "cache", scheduler=args.scheduler,
+                         workers=args.workers, progress=sys.stderr.isatty(),
+                         log=lambda m: print(m, file=sys.stderr),
+                         scheduler_timeout_s=args.scheduler_timeout_s)
+    except ValueError as exc:
+        raise CliError(f"cuneate sweep: {exc}") from None
     page = write_sweep(rows, spec, out, columns)
     for r in rows:
         acc = r.get("fraction_within_tick")
@@ -112,4 +133,7 @@ def register(groups: CommandGroups) -> None:
                    help="dask.distributed address; 'sync' runs in this process (default: a "
                         "local cluster)")
     p.add_argument("--workers", type=positive_int, default=2)
+    p.add_argument("--scheduler-timeout-s", type=positive_float, default=10.0,
+                   help="how long to wait for --scheduler to answer (default 10)")
+    add_max_minutes(p, 60.0)
     p.set_defaults(func=cmd_sweep)

@@ -21,10 +21,10 @@ import numpy as np
 
 from ..engines.registry import ENGINES as ENGINE_TRAITS
 
-from ..cli.options import (CliError, CommandGroups, add_block_commands, add_rate_options,
-                           build_config, clamp_summary, engine_choices, finite_float,
-                           nonneg_int, output_dir, positive_float, positive_int, print_run,
-                           run_ticks)
+from ..cli.options import (CliError, CommandGroups, add_block_commands, add_max_minutes,
+                           add_rate_options, build_config, check_estimate, clamp_summary,
+                           engine_choices, finite_float, nonneg_int, output_dir, positive_float,
+                           positive_int, print_run, run_ticks)
 
 __all__ = ["register", "add_coincidence_options", "coincidence_kwargs",
            "coincidence_from_args", "parse_matrix", "print_resources"]
@@ -242,12 +242,25 @@ def cmd_generate(args) -> int:
 
 
 def cmd_ridge(args) -> int:
-    from .experiments import RidgeSpec, format_comparison, ridge_comparison
+    from .experiments import (RidgeSpec, format_comparison, ridge_comparison, ridge_estimate,
+                              ridge_problem)
     if args.jitter_ms < 0 or args.speed_spread < 0:
         raise CliError("cuneate coincidence ridge: --jitter-ms and --speed-spread must be >= 0")
     spec = RidgeSpec(trials_per_angle=args.trials, jitter_ms=args.jitter_ms,
                      spread_speed=args.speed_spread, seed=args.seed,
                      speed_mm_per_s=args.speed)
+    bad = ridge_problem(spec)
+    if bad is not None:
+        option = {"speed_mm_per_s": "--speed", "spread_speed": "--speed-spread"}[bad[0]]
+        raise CliError(f"cuneate coincidence ridge: {option}: {bad[1]}")
+    est = ridge_estimate(spec, ["golden", "fixed"])
+    if args.hdl_engine:
+        from dataclasses import replace
+        hdl = ridge_estimate(replace(spec, trials_per_angle=args.hdl_trials),
+                             ["fixed"] + list(args.hdl_engine))
+        est = dict(est, bytes=max(est["bytes"], hdl["bytes"]),
+                   seconds=est["seconds"] + hdl["seconds"])
+    check_estimate("cuneate coincidence ridge", est, "fewer --trials or --hdl-trials")
     build_dir = str(output_dir(args.build_dir, "--build-dir")) if args.build_dir else None
     try:
         cmp = ridge_comparison(spec, hdl_engines=tuple(args.hdl_engine),
@@ -299,4 +312,5 @@ def register(groups: CommandGroups) -> None:
                    help="relative s.d. of the speed per trial")
     r.add_argument("--seed", type=nonneg_int, default=1)
     r.add_argument("--json", action="store_true")
+    add_max_minutes(r, 60.0)
     r.set_defaults(func=cmd_ridge)

@@ -26,8 +26,8 @@ import numpy as np
 from ...golden import izhikevich as golden
 from ...golden.fbg import IIRFilter, design_bandpass
 from ...golden.tactile import (MATERIALS, GraspSpec, Material, Pad, PulseSpec, SlideSpec,
-                              apply_effects, synthesize_grasp, synthesize_pulse,
-                              synthesize_slide)
+                              apply_effects, sensor_effects, synthesize_grasp,
+                              synthesize_pulse, synthesize_slide)
 from ...hdl.lib.fixed import QFormat
 from ..decode import decode, isi_samples, trial_features
 from ..engines.registry import ENGINES as ENGINE_TRAITS
@@ -37,7 +37,7 @@ from .runner import agreement as train_agreement
 from .scene import Scene
 
 __all__ = ["SceneRun", "run", "BLOCKS", "ENGINES", "synthesize", "build_neurons",
-           "front_end", "summary", "write_report", "format_run"]
+           "front_end", "summary", "write_report", "format_run", "estimate", "n_driven"]
 
 
 @dataclass
@@ -79,6 +79,52 @@ class SceneRun:
     kind: str = "afferent"
 
 
+# --------------------------------------------------------------------------- estimate
+def n_driven(scene: Scene) -> tuple[int, int]:
+    """``(trials, neurons)``: every trial of every class, and the driven Izhikevich neurons of
+    all of them (the core holds them all)."""
+    trials = 1 if scene["stimulus"]["kind"] == "recorded" else \
+        scene["scene"]["trials"] * len(scene.classes())
+    return trials, trials * sum(p["size"] for p in scene.populations
+                                if p["model"] == "izhikevich")
+
+
+def estimate(scene: Scene, engines: list[str], n_samples: int | None = None) -> dict:
+    """Memory (bytes) and time (s) of running ``scene`` on ``engines``, from its parameters
+    (``n_samples``: the trace's length when known, else the scene's duration): the traces
+    and their synthesis, the front end's arrays (shifts, currents, raw currents), the golden
+    engine's per-tick currents, the batch engines' write schedules and the spikes; the state
+    range search, each engine's updates (or cycles) at the registry's speed."""
+    from ...golden.budget import BASE_BYTES, array_bytes
+    from ...hdl.izhikevich import PIPELINE_DEPTH
+    from ...hdl.izhikevich.range import search_estimate
+    from ..engines.registry import estimate_seconds
+    sen, hw = scene["sensor"], scene["hardware"]
+    fs = sen["sample_rate_hz"]
+    if n_samples is None:
+        n_samples = round(scene["scene"]["duration_ms"] * fs / 1000.0)
+    trials, n = n_driven(scene)
+    hold = max(1, round(hw["update_hz"] / fs))
+    n_ticks = float(n_samples) * hold
+    n_core = max(n, 8)
+    per_sample = array_bytes(n_samples, n)
+    nbytes = (BASE_BYTES + 4 * array_bytes(trials, n_samples, sen["channels"])
+              + 6 * per_sample + 200.0 * n_ticks / 16e3 * n * 16)      # spikes at <= 200 Hz
+    seconds = search_estimate(len({p["preset"] for p in scene.populations}), 2,
+                              1000.0 / hw["update_hz"])["seconds"]
+    seconds += 2e-6 * trials * n_samples * sen["channels"] + 1e-6 * n_samples * n
+    for e in engines:
+        if e == "golden":
+            nbytes += array_bytes(n_ticks, n)
+        elif ENGINE_TRAITS[e].level == "rtl":
+            nbytes += 48 * per_sample             # the write schedule as Python integers
+        per_tick = n_core + PIPELINE_DEPTH + 8 if ENGINE_TRAITS[e].hdl else n_core
+        seconds += estimate_seconds("izhikevich", e, n_ticks * per_tick)
+    return {"bytes": nbytes, "seconds": seconds, "ticks": n_ticks, "neurons": n,
+            "what": f"{trials} trial(s) x {n // max(trials, 1)} neuron(s), {n_ticks:.3g} ticks "
+                    f"on {', '.join(engines)}"}
+
+
 # --------------------------------------------------------------------------- stimulus
 def _material(m) -> Material:
     if isinstance(m, str):
@@ -97,12 +143,22 @@ def synthesize(scene: Scene):
     effect_params = {e: sen[e] for e in sen["effects"] if e != "strain"}
     counts_all: dict = {}
     if st["kind"] == "recorded":
-        from ..host.traces import load_trace
+        from ..host.traces import TraceError, load_trace
         tr = load_trace(st["file"], time_key=st["time_key"], data_key=st["data_key"],
                         struct=st["struct"] or None, time_unit=st["time_unit"],
                         shift_unit=st["shift_unit"], expect_fs_hz=fs,
                         channels=sen["channels"])
-        return classes, [classes[0]], [tr.d_lambda_nm], [tr.info], {}
+        x = tr.d_lambda_nm
+        big = np.abs(x) >= sen["lambda_B_nm"]
+        if big.any():
+            r, c = (int(v) for v in np.argwhere(big)[0])
+            raise TraceError(f"{st['file']}: row {r}, grating {c}: a shift of {x[r, c]:.3g} nm is "
+                             f"not a Bragg shift of a {sen['lambda_B_nm']:g} nm grating (check "
+                             f"stimulus.shift_unit)")
+        # the sensor effects the scene lists act on the recorded shifts too
+        x, counts = sensor_effects(x, sen["effects"], effect_params, rng, fs,
+                                   sen["lambda_B_nm"])
+        return classes, [classes[0]], [x], [tr.info], counts
     for c, cls in enumerate(classes):
         for t in range(sc["trials"]):
             if st["kind"] == "grasp":
@@ -222,7 +278,14 @@ def front_end(scene: Scene, neurons: Neurons, traces: list, infos: list, cfg):
                     scene["frontend"]["latency_ticks"], on_gap=on_gap)
     dl = np.stack([traces[t][:, g] for t, g in zip(neurons.trial, neurons.grating)], axis=1)
     x, gaps = drv.fill_gaps(dl)
-    currents = drv.currents(x)
+    with np.errstate(over="ignore", invalid="ignore"):
+        currents = drv.currents(x)
+    bad = ~np.isfinite(currents)
+    if bad.any():
+        j, i = (int(v) for v in np.argwhere(bad)[0])
+        raise ValueError(f"the front end's current of neuron {i} is {currents[j, i]!r} at sample "
+                         f"{j} (shifts up to {float(np.max(np.abs(x))):.3g} nm): lower the front "
+                         f"end's gain (frontend.gain_S, frontend.sa_gain, population gain)")
     if scene["frontend"]["window"] == "loading":
         # the front end sees the loading phase only (contact to stop), per trial
         t_ms = np.arange(dl.shape[0]) * 1000.0 / sen["sample_rate_hz"]
@@ -241,8 +304,19 @@ def run_golden(ctx) -> tuple[list, dict]:
     n = len(ctx["neurons"])
     params = [golden.to_params(p) for p in ctx["neurons"].preset]
     cur = drv.held(ctx["currents"], ctx["n_ticks"])
-    r = golden.simulate(params, cur, n_steps=ctx["n_ticks"], n_neurons=n, dt_ms=cfg.dt_ms,
-                        scheme="euler", progress=ctx.get("progress"))
+    try:
+        r = golden.simulate(params, cur, n_steps=ctx["n_ticks"], n_neurons=n, dt_ms=cfg.dt_ms,
+                            scheme="euler", progress=ctx.get("progress"))
+    except golden.DivergenceError as exc:
+        nn, i = ctx["neurons"], exc.neuron
+        peak = float(np.max(np.abs(ctx["currents"][:, i])))
+        raise ValueError(
+            f"the golden engine diverged: neuron {i} (trial {nn.trial[i]}, population "
+            f"{nn.population[i]!r}, grating {nn.grating[i]}) leaves |v|, |u| <= {exc.bound:g} at "
+            f"t = {(exc.step + 1) * exc.dt_ms:g} ms under front-end currents up to {peak:.3g} "
+            f"mV/ms (the core saturates at {cfg.I.max_value:g}); lower the front end's gain "
+            f"(frontend.gain_S, frontend.sa_gain, population gain) or the sensor effects' "
+            f"size") from None
     return [np.asarray(s) for s in r.spikes_ms], {"spikes": int(sum(len(s) for s in
                                                                     r.spikes_ms))}
 
@@ -296,8 +370,12 @@ def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None =
     timing: dict = {}
     say = log or (lambda msg: None)
     t0 = time.perf_counter()
+    names = list(engines or scene.engines)
     classes, trial_class, traces, infos, effect_counts = synthesize(scene)
     timing["stimulus_s"] = time.perf_counter() - t0
+    if scene["stimulus"]["kind"] == "recorded":     # its length is known now
+        from .runner import check_budget
+        check_budget(scene, names, n_samples=traces[0].shape[0])
     say(f"stimulus: {len(traces)} trial(s) of {traces[0].shape[0]} samples x "
         f"{traces[0].shape[1]} grating(s) ({timing['stimulus_s']:.2f} s)")
     t0 = time.perf_counter()
@@ -312,10 +390,16 @@ def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None =
     raw, sat = drv.quantize(currents)
     sat["gaps_held"] = gaps
     n_ticks = currents.shape[0] * drv.hold_ticks
+    # samples whose tick (j R + L) falls at or after the run's end are never applied: counted
+    sat["samples"] = int(currents.shape[0])
+    sat["samples_past_end"] = int(np.count_nonzero(
+        drv.tick_of_sample(np.arange(currents.shape[0])) >= n_ticks))
+    if sat["samples_past_end"]:
+        say(f"warning: latency of {drv.latency_ticks} ticks puts {sat['samples_past_end']} of "
+            f"{sat['samples']} samples past the run's end: never applied")
     timing["front_end_s"] = time.perf_counter() - t0
     ctx = {"config": cfg, "driver": drv, "neurons": neurons, "currents": currents, "raw": raw,
            "n_ticks": n_ticks, "build_dir": build_dir}
-    names = list(engines or scene.engines)
     for e in names:
         if e not in ENGINES:
             raise ValueError(f"unknown engine {e!r}; known: {', '.join(ENGINES)}")
@@ -434,8 +518,14 @@ def format_run(run: SceneRun) -> str:
         out.append(f"  accuracy {k}: differs by {100 * v['difference']:.1f} points (tolerance "
                    f"{100 * v['tolerance']:.1f}): {'within' if v['within'] else 'OUTSIDE'}")
     s = run.saturations
+    if s.get("samples_past_end"):
+        out.append(f"  warning: {s['samples_past_end']} of {s['samples']} samples fall past the "
+                   f"run's end (frontend.latency_ticks = "
+                   f"{scene['frontend']['latency_ticks']}) and never reach the core")
     for e, sp in run.spikes.items():
-        if not any(len(x) for x in sp):
+        if s.get("samples_past_end") == s.get("samples"):
+            out.append(f"  warning: {e}: no sample reached the core, so no spike is expected")
+        elif not any(len(x) for x in sp):
             out.append(f"  warning: {e}: no neuron spiked (currents peak at "
                        f"{s['max_mV_per_ms']:.2f} mV/ms; an RS neuron needs about 3.8)")
     n_sat = s.get("format_low", 0) + s.get("format_high", 0)

@@ -12,7 +12,7 @@ import numpy as np
 
 from .registry import kind_module
 
-__all__ = ["run_scene", "agreement", "kind_of"]
+__all__ = ["run_scene", "agreement", "kind_of", "check_budget"]
 
 
 def kind_of(run_or_scene) -> str:
@@ -23,8 +23,24 @@ def kind_of(run_or_scene) -> str:
 def run_scene(scene, engines: list[str] | None = None, build_dir: Path | None = None,
               progress: bool = False, log=None):
     """Run ``scene`` on its engines (or ``engines``) with its kind's module; returns that
-    kind's run (``run.kind`` names the kind; ``run.ran`` lists exactly what was computed)."""
+    kind's run (``run.kind`` names the kind; ``run.ran`` lists exactly what was computed).
+
+    The kind's estimate of the run's memory and time is checked first
+    (:func:`check_budget`): a run that would exhaust the machine's memory or exceed the time
+    limit in force is refused before anything is allocated."""
+    check_budget(scene, list(engines or scene.engines))
     return kind_module(scene.kind).run(scene, engines, build_dir, progress, log)
+
+
+def check_budget(scene, engines: list[str], **known) -> dict:
+    """The kind's ``estimate(scene, engines, **known)`` checked against the memory and time
+    limits (:func:`cuneate.golden.budget.check`; ``BudgetError`` refuses, one line)."""
+    from ...golden import budget
+    est = kind_module(scene.kind).estimate(scene, engines, **known)
+    budget.check(f"the scene ({est['what']})", est["bytes"], est["seconds"],
+                 "fewer trials or neurons, a shorter scene.duration_ms, a lower update rate "
+                 "or faster engines")
+    return est
 
 
 def agreement(a: list, b: list, dt_ms: float) -> dict:

@@ -163,6 +163,10 @@ def parse_scene(text: str, source: str = "<scene>", base_dir: Path | None = None
                                  f"does not list (it would not be computed)")
         sensor[e] = V.table(f"sensor.{e}", given or {}, params) if e in sensor["effects"] \
             else {}
+    sat = sensor.get("saturation") or {}
+    if sat and not sat["min_nm"] < sat["max_nm"]:
+        V.err("sensor.saturation", f"min_nm ({sat['min_nm']:g}) must be below max_nm "
+                                   f"({sat['max_nm']:g})")
     st = sections["stimulus"]
     kind = kind_for(st["kind"])
     if taxels and kind.name == "afferent":
@@ -200,6 +204,10 @@ def parse_scene(text: str, source: str = "<scene>", base_dir: Path | None = None
     if st["kind"] == "pulses":
         if not st["pulse_amplitudes_N"] or any(a <= 0 for a in st["pulse_amplitudes_N"]):
             V.err("stimulus.pulse_amplitudes_N", "must list amplitudes > 0")
+        amps = [f"{a:g}" for a in st["pulse_amplitudes_N"]]
+        if len(set(amps)) != len(amps):
+            V.err("stimulus.pulse_amplitudes_N", f"lists an amplitude twice ({', '.join(amps)}): "
+                                                 f"each amplitude is one class")
         if len(st["coupling_microstrain_per_N"]) != sensor["channels"]:
             V.err("stimulus.coupling_microstrain_per_N",
                   f"needs one value per channel ({sensor['channels']}), got "
@@ -347,9 +355,13 @@ def load_scene(path) -> Scene:
     """Read and validate a scene file (errors name the file)."""
     p = Path(path)
     try:
-        text = p.read_text()
+        text = p.read_bytes().decode("utf-8")
     except OSError as exc:
         raise SceneError(f"{p}: cannot read scene: {exc.strerror or exc}") from None
+    except UnicodeDecodeError as exc:
+        line = p.read_bytes()[:exc.start].count(b"\n") + 1
+        raise SceneError(f"{p}: line {line}: not UTF-8 text (byte {exc.object[exc.start]:#04x} "
+                         f"at offset {exc.start}); TOML scene files are UTF-8") from None
     return parse_scene(text, str(p), p.parent)
 
 
