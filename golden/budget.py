@@ -30,7 +30,7 @@ import resource
 from dataclasses import dataclass
 
 __all__ = ["BudgetError", "Limits", "limits", "limited", "check", "available_memory",
-           "array_bytes", "fmt_bytes", "fmt_time", "MEMORY_FRACTION", "BASE_BYTES"]
+           "array_bytes", "fmt_bytes", "fmt_count", "fmt_time", "MEMORY_FRACTION", "BASE_BYTES"]
 
 #: Share of the memory this process can still get that one estimated run may use.
 MEMORY_FRACTION = 0.8
@@ -134,6 +134,12 @@ def fmt_bytes(n: float) -> str:
         if n >= 1 << k:
             return f"{n / (1 << k):.3g} {unit}"
     return f"{n:.0f} B"
+
+
+def fmt_count(n: float) -> str:
+    """A count for people: exact below a million, else three significant digits (never a
+    300-digit number)."""
+    return f"{int(n)}" if abs(n) < 1e6 else f"{float(n):.3g}"
 
 
 def fmt_time(s: float) -> str:

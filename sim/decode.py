@@ -100,7 +100,12 @@ def decode(X, y, classes, kind: str = "tree", cv_folds: int = 50, max_depth: int
     if kind == "tree":
         model = DecisionTreeClassifier(max_depth=max_depth, random_state=seed)
     elif kind == "knn":
-        model = KNeighborsClassifier(n_neighbors=min(neighbours, y.size - 1))
+        train = y.size - -(-y.size // folds)        # the smallest training fold
+        if neighbours > train:
+            return Decoded(None, np.zeros((k, k), dtype=int), list(classes), int(y.size), folds,
+                           features, kind, reason=f"{neighbours} neighbours, but the smallest "
+                                                  f"training fold holds {train} samples")
+        model = KNeighborsClassifier(n_neighbors=neighbours)
     else:
         raise ValueError(f"unknown decoder {kind!r}")
     cv = StratifiedKFold(n_splits=folds, shuffle=True, random_state=seed)

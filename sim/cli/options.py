@@ -15,11 +15,12 @@ import re
 from dataclasses import dataclass
 from pathlib import Path
 
-from ...golden.budget import fmt_time
+from ...golden.budget import fmt_count, fmt_time
 
 __all__ = ["CliError", "Parser", "one_line", "anticipated", "ANTICIPATED", "CommandGroups",
-           "finite_float", "positive_float", "positive_int", "nonneg_int", "probability",
-           "verilog_name", "output_dir", "input_file", "run_budget", "check_estimate", "fmt_time",
+           "finite_float", "positive_float", "positive_int", "nonneg_int", "seed_int",
+           "probability", "verilog_name", "output_dir", "input_file", "run_budget",
+           "check_estimate", "fmt_time",
            "engine_choices", "add_run_options", "add_max_minutes", "add_generate_options",
            "run_ticks", "print_run", "clamp_summary", "build_config", "add_rate_options",
            "add_block_commands"]
@@ -139,6 +140,15 @@ def nonneg_int(text: str) -> int:
     val = _int(text)
     if val < 0:
         raise argparse.ArgumentTypeError(f"must be >= 0: {text!r}")
+    return val
+
+
+def seed_int(text: str) -> int:
+    """A random seed: an integer in 0 .. 2**32 - 1 (what every generator here accepts)."""
+    val = nonneg_int(text)
+    if val > 2**32 - 1:
+        raise argparse.ArgumentTypeError(f"a seed must be at most 2**32 - 1 = {2**32 - 1}: "
+                                         f"{text!r}")
     return val
 
 
@@ -265,7 +275,7 @@ def run_ticks(command: str, block: str, args, dt_ms: float, cycles: float, updat
                        f"(dt = {dt_ms:g} ms)")
     per_tick = cycles if ENGINES[args.engine].hdl else updates
     run_budget(command, block, args.engine, float(n) * per_tick, float(n) * bytes_per_tick,
-               f"{n} {unit}s")
+               f"{fmt_count(n)} {unit}s")
     return n
 
 

@@ -24,7 +24,7 @@ from ..engines.registry import ENGINES as ENGINE_TRAITS
 from ..cli.options import (CliError, CommandGroups, add_block_commands, add_max_minutes,
                            add_rate_options, build_config, check_estimate, clamp_summary,
                            engine_choices, finite_float, nonneg_int, output_dir, positive_float,
-                           positive_int, print_run, run_ticks)
+                           positive_int, print_run, run_ticks, seed_int)
 
 __all__ = ["register", "add_coincidence_options", "coincidence_kwargs",
            "coincidence_from_args", "parse_matrix", "print_resources"]
@@ -287,7 +287,7 @@ def register(groups: CommandGroups) -> None:
                    help="spike times (ms) of one source; give it once per source")
     s.add_argument("--input-rate-hz", type=finite_float, default=40.0,
                    help="Poisson rate of every source when no --input is given (default 40)")
-    s.add_argument("--seed", type=nonneg_int, default=0)
+    s.add_argument("--seed", type=seed_int, default=0)
 
     c = groups.root.add_parser("coincidence", help="coincidence-detector experiments "
                                                    "(ridge angle)")
@@ -310,7 +310,7 @@ def register(groups: CommandGroups) -> None:
     r.add_argument("--speed", type=positive_float, default=20.0, help="mm/s")
     r.add_argument("--speed-spread", type=finite_float, default=0.05,
                    help="relative s.d. of the speed per trial")
-    r.add_argument("--seed", type=nonneg_int, default=1)
+    r.add_argument("--seed", type=seed_int, default=1)
     r.add_argument("--json", action="store_true")
     add_max_minutes(r, 60.0)
     r.set_defaults(func=cmd_ridge)

@@ -13,6 +13,7 @@ from __future__ import annotations
 import json
 import sys
 
+from ...golden.budget import fmt_count
 from ..cli.options import (CliError, CommandGroups, add_block_commands, add_rate_options,
                            build_config, finite_float, output_dir, positive_float,
                            positive_int, run_budget)
@@ -220,7 +221,7 @@ def cmd_simulate(args) -> int:
                        f"(dt = {dt_ms:g} ms)")
     est = estimate_run(args.engine, n, n_sweeps)
     run_budget("cuneate simulate izhikevich", "izhikevich", args.engine, est["updates"],
-               est["bytes"], f"{n} neuron(s) x {n_sweeps} updates",
+               est["bytes"], f"{n} neuron(s) x {fmt_count(n_sweeps)} updates",
                "reduce --neurons or --duration-ms, pick a faster engine, or pass --force to "
                "run it anyway with a progress bar")
     bar, progress = _progress_bar(n_sweeps, f"{args.engine} sweeps",

@@ -16,7 +16,7 @@ import numpy as np
 from ..cli.options import (CliError, CommandGroups, add_block_commands, add_max_minutes,
                            add_rate_options, clamp_summary, engine_choices, finite_float,
                            input_file, nonneg_int, output_dir, positive_float, positive_int,
-                           print_run, probability, run_ticks)
+                           print_run, probability, run_ticks, seed_int)
 
 __all__ = ["register", "add_lif_options", "lif_kwargs", "lif_from_kwargs"]
 
@@ -194,7 +194,7 @@ def register(groups: CommandGroups) -> None:
                         "one per neuron")
     s.add_argument("--input-rate", type=probability, default=0.1,
                    help="probability per tick of each input spike (with --weights)")
-    s.add_argument("--seed", type=nonneg_int, default=0)
+    s.add_argument("--seed", type=seed_int, default=0)
     add_lif_options(s, neurons_default=1)
     s.set_defaults(func=cmd_simulate)
 
@@ -216,7 +216,7 @@ def register(groups: CommandGroups) -> None:
     q.add_argument("--inputs", type=positive_int, default=64)
     q.add_argument("--neurons", dest="neurons_q", type=positive_int, default=32)
     q.add_argument("--steps", type=positive_int, default=100)
-    q.add_argument("--seed", type=nonneg_int, default=0)
+    q.add_argument("--seed", type=seed_int, default=0)
     q.add_argument("--json", action="store_true")
     add_max_minutes(q, 60.0)
     q.set_defaults(func=cmd_quantization)

@@ -260,6 +260,14 @@ def parse_scene(text: str, source: str = "<scene>", base_dir: Path | None = None
     if dec["window_ms"] is not None and (len(dec["window_ms"]) != 2
                                          or not dec["window_ms"][0] < dec["window_ms"][1]):
         V.err("decoder.window_ms", "must be [start, end] with start < end")
+    elif dec["window_ms"] is not None and st["kind"] != "recorded":
+        dur = sections["scene"]["duration_ms"]
+        if dec["window_ms"][0] >= dur or dec["window_ms"][1] <= 0:
+            V.err("decoder.window_ms", f"[{dec['window_ms'][0]:g}, {dec['window_ms'][1]:g}] ms "
+                                       f"lies outside the run (0 .. {dur:g} ms): no spike "
+                                       f"would be decoded")
+    if kind.name == "afferent":
+        _check_afferent_decoder(V, dec, st, sections["scene"]["trials"])
     # populations and projections
     pops_raw = raw.get("population", [])
     for key in ("population", "projection"):
@@ -349,6 +357,27 @@ def _projections(V, raw: dict, names: list) -> list:
             V.err(f"projection[{i}].delays_ms", "out of range: delays must be >= 0")
         projs.append(q)
     return projs
+
+
+def _check_afferent_decoder(V, dec: dict, st: dict, trials: int) -> None:
+    """An afferent scene decodes with a tree or k nearest neighbours (``winner`` and
+    ``pattern`` belong to the skin and ridge scenes); per-trial kNN needs more training samples
+    in the smallest fold than ``neighbours``."""
+    if dec["kind"] in ("winner", "pattern"):
+        what = "a taxel skin" if dec["kind"] == "winner" else "ridge scenes"
+        V.err("decoder.kind", f"{dec['kind']!r} decodes {what}; a scene of FBG afferents "
+                              f"takes \"tree\", \"knn\" or \"none\"")
+    if dec["kind"] != "knn" or dec["features"] != "trial" or st["kind"] == "recorded":
+        return
+    n_classes = len(st.get({"grasp": "materials", "slide": "periods_mm",
+                            "pulses": "pulse_amplitudes_N"}.get(st["kind"], ""), []) or [0])
+    n = trials * n_classes
+    folds = min(dec["cv_folds"], trials)
+    train = n - -(-n // folds)
+    if folds >= 2 and dec["neighbours"] > train:
+        V.err("decoder.neighbours", f"{dec['neighbours']} neighbours, but the smallest training "
+                                    f"fold holds {train} trial(s) ({trials} trials x "
+                                    f"{n_classes} classes, {folds} folds)")
 
 
 def load_scene(path) -> Scene:

@@ -135,6 +135,29 @@ CASES = [
      {"s.toml": scene("[sensor]\neffects = [\"strain\", \"saturation\"]\n"
                       "saturation = {min_nm = 1.0, max_nm = -1.0}\n")},
      2, "min_nm (1) must be below max_nm (-1)"),
+    ("decoder-window-outside-run", ["run", "{tmp}/s.toml", "--out", "{tmp}/o"],
+     {"s.toml": scene("[decoder]\nwindow_ms = [500.0, 900.0]\n")}, 2,
+     "decoder.window_ms: [500, 900] ms lies outside the run"),
+    ("decoder-winner-on-gratings", ["run", "{tmp}/s.toml", "--out", "{tmp}/o"],
+     {"s.toml": scene("[decoder]\nkind = \"winner\"\n")}, 2,
+     "a scene of FBG afferents takes"),
+    ("knn-more-neighbours-than-samples", ["run", "{tmp}/s.toml", "--out", "{tmp}/o"],
+     {"s.toml": scene("[decoder]\nkind = \"knn\"\nfeatures = \"trial\"\nneighbours = 50\n"
+                      "cv_folds = 2\n", trials=2)}, 2,
+     "decoder.neighbours: 50 neighbours, but the smallest training fold holds 4 trial(s)"),
+    ("scene-seed-above-2-32", ["run", "{tmp}/s.toml", "--out", "{tmp}/o"],
+     {"s.toml": scene("").replace("trials = 1", "trials = 1\nseed = 4294967296")}, 2,
+     "scene.seed"),
+    ("cli-seed-above-2-32", ["coincidence", "ridge", "--seed", "4294967296"], {}, 2,
+     "a seed must be at most 2**32 - 1"),
+    ("duration-1e300-no-300-digit-number", ["simulate", "lif", "--duration-ms", "1e300"], {},
+     2, "1.6e+301 sweeps"),
+    ("range-search-at-10MHz", ["simulate", "izhikevich", "--engine", "fixed", "--clock-hz",
+                               "1e9", "--update-hz", "1e7", "--duration-ms", "1"], {}, 2,
+     "the state-range search (1 parameter set(s), 5e+06 steps"),
+    ("sweep-reference-without-spikes", ["sweep", "--battery", "yardstick", "--duration-ms", "1",
+                                        "--update-hz", "4000", "--scheduler", "sync", "--out",
+                                        "{tmp}/o"], {}, 2, "has no spike in 1 ms"),
     ("out-empty", ["generate", "coincidence", "--out", ""], {}, 2, "empty directory name"),
     ("lif-probability-above-1", ["simulate", "lif", "--input-rate", "2"], {}, 2,
      "a probability must be in [0, 1]"),
@@ -238,3 +261,16 @@ def test_runaways_refused_under_an_address_space_limit(tmp_path):
     assert len(lines) == len(RUNAWAYS), lines
     for line, c in zip(lines, RUNAWAYS):
         assert c[4] in line, line
+
+
+def test_narrow_state_formats_state_their_rounding_and_warn(capsys):
+    """Fraction bits far below the default's: the run goes on, with one warning line that
+    states the per-update rounding and how far it is above the default formats'."""
+    rc = main(["simulate", "izhikevich", "--engine", "fixed", "--v-frac-bits", "6",
+               "--u-frac-bits", "8", "--duration-ms", "10"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 0
+    assert err == ["cuneate: warning: state formats sQ9.6 (v) and sQ10.8 (u) round v by up to "
+                   "0.00781 mV and u by up to 0.00195 per update, 4096 times the default "
+                   "formats' (v_frac_bits 18, u_frac_bits 20): spike counts may differ from the "
+                   "golden model's many-fold"], err
