@@ -98,6 +98,9 @@ def coincidence_kwargs(args) -> dict:
             raise CliError(f"--delays-ms has shape {delays.shape[0]}x{delays.shape[1]}, the "
                            f"detector {M} targets x {S} sources")
         ticks = delays / dt
+        far = ~(np.abs(ticks) < 2.0 ** 53)         # beyond exact integers: never cast them
+        if far.any():
+            raise CliError(f"--delays-ms: {delays[far][0]:g} ms is out of range (dt = {dt:g} ms)")
         bad = np.abs(ticks - np.round(ticks)) > 1e-9
         if bad.any():
             raise CliError(f"--delays-ms: {delays[bad][0]:g} ms is not a whole number of ticks "
@@ -154,8 +157,9 @@ def _input_ticks(args, S: int, dt: float, n_ticks: int) -> list[np.ndarray]:
             if ts.size and (not np.all(np.isfinite(ts)) or ts.min() < 0):
                 raise CliError(f"--input {text!r} (source {s}): times must be finite and "
                                f">= 0 ms")
-            k = np.unique(np.round(ts / dt).astype(np.int64))
-            out.append(k[k < n_ticks])
+            k = np.round(ts / dt)
+            k = np.unique(k[k < n_ticks].astype(np.int64))   # later times never reach a tick
+            out.append(k)
         return out
     rng = np.random.default_rng(args.seed)
     p = args.input_rate_hz * dt / 1000.0

@@ -161,6 +161,9 @@ CASES = [
     ("sweep-reference-without-spikes", ["sweep", "--battery", "yardstick", "--duration-ms",
                                         "0.5", "--update-hz", "4000", "--scheduler", "sync",
                                         "--out", "{tmp}/o"], {}, 2, "has no spike in 0.5 ms"),
+    ("delay-1e300-ms-never-a-negative-tick", ["simulate", "coincidence", "--delays-ms", "1e300",
+                                              "--duration-ms", "1"], {}, 2,
+     "--delays-ms: 1e+300 ms is out of range"),
     ("out-empty", ["generate", "coincidence", "--out", ""], {}, 2, "empty directory name"),
     ("lif-probability-above-1", ["simulate", "lif", "--input-rate", "2"], {}, 2,
      "a probability must be in [0, 1]"),
@@ -277,3 +280,12 @@ def test_narrow_state_formats_state_their_rounding_and_warn(capsys):
                    "0.00781 mV and u by up to 0.00195 per update, 4096 times the default "
                    "formats' (v_frac_bits 18, u_frac_bits 20): spike counts may differ from the "
                    "golden model's many-fold"], err
+
+
+def test_input_spike_after_the_run_is_not_a_negative_tick(capsys):
+    """A spike time far beyond the run (1e300 ms) falls after it: no spike at all (it used to
+    wrap to tick -9223372036854775808)."""
+    rc = main(["simulate", "coincidence", "--input", "1e300", "--input", "", "--input", "",
+               "--input", "", "--duration-ms", "1", "--json"])
+    data = json.loads(capsys.readouterr().out)
+    assert rc == 0 and data["spikes_ms"] == [[], [], []]
