@@ -80,6 +80,11 @@ class SceneRun:
 
 
 # --------------------------------------------------------------------------- estimate
+#: What a scene run holds beyond a bare process (the decoder's and the report's libraries and
+#: figures): measured 284 MiB peak for the smallest scene.
+REPORT_BYTES = 100 << 20
+
+
 def n_driven(scene: Scene) -> tuple[int, int]:
     """``(trials, neurons)``: every trial of every class, and the driven Izhikevich neurons of
     all of them (the core holds them all)."""
@@ -108,14 +113,14 @@ def estimate(scene: Scene, engines: list[str], n_samples: int | None = None) -> 
     n_ticks = float(n_samples) * hold
     n_core = max(n, 8)
     per_sample = array_bytes(n_samples, n)
-    nbytes = (BASE_BYTES + 4 * array_bytes(trials, n_samples, sen["channels"])
+    nbytes = (BASE_BYTES + REPORT_BYTES + 4 * array_bytes(trials, n_samples, sen["channels"])
               + 6 * per_sample + 200.0 * n_ticks / 16e3 * n * 16)      # spikes at <= 200 Hz
     seconds = search_estimate(len({p["preset"] for p in scene.populations}), 2,
                               1000.0 / hw["update_hz"])["seconds"]
     seconds += 2e-6 * trials * n_samples * sen["channels"] + 1e-6 * n_samples * n
     for e in engines:
         if e == "golden":
-            nbytes += array_bytes(n_ticks, n)
+            nbytes += 2 * array_bytes(n_ticks, n)    # held per tick, and the model's copy
         elif ENGINE_TRAITS[e].level == "rtl":
             nbytes += 48 * per_sample             # the write schedule as Python integers
         per_tick = n_core + PIPELINE_DEPTH + 8 if ENGINE_TRAITS[e].hdl else n_core
