@@ -222,6 +222,11 @@ def decode_trials(spikes_ms, neuron_trial, neuron_grating, trial_class, classes,
                       f"classes with data, fewest grasps with samples in a class "
                       f"{min(grasps.values(), default=0)})")
         return out
+    train = y.size - -(-y.size // folds)            # the smallest training fold (samples)
+    if kind == "knn" and neighbours > train:
+        out.reason = (f"{neighbours} neighbours, but the smallest training fold holds {train} "
+                      f"samples")
+        return out
     model = _model(kind, max_depth, neighbours, seed, y.size)
     per_sample, per_grasp = _grouped_decisions(model, X, y, groups, trial_class.size, folds,
                                                seed, decision)

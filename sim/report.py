@@ -12,13 +12,14 @@ from __future__ import annotations
 
 import html
 import json
+import re
 from pathlib import Path
 
 import numpy as np
 
 __all__ = ["write_report", "summary_dict", "figure_names", "page_head", "figures_html",
            "pyplot", "html_table", "fmt", "write_page", "DPI", "save_figure",
-           "decoding_rows", "DECODING_HEAD"]
+           "decoding_rows", "DECODING_HEAD", "printable", "format_run"]
 
 #: Resolution of every report figure (dots per inch); figures are drawn at their display size.
 DPI = 150
@@ -182,6 +183,15 @@ def summary_dict(run) -> dict:
     }
 
 
+#: Control characters no HTML page may hold (all but tab, line feed and carriage return).
+_CONTROL = re.compile(r"[\x00-\x08\x0b\x0c\x0e-\x1f\x7f]")
+
+
+def printable(page: str) -> str:
+    """``page`` with every control character (a NUL from a scene's name, say) shown as U+FFFD."""
+    return _CONTROL.sub("\ufffd", page)
+
+
 def html_table(rows, head) -> str:
     """An HTML table of ``rows`` under the header ``head`` (cells escaped)."""
     h = "".join(f"<th>{html.escape(str(x))}</th>" for x in head)
@@ -207,8 +217,8 @@ def write_page(out: Path, head: str, body: str, figures) -> Path:
     """``out/index.html``: the page head (:func:`page_head` of ``head``), ``body`` and the
     figures section; returns its path."""
     path = Path(out) / "index.html"
-    path.write_text(f"{page_head(head)}\n{body}\n<h2>Figures</h2>\n{figures_html(figures)}\n"
-                    f"</body></html>\n")
+    path.write_text(printable(f"{page_head(head)}\n{body}\n<h2>Figures</h2>\n"
+                              f"{figures_html(figures)}\n</body></html>\n"))
     return path
 
 
@@ -340,7 +350,9 @@ features.</p>
 <h2>Currents per class (mV/ms) and saturation</h2>
 {html_table(cur_rows, ["class", "lowest peak", "highest peak", "minimum"])}
 <p>Format {html.escape(str(s.get('format')))}: {n_sat} of {s.get('values')} values saturated by
-the driver; {n_range} outside the accepted range; {s.get('gaps_held', 0)} missing samples held.</p>
+the driver; {n_range} outside the accepted range; {s.get('gaps_held', 0)} missing samples held;
+{s.get('samples_past_end', 0)} of {s.get('samples', '-')} samples past the run's end (latency),
+never applied.</p>
 <h2>What ran</h2>
 <ul><li>stimulus: {html.escape(ran['stimulus'])}</li>
 <li>effects: {html.escape(', '.join(ran['effects']) or 'none')}</li>
@@ -354,3 +366,53 @@ the driver; {n_range} outside the accepted range; {s.get('gaps_held', 0)} missin
 {_files_html(getattr(run, "files", {}))}"""
     return write_page(out, run.scene.name, body, figure_names(run))
 
+
+def format_run(run) -> str:
+    """The lines ``cuneate run`` prints for an afferent scene run (its summary on the terminal)."""
+    scene = run.scene
+    out = [f"{scene.name}: {len(run.trial_class)} trials, {len(run.neurons)} neurons, "
+           f"engines {', '.join(run.spikes)}"]
+    first = next((d for d in run.decoded.values() if d.rows), None)
+    if first is not None:
+        h = first.headline
+        out.append(f"  decoding: balanced accuracy of the per-grasp decision ({first.decision} "
+                   f"vote), {h.cv} (chance {100 * h.chance_balanced:.0f} %); published "
+                   f"protocol (per ISI, shuffled k-fold) beside it")
+    for e, t in run.timing["engines_s"].items():
+        d = run.decoded.get(e)
+        if d is None:
+            out.append(f"  {e:10s} not decoded  ({t:.1f} s)")
+            continue
+        if d.accuracy is None:
+            out.append(f"  {e:10s} {d.reason}  ({t:.1f} s)")
+            continue
+        rec = ", ".join(f"{c} {'-' if v is None else f'{100 * v:.0f}'}"
+                        for c, v in d.headline.recall.items())
+        pub = d.row("published")
+        pub = (f"; published {100 * pub.accuracy:.1f} % (balanced "
+               f"{100 * pub.balanced_accuracy:.1f} %)") if pub else ""
+        out.append(f"  {e:10s} balanced accuracy {100 * d.accuracy:5.1f} %  recall % "
+                   f"{rec}{pub}  ({t:.1f} s)")
+    for k, v in run.decode_agreement.items():
+        out.append(f"  balanced accuracy {k}: differs by {100 * v['difference']:.1f} points "
+                   f"(tolerance {100 * v['tolerance']:.1f}): "
+                   f"{'within' if v['within'] else 'OUTSIDE'}")
+    s = run.saturations
+    if s.get("samples_past_end"):
+        out.append(f"  warning: {s['samples_past_end']} of {s['samples']} samples fall past the "
+                   f"run's end (frontend.latency_ticks = "
+                   f"{scene['frontend']['latency_ticks']}) and never reach the core")
+    for e, sp in run.spikes.items():
+        if s.get("samples_past_end") == s.get("samples"):
+            out.append(f"  warning: {e}: no sample reached the core, so no spike is expected")
+        elif not any(len(x) for x in sp):
+            out.append(f"  warning: {e}: no neuron spiked (currents peak at "
+                       f"{s['max_mV_per_ms']:.2f} mV/ms; an RS neuron needs about 3.8)")
+    n_sat = s.get("format_low", 0) + s.get("format_high", 0)
+    if n_sat:
+        out.append(f"  warning: {n_sat} of {s['values']} currents saturated to {s['format']} "
+                   f"(range {s['min_mV_per_ms']:.1f} .. {s['max_mV_per_ms']:.1f} mV/ms)")
+    for k, v in run.agreement.items():
+        out.append(f"  {k}: {v['identical_trains']}/{v['neurons']} identical trains, mean "
+                   f"|spike count diff| {v['mean_abs_count_diff']:.2f}")
+    return "\n".join(out)

@@ -35,7 +35,7 @@ import numpy as np
 __all__ = ["Point", "SweepSpec", "register_battery", "battery_module", "battery_names",
            "reference_trains", "evaluate", "accuracy_row", "ok_row", "same_dt_columns",
            "refused", "point_key", "n_steps", "run_sweep", "pareto_front", "write_sweep",
-           "BLOCK_SAME_DT_KEYS", "VP_Q_PER_MS", "HEADLINE_ERROR", "COSTS"]
+           "BLOCK_SAME_DT_KEYS", "VP_Q_PER_MS", "HEADLINE_ERROR", "COSTS", "estimate_sweep"]
 
 from ..golden.metrics import VP_Q_PER_MS  # noqa: E402  (5 / s, every report's q)
 
@@ -129,8 +129,52 @@ class SweepSpec:
 
 def reference_trains(spec: SweepSpec) -> list[np.ndarray]:
     """The accuracy reference of the spec's battery (its block decides: float64 RK4 at
-    ``reference_hz`` for the Izhikevich batteries)."""
-    return battery_module(spec.battery).reference_trains(spec)
+    ``reference_hz`` for the Izhikevich batteries). Refused (``ValueError``, one line): a
+    reference that diverges or has no spike at all (nothing to measure a point against)."""
+    from ..golden.izhikevich import DivergenceError
+    try:
+        ref = battery_module(spec.battery).reference_trains(spec)
+    except DivergenceError as exc:
+        raise ValueError(f"the reference of battery {spec.battery!r} (at --reference-hz "
+                         f"{spec.reference_hz:g}) diverged: {exc}") from None
+    if not any(len(r) for r in ref):
+        raise ValueError(f"the reference of battery {spec.battery!r} at --reference-hz "
+                         f"{spec.reference_hz:g} has no spike in {spec.duration_ms:g} ms: "
+                         f"nothing to measure the points against (lengthen --duration-ms or "
+                         f"raise --reference-hz)")
+    return ref
+
+
+def estimate_sweep(points: list, spec: SweepSpec, workers: int = 1) -> dict:
+    """Memory (bytes) and time (s) of a sweep before it runs, from the battery's size
+    (``battery_size(name)`` of its block's sweep module: trains, inputs, bytes held per step;
+    ``BLOCK``: the block whose engine speeds apply), the duration and each point's update rate:
+    the reference (RK4, four evaluations per step) and every point (the fixed points and the
+    non-Euler float points also run float64 Euler at their dt), at the engine registry's
+    speeds; the points share ``workers`` processes, each holding one point's per-step
+    arrays."""
+    from ..golden.budget import BASE_BYTES
+    from .engines.registry import estimate_seconds
+    mod = battery_module(spec.battery)
+    size = mod.battery_size(spec.battery)
+    n, per_step = size["trains"], size["bytes_per_step"]
+    ref_steps = spec.duration_ms * spec.reference_hz / 1000.0
+    seconds = 4 * estimate_seconds(mod.BLOCK, "golden", ref_steps * n)
+    peak = ref_steps * per_step
+    work = 0.0
+    for p in points:
+        steps = spec.duration_ms * p.update_hz / 1000.0
+        fixed = p.engine == "fixed"
+        work += estimate_seconds(mod.BLOCK, "fixed" if fixed else "golden", steps * n)
+        if fixed or p.engine != "float64" or getattr(p, "scheme", "euler") != "euler":
+            work += estimate_seconds(mod.BLOCK, "golden", steps * n)
+        peak = max(peak, steps * per_step)
+    lanes = max(1, min(workers, len(points)))
+    return {"bytes": BASE_BYTES + lanes * peak, "seconds": seconds + work / lanes,
+            "what": f"the sweep of {len(points)} point(s) on battery {spec.battery!r} "
+                    f"({n} trains, {spec.duration_ms:g} ms, reference at "
+                    f"{spec.reference_hz:g} Hz)"}
+
 
 def accuracy_row(ref: list, trains: list, dt_ms: float) -> dict:
     """The accuracy columns of a row: ``trains`` against ``ref`` with a tick of ``dt_ms``."""
@@ -200,10 +244,12 @@ def _evaluate_task(p, spec: SweepSpec, ref: list, repeats: int = 1) -> dict:
 
 def run_sweep(points: list, spec: SweepSpec, cache_dir: Path,
               scheduler: str | None = None, workers: int = 2, progress: bool = False,
-              log=None, repeats: int = 1) -> list[dict]:
+              log=None, repeats: int = 1,
+              scheduler_timeout_s: float = 10.0) -> list[dict]:
     """Evaluate ``points`` (cached per point in ``cache_dir``) with Dask; returns the rows in
     the order of ``points``. ``scheduler``: ``None`` (a local cluster of ``workers``
-    processes), ``"sync"`` (in this process, no Dask) or a ``dask.distributed`` address.
+    processes), ``"sync"`` (in this process, no Dask) or a ``dask.distributed`` address, refused
+    (``ValueError``, one line) when it does not answer within ``scheduler_timeout_s``.
     Building the reference and running the points are progress steps
     (:mod:`cuneate.sim.progress`; ``progress`` turns them on when no command has). Every row
     run here gets ``host_time``: how its host seconds were measured (one point at a time, or
@@ -230,15 +276,33 @@ def run_sweep(points: list, spec: SweepSpec, cache_dir: Path,
             todo.append(p)
     say(f"sweep: {len(points)} points, {len(points) - len(todo)} cached, {len(todo)} to run")
     if todo:
+        remote = None
+        if scheduler not in (None, "sync"):        # before any work: a bad address fails fast
+            from dask.distributed import Client
+            try:
+                remote = Client(scheduler, timeout=scheduler_timeout_s)
+            except (ValueError, TypeError) as exc:
+                why = " ".join(str(exc).split())[:200] or type(exc).__name__
+                raise ValueError(f"scheduler {scheduler!r}: not a dask scheduler address "
+                                 f"({why})") from None
+            except (OSError, TimeoutError) as exc:
+                why = " ".join(str(exc).split())[:200] or type(exc).__name__
+                raise ValueError(f"scheduler {scheduler!r}: no dask scheduler answered "
+                                 f"within {scheduler_timeout_s:g} s ({why})") from None
         ref_file = cache_dir / f"reference-{point_key('reference', asdict(spec))}.json"
-        if ref_file.exists():
-            ref = [np.asarray(x) for x in json.loads(ref_file.read_text())]
-            prog.say(f"sweep: the reference of {spec.battery} is cached ({ref_file.name})")
-        else:
-            with prog.step(f"building the reference of battery {spec.battery} "
-                           f"({spec.duration_ms:g} ms; cached for later sweeps)"):
-                ref = reference_trains(spec)
-            ref_file.write_text(json.dumps([r.tolist() for r in ref]))
+        try:
+            if ref_file.exists():
+                ref = [np.asarray(x) for x in json.loads(ref_file.read_text())]
+                prog.say(f"sweep: the reference of {spec.battery} is cached ({ref_file.name})")
+            else:
+                with prog.step(f"building the reference of battery {spec.battery} "
+                               f"({spec.duration_ms:g} ms; cached for later sweeps)"):
+                    ref = reference_trains(spec)
+                ref_file.write_text(json.dumps([r.tolist() for r in ref]))
+        except BaseException:
+            if remote is not None:
+                remote.close()
+            raise
         parallel = len(todo) > 1 and scheduler != "sync" and not (scheduler is None
                                                                    and workers == 1)
         how = (f"alongside other points ({workers if scheduler is None else 'cluster'} "
@@ -268,7 +332,7 @@ def run_sweep(points: list, spec: SweepSpec, cache_dir: Path,
                                        dashboard_address=None, silence_logs=logging.ERROR)
                 client = Client(cluster)
             else:
-                client = Client(scheduler)
+                client = remote
             try:
                 ref_f = client.scatter(ref, broadcast=True)
                 futs = {client.submit(_evaluate_task, p, spec, ref_f, repeats, pure=False): p
@@ -312,7 +376,7 @@ def write_sweep(rows: list[dict], spec: SweepSpec, out: Path, columns=None) -> P
     ``pareto.png`` and ``index.html`` in ``out``."""
     import csv
     import html
-    from .report import figures_html, html_table, page_head, pyplot, save_figure
+    from .report import figures_html, html_table, page_head, printable, pyplot, save_figure
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     with open(out / "sweep.csv", "w", newline="") as f:
@@ -374,5 +438,5 @@ of VP against updates per biological second. Host seconds are measured on a shar
                              "deterministic costs")])}
 </body></html>
 """
-    (out / "index.html").write_text(page)
+    (out / "index.html").write_text(printable(page))
     return out / "index.html"

@@ -27,11 +27,17 @@ Clamps (kinds, in the order of the ``upd_clamp``/``clamp_flags`` bits):
 ``u_high`` / ``u_low``  ``u'`` above ``u_hi`` / below ``u_lo``;
 ``current``  a host current outside ``current_range`` (clamped to it before use);
 ``y``  the ``b v - u`` operand outside its format (only when ``y_int_bits`` narrows it).
+
+Every configuration states the rounding its state registers take per update
+(``state_rounding_per_step``: half an LSB of ``v`` and ``u`` when rounding to nearest, one LSB
+when truncating) and warns when that is :data:`NARROW_STATE_RATIO` times the default formats'
+or more: such formats can change spike counts many-fold against the golden model.
 """
 
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass, field
 from typing import Sequence
 
@@ -42,7 +48,12 @@ from ..lib.config import SATURATION, ConfigError, CoreOptions, int_bits_for, sha
 from ..lib.fixed import FixedConstant, FixedPointError, QFormat, round_shift
 from .range import RangeSearchError, one_step_bound, reachable_ranges
 
-__all__ = ["ConfigError", "IzhikevichConfig", "PIPELINE_DEPTH", "CLAMP_KINDS", "SATURATION"]
+__all__ = ["ConfigError", "IzhikevichConfig", "PIPELINE_DEPTH", "CLAMP_KINDS", "SATURATION",
+           "NARROW_STATE_RATIO"]
+
+#: How many times the default formats' per-update state rounding a configuration may take
+#: before it warns (2**8: eight fraction bits fewer than the default's).
+NARROW_STATE_RATIO = 2.0 ** 8
 
 PIPELINE_DEPTH = 5
 CLAMP_KINDS = ("v_low", "u_high", "u_low", "current", "y")
@@ -275,6 +286,7 @@ class IzhikevichConfig(CoreOptions):
         self.U = U = QFormat(self.u_int_bits, self.u_frac_bits)
         if not V.contains(self.v_th) or V.to_raw(self.v_th) * V.lsb != self.v_th:
             raise ConfigError(f"v_th = {self.v_th:g} is not exactly representable in {V}")
+        self._state_rounding(V, U)
         # clamp levels: just outside the proven range, never outside the formats
         self.v_floor_raw = max(V.min_raw, int(math.floor(v_floor * 2 ** V.frac_bits)))
         self.u_lo_raw = max(U.min_raw, int(math.floor(u_lo * 2 ** U.frac_bits)))
@@ -438,6 +450,21 @@ class IzhikevichConfig(CoreOptions):
         if self.widest_sum_bits >= 62:
             raise ConfigError(f"the datapath's widest sum needs {self.widest_sum_bits} bits; "
                               f"reduce the state fraction bits or the operand widths")
+
+    def _state_rounding(self, V: QFormat, U: QFormat) -> None:
+        """``state_rounding_per_step`` (mV for v, u's unit for u), and a warning when it is
+        :data:`NARROW_STATE_RATIO` times the default formats' or more."""
+        k = 0.5 if self.rounding == "nearest" else 1.0
+        self.state_rounding_per_step = {"v_mV": k * V.lsb, "u": k * U.lsb}
+        fields = type(self).__dataclass_fields__
+        ratio = max(V.lsb * 2.0 ** fields["v_frac_bits"].default,
+                    U.lsb * 2.0 ** fields["u_frac_bits"].default)
+        if ratio >= NARROW_STATE_RATIO:
+            warnings.warn(f"state formats {V} (v) and {U} (u) round v by up to {k * V.lsb:.3g} mV "
+                          f"and u by up to {k * U.lsb:.3g} per update, {ratio:g} times the "
+                          f"default formats' (v_frac_bits {fields['v_frac_bits'].default}, "
+                          f"u_frac_bits {fields['u_frac_bits'].default}): spike counts may "
+                          f"differ from the golden model's many-fold", stacklevel=3)
 
     # ------------------------------------------------------------------------------------------
     def to_kwargs(self, **override) -> dict:

@@ -43,7 +43,7 @@ from __future__ import annotations
 import contextlib
 from types import SimpleNamespace
 
-from amaranth import Array, Cat, ClockDomain, Elaboratable, Module, Mux, Signal
+from amaranth import ClockDomain, Elaboratable, Module, Mux, Signal
 from amaranth.hdl import Fragment
 from amaranth.hdl._ast import AnyConst, AnySeq
 

@@ -13,7 +13,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from .options import CliError, CommandGroups, output_dir
+from .options import CliError, CommandGroups, add_max_minutes, output_dir
 
 __all__ = ["register", "cmd_run", "resolve_scene"]
 
@@ -133,4 +133,5 @@ def register(groups: CommandGroups) -> None:
     add_quiet_option(p)
     p.add_argument("-v", "--verbose", action="store_true",
                    help="in a terminal, also print the end of each stage above the bars")
+    add_max_minutes(p, 60.0)
     p.set_defaults(func=cmd_run)

@@ -3,7 +3,10 @@ fraction bits, rounding, the golden model's scheme; see :mod:`cuneate.sim.sweep`
 
 from __future__ import annotations
 
-from .options import (CliError, CommandGroups, add_quiet_option, output_dir, positive_float,
+import math
+
+from .options import (CliError, CommandGroups, add_max_minutes, add_quiet_option, output_dir,
+                      positive_float,
                       positive_int)
 
 __all__ = ["register", "cmd_sweep"]
@@ -16,12 +19,16 @@ def _list(text: str, conv, what: str) -> list:
         raise CliError(f"{what}: expected a comma-separated list, got {text!r}") from None
     if not out:
         raise CliError(f"{what}: empty list")
+    for x in out:
+        if isinstance(x, float) and not math.isfinite(x):
+            raise CliError(f"{what}: not a finite number: {x!r} (in {text!r})")
     return out
 
 
 def cmd_sweep(args) -> int:
+    from ...golden import budget
     from .. import progress
-    from ..sweep import SweepSpec, battery_module, run_sweep, write_sweep
+    from ..sweep import SweepSpec, battery_module, estimate_sweep, run_sweep, write_sweep
     from .options import start_progress
     try:
         block = battery_module(args.battery)
@@ -45,11 +52,25 @@ def cmd_sweep(args) -> int:
         pts, columns = block.points_from_args(args, rates, widths, rnd, floats, _list)
     except ValueError as exc:
         raise CliError(f"cuneate sweep: {exc}") from None
+    if args.reference_hz < max(p.update_hz for p in pts):
+        raise CliError(f"--reference-hz {args.reference_hz:g} is coarser than the point at "
+                       f"{max(p.update_hz for p in pts):g} Hz: the reference must be at least "
+                       f"as fine as every point")
+    try:
+        est = estimate_sweep(pts, spec, 1 if args.scheduler == "sync" else args.workers)
+        budget.check(est["what"], est["bytes"], est["seconds"],
+                     "shorten --duration-ms, lower --reference-hz or sweep fewer points")
+    except ValueError as exc:
+        raise CliError(f"cuneate sweep: {exc}") from None
     izhikevich = block.__name__.endswith(".izhikevich.sweep")
     out = output_dir(args.out)
     start_progress(args)
-    rows = run_sweep(pts, spec, out / "cache", scheduler=args.scheduler, workers=args.workers,
-                     repeats=args.repeat)
+    try:
+        rows = run_sweep(pts, spec, out / "cache", scheduler=args.scheduler,
+                         workers=args.workers, repeats=args.repeat,
+                         scheduler_timeout_s=args.scheduler_timeout_s)
+    except ValueError as exc:
+        raise CliError(f"cuneate sweep: {exc}") from None
     with progress.step("writing the sweep report"):
         page = write_sweep(rows, spec, out, columns)
     print(f"error against the reference (spike-count error, mean VP at q = 5/s); within one tick "
@@ -131,4 +152,7 @@ def register(groups: CommandGroups) -> None:
                    help="run each point N times and keep the fastest host time (with "
                         "--scheduler sync: the host cost measured in isolation)")
     add_quiet_option(p)
+    p.add_argument("--scheduler-timeout-s", type=positive_float, default=10.0,
+                   help="how long to wait for --scheduler to answer")
+    add_max_minutes(p, 60.0)
     p.set_defaults(func=cmd_sweep)

@@ -213,6 +213,12 @@ def _cache_key(sources, toplevel: str, args: list[str], waves: bool) -> str:
             h.update(f"{pkg}={version(pkg)};".encode())
         except PackageNotFoundError:
             h.update(f"{pkg}={shutil.which(pkg)};".encode())
+    # the simulator binary loads cocotb's VPI library from this environment's path (RUNPATH):
+    # a binary built from another environment may not find it
+    import importlib.util
+    spec = importlib.util.find_spec("cocotb")
+    libs = Path(spec.origin).parent / "libs" if spec and spec.origin else None
+    h.update(f"libs={libs};".encode())
     h.update(json.dumps([toplevel, args, bool(waves), "1ns/1ps"]).encode())
     for a in args:                       # files given as build arguments (a DPI source)
         if Path(a).is_file():

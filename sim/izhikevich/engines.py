@@ -251,7 +251,7 @@ class _Buffered(Transport):
         self.tick = 0
         self.writes: list[tuple[int, int, list[int]]] = []
         self.cnt = {"writes": 0, "words": 0, "spikes": 0, "spikes_counted": 0, "overflow": 0,
-                    "overrun": 0, "late_writes": 0, "sweeps": 0}
+                    "overrun": 0, "late_writes": 0, "sweeps": 0, "frames_lost": 0}
         self.clamps = {k: 0 for k in CLAMP_KINDS}
         self.wall_s = 0.0
 

@@ -27,8 +27,8 @@ import numpy as np
 from ...golden import izhikevich as golden
 from ...golden.fbg import IIRFilter, design_bandpass
 from ...golden.tactile import (MATERIALS, GraspSpec, Material, Pad, PulseSpec, SlideSpec,
-                              apply_effects, synthesize_grasp, synthesize_pulse,
-                              synthesize_slide)
+                              apply_effects, sensor_effects, synthesize_grasp,
+                              synthesize_pulse, synthesize_slide)
 from ...hdl.lib.fixed import QFormat
 from ..decode import decode_trials
 from ..engines.registry import ENGINES as ENGINE_TRAITS
@@ -39,7 +39,7 @@ from .scene import Scene
 
 __all__ = ["SceneRun", "run", "BLOCKS", "ENGINES", "synthesize", "build_neurons",
            "front_end", "summary", "write_report", "format_run", "write_spike_files",
-           "waves_request"]
+           "waves_request", "estimate", "n_driven"]
 
 
 @dataclass
@@ -82,6 +82,57 @@ class SceneRun:
     kind: str = "afferent"
 
 
+# --------------------------------------------------------------------------- estimate
+#: What a scene run holds beyond a bare process (the decoder's and the report's libraries and
+#: figures): measured 284 MiB peak for the smallest scene.
+REPORT_BYTES = 100 << 20
+
+
+def n_driven(scene: Scene) -> tuple[int, int]:
+    """``(trials, neurons)``: every trial of every class, and the driven Izhikevich neurons of
+    all of them (the core holds them all)."""
+    trials = 1 if scene["stimulus"]["kind"] == "recorded" else \
+        scene["scene"]["trials"] * len(scene.classes())
+    return trials, trials * sum(p["size"] for p in scene.populations
+                                if p["model"] == "izhikevich")
+
+
+def estimate(scene: Scene, engines: list[str], n_samples: int | None = None) -> dict:
+    """Memory (bytes) and time (s) of running ``scene`` on ``engines``, from its parameters
+    (``n_samples``: the trace's length when known, else the scene's duration): the traces
+    and their synthesis, the front end's arrays (shifts, currents, raw currents), the golden
+    engine's per-tick currents, the batch engines' write schedules and the spikes; the state
+    range search, each engine's updates (or cycles) at the registry's speed."""
+    from ...golden.budget import BASE_BYTES, array_bytes
+    from ...hdl.izhikevich import PIPELINE_DEPTH
+    from ...hdl.izhikevich.range import search_estimate
+    from ..engines.registry import estimate_seconds
+    sen, hw = scene["sensor"], scene["hardware"]
+    fs = sen["sample_rate_hz"]
+    if n_samples is None:
+        n_samples = round(scene["scene"]["duration_ms"] * fs / 1000.0)
+    trials, n = n_driven(scene)
+    hold = max(1, round(hw["update_hz"] / fs))
+    n_ticks = float(n_samples) * hold
+    n_core = max(n, 8)
+    per_sample = array_bytes(n_samples, n)
+    nbytes = (BASE_BYTES + REPORT_BYTES + 4 * array_bytes(trials, n_samples, sen["channels"])
+              + 6 * per_sample + 200.0 * n_ticks / 16e3 * n * 16)      # spikes at <= 200 Hz
+    seconds = search_estimate(len({p["preset"] for p in scene.populations}), 2,
+                              1000.0 / hw["update_hz"])["seconds"]
+    seconds += 2e-6 * trials * n_samples * sen["channels"] + 1e-6 * n_samples * n
+    for e in engines:
+        if e == "golden":
+            nbytes += 2 * array_bytes(n_ticks, n)    # held per tick, and the model's copy
+        elif ENGINE_TRAITS[e].level == "rtl":
+            nbytes += 48 * per_sample             # the write schedule as Python integers
+        per_tick = n_core + PIPELINE_DEPTH + 8 if ENGINE_TRAITS[e].hdl else n_core
+        seconds += estimate_seconds("izhikevich", e, n_ticks * per_tick)
+    return {"bytes": nbytes, "seconds": seconds, "ticks": n_ticks, "neurons": n,
+            "what": f"{trials} trial(s) x {n // max(trials, 1)} neuron(s), {n_ticks:.3g} ticks "
+                    f"on {', '.join(engines)}"}
+
+
 # --------------------------------------------------------------------------- stimulus
 def _material(m) -> Material:
     if isinstance(m, str):
@@ -100,12 +151,22 @@ def synthesize(scene: Scene):
     effect_params = {e: sen[e] for e in sen["effects"] if e != "strain"}
     counts_all: dict = {}
     if st["kind"] == "recorded":
-        from ..host.traces import load_trace
+        from ..host.traces import TraceError, load_trace
         tr = load_trace(st["file"], time_key=st["time_key"], data_key=st["data_key"],
                         struct=st["struct"] or None, time_unit=st["time_unit"],
                         shift_unit=st["shift_unit"], expect_fs_hz=fs,
                         channels=sen["channels"])
-        return classes, [classes[0]], [tr.d_lambda_nm], [tr.info], {}
+        x = tr.d_lambda_nm
+        big = np.abs(x) >= sen["lambda_B_nm"]
+        if big.any():
+            r, c = (int(v) for v in np.argwhere(big)[0])
+            raise TraceError(f"{st['file']}: row {r}, grating {c}: a shift of {x[r, c]:.3g} nm is "
+                             f"not a Bragg shift of a {sen['lambda_B_nm']:g} nm grating (check "
+                             f"stimulus.shift_unit)")
+        # the sensor effects the scene lists act on the recorded shifts too
+        x, counts = sensor_effects(x, sen["effects"], effect_params, rng, fs,
+                                   sen["lambda_B_nm"])
+        return classes, [classes[0]], [x], [tr.info], counts
     for c, cls in enumerate(classes):
         for t in range(sc["trials"]):
             if st["kind"] == "grasp":
@@ -225,7 +286,14 @@ def front_end(scene: Scene, neurons: Neurons, traces: list, infos: list, cfg):
                     scene["frontend"]["latency_ticks"], on_gap=on_gap)
     dl = np.stack([traces[t][:, g] for t, g in zip(neurons.trial, neurons.grating)], axis=1)
     x, gaps = drv.fill_gaps(dl)
-    currents = drv.currents(x)
+    with np.errstate(over="ignore", invalid="ignore"):
+        currents = drv.currents(x)
+    bad = ~np.isfinite(currents)
+    if bad.any():
+        j, i = (int(v) for v in np.argwhere(bad)[0])
+        raise ValueError(f"the front end's current of neuron {i} is {currents[j, i]!r} at sample "
+                         f"{j} (shifts up to {float(np.max(np.abs(x))):.3g} nm): lower the front "
+                         f"end's gain (frontend.gain_S, frontend.sa_gain, population gain)")
     if scene["frontend"]["window"] == "loading":
         # the front end sees the loading phase only (contact to stop), per trial
         t_ms = np.arange(dl.shape[0]) * 1000.0 / sen["sample_rate_hz"]
@@ -244,8 +312,19 @@ def run_golden(ctx) -> tuple[list, dict]:
     n = len(ctx["neurons"])
     params = [golden.to_params(p) for p in ctx["neurons"].preset]
     cur = drv.held(ctx["currents"], ctx["n_ticks"])
-    r = golden.simulate(params, cur, n_steps=ctx["n_ticks"], n_neurons=n, dt_ms=cfg.dt_ms,
-                        scheme="euler", progress=ctx.get("progress"))
+    try:
+        r = golden.simulate(params, cur, n_steps=ctx["n_ticks"], n_neurons=n, dt_ms=cfg.dt_ms,
+                            scheme="euler", progress=ctx.get("progress"))
+    except golden.DivergenceError as exc:
+        nn, i = ctx["neurons"], exc.neuron
+        peak = float(np.max(np.abs(ctx["currents"][:, i])))
+        raise ValueError(
+            f"the golden engine diverged: neuron {i} (trial {nn.trial[i]}, population "
+            f"{nn.population[i]!r}, grating {nn.grating[i]}) leaves |v|, |u| <= {exc.bound:g} at "
+            f"t = {(exc.step + 1) * exc.dt_ms:g} ms under front-end currents up to {peak:.3g} "
+            f"mV/ms (the core saturates at {cfg.I.max_value:g}); lower the front end's gain "
+            f"(frontend.gain_S, frontend.sa_gain, population gain) or the sensor effects' "
+            f"size") from None
     return [np.asarray(s) for s in r.spikes_ms], {"spikes": int(sum(len(s) for s in
                                                                     r.spikes_ms))}
 
@@ -321,10 +400,14 @@ def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None =
         if log is not None:
             log(msg)
     t0 = time.perf_counter()
+    names = list(engines or scene.engines)
     n_grasps = scene["scene"]["trials"] * len(scene.classes())
     with prog.step(f"synthesizing the stimulus ({n_grasps} trial(s))"):
         classes, trial_class, traces, infos, effect_counts = synthesize(scene)
     timing["stimulus_s"] = time.perf_counter() - t0
+    if scene["stimulus"]["kind"] == "recorded":     # its length is known now
+        from .runner import check_budget
+        check_budget(scene, names, n_samples=traces[0].shape[0])
     say(f"stimulus: {len(traces)} trial(s) of {traces[0].shape[0]} samples x "
         f"{traces[0].shape[1]} grating(s) ({timing['stimulus_s']:.2f} s)")
     t0 = time.perf_counter()
@@ -340,10 +423,16 @@ def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None =
         raw, sat = drv.quantize(currents)
     sat["gaps_held"] = gaps
     n_ticks = currents.shape[0] * drv.hold_ticks
+    # samples whose tick (j R + L) falls at or after the run's end are never applied: counted
+    sat["samples"] = int(currents.shape[0])
+    sat["samples_past_end"] = int(np.count_nonzero(
+        drv.tick_of_sample(np.arange(currents.shape[0])) >= n_ticks))
+    if sat["samples_past_end"]:
+        say(f"warning: latency of {drv.latency_ticks} ticks puts {sat['samples_past_end']} of "
+            f"{sat['samples']} samples past the run's end: never applied")
     timing["front_end_s"] = time.perf_counter() - t0
     ctx = {"config": cfg, "driver": drv, "neurons": neurons, "currents": currents, "raw": raw,
            "n_ticks": n_ticks, "build_dir": build_dir, "waves": waves_request(scene, waves)}
-    names = list(engines or scene.engines)
     for e in names:
         if e not in ENGINES:
             raise ValueError(f"unknown engine {e!r}; known: {', '.join(ENGINES)}")
@@ -477,44 +566,5 @@ def write_report(run: SceneRun, out: Path) -> Path:
 
 def format_run(run: SceneRun) -> str:
     """The lines ``cuneate run`` prints for an afferent scene."""
-    scene = run.scene
-    out = [f"{scene.name}: {len(run.trial_class)} trials, {len(run.neurons)} neurons, "
-           f"engines {', '.join(run.spikes)}"]
-    first = next((d for d in run.decoded.values() if d.rows), None)
-    if first is not None:
-        h = first.headline
-        out.append(f"  decoding: balanced accuracy of the per-grasp decision ({first.decision} "
-                   f"vote), {h.cv} (chance {100 * h.chance_balanced:.0f} %); published "
-                   f"protocol (per ISI, shuffled k-fold) beside it")
-    for e, t in run.timing["engines_s"].items():
-        d = run.decoded.get(e)
-        if d is None:
-            out.append(f"  {e:10s} not decoded  ({t:.1f} s)")
-            continue
-        if d.accuracy is None:
-            out.append(f"  {e:10s} {d.reason}  ({t:.1f} s)")
-            continue
-        rec = ", ".join(f"{c} {'-' if v is None else f'{100 * v:.0f}'}"
-                        for c, v in d.headline.recall.items())
-        pub = d.row("published")
-        pub = (f"; published {100 * pub.accuracy:.1f} % (balanced "
-               f"{100 * pub.balanced_accuracy:.1f} %)") if pub else ""
-        out.append(f"  {e:10s} balanced accuracy {100 * d.accuracy:5.1f} %  recall % "
-                   f"{rec}{pub}  ({t:.1f} s)")
-    for k, v in run.decode_agreement.items():
-        out.append(f"  balanced accuracy {k}: differs by {100 * v['difference']:.1f} points "
-                   f"(tolerance {100 * v['tolerance']:.1f}): "
-                   f"{'within' if v['within'] else 'OUTSIDE'}")
-    s = run.saturations
-    for e, sp in run.spikes.items():
-        if not any(len(x) for x in sp):
-            out.append(f"  warning: {e}: no neuron spiked (currents peak at "
-                       f"{s['max_mV_per_ms']:.2f} mV/ms; an RS neuron needs about 3.8)")
-    n_sat = s.get("format_low", 0) + s.get("format_high", 0)
-    if n_sat:
-        out.append(f"  warning: {n_sat} of {s['values']} currents saturated to {s['format']} "
-                   f"(range {s['min_mV_per_ms']:.1f} .. {s['max_mV_per_ms']:.1f} mV/ms)")
-    for k, v in run.agreement.items():
-        out.append(f"  {k}: {v['identical_trains']}/{v['neurons']} identical trains, mean "
-                   f"|spike count diff| {v['mean_abs_count_diff']:.2f}")
-    return "\n".join(out)
+    from ..report import format_run as fmt_run
+    return fmt_run(run)

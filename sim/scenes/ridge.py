@@ -31,7 +31,7 @@ from pathlib import Path
 import numpy as np
 
 __all__ = ["validate", "RidgeSceneRun", "run", "summary", "write_report", "format_run",
-           "spec_of"]
+           "spec_of", "estimate"]
 
 
 def validate(V, raw: dict, sections: dict, pops: list, projs: list) -> None:
@@ -127,6 +127,20 @@ def validate(V, raw: dict, sections: dict, pops: list, projs: list) -> None:
     if sc["trials"] < 2:
         V.err("scene.trials", "a ridge scene needs at least 2 trials per angle (half train "
                               "the lookup table)")
+    from ..coincidence.experiments import ridge_problem
+    bad = ridge_problem(spec_of(_Sections(sections, pops, projs)))
+    if bad is not None:
+        V.err(f"stimulus.{bad[0]}", bad[1])
+
+
+class _Sections:
+    """The parts of a scene :func:`spec_of` reads, while the scene is being validated."""
+
+    def __init__(self, sections, populations, projections):
+        self.sections, self.populations, self.projections = sections, populations, projections
+
+    def __getitem__(self, key):
+        return self.sections[key]
 
 
 def spec_of(scene):
@@ -153,6 +167,13 @@ def spec_of(scene):
                      trials_per_angle=sc["trials"], spread_speed=st["spread_speed"],
                      spread_force=st["spread_force"], jitter_ms=st["jitter_ms"], seed=sc["seed"],
                      update_hz=hw["update_hz"], delays_ticks=delays)
+
+
+def estimate(scene, engines: list[str]) -> dict:
+    """Memory (bytes) and time (s) of the ridge scene on ``engines``
+    (:func:`cuneate.sim.coincidence.experiments.ridge_estimate` of its experiment)."""
+    from ..coincidence.experiments import ridge_estimate
+    return ridge_estimate(spec_of(scene), engines)
 
 
 @dataclass

@@ -12,7 +12,7 @@ import numpy as np
 
 from .registry import kind_module
 
-__all__ = ["run_scene", "agreement", "kind_of"]
+__all__ = ["run_scene", "agreement", "kind_of", "check_budget"]
 
 
 def kind_of(run_or_scene) -> str:
@@ -26,10 +26,15 @@ def run_scene(scene, engines: list[str] | None = None, build_dir: Path | None = 
     kind's run (``run.kind`` names the kind; ``run.ran`` lists exactly what was computed).
     ``progress``: show what each stage does (:mod:`cuneate.sim.progress`, on stderr) when no
     command has chosen how yet. ``waves``: a :class:`~cuneate.sim.engines.waves.Waves` window
-    (afferent scenes; the others refuse it)."""
+    (afferent scenes; the others refuse it).
+
+    The kind's estimate of the run's memory and time is checked first
+    (:func:`check_budget`): a run that would exhaust the machine's memory or exceed the time
+    limit in force is refused before anything is allocated."""
     from .. import progress as prog
     if progress and prog.mode() == "quiet":
         prog.configure("auto")
+    check_budget(scene, list(engines or scene.engines))
     mod = kind_module(scene.kind)
     if waves is not None or scene["run"]["waves"]:
         if scene.kind != "afferent":
@@ -37,6 +42,17 @@ def run_scene(scene, engines: list[str] | None = None, build_dir: Path | None = 
                              f"core); a {scene.kind} scene has none")
         return mod.run(scene, engines, build_dir, progress, log, waves=waves)
     return mod.run(scene, engines, build_dir, progress, log)
+
+
+def check_budget(scene, engines: list[str], **known) -> dict:
+    """The kind's ``estimate(scene, engines, **known)`` checked against the memory and time
+    limits (:func:`cuneate.golden.budget.check`; ``BudgetError`` refuses, one line)."""
+    from ...golden import budget
+    est = kind_module(scene.kind).estimate(scene, engines, **known)
+    budget.check(f"the scene ({est['what']})", est["bytes"], est["seconds"],
+                 "fewer trials or neurons, a shorter scene.duration_ms, a lower update rate "
+                 "or faster engines")
+    return est
 
 
 def agreement(a: list, b: list, dt_ms: float) -> dict:

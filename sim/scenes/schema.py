@@ -53,7 +53,7 @@ EFFECT_PARAMS = {
 SCHEMA: dict = {
     "scene": {"name": F(str, "scene"), "description": F(str, ""),
               "duration_ms": F(NUM, 700.0, lo=1, hi=600_000),
-              "trials": F(int, 10, lo=1, hi=10_000), "seed": F(int, 1, lo=0)},
+              "trials": F(int, 10, lo=1, hi=10_000), "seed": F(int, 1, lo=0, hi=2**32 - 1)},
     "sensor": {"kind": F(str, "fbg", choices=("fbg", "taxels")),
                "channels": F(int, 2, lo=1, hi=1024),
                "grid": F(list, None, items=int),

@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 
 __all__ = ["LIF_PRESETS", "validate", "SkinSceneRun", "run", "summary", "write_report",
-           "format_run"]
+           "format_run", "estimate"]
 
 #: LIF parameter sets a skin population may name (the brief's two cells).
 LIF_PRESETS = {
@@ -130,6 +130,23 @@ def validate(V, raw: dict, sections: dict, pops: list, projs: list) -> None:
     elif dec["kind"] not in ("winner", "none"):
         V.err("decoder.kind", f"a taxel skin decodes the pressed taxel (kind = \"winner\" or "
                               f"\"none\"), got {dec['kind']!r}")
+
+
+def estimate(scene, engines: list[str]) -> dict:
+    """Memory (bytes) and time (s) of the skin scene on ``engines``: the force and current
+    arrays per tick and taxel (and each engine's program), each engine's updates (or cycles)
+    at the registry's speed."""
+    from ...golden.budget import BASE_BYTES, array_bytes
+    from ..engines.registry import ENGINES, estimate_seconds
+    rows, cols = scene["sensor"]["grid"]
+    n = rows * cols
+    n_ticks = scene["scene"]["duration_ms"] * scene["hardware"]["update_hz"] / 1000.0
+    per_tick = array_bytes(n_ticks, n)
+    nbytes = BASE_BYTES + 3 * per_tick + sum(3 * per_tick for _ in engines)
+    seconds = sum(estimate_seconds("lif", e, n_ticks * (n + 8 if ENGINES[e].hdl else n))
+                  for e in engines)
+    return {"bytes": nbytes, "seconds": seconds,
+            "what": f"a {rows}x{cols} skin, {n_ticks:.3g} ticks on {', '.join(engines)}"}
 
 
 @dataclass
