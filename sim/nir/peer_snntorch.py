@@ -107,8 +107,14 @@ def train(data_path, out_dir, bits, qat, seed, hidden, epochs):
             fc1.weight.copy_(_quant(fc1.weight, bits))
             fc2.weight.copy_(_quant(fc2.weight, bits))
     os.makedirs(out_dir, exist_ok=True)
-    net = torch.nn.Sequential(fc1, lif1, fc2, lif2)
-    graph = export_to_nir(net, xte[:1, 0])
+    # the exported copy: neurons that keep their state inside (a Sequential passes spikes on)
+    # with per-neuron parameters (NIR's shape inference needs them)
+    def exported(n):
+        return snn.Leaky(beta=torch.full((n,), beta), threshold=torch.full((n,), thr),
+                         spike_grad=sg, reset_mechanism="zero", reset_delay=False,
+                         init_hidden=True)
+    net = torch.nn.Sequential(fc1, exported(hidden), fc2, exported(n_cls))
+    graph = export_to_nir(net, xte[0, 0])
     import nir
     nir.write(os.path.join(out_dir, "model.nir"), graph)
     print(json.dumps({"accuracy": acc, "train_s": train_s, "bits": bits, "qat": bool(qat)}))

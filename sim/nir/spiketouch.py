@@ -44,6 +44,8 @@ BETA, THRESHOLD = 0.9, 1.0
 #: the seed study's test accuracies (%)
 SEED_FIGURES = {"float": 95.0, "int8": 84.5, "int4": 74.75, "int8-qat": 90.75,
                 "int4-qat": 84.88}
+#: the ECP5 cells the resource table lists (yosys ``synth_ecp5`` names)
+RESOURCE_CELLS = ("LUT4", "TRELLIS_FF", "TRELLIS_DPR16X4", "DP16KD", "MULT18X18D", "CCU2C")
 #: name -> (weight bits, quantization-aware training)
 CONFIGS = {"float": (0, 0), "int8": (8, 0), "int4": (4, 0), "int8-qat": (8, 1),
            "int4-qat": (4, 1)}
@@ -133,7 +135,8 @@ def _resources(mapped_by_bits: dict, out: Path) -> list:
         res = synthesize(lif_verilog(cfg), "lif_core", "ecp5", workdir=out / f"synth_w{bits}")
         rows.append({"weight_bits": bits, "neurons": cfg.n_neurons, "inputs": cfg.n_inputs,
                      "weight_ram_bits": cfg.n_neurons * cfg.n_inputs * cfg.W.width,
-                     **{k: v for k, v in res.items() if isinstance(v, (int, float, str))}})
+                     "flow": res["flow"], "synth_s": res["seconds"],
+                     **{k: int(res["cells"].get(k, 0)) for k in RESOURCE_CELLS}})
     return rows
 
 
@@ -209,11 +212,10 @@ def format_table(res: SpikeTouchResult) -> str:
                      f"| {100 * r['snntorch']:.1f} % | {100 * r['golden']:.1f} % | "
                      f"{100 * r['fixed']:.1f} % | {hv} |")
     if res.resources:
-        lines += ["", "| weight bits | neurons x inputs | weight RAM bits | cells |",
-                  "| --- | --- | --- | --- |"]
+        lines += ["", "| weight bits | neurons x inputs | weight RAM bits | "
+                  + " | ".join(RESOURCE_CELLS) + " |", "| --- " * (3 + len(RESOURCE_CELLS)) + "|"]
         for r in res.resources:
-            cells = ", ".join(f"{k} {v}" for k, v in r.items()
-                              if k not in ("weight_bits", "neurons", "inputs", "weight_ram_bits"))
             lines.append(f"| {r['weight_bits']} | {r['neurons']} x {r['inputs']} | "
-                         f"{r['weight_ram_bits']} | {cells} |")
+                         f"{r['weight_ram_bits']} | "
+                         + " | ".join(str(r.get(k, "-")) for k in RESOURCE_CELLS) + " |")
     return "\n".join(lines)

@@ -272,7 +272,7 @@ def test_runaways_refused_under_an_address_space_limit(tmp_path):
 def test_narrow_state_formats_state_their_rounding_and_warn(capsys):
     """Fraction bits far below the default's: the run goes on, with one warning line that
     states the per-update rounding and how far it is above the default formats'."""
-    rc = main(["simulate", "izhikevich", "--engine", "fixed", "--v-frac-bits", "6",
+    rc = main(["-q", "simulate", "izhikevich", "--engine", "fixed", "--v-frac-bits", "6",
                "--u-frac-bits", "8", "--duration-ms", "10"])
     err = capsys.readouterr().err.strip().splitlines()
     assert rc == 0
