@@ -40,7 +40,7 @@ from ..hdl.link.codec import (COUNTER_NAMES, FRAME_ERRORS, MSG_COUNTERS, MSG_SPI
                               encode_frame, parse_counters, parse_spikes, write_message)
 from ..hdl.link.twin import LinkModel
 from ..hdl.link.codec import MAX_FRAME, MIN_FRAME
-from ..sim.host.transport import SpikeBatch, Transport, TransportError
+from ..sim.host.transport import SimulatedSerial, SpikeBatch, Transport, TransportError
 
 __all__ = ["UartTransport", "ModelSerial", "DEVICE_ERRORS", "HOST_ERRORS"]
 
@@ -55,7 +55,7 @@ class _NoAnswer(TransportError):
     """The device did not answer in time (while the transport was asking why)."""
 
 
-class ModelSerial:
+class ModelSerial(SimulatedSerial):
     """A serial port whose far end is :class:`LinkModel` (the device's protocol on the twin):
     what is written is fed to the model, which runs each step at once; ``read`` returns its
     answers. ``corrupt``, if given, is called on every chunk the device sends and
@@ -80,14 +80,6 @@ class ModelSerial:
             out = self.corrupt(out)
         self._rx += out
         return n
-
-    def read(self, size: int = 1) -> bytes:
-        out, self._rx = bytes(self._rx[:size]), self._rx[size:]
-        return out
-
-    @property
-    def in_waiting(self) -> int:
-        return len(self._rx)
 
     @property
     def silent(self) -> bool:

@@ -13,6 +13,21 @@ from cuneate.sim.engines.toolchain import apply_simulator_env
 apply_simulator_env()
 
 
+@pytest.fixture
+def v_one_high(monkeypatch):
+    """``v_one_high(module)``: fault ``module.update_state`` so that ``v`` comes out one LSB high
+    (a proof's reference keeps the true stage function, bound at import)."""
+    def apply(module):
+        true_update = module.update_state
+
+        def faulty(cfg, *args):
+            out = dict(true_update(cfg, *args))
+            out["v"] = out["v"] + 1
+            return out
+        monkeypatch.setattr(module, "update_state", faulty)
+    return apply
+
+
 @pytest.fixture(scope="session")
 def build_root() -> Path:
     """Root of per-case simulator build directories (``CUNEATE_BUILD_DIR`` or ``build/tests``)."""

@@ -33,7 +33,7 @@ from ..lib.datapath import const_like, false_like, lookup, select_by
 from ..lib.fixed import clamp_flagged, is_hdl, narrow, round_shift, round_shift_add, select
 from .config import CLAMP_KINDS, IzhikevichConfig
 
-__all__ = ["operands", "multiply1", "multiply2", "update_state", "clamp_bits"]
+__all__ = ["operands", "multiply1", "multiply2", "update_state", "one_update", "clamp_bits"]
 
 
 # ----------------------------------------------------------------------------------------------
@@ -158,6 +158,20 @@ def update_state(cfg: IzhikevichConfig, vb_sh, vb_th, vb_lo, u_sh, ud_sh, p, m, 
     v_low = under & ~spike
     return {"v": v_out, "u": u_out, "spike": spike, "v_pre": v_pre, "v_low": v_low,
             "u_high": u_high, "u_low": u_low}
+
+
+def one_update(cfg: IzhikevichConfig, v, u, I, sel, stages=None):
+    """One whole update from ``(v, u, I, sel)``: the four stage functions composed (``stages``:
+    the four functions to compose, in order; default this module's, looked up at the call).
+    Returns the :func:`update_state` result and the clamp flags by kind (``CLAMP_KINDS``)."""
+    op, m1, m2, up = stages or (operands, multiply1, multiply2, update_state)
+    s2 = op(cfg, v, u, I, sel)
+    s3 = m1(cfg, s2["wq"], s2["vq"], s2["x"], u, sel)
+    s4 = m2(cfg, s3["q"], s3["bvp"], s3["uy"], s2["wq"], v, u, s3["x"], sel)
+    o = up(cfg, *(s4[k] for k in ("vb_sh", "vb_th", "vb_lo", "u_sh", "ud_sh", "p", "m")), sel)
+    flags = {"v_low": o["v_low"], "u_high": o["u_high"], "u_low": o["u_low"],
+             "current": s2["i_flag"], "y": s4["y_flag"]}
+    return o, flags
 
 
 def clamp_bits(flags: dict):

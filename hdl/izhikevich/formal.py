@@ -232,16 +232,8 @@ class _CoreVsOneStep(Elaboratable):
 
         # one combinational step from the state the update read, computed in the cycle it is
         # read (the stage-3 registers) and held for the 3 cycles until the result leaves
-        operands, multiply1, multiply2, update_state = _STAGES
         pv0, pi0, v0, u0, i0, sel0 = (probe[k] for k in ("valid", "index", "v", "u", "i", "sel"))
-        sel_arg = sel0 if n_sets > 1 else 0
-        s2 = operands(cfg, v0, u0, i0, sel_arg)
-        s3 = multiply1(cfg, s2["wq"], s2["vq"], s2["x"], u0, sel_arg)
-        s4 = multiply2(cfg, s3["q"], s3["bvp"], s3["uy"], s2["wq"], v0, u0, s3["x"], sel_arg)
-        o = update_state(cfg, *(s4[k] for k in ("vb_sh", "vb_th", "vb_lo", "u_sh", "ud_sh",
-                                                "p", "m")), sel_arg)
-        flags = {"v_low": o["v_low"], "u_high": o["u_high"], "u_low": o["u_low"],
-                 "current": s2["i_flag"], "y": s4["y_flag"]}
+        o, flags = izh.one_update(cfg, v0, u0, i0, sel0 if n_sets > 1 else 0, _STAGES)
         now = {"valid": pv0, "index": pi0, "i": i0, "sel": sel0, "v": o["v"], "u": o["u"],
                "spike": o["spike"], "clamp": Cat(*(flags[k] for k in CLAMP_KINDS))}
         later = {k: delayed(x, _PROBE_TO_OUTPUT, f"ref_step_{k}") for k, x in now.items()}

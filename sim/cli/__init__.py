@@ -88,6 +88,8 @@ def _split_debug(argv) -> tuple[list[str], bool]:
 
 
 def _one_line_warning(message, category, filename, lineno, file=None, line=None):
+    if issubclass(category, ResourceWarning):     # about the program, not the input: not shown
+        return
     print(f"cuneate: warning: {one_line(str(message))}", file=sys.stderr)
 
 

@@ -279,6 +279,8 @@ class WindowedVcd:
         self.f.flush()
 
     def close(self) -> None:
+        if self.f.closed:
+            return
         if self._buf:
             self._line(self._buf)
             self._buf = ""

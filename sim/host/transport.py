@@ -31,7 +31,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["SpikeBatch", "Transport", "TransportError", "COUNTERS", "check_counters"]
+__all__ = ["SpikeBatch", "Transport", "TransportError", "COUNTERS", "check_counters",
+           "SimulatedSerial"]
 
 #: The counters every transport reports, and what each counts.
 COUNTERS = {
@@ -155,3 +156,24 @@ def check_counters(transport: Transport, counters: dict, sent: int, received: in
         if c[k]:
             raise TransportError(f"{name}: {k}: {c[k]} ({COUNTERS[k]}; nothing may be "
                                  f"lost){why}")
+
+
+class SimulatedSerial:
+    """The receiving half of a simulated serial port, read the way pyserial's is: ``_rx`` holds
+    the bytes the device sent and the host has not read; :meth:`_fill` (a hook, nothing by
+    default) lets the device run when the host reads an empty buffer."""
+
+    _rx: bytearray
+
+    def _fill(self) -> None:
+        """Let the far end produce bytes before a read of an empty buffer."""
+
+    def read(self, size: int = 1) -> bytes:
+        if not self._rx:
+            self._fill()
+        out, self._rx = bytes(self._rx[:size]), self._rx[size:]
+        return out
+
+    @property
+    def in_waiting(self) -> int:
+        return len(self._rx)

@@ -123,6 +123,7 @@ def _amaranth_window(cfg: IzhikevichConfig, waves):
     window.on = waves.covers(0)
 
     def finish():
+        window.close()                        # the simulator leaves a file it did not open
         write_gtkw(path.with_suffix(".gtkw"), path, "amaranth",
                    izhikevich_verilog(cfg, "izhikevich_core"), "izhikevich_core")
     return window, finish

@@ -20,13 +20,14 @@ from amaranth.sim import Simulator
 
 from ...hdl.link import LinkedCore
 from ...hdl.link.codec import MAX_FRAME
+from ..host.transport import SimulatedSerial
 
 __all__ = ["AmaranthSerial"]
 
 CLOCK_S = 1e-6
 
 
-class AmaranthSerial:
+class AmaranthSerial(SimulatedSerial):
     """A serial port whose far end is the link gateware in the Amaranth simulator.
 
     Parameters
@@ -108,15 +109,8 @@ class AmaranthSerial:
         self._quiet = 0
         return n
 
-    def read(self, size: int = 1) -> bytes:
-        if not self._rx:
-            self._advance(self.block_cycles)
-        out, self._rx = bytes(self._rx[:size]), self._rx[size:]
-        return out
-
-    @property
-    def in_waiting(self) -> int:
-        return len(self._rx)
+    def _fill(self) -> None:
+        self._advance(self.block_cycles)
 
     @property
     def silent(self) -> bool:

@@ -38,17 +38,11 @@ def test_the_proof_catches_the_fault(cfg, mutant, tmp_path):
     assert check in r.failed, r
 
 
-def test_a_datapath_fault_in_the_core_is_caught(cfg, tmp_path, monkeypatch):
+def test_a_datapath_fault_in_the_core_is_caught(cfg, tmp_path, v_one_high):
     """The core built with a faulty last stage (v one LSB high; the reference keeps the true
     stage functions, bound at import) fails at the tracked neuron's first update: the
     uninterpreted products do not hide the arithmetic around them."""
-    true_update = datapath.update_state
-
-    def faulty(cfg_, *args):
-        out = dict(true_update(cfg_, *args))
-        out["v"] = out["v"] + 1
-        return out
-    monkeypatch.setattr(datapath, "update_state", faulty)
+    v_one_high(datapath)
     r = prove_core(cfg, tmp_path, mode="bmc", depth=induction_depth(cfg), timeout_s=600)
     assert r.status == "fail", r
     assert "tracked_update_upd_v" in r.failed, r

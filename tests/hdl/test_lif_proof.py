@@ -42,15 +42,9 @@ def test_the_lif_proof_catches_the_fault(mutant, tmp_path):
     assert check in r.failed, r
 
 
-def test_a_datapath_fault_in_the_lif_core_is_caught(tmp_path, monkeypatch):
+def test_a_datapath_fault_in_the_lif_core_is_caught(tmp_path, v_one_high):
     """The core's last stage gives v + 1 (the reference keeps the true stage function)."""
-    true_update = lif_core.update_state
-
-    def faulty(cfg, *args):
-        out = dict(true_update(cfg, *args))
-        out["v"] = out["v"] + 1
-        return out
-    monkeypatch.setattr(lif_core, "update_state", faulty)
+    v_one_high(lif_core)
     r = prove_lif(lif_proof_config(), tmp_path, mode="bmc", depth=7, timeout_s=600)
     assert r.status == "fail" and "tracked_update_upd_v" in r.failed, r
 
