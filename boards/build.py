@@ -74,6 +74,8 @@ def build_target(board: str, out: Path, n_neurons: int | None = None,
     ``bitstream`` is true, and write ``<name>.report.json`` / ``.txt``. Returns the report.
     Raises :class:`~cuneate.hdl.izhikevich.config.ConfigError` for a core the device cannot
     hold and :class:`BuildError` for a failed tool."""
+    from ..sim import progress as prog
+    from ..sim.provenance import provenance
     if board not in TARGETS:
         raise ConfigError(f"unknown board {board!r}; known: {', '.join(TARGETS)}")
     target = TARGETS[board]
@@ -98,7 +100,9 @@ def build_target(board: str, out: Path, n_neurons: int | None = None,
                                 **target.get("prepare_opts", {}))
         t0 = time.monotonic()
         try:
-            plan.execute_local(out, env=yowasp_env(target["family"]))
+            with prog.step(f"{board}: synthesis, place and route, bitstream (yosys, "
+                           f"nextpnr-{target['family']}; minutes)"):
+                plan.execute_local(out, env=yowasp_env(target["family"]))
         except Exception as exc:       # the script's failure: name the log to read
             raise BuildError(f"{board} build failed ({exc.__class__.__name__}); see the logs "
                              f"in {out}") from None
@@ -108,7 +112,9 @@ def build_target(board: str, out: Path, n_neurons: int | None = None,
         report["place_route"] = _nextpnr_report(out / f"{name}.nextpnr.json", target,
                                                 lcfg.core.clock_hz)
     if target.get("synth_family") and bitstream:
-        report["yosys_estimate"] = _yosys_estimate(out, f"{name}_core", target)
+        with prog.step(f"{board}: yosys synth_{target['synth_family']} resource estimate"):
+            report["yosys_estimate"] = _yosys_estimate(out, f"{name}_core", target)
+    report["provenance"] = provenance()
     (out / f"{name}.report.json").write_text(json.dumps(report, indent=2, sort_keys=True)
                                              + "\n")
     (out / f"{name}.report.txt").write_text(format_report(report))

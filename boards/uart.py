@@ -1,20 +1,31 @@
 """Host side of the UART link: :class:`UartTransport` behind the driver's transport interface.
 
 The transport talks to a :class:`~cuneate.hdl.link.LinkedCore` on a board through pyserial
-(any ``serial_for_url`` URL: a device path, ``socket://host:port``, ``loop://``), or to the
-protocol model (:class:`ModelSerial`, the simulated serial path used by tests and for dry runs).
+(any ``serial_for_url`` URL: a device path, ``socket://host:port``, ``loop://``), to the
+protocol model (:class:`ModelSerial`, the simulated serial path used by tests and for dry
+runs), or to the gateware in the Amaranth simulator
+(:class:`~cuneate.sim.link.engines.AmaranthSerial`).
 
 Lockstep: the core is stopped between calls. ``write_currents`` queues writes by sweep;
-``run(n)`` sends, in one burst, a ``STEP`` to each sweep at which writes are due, the writes
-for that sweep (the device holds each until the core stands exactly between the sweeps, so the
-currents are in effect from their sweep on), and a final ``STEP`` to the end. ``collect`` reads
-spike frames until they cover every sweep run. Loss is never silent: a device sequence gap, a
-gap in the ticks of spike batches, dropped spikes or a damaged or malformed frame from the
-device raises :class:`~cuneate.sim.host.transport.TransportError` where it is seen; damaged and
-malformed frames are also counted (``rx_*_errors`` in :meth:`UartTransport.counters`), and
-:meth:`UartTransport.check` fails on any of them and on any non-zero device error counter. A
-damaged frame is never accepted: every frame is checked (COBS, size, CRC-32, version, length,
-layout) before anything in it is used.
+``run(n)`` sends a ``STEP`` to each sweep at which writes are due, waits for the spike batch
+that ends there (so the device is known to stand exactly between the sweeps), sends the writes
+for that sweep, and a final ``STEP`` to the end. A frame lost on the way to the device
+therefore never leaves a write waiting for a sweep that never comes: a lost ``STEP`` is seen at
+once (its batch does not arrive) and a lost ``WRITE`` in the device's counters. ``collect``
+reads spike frames until they cover every sweep run.
+
+Loss is never silent: a device sequence gap, a gap in the ticks of spike batches, dropped
+spikes, a spike for a neuron the core does not have, or a damaged or malformed frame from the
+device raises :class:`~cuneate.sim.host.transport.TransportError` where it is seen; damaged
+and malformed frames are also counted (``rx_*_errors``). :meth:`UartTransport.counters` reads
+the device's counters (``READ_COUNTERS``) and reports the driver's counter contract
+(:data:`~cuneate.sim.host.transport.COUNTERS`): ``frames_lost`` counts the host's frames the
+device did not accept and the device's frames the host refused, so that the driver fails a run
+that lost a frame, naming the counters that saw it. When the device does not answer in
+``timeout_s``, the transport asks for its counters before giving up and names what they show.
+:meth:`UartTransport.check` fails on any host or device error counter. A damaged frame is never
+accepted: every frame is checked (COBS, size, CRC-32, version, length, layout) before anything
+in it is used.
 """
 
 from __future__ import annotations
@@ -29,7 +40,7 @@ from ..hdl.link.codec import (COUNTER_NAMES, FRAME_ERRORS, MSG_COUNTERS, MSG_SPI
                               encode_frame, parse_counters, parse_spikes, write_message)
 from ..hdl.link.twin import LinkModel
 from ..hdl.link.codec import MAX_FRAME, MIN_FRAME
-from ..sim.host.transport import SpikeBatch, Transport, TransportError
+from ..sim.host.transport import SimulatedSerial, SpikeBatch, Transport, TransportError
 
 __all__ = ["UartTransport", "ModelSerial", "DEVICE_ERRORS", "HOST_ERRORS"]
 
@@ -40,33 +51,40 @@ DEVICE_ERRORS = tuple(n for n in COUNTER_NAMES if n != "frames_ok")
 HOST_ERRORS = tuple(f"rx_{k}_errors" for k in FRAME_ERRORS)
 
 
-class ModelSerial:
+class _NoAnswer(TransportError):
+    """The device did not answer in time (while the transport was asking why)."""
+
+
+class ModelSerial(SimulatedSerial):
     """A serial port whose far end is :class:`LinkModel` (the device's protocol on the twin):
     what is written is fed to the model, which runs each step at once; ``read`` returns its
-    answers. ``corrupt``, if given, is called on every chunk the device sends (fault tests)."""
+    answers. ``corrupt``, if given, is called on every chunk the device sends and
+    ``corrupt_host`` on every chunk the host writes (line faults, e.g. from
+    :mod:`cuneate.boards.link_faults`)."""
 
-    def __init__(self, lcfg, corrupt=None):
+    def __init__(self, lcfg, corrupt=None, corrupt_host=None):
         self.model = LinkModel(lcfg)
         self.corrupt = corrupt
+        self.corrupt_host = corrupt_host
         self._rx = bytearray()
         self.is_open = True
 
     def write(self, data: bytes) -> int:
+        n = len(data)
+        if self.corrupt_host is not None:
+            data = self.corrupt_host(bytes(data))
         out = self.model.feed(bytes(data))
         self.model.advance(self.model.steps)
         out += self.model.feed(b"")
         if self.corrupt is not None:
             out = self.corrupt(out)
         self._rx += out
-        return len(data)
-
-    def read(self, size: int = 1) -> bytes:
-        out, self._rx = bytes(self._rx[:size]), self._rx[size:]
-        return out
+        return n
 
     @property
-    def in_waiting(self) -> int:
-        return len(self._rx)
+    def silent(self) -> bool:
+        """Nothing more will come until the host writes (the model answers at once)."""
+        return not self._rx
 
     def close(self):
         self.is_open = False
@@ -116,11 +134,16 @@ class UartTransport(Transport):
         self._covered = 0               # sweeps covered by spike frames received
         self._queued: dict[int, list[tuple[int, np.ndarray]]] = {}
         self._spikes: list[SpikeBatch] = []
-        self._counts = {"frames_sent": 0, "writes_sent": 0, "currents_sent": 0,
-                        "frames_received": 0, "spikes_received": 0}
+        self._counts = {"frames_sent": 0, "write_frames_sent": 0, "writes_sent": 0,
+                        "currents_sent": 0, "frames_received": 0, "spikes_received": 0,
+                        "rx_seq_gaps": 0}
         self._last_counters = None
+        self._device_tick = 0
+        self._diagnosing = False
+        self._since_clear = 0
         self._send(control_message(0, OP_STOP))
         self._send(control_message(0, OP_CLEAR_COUNTERS))
+        self._since_clear = 0           # frames sent after CLEAR_COUNTERS (the device counts)
 
     def close(self) -> None:
         if self.port is not None:
@@ -128,23 +151,23 @@ class UartTransport(Transport):
             self.port = None
 
     # -- frames ------------------------------------------------------------------------------
-    def _send(self, msg_or_none):
-        msg = msg_or_none
+    def _send(self, msg):
         msg = type(msg)(msg.type, self._seq, msg.tick, msg.payload)
         self._seq = (self._seq + 1) & 0xFF
         self.port.write(encode_frame(msg))
         self._counts["frames_sent"] += 1
+        self._since_clear += 1
 
     def _receive(self, until, what: str):
-        """Read frames until ``until()`` is true; raise on timeout or on a frame damaged or
-        refused while waiting (it is counted first)."""
+        """Read frames until ``until()`` is true; raise on a frame damaged or refused while
+        waiting (it is counted first), or after ``timeout_s`` without an answer (naming what
+        the device's counters show, when it still answers)."""
         deadline = time.monotonic() + self.timeout_s
         while not until():
             data = self.port.read(max(1, getattr(self.port, "in_waiting", 0) or 1))
             if not data:
-                if time.monotonic() > deadline:
-                    raise TransportError(f"uart: no answer from the device while waiting for "
-                                         f"{what} ({self.timeout_s:g} s)")
+                if time.monotonic() > deadline or getattr(self.port, "silent", False):
+                    self._timeout(what)
                 continue
             before = dict(self._dec.errors)
             msgs = self._dec.feed(data)
@@ -156,11 +179,35 @@ class UartTransport(Transport):
             for msg in msgs:
                 self._accept(msg)
 
+    def _timeout(self, what: str):
+        msg = f"uart: no answer from the device while waiting for {what} ({self.timeout_s:g} s)"
+        if self._diagnosing:
+            raise _NoAnswer(msg)
+        self._diagnosing = True
+        try:
+            dev = self._read_device_counters()
+        except _NoAnswer:
+            raise TransportError(f"{msg}; it does not answer READ_COUNTERS either (no device, "
+                                 f"a dead line, or a device stalled)") from None
+        except TransportError as exc:          # what its answer showed on the way
+            raise TransportError(f"{msg}; then {exc}") from None
+        finally:
+            self._diagnosing = False
+        bad = {k: dev[k] for k in DEVICE_ERRORS if dev[k]}
+        if bad:
+            raise TransportError(f"{msg}; the device counted " +
+                                 ", ".join(f"{k}={v}" for k, v in bad.items()) +
+                                 " (a frame was lost or damaged on the way to it)")
+        raise TransportError(f"{msg}; the device counted no error (it stands at sweep "
+                             f"{self._device_tick})")
+
     def _accept(self, msg):
         self._counts["frames_received"] += 1
         if self._dev_seq is not None and msg.seq != (self._dev_seq + 1) & 0xFF:
+            self._counts["rx_seq_gaps"] += (msg.seq - self._dev_seq - 1) & 0xFF
             raise TransportError(f"uart: device frame sequence gap: expected "
-                                 f"{(self._dev_seq + 1) & 0xFF}, got {msg.seq}")
+                                 f"{(self._dev_seq + 1) & 0xFF}, got {msg.seq} (frames from "
+                                 f"the device lost)")
         self._dev_seq = msg.seq
         try:
             self._use(msg)
@@ -171,6 +218,12 @@ class UartTransport(Transport):
     def _use(self, msg):
         if msg.type == MSG_SPIKES:
             dropped, sweeps, spikes = parse_spikes(msg)
+            N = self.cfg.n_neurons
+            for tick, n in spikes:
+                if n >= N or not msg.tick <= tick < msg.tick + sweeps:
+                    raise FrameError(f"a spike of neuron {n} at sweep {tick} in the batch of "
+                                     f"sweeps {msg.tick}..{msg.tick + sweeps - 1}: the core "
+                                     f"has neurons 0..{N - 1}")
             if msg.tick != self._covered:
                 raise TransportError(f"uart: spike batches lost: expected the batch of sweep "
                                      f"{self._covered}, got sweep {msg.tick}")
@@ -184,6 +237,7 @@ class UartTransport(Transport):
             self._counts["spikes_received"] += len(spikes)
         elif msg.type == MSG_COUNTERS:
             self._last_counters = parse_counters(msg)
+            self._device_tick = msg.tick
         else:
             raise FrameError(f"unexpected frame type {msg.type:#x}")
 
@@ -200,13 +254,21 @@ class UartTransport(Transport):
         self._queued.setdefault(int(tick), []).append((int(first), raw))
 
     def _flush_writes(self, tick: int):
+        """Send the writes for ``tick`` once the device is known to stand at it (its spike
+        batches cover every sweep before it)."""
+        if tick not in self._queued:
+            return
+        self._receive(lambda: self._covered >= tick,
+                      f"the spikes of sweeps {self._covered}..{tick - 1} (the device must "
+                      f"stand at sweep {tick} before its writes are sent)")
         width = self.cfg.I.width
         per_frame = (MAX_FRAME - MIN_FRAME - 2) // current_bytes(width)
-        for first, raw in self._queued.pop(tick, []):
+        for first, raw in self._queued.pop(tick):
             for i in range(0, raw.size, per_frame):
                 self._send(write_message(0, tick, first + i, raw[i:i + per_frame], width))
-                self._counts["writes_sent"] += 1
+                self._counts["write_frames_sent"] += 1
                 self._counts["currents_sent"] += min(per_frame, raw.size - i)
+            self._counts["writes_sent"] += 1
 
     def run(self, n_ticks: int) -> None:
         if n_ticks < 0:
@@ -229,13 +291,45 @@ class UartTransport(Transport):
         self._spikes = []
         return out
 
-    def counters(self) -> dict[str, int]:
+    def _read_device_counters(self) -> dict:
         self._last_counters = None
         self._send(control_message(0, OP_READ_COUNTERS))
         self._receive(lambda: self._last_counters is not None, "the device counters")
-        dev = self._last_counters
+        return self._last_counters
+
+    def counters(self) -> dict[str, int]:
+        """The device's counters (``device_*``), the host's (frames sent and received, damaged
+        frames refused: ``rx_*_errors``) and the driver's contract
+        (:data:`~cuneate.sim.host.transport.COUNTERS`): ``writes`` is the writes sent when no
+        frame was lost (a lower bound otherwise), ``spikes_counted`` the spikes delivered plus
+        those the device dropped, ``frames_lost`` the host's frames the device did not accept
+        plus the device's frames the host refused or missed."""
+        dev = self._read_device_counters()
+        c = self._counts
         host = {f"rx_{k}_errors": v for k, v in self._dec.errors.items()}
-        return dict(self._counts, **host, **{f"device_{k}": v for k, v in dev.items()})
+        lost_out = max(self._since_clear - dev["frames_ok"], 0)
+        lost_in = sum(host.values()) + c["rx_seq_gaps"]
+        contract = {
+            "writes": c["writes_sent"] - min(lost_out, c["writes_sent"]),
+            "spikes": c["spikes_received"],
+            "spikes_counted": c["spikes_received"] + dev["spikes_dropped"],
+            "frames_lost": lost_out + lost_in,
+            "overflow": dev["spikes_dropped"] + dev["batches_dropped"],
+            "overrun": dev["tick_overruns"],
+            "late_writes": dev["late_writes"],
+        }
+        return dict(c, **host, **{f"device_{k}": v for k, v in dev.items()}, **contract)
+
+    def loss_detail(self, counters: dict) -> str:
+        """The device's and the host's error counters that are not zero."""
+        dev = [f"device {k}={counters[f'device_{k}']}" for k in DEVICE_ERRORS
+               if counters.get(f"device_{k}")]
+        host = [f"host {k}={counters[k]}" for k in HOST_ERRORS + ("rx_seq_gaps",)
+                if counters.get(k)]
+        lost_out = self._since_clear - counters.get("device_frames_ok", self._since_clear)
+        sent = [f"{lost_out} of {self._since_clear} frames sent not accepted by the device"] \
+            if lost_out > 0 else []
+        return ", ".join(sent + dev + host)
 
     def check(self) -> dict[str, int]:
         """Counters, raising :class:`TransportError` naming every error counted: frames from the

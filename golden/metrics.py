@@ -35,7 +35,12 @@ __all__ = [
     "isi_stats",
     "compare_trains",
     "compare_populations",
+    "VP_Q_PER_MS",
 ]
+
+#: The Victor-Purpura cost of moving a spike used for every figure the project reports:
+#: q = 5/s (moving a spike by 200 ms costs as much as deleting it).
+VP_Q_PER_MS = 0.005
 
 # Tolerance factor turning a tick ``dt_ms`` into the "within +-1 tick" window, so that an error
 # of exactly one tick computed in floating point still counts.

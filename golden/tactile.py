@@ -51,7 +51,7 @@ from .fbg import bragg_shift_nm, strain_sensitivity_pm_per_microstrain
 __all__ = ["Material", "MATERIALS", "Pad", "contact_stiffness", "series_stiffness",
            "GraspSpec", "SlideSpec", "PulseSpec", "synthesize_grasp", "synthesize_slide",
            "synthesize_pulse", "EFFECTS",
-           "EFFECT_ORDER", "apply_effects", "Trace"]
+           "EFFECT_ORDER", "apply_effects", "sensor_effects", "Trace"]
 
 
 @dataclass(frozen=True)
@@ -318,9 +318,25 @@ def apply_effects(strain, effects, params: dict, rng: np.random.Generator, fs_hz
     if x.ndim == 1:
         x = x[:, None]
     counts = {"strain": {"max_nm": float(np.max(np.abs(x)))}}
+    x, more = sensor_effects(x, effects, params, rng, fs_hz, lambda_B_nm)
+    return Trace(x, fs_hz, {}, counts | more)
+
+
+def sensor_effects(d_lambda_nm, effects, params: dict, rng: np.random.Generator, fs_hz: float,
+                   lambda_B_nm: float = 1550.0) -> tuple[np.ndarray, dict]:
+    """Apply exactly the listed ``effects`` other than ``strain`` to shifts ``(n, gratings)``
+    (nm) that already hold the mechanical term (synthesized or recorded); returns the shifts
+    and one count entry per effect applied, in the order applied."""
+    for e in effects:
+        if e not in EFFECT_ORDER:
+            raise ValueError(f"unknown effect {e!r}; known: {', '.join(EFFECT_ORDER)}")
+    x = np.asarray(d_lambda_nm, dtype=np.float64)
+    if x.ndim == 1:
+        x = x[:, None]
+    counts = {}
     ctx = {"lambda_B_nm": lambda_B_nm}
     for name in EFFECT_ORDER[1:]:
         if name in effects:
             x, c = EFFECTS[name](x, params.get(name, {}), rng, fs_hz, ctx)
             counts[name] = c
-    return Trace(x, fs_hz, {}, counts)
+    return x, counts

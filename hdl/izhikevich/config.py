@@ -27,11 +27,17 @@ Clamps (kinds, in the order of the ``upd_clamp``/``clamp_flags`` bits):
 ``u_high`` / ``u_low``  ``u'`` above ``u_hi`` / below ``u_lo``;
 ``current``  a host current outside ``current_range`` (clamped to it before use);
 ``y``  the ``b v - u`` operand outside its format (only when ``y_int_bits`` narrows it).
+
+Every configuration states the rounding its state registers take per update
+(``state_rounding_per_step``: half an LSB of ``v`` and ``u`` when rounding to nearest, one LSB
+when truncating) and warns when that is :data:`NARROW_STATE_RATIO` times the default formats'
+or more: such formats can change spike counts many-fold against the golden model.
 """
 
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass, field
 from typing import Sequence
 
@@ -43,7 +49,11 @@ from ..lib.fixed import FixedConstant, FixedPointError, QFormat, round_shift
 from .range import RangeSearchError, one_step_bound, reachable_ranges
 
 __all__ = ["ConfigError", "IzhikevichConfig", "PIPELINE_DEPTH", "PIPELINE_STAGES", "PIPELINE_CUTS",
-           "CLAMP_KINDS", "SATURATION"]
+           "CLAMP_KINDS", "SATURATION", "NARROW_STATE_RATIO"]
+
+#: How many times the default formats' per-update state rounding a configuration may take
+#: before it warns (2**8: eight fraction bits fewer than the default's).
+NARROW_STATE_RATIO = 2.0 ** 8
 
 PIPELINE_DEPTH = 5      # the default (the reference core's): fetch, read, 3 datapath stages
 #: Registered cuts of the datapath (after step ``k`` of :data:`~cuneate.hdl.izhikevich.datapath
@@ -296,6 +306,7 @@ class IzhikevichConfig(CoreOptions):
         self.U = U = QFormat(self.u_int_bits, self.u_frac_bits)
         if not V.contains(self.v_th) or V.to_raw(self.v_th) * V.lsb != self.v_th:
             raise ConfigError(f"v_th = {self.v_th:g} is not exactly representable in {V}")
+        self._state_rounding(V, U)
         # clamp levels: just outside the proven range, never outside the formats
         self.v_floor_raw = max(V.min_raw, int(math.floor(v_floor * 2 ** V.frac_bits)))
         self.u_lo_raw = max(U.min_raw, int(math.floor(u_lo * 2 ** U.frac_bits)))
@@ -479,6 +490,21 @@ class IzhikevichConfig(CoreOptions):
             raise ConfigError(f"the datapath's widest sum needs {self.widest_sum_bits} bits; "
                               f"reduce the state fraction bits or the operand widths")
 
+    def _state_rounding(self, V: QFormat, U: QFormat) -> None:
+        """``state_rounding_per_step`` (mV for v, u's unit for u), and a warning when it is
+        :data:`NARROW_STATE_RATIO` times the default formats' or more."""
+        k = 0.5 if self.rounding == "nearest" else 1.0
+        self.state_rounding_per_step = {"v_mV": k * V.lsb, "u": k * U.lsb}
+        fields = type(self).__dataclass_fields__
+        ratio = max(V.lsb * 2.0 ** fields["v_frac_bits"].default,
+                    U.lsb * 2.0 ** fields["u_frac_bits"].default)
+        if ratio >= NARROW_STATE_RATIO:
+            warnings.warn(f"state formats {V} (v) and {U} (u) round v by up to {k * V.lsb:.3g} mV "
+                          f"and u by up to {k * U.lsb:.3g} per update, {ratio:g} times the "
+                          f"default formats' (v_frac_bits {fields['v_frac_bits'].default}, "
+                          f"u_frac_bits {fields['u_frac_bits'].default}): spike counts may "
+                          f"differ from the golden model's many-fold", stacklevel=3)
+
     # ------------------------------------------------------------------------------------------
     def to_kwargs(self, **override) -> dict:
         """JSON-friendly constructor keywords that rebuild this exact configuration (derived
@@ -537,64 +563,12 @@ class IzhikevichConfig(CoreOptions):
 
     # ------------------------------------------------------------------------------------------
     def clamps_dict(self) -> dict:
-        return {
-            "kinds": list(CLAMP_KINDS),
-            "v_low": {"level_mV": self.v_floor, "raw": self.v_floor_raw,
-                      "can_act_for_accepted_inputs": self.clamp_can_act["v_low"]},
-            "u_high": {"level": self.u_hi, "raw": self.u_hi_raw,
-                       "can_act_for_accepted_inputs": self.clamp_can_act["u_high"]},
-            "u_low": {"level": self.u_lo, "raw": self.u_lo_raw,
-                      "can_act_for_accepted_inputs": self.clamp_can_act["u_low"]},
-            "current": {"range": [self.i_lo, self.i_hi], "raw": [self.i_lo_raw, self.i_hi_raw],
-                        "built": self.current_clamp,
-                        "can_act_for_accepted_inputs": False},
-            "y": {"format": str(self.Y), "built": self.y_int_bits is not None,
-                  "can_act_for_accepted_inputs": self.clamp_can_act["y"]},
-        }
+        """The clamps, their levels and whether each can act (see :mod:`.describe`)."""
+        from .describe import clamps_dict
+        return clamps_dict(self, CLAMP_KINDS)
 
     def to_dict(self) -> dict:
-        """Everything a user of the generated Verilog needs (written beside it as JSON)."""
-        consts = [self.VTH, self.V0] + ([self.KDT] if self.KDT else []) + self.KA + \
-            self.woff + self.K0 + self.alpha + self.beta + self.c + self.d + self.E + self.u0
-        bv, bu = self.one_step_bound(np.array([self.v_floor / 2, -65.0, self.v_th]),
-                                     np.array([0.0, -13.0, 0.0]), np.zeros(3))
-        return {
-            "block": "IzhikevichCore", "scheme": "euler", "n_neurons": self.n_neurons,
-            "clock_hz": self.clock_hz, "update_hz": self.update_hz, "dt_ms": self.dt_ms,
-            "cycles_per_tick": self.cycles_per_tick, "pipeline_depth": self.pipeline_stages,
-            "latency_cycles": self.pipeline_stages, "throughput": "one neuron update per cycle",
-            "pipeline_cuts": list(self.cuts),
-            "rounding": self.rounding, "tick_source": self.tick_source,
-            "saturation": self.saturation,
-            "dt_is_shift": self.dt_shift is not None,
-            "multipliers": 4 if self.dt_shift is not None else 5,
-            "multiplier_operands": {"(A dt) w": [self.operand_width, self.W.width],
-                                    "q w": [self.Q.width, self.W.width],
-                                    "b v": [self.operand_width, self.VQ.width],
-                                    "(a dt) y": [max(a.width for a in self.alpha),
-                                                 self.Y.width]}
-            | ({"dt (I - u)": [self.KDT.width, self.X.width]} if self.X else {}),
-            "accepted_current_range": [self.i_lo, self.i_hi],
-            "formats": {k: getattr(self, k).to_dict() for k in ("V", "U", "I", "W", "VQ", "Q",
-                                                                 "Y")}
-            | ({"X": self.X.to_dict()} if self.X else {}),
-            "param_sets": [p.to_dict() for p in self.params],
-            "constants": {c.name: c.to_dict() for c in consts},
-            "proven_range": {
-                "method": "u: worst-case stimulus search (float64 forward Euler at the core's "
-                          "dt, cuneate.hdl.izhikevich.range); v: proven lower bound from u's "
-                          "bound; margins as documented there",
-                "v": list(self.proven["v"]), "u": list(self.proven["u"]),
-                "per_set": [r.to_dict() for r in self.ranges],
-                "v_int_bits_needed": self.v_int_bits_derived,
-                "u_int_bits_needed": self.u_int_bits_derived},
-            "clamps": self.clamps_dict(),
-            "worst_case": {"v_pre_max_mV": self.v_pre_max,
-                           "v_range": [self.v_floor, self.v_th],
-                           "u_range": [self.u_lo, self.u_hi],
-                           "y_range": list(self.y_range),
-                           "one_step_bound_v_mV_at_rest": float(bv[1]),
-                           "one_step_bound_u_at_rest": float(bu[1]),
-                           "one_step_bound_v_mV_at_threshold": float(bv[2])},
-            "state_word_bits": self.V.width + self.U.width,
-        }
+        """Everything a user of the generated Verilog needs (written beside it as JSON; see
+        :mod:`.describe`)."""
+        from .describe import describe
+        return describe(self, CLAMP_KINDS)

@@ -16,8 +16,8 @@ from amaranth.lib import wiring
 from amaranth.lib.wiring import Out
 
 from ..flow.verilog import write_block, verilog_text
-from ..lib.bookkeeping import (core_memories, core_ports, pipeline_tags, sweep_bookkeeping,
-                               sweep_issue)
+from ..lib.bookkeeping import (core_memories, core_ports, pipeline_tags, registrar,
+                               sweep_bookkeeping, sweep_issue)
 from ..lib.fixed import is_hdl
 from ..lib.tick import tick_strobe
 from .config import CLAMP_KINDS, IzhikevichConfig
@@ -137,10 +137,7 @@ class IzhikevichCore(wiring.Component):
         tags = pipeline_tags(m, N, cfg.sweep_number_width, issue, last_stage=D)
         tD = tags[D]
 
-        def reg(name, value, stage):
-            s = Signal(value.shape(), name=f"{name}{stage}", reset_less=True)
-            m.d.sync += s.eq(value)
-            return s
+        reg = registrar(m, reset_less=True)
 
         # --- stage 2: the RAM outputs go straight into registers -------------------------
         vals = {"v": reg("v", st_rd.data[:V.width].as_signed(), 3),

@@ -34,9 +34,9 @@ from ..lib.datapath import const_like, false_like, lookup, select_by
 from ..lib.fixed import clamp_flagged, is_hdl, narrow, round_shift, round_shift_add, select
 from .config import CLAMP_KINDS, IzhikevichConfig
 
-__all__ = ["operands", "multiply1", "multiply2", "update_state", "clamp_bits", "Step", "STEPS",
-           "CARRIED", "U_SUMS", "operand_step", "product1_step", "align_step", "product2_step",
-           "sum_step", "select_step", "one_update"]
+__all__ = ["operands", "multiply1", "multiply2", "update_state", "stage_update", "clamp_bits",
+           "Step", "STEPS", "CARRIED", "U_SUMS", "operand_step", "product1_step", "align_step",
+           "product2_step", "sum_step", "select_step", "one_update", "step_flags"]
 
 
 # ----------------------------------------------------------------------------------------------
@@ -135,7 +135,7 @@ def multiply2(cfg: IzhikevichConfig, q, bvp, uy, wq, v, u, x, sel):
     else:
         u_sh = select_by(sel, [(u << sa) + h for sa, h in zip(shifts, halves)])
         ud_sh = select_by(sel, [(ud << sa) + h for sa, h in zip(shifts, halves)])
-    return {"p": qq * wq, "m": y * lookup([a.raw for a in cfg.alpha], sel),
+    return {"p": qq * wq, "m": y * lookup([a.raw for a in cfg.alpha], sel), "qq": qq, "y": y,
             "vb_sh": vb_sh, "vb_th": vb_th, "vb_lo": vb_lo, "u_sh": u_sh, "ud_sh": ud_sh,
             "y_flag": y_low | y_high}
 
@@ -163,6 +163,20 @@ def update_state(cfg: IzhikevichConfig, vb_sh, vb_th, vb_lo, u_sh, ud_sh, p, m, 
     v_low = under & ~spike
     return {"v": v_out, "u": u_out, "spike": spike, "v_pre": v_pre, "v_low": v_low,
             "u_high": u_high, "u_low": u_low}
+
+
+def stage_update(cfg: IzhikevichConfig, v, u, I, sel, stages=None):
+    """One whole update from ``(v, u, I, sel)``: the four stage functions composed (``stages``:
+    the four functions to compose, in order; default this module's, looked up at the call).
+    Returns the :func:`update_state` result and the clamp flags by kind (``CLAMP_KINDS``)."""
+    op, m1, m2, up = stages or (operands, multiply1, multiply2, update_state)
+    s2 = op(cfg, v, u, I, sel)
+    s3 = m1(cfg, s2["wq"], s2["vq"], s2["x"], u, sel)
+    s4 = m2(cfg, s3["q"], s3["bvp"], s3["uy"], s2["wq"], v, u, s3["x"], sel)
+    o = up(cfg, *(s4[k] for k in ("vb_sh", "vb_th", "vb_lo", "u_sh", "ud_sh", "p", "m")), sel)
+    flags = {"v_low": o["v_low"], "u_high": o["u_high"], "u_low": o["u_low"],
+             "current": s2["i_flag"], "y": s4["y_flag"]}
+    return o, flags
 
 
 def clamp_bits(flags: dict):
@@ -448,13 +462,19 @@ KEPT = ("uyp",)
 CARRIED = ("i", "sel", "i_flag", "y_flag")
 
 
-def one_update(cfg: IzhikevichConfig, v, u, I, sel) -> dict:
-    """The update as one composition of :data:`STEPS` (the twin's and the formal reference's);
+def one_update(cfg: IzhikevichConfig, v, u, I, sel, steps=None) -> dict:
+    """The update as one composition of :data:`STEPS` (the twin's and the formal references';
+    ``steps``: ``(function, reads)`` pairs to compose instead, bound by a proof at import);
     returns every value formed, the results under the keys of :func:`update_state` (``v``,
     ``u``, ``spike``, ``v_pre``, ``v_low``, ``u_high``, ``u_low``, ``under``) and the flags
     ``current`` and ``y``."""
     vals = {"v": v, "u": u, "i": I, "sel": sel}
-    for step in STEPS:
-        vals.update(step.fn(cfg, {k: vals[k] for k in step.reads}))
+    for fn, reads in steps or ((s.fn, s.reads) for s in STEPS):
+        vals.update(fn(cfg, {k: vals[k] for k in reads}))
     vals.update(v=vals["v_next"], u=vals["u_next"], current=vals["i_flag"], y=vals["y_flag"])
     return vals
+
+
+def step_flags(vals: dict) -> dict:
+    """The clamp flags of a :func:`one_update` result by kind (:data:`CLAMP_KINDS`)."""
+    return {k: vals[k] for k in CLAMP_KINDS}

@@ -22,7 +22,9 @@ The largest ``u`` comes from sustained maximal drive (more current, more spikes,
 widened by a margin ``0.02 (u_max - u_min) + max(|d|)`` (one recovery jump more than ever seen,
 plus 2 % for the difference between the float search and the fixed-point datapath). A
 trajectory that diverges (non-finite or beyond 1e4 in magnitude) refuses the configuration,
-naming the parameter set, the stimulus and the time.
+naming the parameter set, the stimulus and the time. The search generates its stimuli a block of
+steps at a time (its memory does not grow with ``1 / dt``) and estimates its time before it
+starts (:func:`search_estimate`, checked against :mod:`cuneate.golden.budget`).
 
 **v (membrane potential): a bound proven from the u bound.** With ``u <= u_hi`` and
 ``I >= I_lo``, ``dv/dt >= f(v) = A v^2 + B v + C - u_hi + I_lo``. Below the lower root ``r`` of
@@ -51,10 +53,11 @@ from functools import lru_cache
 
 import numpy as np
 
+from ...golden import budget
 from ...golden import izhikevich as golden
 
 __all__ = ["SetRange", "RangeSearchError", "reachable_ranges", "stimulus_battery",
-           "SEARCH_STATE_BOUND", "one_step_bound"]
+           "search_estimate", "SEARCH_STATE_BOUND", "one_step_bound"]
 
 SEARCH_STATE_BOUND = 1e4
 
@@ -86,32 +89,77 @@ class SetRange:
         return asdict(self)
 
 
-def stimulus_battery(i_lo: float, i_hi: float, dt_ms: float, n_steps: int):
-    """The search stimuli as ``(names, I)`` with ``I`` of shape ``(n_steps, n_stimuli)``."""
-    t = np.arange(n_steps) * dt_ms
-    cols, names = [], []
+def _battery(i_lo: float, i_hi: float, dt_ms: float):
+    """The search stimuli as ``(name, kind, args)``: ``const`` (level), ``step`` (before,
+    after), ``square`` (low, high, period, duty) and ``ramp`` (start, stop)."""
+    out = []
     for level in np.unique(np.concatenate([np.linspace(i_lo, i_hi, 17),
                                            [0.0] if i_lo < 0 < i_hi else []])):
-        cols.append(np.full(n_steps, level))
-        names.append(f"constant I = {level:g}")
-    half = n_steps // 2
-    cols.append(np.where(np.arange(n_steps) < half, i_lo, i_hi))
-    names.append(f"step {i_lo:g} -> {i_hi:g}")
-    cols.append(np.where(np.arange(n_steps) < half, i_hi, i_lo))
-    names.append(f"step {i_hi:g} -> {i_lo:g}")
+        out.append((f"constant I = {level:g}", "const", (float(level),)))
+    out.append((f"step {i_lo:g} -> {i_hi:g}", "step", (i_lo, i_hi)))
+    out.append((f"step {i_hi:g} -> {i_lo:g}", "step", (i_hi, i_lo)))
     pairs = [(i_lo, i_hi)]
     if i_lo < 0 < i_hi:
         pairs += [(0.0, i_hi), (i_lo, 0.0)]
     for lo, hi in pairs:
         for period in (2 * dt_ms, 1.0, 2.0, 5.0, 10.0, 20.0, 50.0, 100.0):
             for duty in (0.25, 0.5, 0.75):
-                cols.append(np.where((t % period) < duty * period, hi, lo))
-                names.append(f"square {lo:g}/{hi:g}, period {period:g} ms, duty {duty:g}")
-    cols.append(np.linspace(i_lo, i_hi, n_steps))
-    names.append(f"ramp {i_lo:g} -> {i_hi:g}")
-    cols.append(np.linspace(i_hi, i_lo, n_steps))
-    names.append(f"ramp {i_hi:g} -> {i_lo:g}")
-    return names, np.stack(cols, axis=1)
+                out.append((f"square {lo:g}/{hi:g}, period {period:g} ms, duty {duty:g}",
+                            "square", (lo, hi, period, duty)))
+    out.append((f"ramp {i_lo:g} -> {i_hi:g}", "ramp", (i_lo, i_hi)))
+    out.append((f"ramp {i_hi:g} -> {i_lo:g}", "ramp", (i_hi, i_lo)))
+    return out
+
+
+def _battery_rows(battery, k0: int, k1: int, dt_ms: float, n_steps: int) -> np.ndarray:
+    """Rows ``k0 .. k1 - 1`` of the stimulus matrix, ``(k1 - k0, n_stimuli)``, equal bit for
+    bit to the same rows of the whole matrix (a ramp is :func:`numpy.linspace`'s
+    ``start + k * step`` with its last value exactly ``stop``)."""
+    k = np.arange(k0, k1)
+    t = k * dt_ms
+    cols = []
+    for _, kind, a in battery:
+        if kind == "const":
+            cols.append(np.full(k.size, a[0]))
+        elif kind == "step":
+            cols.append(np.where(k < n_steps // 2, a[0], a[1]))
+        elif kind == "square":
+            lo, hi, period, duty = a
+            cols.append(np.where((t % period) < duty * period, hi, lo))
+        else:
+            start, stop = a
+            if n_steps > 1:
+                col = k.astype(np.float64) * ((stop - start) / (n_steps - 1)) + start
+                col[k == n_steps - 1] = stop
+            else:
+                col = np.full(k.size, float(start))
+            cols.append(col)
+    return np.stack(cols, axis=1)
+
+
+def stimulus_battery(i_lo: float, i_hi: float, dt_ms: float, n_steps: int):
+    """The search stimuli as ``(names, I)`` with ``I`` of shape ``(n_steps, n_stimuli)`` (the
+    search itself generates them a block of steps at a time)."""
+    battery = _battery(i_lo, i_hi, dt_ms)
+    return [b[0] for b in battery], _battery_rows(battery, 0, n_steps, dt_ms, n_steps)
+
+
+#: Steps of the stimulus generated at a time by the search (its memory does not grow with dt).
+SEARCH_BLOCK = 4096
+#: Conservative cost of the search: seconds per step and per trajectory-step (Euler on NumPy).
+SEARCH_S_PER_STEP, SEARCH_S_PER_TRAJECTORY_STEP = 6e-5, 1.5e-6
+
+
+def search_estimate(n_sets: int, n_inits: int, dt_ms: float, duration_ms: float = 3000.0
+                    ) -> dict:
+    """Memory (bytes) and time (s) of the range search of ``n_inits`` initial states over
+    ``n_sets`` parameter sets at ``dt_ms`` for ``duration_ms`` (the longest search lasts
+    3000 ms), before it runs."""
+    n_steps = duration_ms / dt_ms
+    cols = 100.0 * n_inits
+    seconds = n_steps * (SEARCH_S_PER_STEP + SEARCH_S_PER_TRAJECTORY_STEP * cols)
+    nbytes = 8.0 * (SEARCH_BLOCK + 16) * cols + 4096.0 * n_sets
+    return {"steps": n_steps, "trajectories": cols, "seconds": seconds, "bytes": nbytes}
 
 
 def _v_floor_bound(p: golden.IzhikevichParams, u_hi: float, i_lo: float, dt: float,
@@ -150,8 +198,13 @@ def _cached(key) -> tuple[SetRange, ...]:
     slowest = min((abs(s.a) for s in sets if s.a != 0), default=0.1)
     duration = float(np.clip(10.0 / slowest, 400.0, 3000.0))
     n_steps = int(round(duration / dt))
-    names, stim = stimulus_battery(i_lo, i_hi, dt, n_steps)
-    n_stim = stim.shape[1]
+    est = search_estimate(len(sets), sum(len(s) for s in inits), dt, duration)
+    budget.check(f"the state-range search ({len(sets)} parameter set(s), {n_steps:.3g} steps "
+                 f"of dt = {dt:g} ms)", est["bytes"], est["seconds"],
+                 "lower the update rate (update_hz)")
+    battery = _battery(i_lo, i_hi, dt)
+    names = [b[0] for b in battery]
+    n_stim = len(battery)
     cols_set, cols_v0, cols_u0 = [], [], []
     for si, (s, st) in enumerate(zip(sets, inits)):
         for v0, u0 in st:
@@ -167,7 +220,9 @@ def _cached(key) -> tuple[SetRange, ...]:
     v_min, u_min, u_max, v_pre_max = v.copy(), u.copy(), u.copy(), v.copy()
     with np.errstate(over="ignore", invalid="ignore"):
         for k in range(n_steps):
-            I = np.tile(stim[k], n_rep)
+            if k % SEARCH_BLOCK == 0:
+                stim = _battery_rows(battery, k, min(k + SEARCH_BLOCK, n_steps), dt, n_steps)
+            I = np.tile(stim[k % SEARCH_BLOCK], n_rep)
             v, u, _, v_pre = golden.step(v, u, I, prm.a, prm.b, prm.c, prm.d, dt, "euler",
                                          **extras)
             bad = ~(np.isfinite(v_pre) & np.isfinite(u) & (np.abs(v_pre) <= SEARCH_STATE_BOUND)

@@ -123,11 +123,12 @@ def pipeline_tags(m: Module, n_neurons: int, number_width: int, issue: SweepIssu
     return tags
 
 
-def registrar(m: Module):
+def registrar(m: Module, reset_less: bool = False):
     """``reg(name, value, stage)``: a pipeline register named ``<name><stage>`` loaded with
-    ``value`` every cycle."""
+    ``value`` every cycle (``reset_less``: without a reset, for data registers whose validity
+    travels in the pipeline tags)."""
     def reg(name, value, stage):
-        s = Signal(value.shape(), name=f"{name}{stage}")
+        s = Signal(value.shape(), name=f"{name}{stage}", reset_less=reset_less)
         m.d.sync += s.eq(value)
         return s
     return reg

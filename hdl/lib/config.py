@@ -15,7 +15,7 @@ from typing import Sequence
 from .fixed import ROUNDINGS, FixedConstant, FixedPointError
 
 __all__ = ["ConfigError", "CoreOptions", "SATURATION", "TICK_SOURCES", "int_bits_for",
-           "shared_exponent"]
+           "check_delays", "shared_exponent"]
 
 SATURATION = ("refuse", "flag")
 TICK_SOURCES = ("internal", "external")
@@ -73,3 +73,18 @@ def shared_exponent(name: str, values: Sequence[float], width: int, nominal: flo
     return [FixedConstant.scaled(f"{name}[{i}]", x, ref.frac_bits, width,
                                  max_rel_error=max_rel_error if x else None)
             for i, x in enumerate(values)]
+
+
+def check_delays(delays, n: int, max_ticks: int, what: str):
+    """``n`` integer delays in ``0 .. max_ticks`` ticks as a list (None stays None), or a
+    one-line refusal naming the delay the history cannot hold."""
+    if delays is None:
+        return None
+    d = [int(x) for x in delays]
+    if len(d) != n or any(x != y for x, y in zip(d, delays)):
+        raise ConfigError(f"{what} delays: {n} integer tick counts needed (one per source)")
+    bad = [x for x in d if not 0 <= x <= max_ticks]
+    if bad:
+        raise ConfigError(f"{what} delay of {bad[0]} ticks is outside the {what} history "
+                          f"(0 .. {max_ticks} ticks)")
+    return d

@@ -36,7 +36,8 @@ from .config import ConfigError, int_bits_for
 from .fixed import FixedConstant, QFormat, narrow, round_shift, select
 
 __all__ = ["TRACE_NAMES", "TraceSpec", "TraceView", "trace_spec", "scale_weights",
-           "derive_traces", "trace_inputs", "trace_products", "trace_update",
+           "derive_traces", "derive_cuba_trace", "cuba_input", "CUBA_TRACE", "trace_inputs",
+           "trace_products", "trace_update",
            "trace_golden_check"]
 
 #: trace order everywhere (state word, probe ports, twin arrays)
@@ -73,11 +74,13 @@ class TraceView:
 
 
 def trace_spec(name: str, tau_ms: float, dt_ms: float, operand_width: int, frac_bits: int,
-               input_max: float, max_decay_error: float, what: str = "trace") -> TraceSpec:
-    """One trace's formats: ``x' = y - round(k round(y))``, ``y = x + a`` with ``a`` at most
-    ``input_max`` per tick, ``k = 1 - exp(-dt/tau)`` in ``operand_width`` bits (refused when its
+               input_max: float, max_decay_error: float, what: str = "trace",
+               input_min: float = 0.0) -> TraceSpec:
+    """One trace's formats: ``x' = y - round(k round(y))``, ``y = x + a`` with ``a`` in
+    ``[input_min, input_max]`` per tick (``input_min < 0``: a signed trace, as the LIF core's
+    current-based synapse), ``k = 1 - exp(-dt/tau)`` in ``operand_width`` bits (refused when its
     representation error exceeds ``max_decay_error``), the stored trace in ``frac_bits``
-    fraction bits and integer bits proven from the steady state of the largest input."""
+    fraction bits and integer bits proven from the steady states of the extreme inputs."""
     lsb = 2.0 ** -frac_bits
     k = -math.expm1(-dt_ms / tau_ms)
     K = FixedConstant.normalized(f"k_{name}", k, operand_width)
@@ -86,17 +89,18 @@ def trace_spec(name: str, tau_ms: float, dt_ms: float, operand_width: int, frac_
                           f"{tau_ms:g} ms at dt {dt_ms:g} ms) is represented as "
                           f"{K.quantized:.6g} in {operand_width} bits")
     y_max = input_max / K.quantized + 8 * lsb
-    Y = QFormat.for_range(-4 * lsb, y_max, operand_width)
+    y_min = min(0.0, input_min) / K.quantized - (8 * lsb if input_min < 0 else 0.0)
+    Y = QFormat.for_range(y_min - 4 * lsb, y_max, operand_width)
     if Y.frac_bits > frac_bits:
         Y = QFormat(Y.int_bits, frac_bits)
-    # the stored trace: y - round(k round(y)) can dip below 0 by the operand rounding
-    t_lo = -(Y.lsb + 2 * lsb) / K.quantized - 4 * lsb
+    # the stored trace: y - round(k round(y)) can pass 0 (or y_min) by the operand rounding
+    t_lo = y_min - (Y.lsb + 2 * lsb) / K.quantized - 4 * lsb
     t_hi = y_max + (Y.lsb + 2 * lsb) / K.quantized
     T = QFormat(int_bits_for(t_lo, t_hi), frac_bits)
     t_bounds = (int(math.floor(t_lo / lsb)), int(math.ceil(t_hi / lsb)))
 
     def y_bounds(Y):
-        return (int(math.floor(t_lo / Y.lsb)) - 1,
+        return (int(math.floor((t_lo + min(0.0, input_min)) / Y.lsb)) - 1,
                 int(math.ceil((t_hi + input_max) / Y.lsb)) + 1)
     lo_r, hi_r = y_bounds(Y)
     while not (Y.min_raw <= lo_r and hi_r <= Y.max_raw):
@@ -153,6 +157,35 @@ def derive_traces(cfg) -> tuple[list[TraceSpec], tuple[int, int]]:
     lo = -(max(0.0, sg) + marg)
     hi = max(0.0, sa) + marg
     return specs, (int(math.floor(lo / lsb)), int(math.ceil(hi / lsb)))
+
+
+#: the LIF core's current-based synapse: one signed trace per neuron
+CUBA_TRACE = "x_syn"
+
+
+def derive_cuba_trace(cfg) -> tuple[list[TraceSpec], tuple[int, int]]:
+    """The current-based synapse of a discrete LIF core (``syn_alpha``, NIR's ``CubaLIF``):
+    one signed trace ``x`` per neuron; per tick ``y = x + I + a`` (the host current ``I`` and
+    ``a = sum_i w_i x_i``, the weighted input spikes of the tick), ``D = y`` and ``x' = y - k y``
+    with ``k = 1 - syn_alpha``. The synaptic current of a spike enters the membrane in its own
+    tick and decays by ``syn_alpha`` per tick after (snnTorch's ``Synaptic``; the schemes of
+    :mod:`cuneate.sim.nir.discretize` put their factors into the weights). Returns the spec
+    and the raw bounds of ``y`` (state fraction bits), which is all of ``D``."""
+    fv, lsb = cfg.v_frac_bits, 2.0 ** -cfg.v_frac_bits
+    wsh, ish = fv - cfg.W.frac_bits, fv - cfg.I.frac_bits
+    lo_raw = (int(cfg.syn_lo_raw.min()) << wsh if cfg.n_inputs else 0) + (cfg.i_lo_raw << ish)
+    hi_raw = (int(cfg.syn_hi_raw.max()) << wsh if cfg.n_inputs else 0) + (cfg.i_hi_raw << ish)
+    tau_ms = -cfg.dt_ms / math.log(cfg.syn_alpha)
+    spec = trace_spec(CUBA_TRACE, tau_ms, cfg.dt_ms, cfg.operand_width, fv, hi_raw * lsb,
+                      cfg.max_decay_error, "current-based synapse", input_min=lo_raw * lsb)
+    return [spec], (spec.t_bounds[0] + lo_raw, spec.t_bounds[1] + hi_raw)
+
+
+def cuba_input(cfg, traces, I, acc):
+    """Stage 3 of the current-based synapse: ``y = x + I + a`` (``I`` in current LSBs, ``a``
+    in weight LSBs, ``y`` in state LSBs)."""
+    fv = cfg.V.frac_bits
+    return traces[0] + (I << (fv - cfg.I.frac_bits)) + (acc << (fv - cfg.W.frac_bits))
 
 
 # ----------------------------------------------------------------------------------------------

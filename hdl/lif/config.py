@@ -30,17 +30,18 @@ from typing import Sequence
 import numpy as np
 
 from ...golden import lif as golden
-from ..lib.config import SATURATION, ConfigError, CoreOptions, int_bits_for
+from ..lib.config import SATURATION, ConfigError, CoreOptions, check_delays, int_bits_for
 from ..lib.fixed import FixedConstant, QFormat
 
 __all__ = ["ConfigError", "LifConfig", "LifSet", "PIPELINE_DEPTH", "CLAMP_KINDS", "FORMS",
-           "DECAYS", "SATURATION"]
+           "DECAYS", "SATURATION", "MAX_INPUT_DELAY"]
 
 PIPELINE_DEPTH = 5
 CLAMP_KINDS = ("current", "input", "v_low")
 FORMS = ("continuous", "discrete")
 DECAYS = ("multiply", "shift")
 _GRID_EPS = 1e-9
+MAX_INPUT_DELAY = 64    #: the longest input delay the core's input history holds (ticks)
 
 
 @dataclass(frozen=True)
@@ -138,6 +139,9 @@ class LifConfig(CoreOptions):
         As for the Izhikevich core.
     max_decay_error
         Largest accepted relative error of ``k`` (and of ``1 - k``) as represented.
+    syn_alpha, input_delays
+        Discrete form: a current-based synapse (NIR's CubaLIF, :mod:`~cuneate.hdl.lib.synapses`);
+        per source a delay in ticks (<= MAX_INPUT_DELAY; a spike before tick T acts at T + d).
     """
 
     n_neurons: int = 8
@@ -164,6 +168,8 @@ class LifConfig(CoreOptions):
     input_types: Sequence[str] | None = None
     ampa: tuple[float, float] = (golden.AMPA.tau_rise_ms, golden.AMPA.tau_decay_ms)
     gaba: tuple[float, float] = (golden.GABA.tau_rise_ms, golden.GABA.tau_decay_ms)
+    syn_alpha: float | None = None
+    input_delays: Sequence[int] | None = None
 
     def __post_init__(self):
         self._check_sizes()
@@ -252,6 +258,8 @@ class LifConfig(CoreOptions):
                 raise ConfigError("weights must be finite")
         self.n_inputs = F = w.shape[1]
         self.weights = w
+        self.input_delays = check_delays(self.input_delays, F, MAX_INPUT_DELAY, "input")
+        self.max_input_delay = max(self.input_delays or [0])
         self.input_exc = np.ones(F, dtype=bool)
         if self.input_types is not None and not self.synapses:
             raise ConfigError("input_types (AMPA/GABA) only apply with synapses=True")
@@ -302,12 +310,16 @@ class LifConfig(CoreOptions):
         if self.synapses:
             from ..lib.synapses import derive_traces
             self.traces, (s_lo, s_hi) = derive_traces(self)
+        elif self.syn_alpha is not None:
+            from ..lib.synapses import derive_cuba_trace
+            self.traces, (s_lo, s_hi) = derive_cuba_trace(self)
         else:
             self.traces = []
             s_lo = int(self.syn_lo_raw.min()) << (fv - W.frac_bits)
             s_hi = int(self.syn_hi_raw.max()) << (fv - W.frac_bits)
-        d_lo = (self.i_lo_raw << (fv - I.frac_bits)) + s_lo
-        d_hi = (self.i_hi_raw << (fv - I.frac_bits)) + s_hi
+        cur = self.syn_alpha is None            # (the current-based synapse: D = y)
+        d_lo = (self.i_lo_raw << (fv - I.frac_bits)) * cur + s_lo
+        d_hi = (self.i_hi_raw << (fv - I.frac_bits)) * cur + s_hi
         self.d_proven_raw = (int(d_lo), int(d_hi))
         if self.input_limit is None:
             self.d_lo_raw, self.d_hi_raw = self.d_proven_raw
@@ -519,7 +531,8 @@ class LifConfig(CoreOptions):
               "synapses": bool(self.synapses), "weights_writable": bool(self.weights_writable),
               "input_types": (["exc" if e else "inh" for e in self.input_exc]
                               if self.synapses else None),
-              "ampa": list(self.ampa), "gaba": list(self.gaba)}
+              "ampa": list(self.ampa), "gaba": list(self.gaba), "syn_alpha": self.syn_alpha,
+              "input_delays": self.input_delays}
         kw.update(override)
         return kw
 
@@ -573,6 +586,9 @@ class LifConfig(CoreOptions):
                           "weights_stored_as": "w / N (peak-normalized kernel)",
                           "traces": {t.name: t.to_dict() for t in self.traces},
                           "multipliers": len(self.traces)} if self.synapses else None),
+            "current_synapse": (self.traces[0].to_dict() | {"syn_alpha": self.syn_alpha}
+                                if self.syn_alpha is not None else None),
+            "input_delays_ticks": self.input_delays,
             "resources_hint": {"multipliers": (1 if self.decay == "multiply" else 0)
                                + len(self.traces),
                                "trace_ram_bits": self.n_neurons * sum(t.T.width

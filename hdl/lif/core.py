@@ -42,8 +42,10 @@ class LifCore(wiring.Component):
        back; outputs registered.
 
     Input spikes: ``in_valid``/``in_source`` set a source's bit in the pending vector; each
-    tick moves the pending vector into the active one (used by every neuron of that sweep)
-    and clears it, so a spike arriving during tick t acts on the sweep of tick t + 1. Several
+    tick moves the pending vector into the active one (used by every neuron of that sweep;
+    with ``input_delays`` source ``i`` comes from the pending vector of ``d_i`` ticks before,
+    through a shift register of pending vectors) and clears it, so a spike arriving during
+    tick t acts on the sweep of tick t + 1. Several
     spikes of one source in one tick count once and set the sticky ``in_merged`` flag. Other
     ports are those of
     :class:`cuneate.hdl.izhikevich.IzhikevichCore` (``i_wr_*``, ``sel_wr_*``, spike stream,
@@ -104,7 +106,7 @@ class LifCore(wiring.Component):
             pending = Signal(F)
             event = Mux(self.in_valid, Const(1, F) << self.in_source, 0)
             with m.If(start):
-                m.d.sync += [active.eq(pending), pending.eq(event)]
+                m.d.sync += [active.eq(self._delayed(m, pending, start)), pending.eq(event)]
             with m.Else():
                 m.d.sync += pending.eq(pending | event)
                 # a second spike of a source within one tick merges with the first: flagged
@@ -175,6 +177,20 @@ class LifCore(wiring.Component):
         sweep_bookkeeping(m, self, N, cfg.sweep_number_width, t5, CLAMP_KINDS,
                           cfg.spike_fifo_depth)
         return m
+
+
+    def _delayed(self, m: Module, pending, start):
+        """The active vector of a starting sweep: source ``i`` from ``input_delays[i]`` ticks
+        ago (a shift register of ``max_input_delay`` pending vectors, advanced on each sweep
+        start), or ``pending`` itself without delays."""
+        cfg = self.cfg
+        if not cfg.max_input_delay:
+            return pending
+        hist = [Signal(cfg.n_inputs, name=f"in_hist{j}") for j in range(cfg.max_input_delay)]
+        with m.If(start):
+            m.d.sync += [h.eq(prev) for h, prev in zip(hist, [pending] + hist[:-1])]
+        taps = [pending] + hist
+        return Cat(*[taps[d][i] for i, d in enumerate(cfg.input_delays)])
 
 
 def lif_verilog(config: LifConfig, name: str = "lif_core") -> str:

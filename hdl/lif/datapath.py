@@ -22,7 +22,10 @@ register after each stage) and by the twin (composed directly).
 
 With ``synapses=True`` the weighted input spikes drive four per-neuron AMPA/GABA traces instead
 (:mod:`cuneate.hdl.lib.synapses`): ``D = clamp(I) + I_syn``, the traces in their own block RAM,
-their decays (one multiplier each) in stage 4 and their write-back in stage 5.
+their decays (one multiplier each) in stage 4 and their write-back in stage 5. With
+``syn_alpha`` (discrete form) one signed current-based trace takes the whole input:
+``D = y = x + clamp(I) + sum w x_in``, ``x' = y - (1 - syn_alpha) y`` (the host current is a
+per-tick input of the synapse, as an Affine bias before NIR's CubaLIF).
 
 Every clamp that can act is flagged and counted (:data:`CLAMP_KINDS`): ``current`` (host wrote
 outside ``current_range``), ``input`` (the total input left ``input_limit``; only built with
@@ -39,7 +42,7 @@ from amaranth import Const
 from ..lib.datapath import false_like, lookup
 from ..lib.fixed import (QFormat, clamp_flagged, is_hdl, narrow, round_shift, round_shift_select,
                          select)
-from ..lib.synapses import trace_inputs
+from ..lib.synapses import cuba_input, trace_inputs
 from .config import CLAMP_KINDS, LifConfig
 
 __all__ = ["gather_input", "leak_operand", "leak_product", "update_state", "clamp_bits"]
@@ -72,7 +75,11 @@ def gather_input(cfg: LifConfig, I, x: Sequence, w: Sequence, traces=None):
             acc = acc + select(xi, wi, 0)
         if not cfg.n_inputs:
             acc = Const(0, 1) if is_hdl(I) else np.zeros(np.shape(I), dtype=np.int64)
-        D = (I << (fv - cfg.I.frac_bits)) + (acc << (fv - cfg.W.frac_bits))
+        if cfg.syn_alpha is not None:       # current-based synapse: D = y = x + I + a
+            ys = [cuba_input(cfg, traces, I, acc)]
+            D = ys[0]
+        else:
+            D = (I << (fv - cfg.I.frac_bits)) + (acc << (fv - cfg.W.frac_bits))
     if cfg.input_clamp:
         width = max(abs(cfg.d_lo_raw), abs(cfg.d_hi_raw)).bit_length() + 1
         D, lo, hi = clamp_flagged(D, cfg.d_lo_raw, cfg.d_hi_raw, QFormat(width, 0))

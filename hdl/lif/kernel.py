@@ -54,13 +54,16 @@ class LifConstants:
 def gather_constants(cfg: LifConfig) -> LifConstants:
     """The configuration's constants for the kernel. Raises ``ValueError`` for a configuration
     the kernel does not cover (a current or weight format with more fraction bits than the
-    state), which then runs on the stage functions."""
+    state, a current-based synapse, input delays), which then runs on the stage functions."""
     near = cfg.rounding == "nearest"
     fv = cfg.V.frac_bits
     ish, wsh = fv - cfg.I.frac_bits, fv - cfg.W.frac_bits
     if ish < 0 or wsh < 0:
         raise ValueError("the compiled LIF kernel needs current and weight formats with at "
                          "most the state's fraction bits")
+    if cfg.syn_alpha is not None or cfg.max_input_delay:
+        raise ValueError("the compiled LIF kernel covers neither the current-based synapse nor "
+                         "input delays")
     n_sets = len(cfg.sets)
     tab = np.zeros((6, n_sets), dtype=np.int64)
     for s in range(n_sets):

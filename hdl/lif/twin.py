@@ -59,9 +59,23 @@ class LifTwin:
         self.I = np.zeros(cfg.n_neurons, dtype=np.int64)
         self.traces = np.zeros((len(cfg.traces), cfg.n_neurons), dtype=np.int64)
         self.W = cfg.weights_raw.copy()
+        self.history = np.zeros((cfg.max_input_delay, cfg.n_inputs), dtype=bool)
         self.sweeps = 0
         self.clamp_sticky = 0
         self.clamp_counts = {k: 0 for k in CLAMP_KINDS}
+
+    def delay_inputs(self, x):
+        """The input vector the sweep of this tick uses, given the spikes ``x`` received before
+        its tick: source ``i`` delayed by ``input_delays[i]`` ticks (the core's input history,
+        advanced by one tick). Without delays ``x`` itself."""
+        if not self.cfg.max_input_delay:
+            return x
+        xs = np.zeros(self.cfg.n_inputs, dtype=bool) if x is None else np.asarray(x, dtype=bool)
+        d = np.asarray(self.cfg.input_delays)
+        hist = np.vstack([xs[None, :], self.history])
+        out = hist[d, np.arange(d.size)]
+        self.history = hist[:-1].copy()
+        return out
 
     def set_currents(self, values, index=None) -> np.ndarray:
         """Quantize currents like the host does (saturating to the current format)."""
@@ -96,7 +110,7 @@ class LifTwin:
             raise ValueError(f"input spike vector must have {cfg.n_inputs} entries")
         W = self.W
         tr = None
-        if cfg.synapses:
+        if cfg.traces:
             tr = [np.asarray(t, dtype=np.int64) for t in (self.traces if traces is None
                                                           else traces)]
         g = gather_input(cfg, I, [bool(b) for b in xs], [W[:, i] for i in range(cfg.n_inputs)],
@@ -106,7 +120,7 @@ class LifTwin:
         if self.check:
             check_int64("leak product", d)
         out = update_state(cfg, v, d, g["d"], ref, sel)
-        if cfg.synapses:
+        if cfg.traces:
             out["traces"] = np.array(trace_update(cfg, g["ys"], trace_products(cfg, g["ys"])),
                                      dtype=np.int64)
             out["ys"] = np.array(g["ys"], dtype=np.int64)
@@ -169,10 +183,10 @@ class LifTwin:
             spk = np.zeros(self.cfg.n_neurons, dtype=bool)
             spk[ns] = True
             return spk
-        out = self.update(self.v, self.ref, self.I, x, self.sel)
+        out = self.update(self.v, self.ref, self.I, self.delay_inputs(x), self.sel)
         self.v = np.asarray(out["v"], dtype=np.int64)
         self.ref = np.asarray(out["ref"], dtype=np.int64)
-        if self.cfg.synapses:
+        if self.cfg.traces:
             self.traces = out["traces"]
         self.sweeps += 1
         tally_clamps(self, CLAMP_KINDS, [np.count_nonzero(out[k]) for k in CLAMP_KINDS])

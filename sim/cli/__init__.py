@@ -5,18 +5,30 @@ General commands live in this package, one module each: ``doctor`` and ``filter`
 ``prove`` (:mod:`.prove`), ``hardcases`` (:mod:`.hardcases`), ``boards``/``build``/``program``
 (:mod:`.boards`). Each block adds its own commands from ``cuneate.sim.<block>.cli``
 (``simulate BLOCK``, ``generate BLOCK`` and block experiments). Every command module has a
-``register(groups)`` function. Bad arguments exit with status 2 and a one-line reason on
-stderr; a failed check exits 1.
+``register(groups)`` function.
+
+Exit status and the one error path (:func:`main`):
+
+* 0: done; 1: a check failed (the run's own verdict, e.g. a proof or an engine mismatch);
+* 2: refused: bad arguments, a bad scene or trace file, a configuration the hardware cannot hold,
+  a run estimated to exhaust memory or exceed ``--max-minutes`` (:mod:`cuneate.golden.budget`),
+  a divergence of a golden model, a loss on a transport, a tool that refuses a user-given name:
+  one line on stderr naming the input;
+* 3: an unanticipated error: one line and "run with --debug for the traceback" (``--debug``,
+  anywhere on the command line, or ``CUNEATE_DEBUG=1``, shows it);
+* 130: interrupted.
 """
 
 from __future__ import annotations
 
 import importlib
 import importlib.util
+import os
 import pkgutil
 import sys
+import warnings
 
-from .options import CliError, CommandGroups, Parser
+from .options import CliError, CommandGroups, Parser, add_quiet_option, anticipated, one_line
 
 __all__ = ["main", "build_parser", "COMMAND_MODULES", "CliError", "block_command_modules"]
 
@@ -48,6 +60,10 @@ def version() -> str:
 def build_parser() -> Parser:
     p = Parser(prog="cuneate", description=__doc__.splitlines()[0])
     p.add_argument("--version", action="version", version=f"cuneate {version()}")
+    add_quiet_option(p, root=True)
+    p.add_argument("--debug", action="store_true",
+                   help="show the traceback of an unexpected error (accepted anywhere on the "
+                        "command line)")
     sub = p.add_subparsers(dest="command", required=True, parser_class=Parser)
     s = sub.add_parser("simulate", help="simulate a hardware block on an engine")
     s_models = s.add_subparsers(dest="model", required=True, parser_class=Parser,
@@ -63,16 +79,68 @@ def build_parser() -> Parser:
     return p
 
 
+def _split_debug(argv) -> tuple[list[str], bool]:
+    """``argv`` without ``--debug`` (anywhere before a ``--``), and whether it was there."""
+    argv = list(argv)
+    end = argv.index("--") if "--" in argv else len(argv)
+    debug = "--debug" in argv[:end]
+    return [a for i, a in enumerate(argv) if not (i < end and a == "--debug")], debug
+
+
+def _one_line_warning(message, category, filename, lineno, file=None, line=None):
+    if issubclass(category, ResourceWarning):     # about the program, not the input: not shown
+        return
+    print(f"cuneate: warning: {one_line(str(message))}", file=sys.stderr)
+
+
+def _command(args) -> str:
+    """``cuneate`` and the (sub)command words of ``args`` (``cuneate lif quantization``)."""
+    words = ["cuneate"]
+    if args is not None:
+        for attr in ("command", "model", "block", "lif_command", "coincidence_command",
+                     "filter_command", "hardcases_command"):
+            if isinstance(getattr(args, attr, None), str):
+                words.append(getattr(args, attr))
+    return " ".join(words)
+
+
 def main(argv=None) -> int:
-    try:
-        args = build_parser().parse_args(argv)
-        return args.func(args)
-    except CliError as exc:
-        msg = str(exc)
-        print(msg if msg.startswith("cuneate") else f"cuneate: {msg}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        return 130
+    """Run one command; see the module docstring for the exit status."""
+    from ...golden import budget
+    argv, debug = _split_debug(sys.argv[1:] if argv is None else argv)
+    debug = debug or os.environ.get("CUNEATE_DEBUG", "") not in ("", "0")
+    args = None
+    with warnings.catch_warnings():
+        warnings.showwarning = _one_line_warning
+        try:
+            args = build_parser().parse_args(argv)
+            minutes = None if getattr(args, "force", False) else getattr(args, "max_minutes",
+                                                                         None)
+            # the command's time limit; a memory limit set around main (tests) stays
+            with budget.limited(max_minutes=minutes, memory_bytes=budget.limits().memory_bytes):
+                return args.func(args)
+        except CliError as exc:
+            msg = one_line(str(exc))
+            print(msg if msg.startswith("cuneate") else f"cuneate: {msg}", file=sys.stderr)
+            return 2
+        except KeyboardInterrupt:
+            return 130
+        except Exception as exc:
+            command = _command(args)
+            if anticipated(exc) and not debug:
+                print(f"{command}: {one_line(str(exc))}", file=sys.stderr)
+                return 2
+            if debug:
+                import traceback
+                traceback.print_exc()
+            else:
+                print(f"{command}: internal error: {type(exc).__name__}: "
+                      f"{one_line(str(exc)) or 'no message'} (run with --debug for the "
+                      f"traceback)", file=sys.stderr)
+            return 3
+        finally:
+            from .. import progress
+            progress.configure("quiet")      # the library is quiet again once a command is over
 
 
 if __name__ == "__main__":

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import json
 
-from .options import CliError, CommandGroups, output_dir, positive_int
+from .options import CliError, CommandGroups, add_quiet_option, output_dir, positive_int
 
 __all__ = ["register"]
 
@@ -33,6 +33,16 @@ def cmd_build(args) -> int:
     from ...boards.build import BuildError, build_target
     from ...boards.targets import TARGETS
     from ...hdl.lib.config import ConfigError
+    from .options import start_progress
+    if args.board_option is not None:
+        if args.board is not None and args.board != args.board_option:
+            raise CliError(f"cuneate build: two boards given ({args.board!r} and --board "
+                           f"{args.board_option!r})")
+        args.board = args.board_option
+    if args.board is None:
+        raise CliError(f"cuneate build: name a board (cuneate build BOARD, or --board BOARD); "
+                       f"known: {', '.join(TARGETS)}")
+    start_progress(args)
     if args.board not in TARGETS:
         raise CliError(f"cuneate build: unknown board {args.board!r}; known: "
                        f"{', '.join(TARGETS)}")
@@ -93,7 +103,10 @@ def register(groups: CommandGroups) -> None:
 
     c = groups.root.add_parser("build", help="Verilog, bitstream and resource/timing report "
                                              "for a board")
-    c.add_argument("board", help="target name (see cuneate boards)")
+    c.add_argument("board", nargs="?", default=None, help="target name (see cuneate boards)")
+    c.add_argument("--board", dest="board_option", default=None, metavar="BOARD",
+                   help="the same as the positional BOARD")
+    add_quiet_option(c)
     c.add_argument("--neurons", type=positive_int, default=None)
     c.add_argument("--clock-hz", type=float, default=None,
                    help="core clock (must be one of the board's PLL plans)")

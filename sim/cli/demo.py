@@ -1,4 +1,5 @@
-"""The default job behind ``make demo``: generate the hardware and summarize the models."""
+"""``cuneate demo``: the same job as ``make demo`` (``cuneate run --out out/demo``, the default
+scene and its report); ``--summary`` generates the hardware and summarizes the models."""
 
 from __future__ import annotations
 
@@ -81,11 +82,26 @@ def core_summary() -> list[str]:
 
 
 def cmd_demo(args) -> int:
-    return run_demo(output_dir(args.out))
+    """``cuneate demo``: what ``make demo`` runs (the default scene into ``--out``); with
+    ``--summary`` the hardware's files and a golden-model summary instead."""
+    if args.summary:
+        return run_demo(output_dir(args.out))
+    import argparse
+
+    from ..engines.waves import DEFAULT_TICKS
+    from .run import cmd_run
+    return cmd_run(argparse.Namespace(
+        scene=None, out=args.out, engines=None, list_examples=False, json=False, waves=None,
+        waves_start=0, waves_ticks=DEFAULT_TICKS, quiet=getattr(args, "quiet", False),
+        verbose=False))
 
 
 def register(groups: CommandGroups) -> None:
-    dm = groups.root.add_parser("demo", help="generate the hardware and print a golden-model "
-                                             "summary")
-    dm.add_argument("--out", default="out/demo")
+    from .options import add_quiet_option
+    dm = groups.root.add_parser("demo", help="what make demo runs: the default scene (the "
+                                             "four-material grasp) and its report")
+    dm.add_argument("--out", default="out/demo", help="report directory")
+    dm.add_argument("--summary", action="store_true",
+                    help="instead: generate the hardware and print a golden-model summary")
+    add_quiet_option(dm)
     dm.set_defaults(func=cmd_demo)

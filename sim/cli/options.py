@@ -11,25 +11,152 @@ from __future__ import annotations
 
 import argparse
 import math
+import re
 from dataclasses import dataclass
 from pathlib import Path
 
-__all__ = ["CliError", "Parser", "CommandGroups", "finite_float", "positive_float",
-           "positive_int", "nonneg_int", "output_dir", "input_file", "refuse_long_run",
-           "fmt_time", "engine_choices", "add_run_options", "add_generate_options",
+from ...golden.budget import fmt_count, fmt_time
+
+__all__ = ["CliError", "Parser", "one_line", "anticipated", "ANTICIPATED", "CommandGroups",
+           "finite_float", "positive_float", "positive_int", "nonneg_int", "seed_int",
+           "probability", "verilog_name", "output_dir", "input_file", "run_budget",
+           "check_estimate", "fmt_time",
+           "engine_choices", "add_run_options", "add_max_minutes", "add_generate_options",
            "run_ticks", "print_run", "clamp_summary", "build_config", "add_rate_options",
-           "add_block_commands"]
+           "add_block_commands", "HelpFormatter", "add_quiet_option", "start_progress",
+           "add_waves_options", "waves_from_args", "add_spikes_option", "write_simulate_spikes"]
 
 
 class CliError(Exception):
     """A user error: printed as one line, exit status 2."""
 
 
+#: The errors every command maps to exit status 2 and one line (module -> class names): what
+#: bad input, a configuration the hardware cannot hold, a run over budget, a diverging golden
+#: model, a loss on a transport or a refusing tool raise. Their messages name the input; where
+#: a command knows more (the scene file, the option) it says so itself.
+ANTICIPATED = {
+    "golden.budget": ("BudgetError",),
+    "golden.izhikevich": ("DivergenceError",),
+    "golden.lif": ("LIFDivergenceError",),
+    "golden.fbg": ("UnstableFilterError",),
+    "hdl.izhikevich.range": ("RangeSearchError",),
+    "hdl.lib.config": ("ConfigError",),
+    "hdl.izhikevich.formal": ("FormalError",),
+    "sim.scenes.schema": ("SceneError",),
+    "sim.host.traces": ("TraceError",),
+    "sim.host.transport": ("TransportError",),
+    "sim.host.driver": ("GapError",),
+    "sim.engines.registry": ("UnknownEngine",),
+    "hdl.flow.tools": ("ToolError",),
+    "boards.build": ("BuildError",),
+}
+
+
+def anticipated(exc: BaseException) -> bool:
+    """True for the errors of :data:`ANTICIPATED` (of modules already loaded: an error of a
+    module never imported cannot have been raised) and for undecodable text input."""
+    import sys
+    if isinstance(exc, UnicodeDecodeError):
+        return True
+    root = __package__.split(".")[0]
+    for mod, names in ANTICIPATED.items():
+        m = sys.modules.get(f"{root}.{mod}")
+        if m is not None and isinstance(exc, tuple(getattr(m, n) for n in names)):
+            return True
+    return False
+
+
+def one_line(text: str, limit: int = 600) -> str:
+    """``text`` on one line (line breaks and runs of blanks become one space), at most
+    ``limit`` characters."""
+    out = " ".join(str(text).split())
+    return out if len(out) <= limit else out[:limit - 3] + "..."
+
+
+class HelpFormatter(argparse.ArgumentDefaultsHelpFormatter):
+    """Help with every option's default, unless its help already states it or it has none
+    worth stating (``None``, a flag's ``False``)."""
+
+    def _get_help_string(self, action):
+        text = action.help or ""
+        d = action.default
+        if "default" in text.lower() or d is None or d is False or d is argparse.SUPPRESS:
+            return text
+        return super()._get_help_string(action)
+
+
 class Parser(argparse.ArgumentParser):
-    """An argument parser whose errors are one line (no usage dump)."""
+    """An argument parser whose errors are one line (no usage dump), whose help states the
+    defaults, and which reads every argument that starts with ``-`` and a digit or a point
+    (``-5``, ``-1e3``, ``-1,2``, ``-.5;3``) as a value, never as an option."""
+
+    def __init__(self, *args, **kwargs):
+        kwargs.setdefault("formatter_class", HelpFormatter)
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = re.compile(r"^-\.?\d")
 
     def error(self, message):
         raise CliError(f"{self.prog}: {message}")
+
+
+def add_quiet_option(p, root: bool = False) -> None:
+    """``-q/--quiet``: no progress bars or progress lines (on the command or, with ``root``,
+    before it: ``cuneate -q run``)."""
+    p.add_argument("-q", "--quiet", action="store_true",
+                   default=False if root else argparse.SUPPRESS,
+                   help="no progress bars or progress lines on stderr")
+
+
+def start_progress(args, verbose: bool = False) -> str:
+    """Show what the command does (:mod:`cuneate.sim.progress`): bars in a terminal,
+    timestamped lines otherwise, nothing with ``-q``; returns the mode."""
+    from .. import progress
+    if getattr(args, "quiet", False):
+        return progress.configure("quiet")
+    return progress.configure("auto", verbose=verbose or getattr(args, "verbose", False))
+
+
+def add_waves_options(p) -> None:
+    """``--waves DIR`` and its window (``--waves-start``, ``--waves-ticks``)."""
+    from ..engines.waves import DEFAULT_TICKS
+    p.add_argument("--waves", default=None, metavar="DIR",
+                   help="write the RTL engines' waveforms (amaranth: VCD, icarus: FST, "
+                        "verilator: VCD) and GTKWave save files into DIR")
+    p.add_argument("--waves-start", type=nonneg_int, default=0, metavar="TICK",
+                   help="first tick (sweep) of the waveform window")
+    p.add_argument("--waves-ticks", type=positive_int, default=DEFAULT_TICKS, metavar="N",
+                   help="ticks in the waveform window (a long run does not write gigabytes)")
+
+
+def waves_from_args(args, relative_to: Path | None = None):
+    """The :class:`~cuneate.sim.engines.waves.Waves` window of ``--waves``, or ``None``."""
+    if not getattr(args, "waves", None):
+        return None
+    from ..engines.waves import Waves
+    d = output_dir(args.waves, "--waves")
+    return Waves(d, args.waves_start, args.waves_ticks)
+
+
+def add_spikes_option(p) -> None:
+    """``--spikes FILE``: the spikes in the spike-file format (:mod:`cuneate.sim.spikes`)."""
+    p.add_argument("--spikes", default=None, metavar="FILE.npz",
+                   help="also write the spikes as a spike file (NPZ; cuneate.sim.spikes)")
+
+
+def write_simulate_spikes(args, trains, block: str, t_stop_ms: float, dt_ms: float | None,
+                          populations=None) -> None:
+    """``--spikes``: write a ``simulate`` command's trains (one neuron per train, population
+    ``block`` unless ``populations`` names each) and say where."""
+    if not getattr(args, "spikes", None):
+        return
+    from ..spikes import write_spikes
+    path = Path(args.spikes)
+    try:
+        write_spikes(path, trains, args.engine, t_stop_ms,
+                     populations or [block] * len(trains), dt_ms=dt_ms)
+    except OSError as exc:
+        raise CliError(f"--spikes {str(path)!r}: cannot write: {exc.strerror or exc}") from None
 
 
 @dataclass
@@ -89,8 +216,37 @@ def nonneg_int(text: str) -> int:
     return val
 
 
+def seed_int(text: str) -> int:
+    """A random seed: an integer in 0 .. 2**32 - 1 (what every generator here accepts)."""
+    val = nonneg_int(text)
+    if val > 2**32 - 1:
+        raise argparse.ArgumentTypeError(f"a seed must be at most 2**32 - 1 = {2**32 - 1}: "
+                                         f"{text!r}")
+    return val
+
+
+def probability(text: str) -> float:
+    """A probability: a finite number in [0, 1]."""
+    val = finite_float(text)
+    if not 0.0 <= val <= 1.0:
+        raise argparse.ArgumentTypeError(f"a probability must be in [0, 1]: {text!r}")
+    return val
+
+
+def verilog_name(text: str) -> str:
+    """A Verilog module name (a simple identifier: a letter or ``_``, then letters, digits,
+    ``_`` or ``$``; at most 1024 characters), else one line naming it."""
+    if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_$]{0,1023}", text):
+        raise argparse.ArgumentTypeError(f"not a Verilog module name: {text!r} (a letter or _, "
+                                         f"then letters, digits, _ or $)")
+    return text
+
+
 def output_dir(path: str | Path, what: str = "--out") -> Path:
-    """Create ``path`` as a directory (and parents) or refuse in one line."""
+    """Create ``path`` as a directory (and parents) or refuse in one line (an empty name is
+    refused: it would write into the current directory)."""
+    if not str(path).strip():
+        raise CliError(f"{what}: empty directory name (give a directory, e.g. {what} out)")
     p = Path(path)
     try:
         p.mkdir(parents=True, exist_ok=True)
@@ -129,31 +285,31 @@ def engine_choices(block: str) -> tuple[str, ...]:
     return block_engines(block)
 
 
-def fmt_time(s: float) -> str:
-    """A duration for people: seconds, minutes, hours or days."""
-    if s < 120:
-        return f"{s:.0f} s"
-    if s < 7200:
-        return f"{s / 60:.0f} min"
-    if s < 2 * 86400:
-        return f"{s / 3600:.1f} h"
-    return f"{s / 86400:.0f} days"
-
-
-def refuse_long_run(command: str, block: str, engine: str, work: float, max_minutes: float,
-                    what: str = "") -> float:
+def run_budget(command: str, block: str, engine: str, work: float, nbytes: float = 0.0,
+               what: str = "", hint: str = "shorten --duration-ms") -> dict:
     """Refuse (one line) a run of ``work`` (the block's unit: updates, or cycles on an HDL
-    simulator) that the engine registry estimates to take longer than ``max_minutes``;
-    returns the estimate in seconds."""
+    simulator) that the engine registry estimates to take longer than the time limit in force
+    (``--max-minutes``), or whose ``nbytes`` exceed the memory this machine can give
+    (:func:`cuneate.golden.budget.check`); returns the estimate."""
+    from ...golden import budget
     from ..engines.registry import BLOCKS, estimate_seconds
     secs = estimate_seconds(block, engine, work)
-    if secs > max_minutes * 60:
-        unit = BLOCKS[block].unit
-        limit = BLOCKS[block].speed[engine] * max_minutes * 60
-        raise CliError(f"{command}: {what or 'the run'} is too long for the {engine} engine "
-                       f"(about {work:.3g} {unit}, ~{fmt_time(secs)}; limit {limit:.0e} "
-                       f"{unit} = --max-minutes {max_minutes:g}); shorten --duration-ms")
-    return secs
+    unit = BLOCKS[block].unit
+    try:
+        return budget.check(f"{what or 'the run'} on the {engine} engine (about {work:.3g} "
+                            f"{unit})", budget.BASE_BYTES + nbytes, secs, hint)
+    except budget.BudgetError as exc:
+        raise CliError(f"{command}: {exc}") from None
+
+
+def check_estimate(command: str, est: dict, hint: str = "") -> dict:
+    """An estimate ``{"what", "bytes", "seconds"}`` checked against the limits in force
+    (:func:`cuneate.golden.budget.check`), refused as a one-line :class:`CliError`."""
+    from ...golden import budget
+    try:
+        return budget.check(est["what"], est["bytes"], est["seconds"], hint)
+    except budget.BudgetError as exc:
+        raise CliError(f"{command}: {exc}") from None
 
 
 def add_run_options(p, max_minutes: bool = True) -> None:
@@ -161,9 +317,15 @@ def add_run_options(p, max_minutes: bool = True) -> None:
     ``--json``."""
     p.add_argument("--build-dir", default=None, help="HDL simulator build directory")
     if max_minutes:
-        p.add_argument("--max-minutes", type=positive_float, default=10.0,
-                       help="refuse runs estimated to take longer (default 10)")
+        add_max_minutes(p, 10.0)
     p.add_argument("--json", action="store_true", help="print the result as JSON")
+
+
+def add_max_minutes(p, default: float) -> None:
+    """``--max-minutes``: the time limit the command line sets for the command
+    (:func:`cuneate.golden.budget.limited`); runs estimated to take longer are refused."""
+    p.add_argument("--max-minutes", type=positive_float, default=default,
+                   help=f"refuse work estimated to take longer (default {default:g})")
 
 
 def add_generate_options(g) -> None:
@@ -174,18 +336,19 @@ def add_generate_options(g) -> None:
 
 
 def run_ticks(command: str, block: str, args, dt_ms: float, cycles: float, updates: float,
-              unit: str = "tick") -> int:
+              unit: str = "tick", bytes_per_tick: float = 0.0) -> int:
     """The ticks of ``args.duration_ms`` at ``dt_ms``, refused in one line when shorter than
-    one tick or estimated longer than ``args.max_minutes`` on ``args.engine`` (``cycles`` per
-    tick on an HDL simulator, ``updates`` per tick otherwise)."""
+    one tick, or estimated to take longer than ``args.max_minutes`` on ``args.engine``
+    (``cycles`` per tick on an HDL simulator, ``updates`` per tick otherwise) or to hold more
+    memory (``bytes_per_tick``) than the machine can give."""
     from ..engines.registry import ENGINES
     n = int(round(args.duration_ms / dt_ms))
     if n < 1:
         raise CliError(f"--duration-ms {args.duration_ms:g} is shorter than one {unit} "
                        f"(dt = {dt_ms:g} ms)")
     per_tick = cycles if ENGINES[args.engine].hdl else updates
-    refuse_long_run(command, block, args.engine, n * per_tick, args.max_minutes,
-                    f"{n} {unit}s")
+    run_budget(command, block, args.engine, float(n) * per_tick, float(n) * bytes_per_tick,
+               f"{fmt_count(n)} {unit}s")
     return n
 
 
@@ -197,8 +360,16 @@ def clamp_summary(run, engine: str):
 
 def print_run(args, out: dict, header: str, rows) -> None:
     """A ``simulate`` result: ``out`` as JSON with ``--json``, else ``header`` and one line per
-    ``(label, spike times)`` row with the first six times."""
+    ``(label, spike times)`` row with the first six times; with ``--spikes`` also the spike
+    file (population: ``out["populations"]`` when it names them, else the block)."""
     import json
+    trains = out["spikes_ms"]
+    pops = None
+    for pop in out.get("populations", []):
+        pops = (pops or [out["model"]] * len(trains))
+        pops[pop["first"]:pop["first"] + pop["count"]] = [pop["name"]] * pop["count"]
+    write_simulate_spikes(args, trains, out["model"], out["duration_ms"], out.get("dt_ms"),
+                          pops)
     if args.json:
         print(json.dumps(out))
         return
@@ -249,14 +420,25 @@ def add_block_commands(groups, block: str, help: str, duration_ms: float, option
     g = groups.generate.add_parser(block, help=help)
     add_generate_options(g)
     if module:
-        g.add_argument("--name", default=module, help=f"Verilog module name (default {module})")
+        g.add_argument("--name", type=verilog_name, default=module,
+                       help=f"Verilog module name (default {module})")
     if resources_s:
         g.add_argument("--resources", action="store_true",
                        help=f"also run yosys synth_ecp5 and synth_xilinx -family xc6s "
                             f"(~{resources_s} s)")
+    add_quiet_option(s)
+    add_spikes_option(s)
     for p, func in ((s, simulate), (g, generate)):
         if options is not None:
             options(p)
         if func is not None:
-            p.set_defaults(func=func)
+            p.set_defaults(func=_with_progress(func) if p is s else func)
     return s, g
+
+
+def _with_progress(func):
+    def run(args):
+        start_progress(args)
+        return func(args)
+    run.__doc__ = func.__doc__
+    return run

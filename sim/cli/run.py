@@ -3,16 +3,17 @@
 ``SCENE`` is a scene file, or the name of a shipped example (``examples/NAME.toml``,
 ``NAME.toml`` or ``NAME``); without it the embedded default scene (the four-material grasp)
 runs. ``--engines`` overrides the scene's engine list; ``--list-examples`` prints the shipped
-examples. Prints the accuracy per engine and the report's path.
+scenes with what each asks (the default marked). ``--waves DIR`` dumps the RTL engines'
+waveforms (a window of ticks). Prints the decoding per engine and the report's path; the
+report directory also holds one spike file per engine (``spikes_<engine>.npz``).
 """
 
 from __future__ import annotations
 
 import json
-import sys
 from pathlib import Path
 
-from .options import CliError, CommandGroups, output_dir
+from .options import CliError, CommandGroups, add_max_minutes, output_dir
 
 __all__ = ["register", "cmd_run", "resolve_scene"]
 
@@ -34,13 +35,46 @@ def resolve_scene(arg: str | None):
         raise CliError(f"cuneate run: {exc}") from None
 
 
+def _description(text: str) -> str:
+    """A scene's ``scene.description``, or its leading comment, as one line."""
+    import tomllib
+    try:
+        desc = tomllib.loads(text).get("scene", {}).get("description", "")
+    except tomllib.TOMLDecodeError:
+        desc = ""
+    if not desc:
+        lead = []
+        for line in text.splitlines():
+            if not line.startswith("#"):
+                break
+            lead.append(line.lstrip("# ").strip())
+        desc = " ".join(lead)
+    return " ".join(desc.split())
+
+
+def list_examples() -> list[str]:
+    """The lines of ``--list-examples``: the default scene (marked) and every shipped one,
+    each with its name and description."""
+    from ..scenes.scene import (DEFAULT_SCENE_TOML, default_scene, example_names, example_path,
+                                load_scene)
+    import textwrap
+
+    def wrap(text):
+        return textwrap.wrap(text, 96, initial_indent="    ", subsequent_indent="    ")
+    lines = [f"(default: run without SCENE) {default_scene().name}",
+             *wrap(_description(DEFAULT_SCENE_TOML))]
+    for n in example_names():
+        p = example_path(n)
+        lines += [f"examples/{n}: {load_scene(p).name}", *wrap(_description(p.read_text()))]
+    return lines
+
+
 def cmd_run(args) -> int:
     from ..engines.registry import UnknownEngine, check_engine
     from ..scenes.registry import KINDS, kind_module
-    from ..scenes.scene import example_names
+    from .options import start_progress, waves_from_args
     if args.list_examples:
-        for n in example_names():
-            print(f"examples/{n}")
+        print("\n".join(list_examples()))
         return 0
     scene = resolve_scene(args.scene)
     engines = None
@@ -52,14 +86,22 @@ def cmd_run(args) -> int:
             except UnknownEngine as exc:
                 raise CliError(f"cuneate run: --engines: {exc}") from None
     out = output_dir(args.out)
+    waves = waves_from_args(args)
+    if waves is None and scene["run"]["waves"]:
+        from ..engines.waves import Waves
+        r = scene["run"]
+        waves = Waves(output_dir(out / r["waves"], "run.waves"), r["waves_start_tick"],
+                      r["waves_ticks"])
+    if waves is not None and scene.kind != "afferent":
+        raise CliError(f"cuneate run: --waves: waveforms are written for afferent scenes (the "
+                       f"Izhikevich core); {scene.source} is a {scene.kind} scene")
     from ..host.driver import GapError
     from ..host.traces import TraceError
     from ..host.transport import TransportError
     from ..scenes.runner import run_scene
-    log = (lambda m: print(m, file=sys.stderr)) if args.verbose else None
+    start_progress(args)
     try:
-        run = run_scene(scene, engines, build_dir=out / "build",
-                        progress=sys.stderr.isatty(), log=log)
+        run = run_scene(scene, engines, build_dir=out / "build", waves=waves)
     except (TraceError, GapError, TransportError) as exc:
         raise CliError(f"cuneate run: {exc}") from None
     except ValueError as exc:
@@ -75,14 +117,21 @@ def cmd_run(args) -> int:
 
 
 def register(groups: CommandGroups) -> None:
+    from .options import add_quiet_option, add_waves_options
     p = groups.root.add_parser("run", help="run a scene (default: the four-material grasp) "
                                            "and write its report")
     p.add_argument("scene", nargs="?", default=None,
                    help="scene file or shipped example name (default: embedded grasp scene)")
-    p.add_argument("--out", default="out/run", help="report directory (default out/run)")
+    p.add_argument("--out", default="out/run",
+                   help="report directory (index.html, run.json, figures, spike files)")
     p.add_argument("--engines", default=None,
                    help="comma-separated engines overriding the scene's run.engines")
-    p.add_argument("--list-examples", action="store_true", help="list the shipped scenes")
+    p.add_argument("--list-examples", action="store_true",
+                   help="list the shipped scenes with their descriptions (default marked)")
     p.add_argument("--json", action="store_true", help="print the run summary as JSON")
-    p.add_argument("-v", "--verbose", action="store_true", help="log each stage")
+    add_waves_options(p)
+    add_quiet_option(p)
+    p.add_argument("-v", "--verbose", action="store_true",
+                   help="in a terminal, also print the end of each stage above the bars")
+    add_max_minutes(p, 60.0)
     p.set_defaults(func=cmd_run)

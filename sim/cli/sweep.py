@@ -3,9 +3,11 @@ fraction bits, rounding, the golden model's scheme; see :mod:`cuneate.sim.sweep`
 
 from __future__ import annotations
 
-import sys
+import math
 
-from .options import CliError, CommandGroups, output_dir, positive_float, positive_int
+from .options import (CliError, CommandGroups, add_max_minutes, add_quiet_option, output_dir,
+                      positive_float,
+                      positive_int)
 
 __all__ = ["register", "cmd_sweep"]
 
@@ -17,11 +19,17 @@ def _list(text: str, conv, what: str) -> list:
         raise CliError(f"{what}: expected a comma-separated list, got {text!r}") from None
     if not out:
         raise CliError(f"{what}: empty list")
+    for x in out:
+        if isinstance(x, float) and not math.isfinite(x):
+            raise CliError(f"{what}: not a finite number: {x!r} (in {text!r})")
     return out
 
 
 def cmd_sweep(args) -> int:
-    from ..sweep import SweepSpec, battery_module, run_sweep, write_sweep
+    from ...golden import budget
+    from .. import progress
+    from ..sweep import SweepSpec, battery_module, estimate_sweep, run_sweep, write_sweep
+    from .options import start_progress
     try:
         block = battery_module(args.battery)
         duration = args.duration_ms or block.default_duration_ms(args.battery) or 1000.0
@@ -47,21 +55,46 @@ def cmd_sweep(args) -> int:
         pts, columns = block.points_from_args(args, rates, widths, rnd, floats, _list)
     except ValueError as exc:
         raise CliError(f"cuneate sweep: {exc}") from None
+    if args.reference_hz < max(p.update_hz for p in pts):
+        raise CliError(f"--reference-hz {args.reference_hz:g} is coarser than the point at "
+                       f"{max(p.update_hz for p in pts):g} Hz: the reference must be at least "
+                       f"as fine as every point")
+    try:
+        est = estimate_sweep(pts, spec, 1 if args.scheduler == "sync" else args.workers)
+        budget.check(est["what"], est["bytes"], est["seconds"],
+                     "shorten --duration-ms, lower --reference-hz or sweep fewer points")
+    except ValueError as exc:
+        raise CliError(f"cuneate sweep: {exc}") from None
     izhikevich = block.__name__.endswith(".izhikevich.sweep")
     out = output_dir(args.out)
-    rows = run_sweep(pts, spec, out / "cache", scheduler=args.scheduler, workers=args.workers,
-                     progress=sys.stderr.isatty(), log=lambda m: print(m, file=sys.stderr))
-    page = write_sweep(rows, spec, out, columns)
+    start_progress(args)
+    try:
+        rows = run_sweep(pts, spec, out / "cache", scheduler=args.scheduler,
+                         workers=args.workers, repeats=args.repeat,
+                         scheduler_timeout_s=args.scheduler_timeout_s)
+    except ValueError as exc:
+        raise CliError(f"cuneate sweep: {exc}") from None
+    with progress.step("writing the sweep report"):
+        page = write_sweep(rows, spec, out, columns)
+    print(f"error against the reference (spike-count error, mean VP at q = 5/s); within one tick "
+          f"of {'Euler' if izhikevich else 'float64'} at the same dt; costs")
     for r in rows:
-        acc = r.get("fraction_within_tick")
         ve = r.get("vs_euler_fraction_within_tick", r.get("vs_float64_fraction_within_tick"))
-        print(f"  {r['label']:44s} "
-              + (f"within 1 tick {acc:.4f}" if acc is not None else r.get("reason", "")[:70])
-              + (f", of {'Euler' if izhikevich else 'float64'} at its dt {ve:.4f}"
-                 if ve is not None else "")
-              + (f", {r['host_s_per_bio_s']:.2f} s/bio s" if r.get("host_s_per_bio_s")
-                 else "")
-              + (f", fmax {r['fmax_mhz']:.1f} MHz" if r.get("fmax_mhz") else ""))
+        if r.get("status") != "ok":
+            print(f"  {r['label']:44s} {r.get('reason', '')[:70]}")
+            continue
+        costs = ", ".join(f"{v} {k}" for k, v in (
+            ("neurons/core", r.get("neurons_per_core")), ("mult", r.get("multipliers")),
+            ("state bits", r.get("state_bits"))) if v is not None)
+        host = r.get("host_s_per_bio_s")
+        print(f"  {r['label']:44s} count error {r.get('count_error')}, VP "
+              f"{r.get('mean_vp', 0):.3f}"
+              + (f", same-dt {ve:.4f}" if ve is not None else "")
+              + (f"; {costs}" if costs else "")
+              + (f"; fmax {r['fmax_mhz']:.1f} MHz" if r.get("fmax_mhz") else "")
+              + (f"; host {host:.2f} s/bio s"
+                 + (" (parallel)" if str(r.get("host_time", "")).startswith("alongside")
+                    else "") if host else ""))
     print(f"report: {page}")
     return 0
 
@@ -119,5 +152,15 @@ def register(groups: CommandGroups) -> None:
     p.add_argument("--scheduler", default=None,
                    help="dask.distributed address; 'sync' runs in this process (default: a "
                         "local cluster)")
-    p.add_argument("--workers", type=positive_int, default=2)
+    p.add_argument("--workers", type=positive_int, default=2,
+                   help="local cluster processes (host seconds of points run in parallel are "
+                        "marked: not comparable between runs; --workers 1 or --scheduler sync "
+                        "for comparable ones)")
+    p.add_argument("--repeat", type=positive_int, default=1, metavar="N",
+                   help="run each point N times and keep the fastest host time (with "
+                        "--scheduler sync: the host cost measured in isolation)")
+    add_quiet_option(p)
+    p.add_argument("--scheduler-timeout-s", type=positive_float, default=10.0,
+                   help="how long to wait for --scheduler to answer")
+    add_max_minutes(p, 60.0)
     p.set_defaults(func=cmd_sweep)

@@ -21,10 +21,10 @@ import numpy as np
 
 from ..engines.registry import ENGINES as ENGINE_TRAITS
 
-from ..cli.options import (CliError, CommandGroups, add_block_commands, add_rate_options,
-                           build_config, clamp_summary, engine_choices, finite_float,
-                           nonneg_int, output_dir, positive_float, positive_int, print_run,
-                           run_ticks)
+from ..cli.options import (CliError, CommandGroups, add_block_commands, add_max_minutes,
+                           add_rate_options, build_config, check_estimate, clamp_summary,
+                           engine_choices, finite_float, output_dir, positive_float,
+                           positive_int, print_run, run_ticks, seed_int)
 
 __all__ = ["register", "add_coincidence_options", "coincidence_kwargs",
            "coincidence_from_args", "parse_matrix", "print_resources"]
@@ -98,6 +98,9 @@ def coincidence_kwargs(args) -> dict:
             raise CliError(f"--delays-ms has shape {delays.shape[0]}x{delays.shape[1]}, the "
                            f"detector {M} targets x {S} sources")
         ticks = delays / dt
+        far = ~(np.abs(ticks) < 2.0 ** 53)         # beyond exact integers: never cast them
+        if far.any():
+            raise CliError(f"--delays-ms: {delays[far][0]:g} ms is out of range (dt = {dt:g} ms)")
         bad = np.abs(ticks - np.round(ticks)) > 1e-9
         if bad.any():
             raise CliError(f"--delays-ms: {delays[bad][0]:g} ms is not a whole number of ticks "
@@ -154,8 +157,9 @@ def _input_ticks(args, S: int, dt: float, n_ticks: int) -> list[np.ndarray]:
             if ts.size and (not np.all(np.isfinite(ts)) or ts.min() < 0):
                 raise CliError(f"--input {text!r} (source {s}): times must be finite and "
                                f">= 0 ms")
-            k = np.unique(np.round(ts / dt).astype(np.int64))
-            out.append(k[k < n_ticks])
+            k = np.round(ts / dt)
+            k = np.unique(k[k < n_ticks].astype(np.int64))   # later times never reach a tick
+            out.append(k)
         return out
     rng = np.random.default_rng(args.seed)
     p = args.input_rate_hz * dt / 1000.0
@@ -242,12 +246,25 @@ def cmd_generate(args) -> int:
 
 
 def cmd_ridge(args) -> int:
-    from .experiments import RidgeSpec, format_comparison, ridge_comparison
+    from .experiments import (RidgeSpec, format_comparison, ridge_comparison, ridge_estimate,
+                              ridge_problem)
     if args.jitter_ms < 0 or args.speed_spread < 0:
         raise CliError("cuneate coincidence ridge: --jitter-ms and --speed-spread must be >= 0")
     spec = RidgeSpec(trials_per_angle=args.trials, jitter_ms=args.jitter_ms,
                      spread_speed=args.speed_spread, seed=args.seed,
                      speed_mm_per_s=args.speed)
+    bad = ridge_problem(spec)
+    if bad is not None:
+        option = {"speed_mm_per_s": "--speed", "spread_speed": "--speed-spread"}[bad[0]]
+        raise CliError(f"cuneate coincidence ridge: {option}: {bad[1]}")
+    est = ridge_estimate(spec, ["golden", "fixed"])
+    if args.hdl_engine:
+        from dataclasses import replace
+        hdl = ridge_estimate(replace(spec, trials_per_angle=args.hdl_trials),
+                             ["fixed"] + list(args.hdl_engine))
+        est = dict(est, bytes=max(est["bytes"], hdl["bytes"]),
+                   seconds=est["seconds"] + hdl["seconds"])
+    check_estimate("cuneate coincidence ridge", est, "fewer --trials or --hdl-trials")
     build_dir = str(output_dir(args.build_dir, "--build-dir")) if args.build_dir else None
     try:
         cmp = ridge_comparison(spec, hdl_engines=tuple(args.hdl_engine),
@@ -274,7 +291,7 @@ def register(groups: CommandGroups) -> None:
                    help="spike times (ms) of one source; give it once per source")
     s.add_argument("--input-rate-hz", type=finite_float, default=40.0,
                    help="Poisson rate of every source when no --input is given (default 40)")
-    s.add_argument("--seed", type=nonneg_int, default=0)
+    s.add_argument("--seed", type=seed_int, default=0)
 
     c = groups.root.add_parser("coincidence", help="coincidence-detector experiments "
                                                    "(ridge angle)")
@@ -297,6 +314,7 @@ def register(groups: CommandGroups) -> None:
     r.add_argument("--speed", type=positive_float, default=20.0, help="mm/s")
     r.add_argument("--speed-spread", type=finite_float, default=0.05,
                    help="relative s.d. of the speed per trial")
-    r.add_argument("--seed", type=nonneg_int, default=1)
+    r.add_argument("--seed", type=seed_int, default=1)
     r.add_argument("--json", action="store_true")
+    add_max_minutes(r, 60.0)
     r.set_defaults(func=cmd_ridge)

@@ -44,7 +44,7 @@ from .engines import run_coincidence
 
 __all__ = ["RidgeSpec", "RidgeResult", "ridge_experiment", "ridge_comparison", "format_ridge",
            "format_comparison", "detector_config", "network_config", "afferent_currents",
-           "afferent_spikes", "decode"]
+           "afferent_spikes", "decode", "ridge_problem", "ridge_estimate"]
 
 
 @dataclass
@@ -95,6 +95,53 @@ class RidgeResult:
 
 def _lags_ms(spec: RidgeSpec, speed, angle_deg):
     return spec.spacing_mm * math.tan(math.radians(angle_deg)) / speed * 1000.0
+
+
+def ridge_problem(spec: RidgeSpec) -> tuple[str, str] | None:
+    """``(field, reason)`` when the experiment cannot work with ``spec`` (checked before
+    anything runs): the slowest crossing (speed less three spreads) must put its longest lag
+    within the detector's delay line and its crossing and indentation within the trial; else
+    ``None``."""
+    dt = 1000.0 / spec.update_hz
+    slowest = spec.speed_mm_per_s * (1.0 - 3.0 * spec.spread_speed)
+    if not slowest > 0:
+        return "spread_speed", (f"a speed spread of {spec.spread_speed:g} (relative s.d.) "
+                                f"reaches standstill within three spreads; keep it below 1/3")
+    max_delay_ms = (CoincidenceConfig.max_delay_ticks - 1) * dt
+    angle = max(abs(a) for a in spec.angles_deg)
+    lag = abs(_lags_ms(spec, spec.speed_mm_per_s, angle))
+    if spec.delays_ticks is None and lag > max_delay_ms:
+        need = spec.spacing_mm * math.tan(math.radians(angle)) / max_delay_ms * 1000.0
+        return "speed_mm_per_s", (f"at {spec.speed_mm_per_s:g} mm/s the {angle:g} degree "
+                                  f"ridges cross the second sensor {lag:.3g} ms after the first, "
+                                  f"beyond the detector's {max_delay_ms:g} ms delay line; the "
+                                  f"speed must be at least {need:.3g} mm/s")
+    lag = abs(_lags_ms(spec, slowest, angle))
+    press = spec.ridge_width_mm / slowest * 1000.0
+    if spec.onset_ms + lag + 3 * spec.jitter_ms + press >= spec.trial_ms:
+        return "speed_mm_per_s", (f"at {spec.speed_mm_per_s:g} mm/s a crossing ({lag:.3g} ms "
+                                  f"lag, {press:.3g} ms indentation after {spec.onset_ms:g} ms) "
+                                  f"does not end within the {spec.trial_ms:g} ms trial")
+    return None
+
+
+def ridge_estimate(spec: RidgeSpec, engines) -> dict:
+    """Memory (bytes) and time (s) of the experiment on ``engines`` before it runs: every trial
+    of every angle in one run, the afferents' currents and spikes per tick, and the afferent
+    core's and the detector's updates (or cycles) at the engine registry's speeds."""
+    from ...golden.budget import BASE_BYTES, array_bytes
+    from ..engines.registry import ENGINES, estimate_seconds
+    trials = spec.trials_per_angle * len(spec.angles_deg)
+    ticks = trials * spec.trial_ms * spec.update_hz / 1000.0
+    m = len(spec.delays_ticks) if spec.delays_ticks is not None else len(spec.angles_deg)
+    engines = list(engines)
+    nbytes = BASE_BYTES + (3 + len(engines)) * array_bytes(ticks, 4 + m)
+    seconds = estimate_seconds("izhikevich", "fixed", ticks * 8) * len(engines)
+    seconds += sum(estimate_seconds("coincidence", e, ticks * (m * 8 if ENGINES[e].hdl else m))
+                   for e in engines)
+    return {"bytes": nbytes, "seconds": seconds,
+            "what": f"{trials} trials of {spec.trial_ms:g} ms ({ticks:.3g} ticks) on "
+                    f"{', '.join(engines)}"}
 
 
 def detector_config(spec: RidgeSpec) -> CoincidenceConfig:

@@ -48,7 +48,11 @@ from .engines import run_coincidence
 __all__ = ["reference_trains", "COLUMNS", "default_duration_ms", "points_from_args",
            "CUNEATE_BATTERIES", "AfferentBattery", "afferent_battery", "CoincidenceSweepPoint",
            "coincidence_grid", "cuneate_reference_trains", "golden_cuneate_trains",
-           "coincidence_config", "coincidence_point_trains", "CUNEATE_COLUMNS"]
+           "coincidence_config", "coincidence_point_trains", "CUNEATE_COLUMNS",
+           "battery_size", "BLOCK"]
+
+#: The block whose engine speeds estimate this module's sweeps.
+BLOCK = "coincidence"
 
 CUNEATE_BATTERIES = {
     "cuneate-afferents": "coincidence detector: 6 afferents (events with latencies, background) "
@@ -65,6 +69,8 @@ CUNEATE_COLUMNS = ("label", "engine", "update_hz", "weight_bits", "trace_frac_bi
                    "clamped_updates", "host_s_per_bio_s", "reason")
 
 GRID_MS = 0.25
+#: afferents and targets of the battery
+BATTERY_SOURCES, BATTERY_TARGETS = 6, 10
 
 
 @dataclass(frozen=True)
@@ -96,6 +102,15 @@ class AfferentBattery:
                 np.rint(self.delays_ms / dt_ms).astype(np.int64))
 
 
+def battery_size(name: str) -> dict:
+    """The size of battery ``name`` (without drawing its spike trains): ``trains`` (targets),
+    ``inputs`` (sources) and ``bytes_per_step`` (the per-tick arrays of a run)."""
+    if name not in CUNEATE_BATTERIES:
+        afferent_battery(name, 0.0)         # refuses, naming the known ones
+    return {"trains": BATTERY_TARGETS, "inputs": BATTERY_SOURCES,
+            "bytes_per_step": 24.0 * (BATTERY_TARGETS + BATTERY_SOURCES)}
+
+
 def _on_grid(t):
     return np.round(np.asarray(t) / GRID_MS) * GRID_MS
 
@@ -107,7 +122,7 @@ def afferent_battery(name: str, duration_ms: float) -> AfferentBattery:
         raise ValueError(f"unknown coincidence battery {name!r}; known: "
                          f"{', '.join(CUNEATE_BATTERIES)}")
     rng = np.random.default_rng(11)
-    S, M = 6, 10
+    S, M = BATTERY_SOURCES, BATTERY_TARGETS
     latency = _on_grid(rng.uniform(0.0, 6.0, S))
     events = np.sort(rng.uniform(0.0, duration_ms, rng.poisson(20.0 * duration_ms / 1000.0)))
     trains = []

@@ -14,7 +14,7 @@ import numpy as np
 from cocotb.clock import Clock
 from cocotb.triggers import FallingEdge, RisingEdge
 
-__all__ = ["bench_config", "bench_report", "bench_progress", "CoreBench"]
+__all__ = ["bench_config", "bench_report", "bench_progress", "spikes_then_tick", "CoreBench"]
 
 
 def bench_config() -> dict:
@@ -35,6 +35,20 @@ def bench_progress(config: dict, done: int) -> None:
     if path:
         with open(path, "w") as f:
             json.dump({"done": int(done)}, f)
+
+
+async def spikes_then_tick(dut, sources, step, has_inputs: bool) -> None:
+    """Present each input spike source on ``in_valid``/``in_source`` for one ``step``, then one
+    ``tick`` pulse (the cocotb form of :func:`cuneate.sim.engines.amaranth.spikes_then_tick`)."""
+    for s in sources:
+        dut.in_valid.value = 1
+        dut.in_source.value = int(s)
+        await step()
+    if has_inputs:
+        dut.in_valid.value = 0
+    dut.tick.value = 1
+    await step()
+    dut.tick.value = 0
 
 
 class CoreBench:

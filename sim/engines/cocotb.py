@@ -56,7 +56,7 @@ class CocotbRun:
 
 def run_cocotb(simulator: str, sources: list[Path], toplevel: str, test_module: str,
                build_dir: Path, config: dict | None = None, testcase: str | None = None,
-               build_args: list[str] | None = None, waves: bool = False,
+               build_args: list[str] | None = None, waves=None,
                quiet: bool = True, progress=None) -> CocotbRun:
     """Build ``sources`` with ``simulator`` and run the cocotb ``test_module`` on ``toplevel``.
 
@@ -64,8 +64,12 @@ def run_cocotb(simulator: str, sources: list[Path], toplevel: str, test_module: 
     the bench writes ``build_dir/report.json`` (path in ``CUNEATE_BENCH_REPORT``), returned as
     :attr:`CocotbRun.report`. Raises :class:`SimulatorFailed` unless at least one test ran and none
     failed. ``progress``, if given, is called with the count a bench writes to
-    ``build_dir/progress.json`` (``{"done": n}``) while the simulator runs.
+    ``build_dir/progress.json`` (``{"done": n}``) while the simulator runs. ``waves``: a
+    :class:`~cuneate.sim.engines.waves.Waves` window, for sources instrumented by
+    :func:`~cuneate.sim.engines.waves.instrument` (the dump goes to ``waves.path(simulator)``).
+    Compiling and simulating are reported as steps (:mod:`cuneate.sim.progress`).
     """
+    from .. import progress as prog
     if simulator not in SIMULATORS:
         raise ValueError(f"unknown simulator {simulator!r}; known: {', '.join(SIMULATORS)}")
     apply_simulator_env()
@@ -83,6 +87,12 @@ def run_cocotb(simulator: str, sources: list[Path], toplevel: str, test_module: 
             f.unlink()
 
     args = list(build_args or [])
+    plusargs, test_waves = [], False
+    if waves:
+        from .waves import cocotb_options
+        opts = cocotb_options(simulator, waves)
+        args += opts["build_args"]
+        plusargs, test_waves = opts["plusargs"], opts["test_waves"]
     if simulator == "verilator":
         # Amaranth's output is lint-clean in spirit but not width-pedantic.
         args += ["-Wno-fatal", "-Wno-WIDTHEXPAND", "-Wno-WIDTHTRUNC", "-O3"]
@@ -95,12 +105,14 @@ def run_cocotb(simulator: str, sources: list[Path], toplevel: str, test_module: 
             cache.mkdir(parents=True, exist_ok=True)
         except OSError:
             cache = None                 # an unwritable cache: build in the case's directory
+    trace = simulator == "verilator" and bool(waves)
     if cache is not None:
-        sim_dir = _cached_build(runner, cache, sources, toplevel, args, waves, log)
+        sim_dir = _cached_build(runner, cache, sources, toplevel, args, trace, log)
     else:
-        runner.build(sources=[str(s) for s in sources], hdl_toplevel=toplevel,
-                     build_dir=build_dir, timescale=("1ns", "1ps"), build_args=args,
-                     always=True, waves=waves, log_file=log)
+        with prog.step(f"compiling {toplevel} with {simulator}"):
+            runner.build(sources=[str(s) for s in sources], hdl_toplevel=toplevel,
+                         build_dir=build_dir, timescale=("1ns", "1ps"), build_args=args,
+                         always=True, waves=trace, log_file=log)
     env = {"CUNEATE_BENCH_CONFIG": str(cfg_path), "CUNEATE_BENCH_REPORT": str(report_path),
            "COCOTB_LOG_LEVEL": os.environ.get("COCOTB_LOG_LEVEL", "WARNING")}
     stop = threading.Event()
@@ -122,7 +134,7 @@ def run_cocotb(simulator: str, sources: list[Path], toplevel: str, test_module: 
         results = runner.test(test_module=test_module, hdl_toplevel=toplevel,
                               hdl_toplevel_lang="verilog",
                               build_dir=sim_dir, test_dir=build_dir, extra_env=env,
-                              testcase=testcase, waves=waves,
+                              testcase=testcase, waves=test_waves, plusargs=plusargs,
                               log_file=build_dir / "test.log" if quiet else None)
     finally:
         stop.set()
@@ -143,16 +155,27 @@ def run_cocotb(simulator: str, sources: list[Path], toplevel: str, test_module: 
 
 def run_bench(simulator: str, verilog: str, toplevel: str, block: str, config: dict,
               build_dir: Path | None = None, testcase: str | None = None,
-              progress=None) -> CocotbRun:
+              progress=None, waves=None) -> CocotbRun:
     """Write ``verilog`` as ``<toplevel>.v`` and run the bench of ``block``
     (``cuneate.sim.<block>.bench``) on it with ``config``, in ``build_dir`` or a scratch
-    directory; returns the :class:`CocotbRun` (its ``report`` is the bench's JSON)."""
+    directory; returns the :class:`CocotbRun` (its ``report`` is the bench's JSON). With
+    ``waves`` (a :class:`~cuneate.sim.engines.waves.Waves` window) the Verilog gets the
+    window's control block and the run writes the dump and its GTKWave save file."""
     def go(bd: Path) -> CocotbRun:
         bd.mkdir(parents=True, exist_ok=True)
         src = bd / f"{toplevel}.v"
-        src.write_text(verilog)
-        return run_cocotb(simulator, [src], toplevel, f"cuneate.sim.{block}.bench", bd,
-                          config=config, testcase=testcase, progress=progress)
+        if waves:
+            from .waves import instrument
+            src.write_text(instrument(verilog, toplevel))
+        else:
+            src.write_text(verilog)
+        run = run_cocotb(simulator, [src], toplevel, f"cuneate.sim.{block}.bench", bd,
+                         config=config, testcase=testcase, progress=progress, waves=waves)
+        if waves:
+            from .waves import write_gtkw
+            dump = waves.path(simulator)
+            write_gtkw(dump.with_suffix(".gtkw"), dump, simulator, verilog, toplevel)
+        return run
     if build_dir is not None:
         return go(Path(build_dir))
     with tempfile.TemporaryDirectory(prefix=f"cuneate-{block}-{simulator}-") as tmp:
@@ -190,7 +213,16 @@ def _cache_key(sources, toplevel: str, args: list[str], waves: bool) -> str:
             h.update(f"{pkg}={version(pkg)};".encode())
         except PackageNotFoundError:
             h.update(f"{pkg}={shutil.which(pkg)};".encode())
+    # the simulator binary loads cocotb's VPI library from this environment's path (RUNPATH):
+    # a binary built from another environment may not find it
+    import importlib.util
+    spec = importlib.util.find_spec("cocotb")
+    libs = Path(spec.origin).parent / "libs" if spec and spec.origin else None
+    h.update(f"libs={libs};".encode())
     h.update(json.dumps([toplevel, args, bool(waves), "1ns/1ps"]).encode())
+    for a in args:                       # files given as build arguments (a DPI source)
+        if Path(a).is_file():
+            h.update(Path(a).read_bytes())
     for src in sources:
         data = Path(src).read_bytes()
         h.update(f"{Path(src).name}:{len(data)};".encode())
@@ -203,7 +235,10 @@ def _cached_build(runner, root: Path, sources, toplevel: str, args: list[str], w
     """Build in (or reuse) the cache entry of this design; returns its directory."""
     entry = root / f"verilator-{toplevel}-{_cache_key(sources, toplevel, args, waves)}"
     stamp = entry / "built.json"
-    if not stamp.exists():
+    from .. import progress as prog
+    if stamp.exists():
+        prog.say(f"verilator: the model of {toplevel} is in the build cache ({entry.name})")
+    else:
         entry.mkdir(parents=True, exist_ok=True)
         with open(entry / ".lock", "w") as lock:
             fcntl.flock(lock, fcntl.LOCK_EX)
@@ -217,9 +252,11 @@ def _cached_build(runner, root: Path, sources, toplevel: str, args: list[str], w
                     dst = src_dir / Path(src).name
                     shutil.copyfile(src, dst)
                     copies.append(str(dst))
-                runner.build(sources=copies, hdl_toplevel=toplevel, build_dir=entry,
-                             timescale=("1ns", "1ps"), build_args=args, always=True,
-                             waves=waves, log_file=log)
+                with prog.step(f"compiling the Verilator model of {toplevel} (first build "
+                               f"of this design; cached for later runs)"):
+                    runner.build(sources=copies, hdl_toplevel=toplevel, build_dir=entry,
+                                 timescale=("1ns", "1ps"), build_args=args, always=True,
+                                 waves=waves, log_file=log)
                 stamp.write_text(json.dumps({"toplevel": toplevel, "args": args,
                                              "sources": [Path(c).name for c in copies]}))
                 _prune(root, keep=entry)

@@ -23,6 +23,7 @@ from pathlib import Path
 __all__ = [
     "VERILATOR_MIN", "ICARUS_MIN", "SIMULATORS", "ToolStatus", "verilator_root",
     "simulator_env", "apply_simulator_env", "doctor", "doctor_ok", "format_doctor",
+    "icarus_version", "tool_versions",
 ]
 
 VERILATOR_MIN = (5, 36)
@@ -130,14 +131,35 @@ def _check_verilator() -> ToolStatus:
                                       f"needed: {fix}")
 
 
+def icarus_version() -> tuple[int, int] | None:
+    """``(major, minor)`` of the ``iverilog`` on ``PATH``, or ``None``."""
+    exe = shutil.which("iverilog")
+    text = (_run([exe, "-V"]) or "") if exe else ""
+    m = re.search(r"version (\d+)\.(\d+)", text)
+    return (int(m.group(1)), int(m.group(2))) if m else None
+
+
+def tool_versions(names) -> dict:
+    """Versions of ``names``: Python distributions (``numpy``, ``amaranth``, ...) from their
+    metadata, ``icarus`` from ``iverilog -V``, ``python`` itself; ``None`` for what is absent."""
+    out = {}
+    for n in names:
+        if n == "python":
+            out[n] = platform.python_version()
+        elif n == "icarus":
+            v = icarus_version()
+            out[n] = f"{v[0]}.{v[1]}" if v else None
+        else:
+            out[n] = _dist_version(n)
+    return out
+
+
 def _check_icarus() -> ToolStatus:
     fix = "apt-get install -y iverilog (as root or with sudo)"
     exe = shutil.which("iverilog")
     if exe is None:
         return ToolStatus("icarus", True, False, None, None, "iverilog not on PATH", fix)
-    text = _run([exe, "-V"]) or ""
-    m = re.search(r"version (\d+)\.(\d+)", text)
-    version = (int(m.group(1)), int(m.group(2))) if m else None
+    version = icarus_version()
     vvp = shutil.which("vvp")
     ok = version is not None and version >= ICARUS_MIN and vvp is not None
     return ToolStatus("icarus", True, ok, f"{version[0]}.{version[1]}" if version else None, exe,

@@ -22,10 +22,12 @@ held or repeated value costs nothing on a slow link.
 
 Loss detection
 --------------
-Every write carries a sequence number; after the run the transport's counters must show every
-write applied (``writes == sent``), every spike of the core's own per-sweep counts received
-(``spikes == spikes_counted``) and no overflow, overrun or late write, else
-:class:`~cuneate.sim.host.transport.TransportError` names what was lost.
+After the run the transport's counters (one contract for every transport, read from the device
+where it counts them: :data:`~cuneate.sim.host.transport.COUNTERS`) must show no frame lost or
+damaged on a link, every write applied (``writes == sent``), every spike of the core's own
+count received (``spikes == spikes_counted``) and no overflow, overrun or late write, else
+:class:`~cuneate.sim.host.transport.TransportError` names what was lost
+(:func:`~cuneate.sim.host.transport.check_counters`).
 """
 
 from __future__ import annotations
@@ -37,7 +39,7 @@ import scipy.signal
 
 from ...golden.encoders import sa_current
 from ...golden.fbg import FbgFrontEnd, IIRFilter
-from .transport import SpikeBatch, Transport, TransportError
+from .transport import SpikeBatch, Transport, check_counters
 
 __all__ = ["AfferentEncoding", "FbgDriver", "OnlineStream", "DriverRun", "GapError"]
 
@@ -244,22 +246,6 @@ class FbgDriver:
         caps the run (default: every received sample's hold)."""
         return OnlineStream(self, transport, n_ticks)
 
-    @staticmethod
-    def check_counters(cnt: dict, sent: int, received: int) -> None:
-        """Raise :class:`TransportError` for any loss the counters show."""
-        if cnt.get("writes") != sent:
-            raise TransportError(f"{cnt.get('writes')} of {sent} current writes reached the core "
-                                 f"(sequence gap after write {cnt.get('writes')})")
-        if cnt.get("spikes") != received:
-            raise TransportError(f"the transport counted {cnt.get('spikes')} spikes but "
-                                 f"delivered {received}")
-        if cnt.get("spikes_counted", received) != received:
-            raise TransportError(f"the core counted {cnt['spikes_counted']} spikes but "
-                                 f"{received} arrived (spikes lost on the way)")
-        for k in ("overflow", "overrun", "late_writes", "dropped"):
-            if cnt.get(k, 0):
-                raise TransportError(f"{k}: {cnt[k]} (nothing may be lost)")
-
 
 class OnlineStream:
     """Chunk-by-chunk streaming (a live interrogator feeding a board): the front end's filter
@@ -360,6 +346,6 @@ class OnlineStream:
             self.tick = n_ticks
         spikes = self.tr.collect()
         cnt = self.tr.counters()
-        self.d.check_counters(cnt, self.sent, len(spikes))
+        check_counters(self.tr, cnt, self.sent, len(spikes))
         return DriverRun(spikes, n_ticks, self.sent, self.words, self.sat, cnt, past,
                          self.gaps)

@@ -87,8 +87,15 @@ def check_trace(path, t, x, time_unit="s", shift_unit="nm", expect_fs_hz=None,
 
 
 def _load_csv(p: Path, time_key: str):
-    with p.open(newline="") as f:
-        rows = [r for r in csv.reader(f) if r and not r[0].lstrip().startswith("#")]
+    try:
+        with p.open(newline="", encoding="utf-8") as f:
+            rows = [r for r in csv.reader(f) if r and not r[0].lstrip().startswith("#")]
+    except UnicodeDecodeError as exc:
+        line = p.read_bytes()[:exc.start].count(b"\n") + 1
+        raise TraceError(f"{p}: line {line}: not UTF-8 text (byte {exc.object[exc.start]:#04x} "
+                         f"at offset {exc.start})") from None
+    except csv.Error as exc:
+        raise TraceError(f"{p}: not a CSV file: {exc}") from None
     if not rows:
         raise TraceError(f"{p}: empty file")
     head = [h.strip() for h in rows[0]]
@@ -111,6 +118,20 @@ def _load_csv(p: Path, time_key: str):
         data.append(vals)
     a = np.asarray(data, dtype=np.float64).reshape(-1, len(head))
     return a[:, ti], np.delete(a, ti, axis=1)
+
+
+def _numbers(p, a, what: str) -> np.ndarray:
+    """``a`` as a real numeric array, or a :class:`TraceError` naming the file and the field
+    (a struct, text, or complex values whose imaginary part would be lost)."""
+    arr = np.asarray(a)
+    if arr.dtype.kind == "c":
+        raise TraceError(f"{p}: {what} holds complex values (the imaginary part would be "
+                         f"lost); store real shifts")
+    if arr.dtype.kind not in "biuf":
+        kind = type(a).__name__ if arr.dtype.kind == "O" and arr.ndim == 0 else \
+            f"an array of {arr.dtype}"
+        raise TraceError(f"{p}: {what} is not numeric (it is {kind})")
+    return arr
 
 
 def _get(obj, key, p, where):
@@ -156,4 +177,7 @@ def load_trace(path, time_key: str = "Time", data_key: str = "DeltaBraggW",
         t, x = _get(src, time_key, p, where), _get(src, data_key, p, where)
     else:
         raise TraceError(f"{p}: unknown trace format {suf!r} (use .csv, .npz or .mat)")
+    where = f" in struct {struct!r}" if suf == ".mat" and struct else ""
+    t = _numbers(p, t, f"the time field {time_key!r}{where}")
+    x = _numbers(p, x, f"the data field {data_key!r}{where}")
     return check_trace(p, t, x, time_unit, shift_unit, expect_fs_hz, channels)

@@ -5,6 +5,15 @@ the board's UART link implement :class:`Transport`. The driver writes raw curren
 sweep (tick) from which they take effect, lets the core run, and collects spikes; counters
 report every frame, write and spike so that loss is never silent.
 
+The counter contract
+--------------------
+Every transport's :meth:`Transport.counters` reports at least the keys of :data:`COUNTERS`,
+read from the core or device where it counts them (a board's link answers ``READ_COUNTERS``),
+so that one check (:func:`check_counters`) serves every transport: every write applied, every
+spike the core produced delivered, no frame lost or damaged, nothing overflowed, overran or
+arrived late. A transport may report more (clamp counts, raw device counters) and explain a
+loss in its own terms (:meth:`Transport.loss_detail`).
+
 Conventions
 -----------
 * Ticks count sweeps of the core from 0. A spike produced by the update of sweep ``k`` carries
@@ -22,7 +31,20 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["SpikeBatch", "Transport", "TransportError"]
+__all__ = ["SpikeBatch", "Transport", "TransportError", "COUNTERS", "check_counters",
+           "SimulatedSerial"]
+
+#: The counters every transport reports, and what each counts.
+COUNTERS = {
+    "writes": "current writes (write_currents calls) the core applied",
+    "spikes": "spikes the transport delivered to the host",
+    "spikes_counted": "spikes the core produced, by its own count",
+    "frames_lost": "frames lost, damaged or refused on the link, both directions (0 without a "
+                   "link)",
+    "overflow": "spikes lost to a full spike FIFO or batch",
+    "overrun": "ticks lost because a sweep was still running",
+    "late_writes": "writes refused because their tick had already run",
+}
 
 
 class TransportError(RuntimeError):
@@ -88,7 +110,12 @@ class Transport(abc.ABC):
 
     @abc.abstractmethod
     def counters(self) -> dict[str, int]:
-        """Frames or writes sent, spikes received, gaps, drops, overflows, clamp counts."""
+        """The counters of :data:`COUNTERS` (and any more: frames, clamp counts)."""
+
+    def loss_detail(self, counters: dict) -> str:
+        """What the transport's own counters say about a loss (e.g. a device's CRC errors), for
+        the message of :func:`check_counters`; empty when they say nothing more."""
+        return ""
 
     def close(self) -> None:
         """Release the core (simulator process, serial port)."""
@@ -99,3 +126,54 @@ class Transport(abc.ABC):
     def __exit__(self, *exc):
         self.close()
         return False
+
+
+def check_counters(transport: Transport, counters: dict, sent: int, received: int) -> None:
+    """Raise :class:`TransportError` naming the first loss ``counters`` show for ``sent``
+    current writes and ``received`` spikes (the contract of :data:`COUNTERS`)."""
+    name = transport.name
+    missing = [k for k in COUNTERS if not isinstance(counters.get(k), (int, np.integer))]
+    if missing:
+        raise TransportError(f"{name}: the transport does not report {', '.join(missing)} "
+                             f"(every transport reports {', '.join(COUNTERS)}); nothing can "
+                             f"be checked")
+    c = {k: int(counters[k]) for k in COUNTERS}
+    detail = transport.loss_detail(counters)
+    why = f" ({detail})" if detail else ""
+    if c["frames_lost"]:
+        raise TransportError(f"{name}: {c['frames_lost']} frame(s) lost or damaged on the "
+                             f"link{why}")
+    if c["writes"] != sent:
+        raise TransportError(f"{name}: {c['writes']} of {sent} current writes were applied by "
+                             f"the core ({sent - c['writes']} lost){why}")
+    if c["spikes"] != received:
+        raise TransportError(f"{name}: the transport counted {c['spikes']} spikes but "
+                             f"delivered {received}{why}")
+    if c["spikes_counted"] != received:
+        raise TransportError(f"{name}: the core counted {c['spikes_counted']} spikes but "
+                             f"{received} arrived (spikes lost on the way){why}")
+    for k in ("overflow", "overrun", "late_writes"):
+        if c[k]:
+            raise TransportError(f"{name}: {k}: {c[k]} ({COUNTERS[k]}; nothing may be "
+                                 f"lost){why}")
+
+
+class SimulatedSerial:
+    """The receiving half of a simulated serial port, read the way pyserial's is: ``_rx`` holds
+    the bytes the device sent and the host has not read; :meth:`_fill` (a hook, nothing by
+    default) lets the device run when the host reads an empty buffer."""
+
+    _rx: bytearray
+
+    def _fill(self) -> None:
+        """Let the far end produce bytes before a read of an empty buffer."""
+
+    def read(self, size: int = 1) -> bytes:
+        if not self._rx:
+            self._fill()
+        out, self._rx = bytes(self._rx[:size]), self._rx[size:]
+        return out
+
+    @property
+    def in_waiting(self) -> int:
+        return len(self._rx)

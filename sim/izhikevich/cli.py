@@ -11,12 +11,12 @@ bar).
 from __future__ import annotations
 
 import json
-import os
-import sys
 
+from ...golden.budget import fmt_count
 from ..cli.options import (CliError, CommandGroups, add_block_commands, add_rate_options,
-                           build_config, finite_float, fmt_time, output_dir, positive_float,
-                           positive_int)
+                           add_waves_options, build_config, finite_float, fmt_time, output_dir,
+                           positive_float, positive_int, run_budget, start_progress,
+                           waves_from_args, write_simulate_spikes)
 
 __all__ = ["register", "add_core_options", "add_pipeline_option", "core_from_args",
            "parse_param_set", "estimate_run"]
@@ -119,14 +119,18 @@ def _neuron_sets(spec: str, n: int, n_sets: int) -> list[int]:
     return vals
 
 
-def core_kwargs(args, param_sets, n_core: int) -> dict:
-    """Constructor keywords of the core described by the shared options."""
+def core_kwargs(args, param_sets, n_core: int, n: int | None = None) -> dict:
+    """Constructor keywords of the core described by the shared options; ``--neuron-sets``
+    gives the set of each of the ``n`` neurons asked for (default ``n_core``), and the neurons
+    that pad the core to ``n_core`` use set 0."""
     if n_core * args.update_hz > args.clock_hz:     # refuse before building per-neuron lists
         core_from_args({"n_neurons": n_core, "clock_hz": args.clock_hz,
                         "update_hz": args.update_hz, "param_sets": tuple(param_sets)})
+    n = n_core if n is None else n
     kw = {"n_neurons": n_core, "clock_hz": args.clock_hz, "update_hz": args.update_hz,
           "param_sets": tuple(param_sets),
-          "neuron_sets": _neuron_sets(args.neuron_sets, n_core, len(param_sets)),
+          "neuron_sets": (_neuron_sets(args.neuron_sets, n, len(param_sets))
+                          + [0] * (n_core - n)),
           "v_int_bits": args.v_int_bits, "u_int_bits": args.u_int_bits,
           "v_frac_bits": args.v_frac_bits, "u_frac_bits": args.u_frac_bits,
           "operand_width": args.operand_width, "y_frac_bits": args.y_frac_bits,
@@ -171,13 +175,6 @@ def _currents(args, n):
     return list(cur)
 
 
-def _available_memory() -> int:
-    try:
-        return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_AVPHYS_PAGES")
-    except (ValueError, OSError, AttributeError):
-        return 8 << 30
-
-
 def estimate_run(engine: str, n: int, n_sweeps: int, rate_hz: float = 50.0) -> dict:
     """Memory (bytes) and time (s) a run will take, from conservative per-engine figures;
     ``rate_hz`` is the spike rate assumed for the size of the output."""
@@ -187,34 +184,21 @@ def estimate_run(engine: str, n: int, n_sweeps: int, rate_hz: float = 50.0) -> d
     work = n_core * n_sweeps                        # updates (= cycles on HDL simulators)
     seconds = estimate_seconds("izhikevich", engine, work)
     spikes = n * n_sweeps * rate_hz / 16e3
-    mem = n_core * _BYTES_PER_NEURON.get(engine, 200) + spikes * _BYTES_PER_SPIKE_OUT + (64 << 20)
+    mem = n_core * _BYTES_PER_NEURON.get(engine, 200) + spikes * _BYTES_PER_SPIKE_OUT
     return {"updates": work, "seconds": seconds, "bytes": mem}
-
-
-def _progress_bar(total: int, label: str, show: bool):
-    if not show:
-        return None, None
-    from tqdm import tqdm
-    bar = tqdm(total=total, unit="upd", unit_scale=True, desc=label, file=sys.stderr,
-               leave=False)
-
-    def update(done):
-        bar.update(done - bar.n)
-    return bar, update
 
 
 def cmd_simulate(args) -> int:
     import numpy as np
+    start_progress(args)
     from ...golden import izhikevich as gz
     from .engines import MIN_NEURONS, run_engine
 
     n = args.neurons
     sets = _param_sets(args)
     n_core = max(n, MIN_NEURONS)
-    kw = core_kwargs(args, sets, n_core)
+    kw = core_kwargs(args, sets, n_core, n)   # idle neurons pad the core to its minimum
     currents = _currents(args, n)
-    if args.neuron_sets != "cycle":           # one index per neuron given: pad idle ones
-        kw["neuron_sets"] = _neuron_sets(args.neuron_sets, n, len(sets)) + [0] * (n_core - n)
     cfg = core_from_args(kw)                  # the same refusals as `generate`
     golden_run = args.engine == "golden"
     if not golden_run:
@@ -235,21 +219,23 @@ def cmd_simulate(args) -> int:
         raise CliError(f"--duration-ms {args.duration_ms:g} is shorter than one update "
                        f"(dt = {dt_ms:g} ms)")
     est = estimate_run(args.engine, n, n_sweeps)
-    avail = _available_memory()
-    if est["bytes"] > 0.5 * avail:
-        raise CliError(f"cuneate simulate: {n} neurons x {n_sweeps} updates on {args.engine} "
-                       f"need about {est['bytes'] / 2**30:.1f} GiB, more than half of the "
-                       f"{avail / 2**30:.1f} GiB available; reduce --neurons or --duration-ms")
-    if est["seconds"] > args.max_minutes * 60 and not args.force:
-        rate = est["updates"] / est["seconds"]
-        raise CliError(f"cuneate simulate: about {fmt_time(est['seconds'])} on {args.engine} "
-                       f"({est['updates']:.3g} updates at ~{rate:.2g}/s), more than "
-                       f"--max-minutes {args.max_minutes:g}; shorten the run, pick a faster "
-                       f"engine, or pass --force to run it with a progress bar")
-    bar, progress = _progress_bar(n_sweeps, f"{args.engine} sweeps",
-                                  args.force or est["seconds"] > 10)
+    run_budget("cuneate simulate izhikevich", "izhikevich", args.engine, est["updates"],
+               est["bytes"], f"{n} neuron(s) x {fmt_count(n_sweeps)} updates",
+               "reduce --neurons or --duration-ms, pick a faster engine, or pass --force to "
+               "run it anyway with a progress bar")
+    from ..engines.waves import FORMATS
+    waves = waves_from_args(args)
+    if waves is not None and args.engine not in FORMATS:
+        raise CliError(f"--waves: engine {args.engine!r} writes no waveforms (those that do: "
+                       f"{', '.join(FORMATS)})")
+    build_dir = None
+    if not golden_run and args.build_dir:
+        build_dir = output_dir(args.build_dir, "--build-dir")
+    from .. import progress as prog
     saturation = None
-    try:
+    with prog.step(f"simulating {n} neuron(s) on {args.engine} (~{fmt_time(est['seconds'])} "
+                   f"estimated)", total=n_sweeps, unit="sweep") as st:
+        progress = st.set
         if golden_run:
             try:
                 cur = np.asarray(currents, dtype=float)
@@ -258,23 +244,19 @@ def cmd_simulate(args) -> int:
                                   n_steps=n_sweeps, n_neurons=n, dt_ms=dt_ms,
                                   scheme=args.scheme, progress=progress)
             except gz.DivergenceError as exc:
-                print(f"cuneate simulate: {exc}", file=sys.stderr)
-                return 1
+                raise CliError(f"cuneate simulate izhikevich: {exc}") from None
             except ValueError as exc:
                 raise CliError(f"cuneate simulate: {exc}") from None
             spikes = [s.tolist() for s in res.spikes_ms]
         else:
-            build_dir = output_dir(args.build_dir, "--build-dir") if args.build_dir else None
             try:
                 run = run_engine(args.engine, kw, currents, n_sweeps * dt_ms, build_dir,
-                                 progress)
+                                 progress, waves)
             except ValueError as exc:
                 raise CliError(f"cuneate simulate: {exc}") from None
             spikes = run.spikes_ms
             saturation = {"counts": run.clamp_counts, "sticky": run.clamp_sticky}
-    finally:
-        if bar is not None:
-            bar.close()
+    write_simulate_spikes(args, spikes, "izhikevich", n_sweeps * dt_ms, dt_ms)
     params = sets[0].to_dict() if len(sets) == 1 else [s.to_dict() for s in sets]
     if isinstance(params, dict):
         params = {k: v for k, v in params.items() if k in "abcd"} | \
@@ -285,6 +267,12 @@ def cmd_simulate(args) -> int:
            "accepted_current_range": [cfg.i_lo, cfg.i_hi],
            "formats": {k: str(getattr(cfg, k)) for k in ("V", "U", "I", "W", "VQ", "Q", "Y")},
            "saturation": saturation}
+    if waves is not None:
+        dump = waves.path(args.engine)
+        out["waves"] = waves.to_dict() | {"dump": str(dump),
+                                          "gtkw": str(dump.with_suffix(".gtkw"))}
+    if args.spikes:
+        out["spike_file"] = str(args.spikes)
     if args.json:
         print(json.dumps(out))
     else:
@@ -300,6 +288,11 @@ def cmd_simulate(args) -> int:
             acted = {k: c for k, c in saturation["counts"].items() if c}
             print("  clamps: " + (", ".join(f"{k} {c}" for k, c in acted.items())
                                   if acted else "none acted"))
+        if waves is not None:
+            print(f"  waves: {out['waves']['dump']} (ticks {waves.start}.."
+                  f"{waves.start + waves.ticks - 1}; GTKWave: {out['waves']['gtkw']})")
+        if args.spikes:
+            print(f"  spikes: {args.spikes}")
     return 0
 
 
@@ -336,6 +329,7 @@ def register(groups: CommandGroups) -> None:
     s.add_argument("--scheme", choices=SCHEMES, default="euler")
     s.add_argument("--force", action="store_true",
                    help="run even when estimated to take longer than --max-minutes")
+    add_waves_options(s)
     add_core_options(s, neurons_default=1)
     s.set_defaults(func=cmd_simulate)
 

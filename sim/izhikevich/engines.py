@@ -50,11 +50,13 @@ from ..host.transport import SpikeBatch, Transport, TransportError
 __all__ = ["HARDWARE_ENGINES", "EngineRun", "engine_core", "run_engine", "engine_config",
            "run_hardware_engine", "run_cocotb_engine", "run_amaranth_sweeps", "MIN_NEURONS",
            "TwinTransport", "CocotbTransport", "AmaranthTransport", "VerilatorFastTransport",
-           "TRANSPORTS", "make_transport", "PROTOCOL"]
+           "TRANSPORTS", "make_transport", "PROTOCOL", "WAVE_ENGINES"]
 
 #: The engines that run the core's arithmetic (all but golden), from the engine registry.
 HARDWARE_ENGINES = tuple(e for e in block_engines("izhikevich") if e != "golden")
 MIN_NEURONS = 8
+#: The engines that write waveforms (their simulators dump the RTL's signals).
+WAVE_ENGINES = ("amaranth", "icarus", "verilator")
 PROTOCOL = "writes between sweeps, external tick, FIFO drained between sweeps"
 #: Default write-buffer capacity of the batch transports (write calls held until collect).
 BUFFER_WRITES = 1 << 20
@@ -88,14 +90,14 @@ def engine_config(params: dict, n: int, update_hz: float) -> IzhikevichConfig:
 # ----------------------------------------------------------------------------------------------
 # whole runs with constant currents
 
-def _run_fixed(cfg, cur, n_sweeps, n, build_dir, progress):
+def _run_fixed(cfg, cur, n_sweeps, n, build_dir, progress, waves=None):
     twin = IzhikevichTwin(cfg)
     spikes = [s.tolist() for s in twin.run(cur, n_sweeps, progress=progress)[:n]]
     rep = twin.clamp_report()
     return spikes, rep["counts"], rep["sticky"]
 
 
-def _run_verilator_fast(cfg, cur, n_sweeps, n, build_dir, progress):
+def _run_verilator_fast(cfg, cur, n_sweeps, n, build_dir, progress, waves=None):
     from ..engines.verilator_fast import run_harness
     run = run_harness(cfg, cur, n_sweeps, build_root=build_dir)
     if progress is not None:
@@ -109,11 +111,31 @@ def _to_times(spike_sweeps, n, dt_ms):
     return [[(k + 1) * dt_ms for k in sorted(spike_sweeps[i])] for i in range(n)]
 
 
-def run_amaranth_sweeps(cfg: IzhikevichConfig, cur, n_sweeps: int, progress=None):
+def _amaranth_window(cfg: IzhikevichConfig, waves):
+    """The VCD window of an Amaranth run (``None`` without ``waves``) and what writes its
+    GTKWave save file when the run is over."""
+    if not waves:
+        return None, lambda: None
+    from ..engines.waves import WindowedVcd, write_gtkw
+    path = waves.path("amaranth")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    window = WindowedVcd(path)
+    window.on = waves.covers(0)
+
+    def finish():
+        window.close()                        # the simulator leaves a file it did not open
+        write_gtkw(path.with_suffix(".gtkw"), path, "amaranth",
+                   izhikevich_verilog(cfg, "izhikevich_core"), "izhikevich_core")
+    return window, finish
+
+
+def run_amaranth_sweeps(cfg: IzhikevichConfig, cur, n_sweeps: int, progress=None, waves=None):
     """The core in the Amaranth simulator with constant currents ``cur`` (mV/ms, one per neuron
     of ``cfg``), ticks every ``n_neurons`` cycles; returns the spike sweeps per neuron, the
-    clamp counts per kind and the sticky flags."""
+    clamp counts per kind and the sticky flags. ``waves``: a
+    :class:`~cuneate.sim.engines.waves.Waves` window to dump."""
     dut = IzhikevichCore(cfg)
+    window, finish = _amaranth_window(cfg, waves)
     N = cfg.n_neurons
     raw = cfg.I.to_raw(cur)
     spikes = [[] for _ in range(N)]
@@ -130,55 +152,66 @@ def run_amaranth_sweeps(cfg: IzhikevichConfig, cur, n_sweeps: int, progress=None
             if ctx.get(dut.sweep_done):
                 for k in CLAMP_KINDS:
                     counts[k] += ctx.get(getattr(dut, f"sweep_clamps_{k}"))
-                if progress is not None and (c // N + 1) % 1000 == 0:
-                    progress(c // N + 1)
+                done_sweeps = c // N + 1
+                if window is not None:
+                    window.on = waves.covers(done_sweeps)
+                if progress is not None and done_sweeps % 1000 == 0:
+                    progress(done_sweeps)
             if ctx.get(dut.spike_valid):
                 spikes[ctx.get(dut.spike_index)].append(unwrap(ctx.get(dut.spike_sweep)))
         assert not ctx.get(dut.overrun) and not ctx.get(dut.spike_overflow)
         out["sticky"] = ctx.get(dut.clamp_flags)
 
-    simulate(dut, bench)
+    simulate(dut, bench, vcd=window)
+    finish()
     sticky = {k: bool(out["sticky"] >> i & 1) for i, k in enumerate(CLAMP_KINDS)}
     return spikes, counts, sticky
 
 
-def _run_amaranth(cfg, cur, n_sweeps, n, build_dir, progress):
-    spikes, counts, sticky = run_amaranth_sweeps(cfg, cur, n_sweeps, progress)
+def _run_amaranth(cfg, cur, n_sweeps, n, build_dir, progress, waves=None):
+    spikes, counts, sticky = run_amaranth_sweeps(cfg, cur, n_sweeps, progress, waves)
     return _to_times(spikes, n, cfg.dt_ms), counts, sticky
 
 
 def run_cocotb_engine(simulator: str, cfg: IzhikevichConfig, cur, n_sweeps: int,
-                      build_dir: Path | None, progress=None):
+                      build_dir: Path | None, progress=None, waves=None):
     """Generate the core for ``cfg`` and run the cocotb ``engine`` bench (in ``build_dir`` or a
     scratch directory); returns the :class:`~cuneate.sim.engines.cocotb.CocotbRun` (its report
-    has the spike sweeps and the clamp counters)."""
+    has the spike sweeps and the clamp counters). ``waves``: a window to dump."""
     from ..engines.cocotb import run_bench
     return run_bench(simulator, izhikevich_verilog(cfg), "izhikevich_core", "izhikevich",
                      {"core": cfg.to_kwargs(), "currents": list(map(float, cur)),
-                      "sweeps": n_sweeps}, build_dir, testcase="engine", progress=progress)
+                      "sweeps": n_sweeps}, build_dir, testcase="engine", progress=progress,
+                     waves=waves)
 
 
 def _cocotb_runner(simulator):
-    def run(cfg, cur, n_sweeps, n, build_dir, progress):
-        rep = run_cocotb_engine(simulator, cfg, cur, n_sweeps, build_dir, progress).report
+    def run(cfg, cur, n_sweeps, n, build_dir, progress, waves=None):
+        rep = run_cocotb_engine(simulator, cfg, cur, n_sweeps, build_dir, progress,
+                                waves).report
         return (_to_times(rep["spike_sweeps"], n, cfg.dt_ms), rep["clamp_counts"],
                 rep["clamp_sticky"])
     return run
 
 
-#: Engine name -> whole-run runner ``(cfg, currents, n_sweeps, n, build_dir, progress) ->
-#: (spikes per neuron, clamp counts, sticky flags)``.
+#: Engine name -> whole-run runner ``(cfg, currents, n_sweeps, n, build_dir, progress, waves)
+#: -> (spikes per neuron, clamp counts, sticky flags)`` (``waves``: the RTL engines' window).
 RUNNERS = {"fixed": _run_fixed, "amaranth": _run_amaranth, "icarus": _cocotb_runner("icarus"),
            "verilator": _cocotb_runner("verilator"), "verilator-fast": _run_verilator_fast}
 
 
 def run_engine(engine: str, core: dict, currents, duration_ms: float,
-               build_dir: Path | None = None, progress=None) -> EngineRun:
+               build_dir: Path | None = None, progress=None, waves=None) -> EngineRun:
     """Run ``engine`` on ``len(currents)`` neurons of ``core`` with constant currents (mV/ms).
 
     ``progress``, if given, is called with the number of sweeps done (the twin and the Amaranth
     simulator report as they go; cocotb runs report from the simulator's progress file).
+    ``waves``: a :class:`~cuneate.sim.engines.waves.Waves` window, dumped by the RTL engines
+    (``amaranth``, ``icarus``, ``verilator``; refused for the others).
     """
+    if waves and engine not in WAVE_ENGINES:
+        raise ValueError(f"engine {engine!r} writes no waveforms (those that do: "
+                         f"{', '.join(WAVE_ENGINES)})")
     if engine not in RUNNERS:
         check_engine("izhikevich", engine)
         raise ValueError(f"engine {engine!r} runs the golden model, not the core")
@@ -192,7 +225,7 @@ def run_engine(engine: str, core: dict, currents, duration_ms: float,
             raise ValueError(f"current {x:g} is outside the core's input format {cfg.I} "
                              f"[{cfg.I.min_value:g}, {cfg.I.max_value:g}]")
     t0 = time.perf_counter()
-    spikes, counts, sticky = RUNNERS[engine](cfg, cur, n_sweeps, n, build_dir, progress)
+    spikes, counts, sticky = RUNNERS[engine](cfg, cur, n_sweeps, n, build_dir, progress, waves)
     return EngineRun(engine, cfg.dt_ms, n_sweeps, spikes, dict(counts), sticky,
                      time.perf_counter() - t0)
 
@@ -219,7 +252,7 @@ class _Buffered(Transport):
         self.tick = 0
         self.writes: list[tuple[int, int, list[int]]] = []
         self.cnt = {"writes": 0, "words": 0, "spikes": 0, "spikes_counted": 0, "overflow": 0,
-                    "overrun": 0, "late_writes": 0, "sweeps": 0}
+                    "overrun": 0, "late_writes": 0, "sweeps": 0, "frames_lost": 0}
         self.clamps = {k: 0 for k in CLAMP_KINDS}
         self.wall_s = 0.0
 
@@ -303,10 +336,11 @@ class _Batch(_Buffered):
     """Writes and ticks are buffered; the schedule runs on the engine at :meth:`collect`."""
 
     def __init__(self, build_dir: Path | None = None, buffer_writes: int = BUFFER_WRITES,
-                 progress=None):
+                 progress=None, waves=None):
         super().__init__(buffer_writes)
         self.build_dir = Path(build_dir) if build_dir is not None else None
         self.progress = progress
+        self.waves = waves
         self.ran_ticks = 0
 
     def write_currents(self, tick: int, first: int, raw) -> None:
@@ -346,8 +380,8 @@ class CocotbTransport(_Batch):
     """cocotb on Icarus or Verilator (test ``play`` of :mod:`cuneate.sim.izhikevich.bench`)."""
 
     def __init__(self, simulator: str, build_dir: Path | None = None,
-                 buffer_writes: int = BUFFER_WRITES, progress=None):
-        super().__init__(build_dir, buffer_writes, progress)
+                 buffer_writes: int = BUFFER_WRITES, progress=None, waves=None):
+        super().__init__(build_dir, buffer_writes, progress, waves)
         self.name = simulator
 
     def _execute(self, n_ticks, writes) -> dict:
@@ -357,7 +391,7 @@ class CocotbTransport(_Batch):
                   "writes": [[t, f, r] for t, f, r in writes]}
         return run_bench(self.name, izhikevich_verilog(cfg), "izhikevich_core", "izhikevich",
                          config, self.build_dir, testcase="play",
-                         progress=self.progress).report
+                         progress=self.progress, waves=self.waves).report
 
 
 class AmaranthTransport(_Batch):
@@ -376,10 +410,14 @@ class AmaranthTransport(_Batch):
                "sweeps": 0, "clamp_counts": {k: 0 for k in CLAMP_KINDS}, "spike_tick": [],
                "spike_neuron": []}
         width = cfg.sweep_number_width
+        waves = self.waves
+        window, finish = _amaranth_window(cfg, waves)
 
         async def bench(ctx):
             ctx.set(dut.spike_ready, 0)
             for k in range(n_ticks):
+                if window is not None:
+                    window.on = waves.covers(k)
                 for f, r in by_tick.pop(k, []):
                     await write_currents(ctx, dut, r, f)
                     rep["writes"] += 1
@@ -407,8 +445,9 @@ class AmaranthTransport(_Batch):
             rep["overrun"] += int(ctx.get(dut.overrun))
 
         t0 = time.perf_counter()
-        simulate(dut, bench)
+        simulate(dut, bench, vcd=window)
         rep["wall_s"] = time.perf_counter() - t0
+        finish()
         return rep
 
 
@@ -420,6 +459,13 @@ class VerilatorFastTransport(_Batch):
     host port between sweeps like the other engines, so its spikes equal the twin's."""
 
     name = "verilator-fast"
+
+    def __init__(self, build_dir: Path | None = None, buffer_writes: int = BUFFER_WRITES,
+                 progress=None, waves=None):
+        if waves:
+            raise ValueError("engine 'verilator-fast' writes no waveforms (those that do: "
+                             f"{', '.join(WAVE_ENGINES)})")
+        super().__init__(build_dir, buffer_writes, progress)
 
     def _execute(self, n_ticks, writes) -> dict:
         from ..engines.verilator_fast import run_harness
@@ -444,9 +490,16 @@ class VerilatorFastTransport(_Batch):
                 "spike_neuron": run.spike_neurons, "wall_s": float(s.get("wall_s", 0.0))}
 
 
-#: Engine name -> transport factory (``build_dir`` and ``progress`` keywords).
+def _twin_transport(progress=None, waves=None, **_):
+    if waves:
+        raise ValueError(f"engine 'fixed' writes no waveforms (those that do: "
+                         f"{', '.join(WAVE_ENGINES)})")
+    return TwinTransport(progress=progress)
+
+
+#: Engine name -> transport factory (``build_dir``, ``progress`` and ``waves`` keywords).
 TRANSPORTS = {
-    "fixed": lambda **kw: TwinTransport(progress=kw.get("progress")),
+    "fixed": _twin_transport,
     "amaranth": lambda **kw: AmaranthTransport(**kw),
     "icarus": lambda **kw: CocotbTransport("icarus", **kw),
     "verilator": lambda **kw: CocotbTransport("verilator", **kw),

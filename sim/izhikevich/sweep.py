@@ -38,7 +38,11 @@ from ..sweep import (Point, SweepSpec, n_steps, ok_row, point_key, refused, regi
 
 __all__ = ["BATTERIES", "Battery", "battery", "scene_battery", "simulate_float", "SweepPoint",
            "grid", "fixed_config", "run_fixed", "reference_trains", "points_from_args",
-           "COLUMNS", "current_format", "default_duration_ms", "synth_point"]
+           "COLUMNS", "current_format", "default_duration_ms", "synth_point", "battery_size",
+           "BLOCK"]
+
+#: The block whose engine speeds estimate this module's sweeps.
+BLOCK = "izhikevich"
 
 PRESETS = ("RS", "IB", "CH", "FS")
 BATTERIES = {
@@ -124,6 +128,23 @@ def scene_battery(which: str | None = None) -> Battery:
     name or a scene file. Refused (``ValueError``, one line): a scene whose neurons are not
     Izhikevich neurons driven by currents (the taxel skin, the ridge network)."""
     from ..scenes.afferent import build_izhikevich, build_neurons, front_end, synthesize
+    from ..scenes.runner import check_budget
+    scene = _scene_of(which)
+    check_budget(scene, ["golden"])
+    _, _, traces, infos, _ = synthesize(scene)
+    nn = build_neurons(scene, len(traces))
+    cfg, _ = build_izhikevich(scene, nn)
+    _, cur, _ = front_end(scene, nn, traces, infos, cfg)
+    fs = scene["sensor"]["sample_rate_hz"]
+    return Battery(f"scene:{which}" if which else "scene", tuple(nn.preset),
+                   tuple(f"{t}/{p}/{g}" for t, p, g in zip(nn.trial, nn.population, nn.grating)),
+                   samples=cur, sample_ms=1000.0 / fs, current_format=cfg.I,
+                   current_range=cfg.current_range, duration_ms=cur.shape[0] * 1000.0 / fs)
+
+
+def _scene_of(which: str | None):
+    """The scene of a ``scene`` battery, refused (``ValueError``) unless it drives independent
+    Izhikevich neurons with currents."""
     from ..scenes.scene import default_scene, example_names, example_path, load_scene
     if which is None:
         scene = default_scene()
@@ -139,15 +160,7 @@ def scene_battery(which: str | None = None) -> Battery:
     if kind in ("press", "ridges") or any(p["model"] != "izhikevich" for p in scene.populations):
         raise ValueError(f"scene {which or 'default'!r} ({kind}) does not drive independent "
                          f"Izhikevich neurons with currents; a sweep battery needs one that does")
-    _, _, traces, infos, _ = synthesize(scene)
-    nn = build_neurons(scene, len(traces))
-    cfg, _ = build_izhikevich(scene, nn)
-    _, cur, _ = front_end(scene, nn, traces, infos, cfg)
-    fs = scene["sensor"]["sample_rate_hz"]
-    return Battery(f"scene:{which}" if which else "scene", tuple(nn.preset),
-                   tuple(f"{t}/{p}/{g}" for t, p, g in zip(nn.trial, nn.population, nn.grating)),
-                   samples=cur, sample_ms=1000.0 / fs, current_format=cfg.I,
-                   current_range=cfg.current_range, duration_ms=cur.shape[0] * 1000.0 / fs)
+    return scene
 
 
 def simulate_float(bat: Battery, dt_ms: float, n_steps: int, scheme: str,
@@ -319,6 +332,23 @@ def reference_trains(spec: SweepSpec) -> list[np.ndarray]:
     """Float64 RK4 at ``reference_hz`` on the battery (the accuracy reference)."""
     dt = 1000.0 / spec.reference_hz
     return simulate_float(battery(spec.battery), dt, n_steps(spec.duration_ms, dt), "rk4")
+
+
+def battery_size(name: str) -> dict:
+    """The size of battery ``name`` without building it: ``trains``, ``inputs`` (none) and
+    ``bytes_per_step`` (the per-update currents a run holds: none for constant currents, a
+    broadcast; a scene's from its file: every trial, population and grating)."""
+    if name == "scene" or name.startswith("scene:"):
+        from ..scenes.afferent import n_driven
+        n = n_driven(_scene_of(name.partition(":")[2] or None))[1]
+        return {"trains": n, "inputs": 0, "bytes_per_step": 24.0 * n}
+    if name == "behaviours":
+        from ...golden.behaviours import BEHAVIOURS
+        n = len(BEHAVIOURS) - 1
+        return {"trains": n, "inputs": 0, "bytes_per_step": 24.0 * n}
+    if name not in BATTERIES:
+        battery(name)                       # refuses, naming the known ones
+    return {"trains": len(BATTERIES[name]), "inputs": 0, "bytes_per_step": 0.0}
 
 
 def default_duration_ms(name: str) -> float | None:

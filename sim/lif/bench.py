@@ -31,7 +31,8 @@ import numpy as np
 from cocotb.triggers import FallingEdge
 
 from cuneate.hdl.lif import CLAMP_KINDS, PIPELINE_DEPTH, LifConfig, LifTwin
-from cuneate.sim.engines.bench import CoreBench, bench_config, bench_progress, bench_report
+from cuneate.sim.engines.bench import (CoreBench, bench_config, bench_progress, bench_report,
+                                        spikes_then_tick)
 from cuneate.sim.lif.scoreboard import LifSweepChecker
 
 
@@ -184,15 +185,7 @@ async def engine(dut):
                 d.i_wr_en.value = 1
                 await step()
             d.i_wr_en.value = 0
-        for s in sources:
-            d.in_valid.value = 1
-            d.in_source.value = int(s)
-            await step()
-        if cfg.n_inputs:
-            d.in_valid.value = 0
-        d.tick.value = 1
-        await step()
-        d.tick.value = 0
+        await spikes_then_tick(d, sources, step, bool(cfg.n_inputs))
         if (k + 1) % 1000 == 0:
             bench_progress(cfgj, k + 1)
     for _ in range(N + PIPELINE_DEPTH + cfg.spike_fifo_depth + 4):

@@ -13,9 +13,10 @@ import json
 
 import numpy as np
 
-from ..cli.options import (CliError, CommandGroups, add_block_commands, add_rate_options,
-                           clamp_summary, engine_choices, finite_float, input_file, nonneg_int,
-                           output_dir, positive_float, positive_int, print_run, run_ticks)
+from ..cli.options import (CliError, CommandGroups, add_block_commands, add_max_minutes,
+                           add_rate_options, clamp_summary, engine_choices, finite_float,
+                           input_file, nonneg_int, output_dir, positive_float, positive_int,
+                           print_run, probability, run_ticks, seed_int)
 
 __all__ = ["register", "add_lif_options", "lif_kwargs", "lif_from_kwargs"]
 
@@ -191,9 +192,9 @@ def register(groups: CommandGroups) -> None:
     s.add_argument("--current", type=finite_float, nargs="+", default=[25.0],
                    help="host current (mV, or u per step for --form discrete): one value or "
                         "one per neuron")
-    s.add_argument("--input-rate", type=finite_float, default=0.1,
+    s.add_argument("--input-rate", type=probability, default=0.1,
                    help="probability per tick of each input spike (with --weights)")
-    s.add_argument("--seed", type=nonneg_int, default=0)
+    s.add_argument("--seed", type=seed_int, default=0)
     add_lif_options(s, neurons_default=1)
     s.set_defaults(func=cmd_simulate)
 
@@ -209,11 +210,13 @@ def register(groups: CommandGroups) -> None:
     sk.add_argument("--k2", type=finite_float, default=20.0, help="mV per force unit")
     sk.add_argument("--update-hz", type=positive_float, default=1000.0)
     sk.add_argument("--json", action="store_true")
+    add_max_minutes(sk, 60.0)
     sk.set_defaults(func=cmd_skin)
     q = sub.add_parser("quantization", help="FP32 vs INT8 vs INT4 weights, discrete LIF")
     q.add_argument("--inputs", type=positive_int, default=64)
     q.add_argument("--neurons", dest="neurons_q", type=positive_int, default=32)
     q.add_argument("--steps", type=positive_int, default=100)
-    q.add_argument("--seed", type=nonneg_int, default=0)
+    q.add_argument("--seed", type=seed_int, default=0)
     q.add_argument("--json", action="store_true")
+    add_max_minutes(q, 60.0)
     q.set_defaults(func=cmd_quantization)

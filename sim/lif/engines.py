@@ -30,7 +30,7 @@ import numpy as np
 
 from ...golden import lif as golden
 from ...hdl.lif import CLAMP_KINDS, PIPELINE_DEPTH, LifConfig, LifCore, LifTwin, lif_verilog
-from ..engines.amaranth import simulate
+from ..engines.amaranth import simulate, spikes_then_tick
 from ..engines.registry import block_engines, check_engine
 from ..engines.run import EngineRun, TickUnwrap
 
@@ -218,15 +218,7 @@ def _run_amaranth(cfg: LifConfig, ops) -> dict:
                     ctx.set(dut.i_wr_data, row[i])
                     await step()
                 ctx.set(dut.i_wr_en, 0)
-            for s in srcs:
-                ctx.set(dut.in_valid, 1)
-                ctx.set(dut.in_source, s)
-                await step()
-            if cfg.n_inputs:
-                ctx.set(dut.in_valid, 0)
-            ctx.set(dut.tick, 1)
-            await step()
-            ctx.set(dut.tick, 0)
+            await spikes_then_tick(ctx, dut, srcs, step, bool(cfg.n_inputs))
         for _ in range(N + PIPELINE_DEPTH + cfg.spike_fifo_depth + 4):
             await step()
         assert not ctx.get(dut.overrun) and not ctx.get(dut.spike_overflow)

@@ -20,13 +20,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ...golden import budget
 from ...golden import lif as golden
 from ...golden.metrics import victor_purpura
 from ...hdl.lif import LifConfig, LifTwin
 from .engines import LifProgram, engine_config, run_lif
 
 __all__ = ["SkinResult", "skin_protocol", "press_spread", "skin_grid", "skin_3x3", "QuantRow",
-           "quantization_table", "format_skin", "format_quantization"]
+           "quantization_table", "quantization_estimate", "format_skin", "format_quantization"]
 
 
 
@@ -208,6 +209,23 @@ class QuantRow:
         return dict(self.__dict__)
 
 
+def quantization_estimate(n_inputs: int, n_neurons: int, n_steps: int, n_bits: int = 2
+                          ) -> dict:
+    """Memory (bytes) and time (s) of :func:`quantization_table` before it allocates: the
+    weight matrix and its copies (float, per format raw and rounded), the input spikes (and
+    their float copy for the golden model), the spike rasters; the golden layer's products and
+    each format's twin run at the registry's speed."""
+    from ..engines.registry import estimate_seconds
+    n_core = max(8, n_neurons)
+    w = budget.array_bytes(n_inputs, n_core)
+    nbytes = (budget.BASE_BYTES + (4 + 3 * n_bits) * w
+              + budget.array_bytes(n_steps, n_inputs, 9)
+              + (2 + n_bits) * budget.array_bytes(n_steps, n_core, 1))
+    seconds = 1e-9 * n_steps * n_inputs * n_neurons + n_bits * estimate_seconds(
+        "lif", "fixed", n_steps * n_core * (1.0 + n_inputs / 64.0))
+    return {"bytes": nbytes, "seconds": seconds}
+
+
 def quantization_table(n_inputs: int = 64, n_neurons: int = 32, n_steps: int = 100,
                        rate: float = 0.2, alpha: float = golden.DISCRETE_ALPHA,
                        u_th: float = golden.DISCRETE_U_TH, weight_scale: float = 0.12,
@@ -219,6 +237,9 @@ def quantization_table(n_inputs: int = 64, n_neurons: int = 32, n_steps: int = 1
     the core's arithmetic (twin) with the weights in an n-bit format whose fraction bits hold
     the largest weight. VP cost ``vp_q`` per step of shift.
     """
+    est = quantization_estimate(n_inputs, n_neurons, n_steps, len(bits))
+    budget.check(f"the quantization table ({n_inputs} inputs x {n_neurons} neurons, {n_steps} "
+                 f"steps)", est["bytes"], est["seconds"], "fewer inputs, neurons or steps")
     rng = np.random.default_rng(seed)
     w = (rng.normal(0.25 * weight_scale, weight_scale, (n_inputs, n_neurons))
          .astype(np.float32).astype(np.float64))

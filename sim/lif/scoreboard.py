@@ -36,6 +36,7 @@ class LifSweepChecker:
         cfg, st = self.cfg, self.stats
         v, ref, i, acc, clamp = (np.asarray(a, dtype=np.int64) for a in (v, ref, i, acc, clamp))
         spk = np.asarray(spike, dtype=bool)
+        x = self.twin.delay_inputs(x)       # the input history (input_delays), if any
         out = self.twin.update(self.prev_v, self.prev_ref, i, x, self.sel, self.prev_tr)
         mism = ((out["v"] != v) | (out["ref"] != ref) | (out["spike"] != spk)
                 | (out["clamp"] != clamp) | (out["acc"] != acc))

@@ -72,7 +72,10 @@ from .engines import LifProgram, engine_config, run_lif
 __all__ = ["reference_trains", "COLUMNS", "default_duration_ms", "points_from_args",
            "LIF_BATTERIES", "LifBattery", "lif_battery", "LifSweepPoint", "lif_grid",
            "lif_reference_trains", "golden_lif_trains", "lif_core_kwargs", "lif_point_trains",
-           "LIF_COLUMNS"]
+           "LIF_COLUMNS", "battery_size", "BLOCK"]
+
+#: The block whose engine speeds estimate this module's sweeps.
+BLOCK = "lif"
 
 LIF_BATTERIES = {
     "lif-currents": "continuous LIF, 3 cells (tau_m 20, 10, 30 ms) x 6 constant currents and "
@@ -209,6 +212,14 @@ def lif_battery(name: str) -> LifBattery:
                           tuple(f"neuron {i} alpha {sets[i % 2]['alpha']:g}" for i in range(n)),
                           weights=w, input_rate=0.2, input_seed=8, current_format=(1, 1))
     raise ValueError(f"unknown LIF battery {name!r}; known: {', '.join(LIF_BATTERIES)}")
+
+
+def battery_size(name: str) -> dict:
+    """The size of battery ``name``: ``trains``, ``inputs`` and ``bytes_per_step`` (the
+    per-step currents and input spikes a run holds)."""
+    bat = lif_battery(name)
+    return {"trains": bat.n, "inputs": bat.n_inputs,
+            "bytes_per_step": 24.0 * bat.n + 2.0 * bat.n_inputs}
 
 
 def golden_lif_trains(bat: LifBattery, dt_ms: float, n_steps: int,

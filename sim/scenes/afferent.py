@@ -17,6 +17,7 @@ engines computed, with wall time per stage and per engine.
 
 from __future__ import annotations
 
+import os
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -26,10 +27,10 @@ import numpy as np
 from ...golden import izhikevich as golden
 from ...golden.fbg import IIRFilter, design_bandpass
 from ...golden.tactile import (MATERIALS, GraspSpec, Material, Pad, PulseSpec, SlideSpec,
-                              apply_effects, synthesize_grasp, synthesize_pulse,
-                              synthesize_slide)
+                              apply_effects, sensor_effects, synthesize_grasp,
+                              synthesize_pulse, synthesize_slide)
 from ...hdl.lib.fixed import QFormat
-from ..decode import decode, isi_samples, trial_features
+from ..decode import decode_trials
 from ..engines.registry import ENGINES as ENGINE_TRAITS
 from ..engines.registry import block_engines
 from ..host.driver import AfferentEncoding, FbgDriver
@@ -37,7 +38,8 @@ from .runner import agreement as train_agreement
 from .scene import Scene
 
 __all__ = ["SceneRun", "run", "BLOCKS", "ENGINES", "synthesize", "build_neurons",
-           "front_end", "summary", "write_report", "format_run"]
+           "front_end", "summary", "write_report", "format_run", "write_spike_files",
+           "waves_request", "estimate", "n_driven"]
 
 
 @dataclass
@@ -76,7 +78,59 @@ class SceneRun:
     ran: dict
     timing: dict
     decode_agreement: dict = field(default_factory=dict)
+    files: dict = field(default_factory=dict)   # "spikes": engine -> file, "waves": window
     kind: str = "afferent"
+
+
+# --------------------------------------------------------------------------- estimate
+#: What a scene run holds beyond a bare process (the decoder's and the report's libraries and
+#: figures): measured 284 MiB peak for the smallest scene.
+REPORT_BYTES = 100 << 20
+
+
+def n_driven(scene: Scene) -> tuple[int, int]:
+    """``(trials, neurons)``: every trial of every class, and the driven Izhikevich neurons of
+    all of them (the core holds them all)."""
+    trials = 1 if scene["stimulus"]["kind"] == "recorded" else \
+        scene["scene"]["trials"] * len(scene.classes())
+    return trials, trials * sum(p["size"] for p in scene.populations
+                                if p["model"] == "izhikevich")
+
+
+def estimate(scene: Scene, engines: list[str], n_samples: int | None = None) -> dict:
+    """Memory (bytes) and time (s) of running ``scene`` on ``engines``, from its parameters
+    (``n_samples``: the trace's length when known, else the scene's duration): the traces
+    and their synthesis, the front end's arrays (shifts, currents, raw currents), the golden
+    engine's per-tick currents, the batch engines' write schedules and the spikes; the state
+    range search, each engine's updates (or cycles) at the registry's speed."""
+    from ...golden.budget import BASE_BYTES, array_bytes
+    from ...hdl.izhikevich import PIPELINE_DEPTH
+    from ...hdl.izhikevich.range import search_estimate
+    from ..engines.registry import estimate_seconds
+    sen, hw = scene["sensor"], scene["hardware"]
+    fs = sen["sample_rate_hz"]
+    if n_samples is None:
+        n_samples = round(scene["scene"]["duration_ms"] * fs / 1000.0)
+    trials, n = n_driven(scene)
+    hold = max(1, round(hw["update_hz"] / fs))
+    n_ticks = float(n_samples) * hold
+    n_core = max(n, 8)
+    per_sample = array_bytes(n_samples, n)
+    nbytes = (BASE_BYTES + REPORT_BYTES + 4 * array_bytes(trials, n_samples, sen["channels"])
+              + 6 * per_sample + 200.0 * n_ticks / 16e3 * n * 16)      # spikes at <= 200 Hz
+    seconds = search_estimate(len({p["preset"] for p in scene.populations}), 2,
+                              1000.0 / hw["update_hz"])["seconds"]
+    seconds += 2e-6 * trials * n_samples * sen["channels"] + 1e-6 * n_samples * n
+    for e in engines:
+        if e == "golden":
+            nbytes += 2 * array_bytes(n_ticks, n)    # held per tick, and the model's copy
+        elif ENGINE_TRAITS[e].level == "rtl":
+            nbytes += 48 * per_sample             # the write schedule as Python integers
+        per_tick = n_core + PIPELINE_DEPTH + 8 if ENGINE_TRAITS[e].hdl else n_core
+        seconds += estimate_seconds("izhikevich", e, n_ticks * per_tick)
+    return {"bytes": nbytes, "seconds": seconds, "ticks": n_ticks, "neurons": n,
+            "what": f"{trials} trial(s) x {n // max(trials, 1)} neuron(s), {n_ticks:.3g} ticks "
+                    f"on {', '.join(engines)}"}
 
 
 # --------------------------------------------------------------------------- stimulus
@@ -97,12 +151,22 @@ def synthesize(scene: Scene):
     effect_params = {e: sen[e] for e in sen["effects"] if e != "strain"}
     counts_all: dict = {}
     if st["kind"] == "recorded":
-        from ..host.traces import load_trace
+        from ..host.traces import TraceError, load_trace
         tr = load_trace(st["file"], time_key=st["time_key"], data_key=st["data_key"],
                         struct=st["struct"] or None, time_unit=st["time_unit"],
                         shift_unit=st["shift_unit"], expect_fs_hz=fs,
                         channels=sen["channels"])
-        return classes, [classes[0]], [tr.d_lambda_nm], [tr.info], {}
+        x = tr.d_lambda_nm
+        big = np.abs(x) >= sen["lambda_B_nm"]
+        if big.any():
+            r, c = (int(v) for v in np.argwhere(big)[0])
+            raise TraceError(f"{st['file']}: row {r}, grating {c}: a shift of {x[r, c]:.3g} nm is "
+                             f"not a Bragg shift of a {sen['lambda_B_nm']:g} nm grating (check "
+                             f"stimulus.shift_unit)")
+        # the sensor effects the scene lists act on the recorded shifts too
+        x, counts = sensor_effects(x, sen["effects"], effect_params, rng, fs,
+                                   sen["lambda_B_nm"])
+        return classes, [classes[0]], [x], [tr.info], counts
     for c, cls in enumerate(classes):
         for t in range(sc["trials"]):
             if st["kind"] == "grasp":
@@ -222,7 +286,14 @@ def front_end(scene: Scene, neurons: Neurons, traces: list, infos: list, cfg):
                     scene["frontend"]["latency_ticks"], on_gap=on_gap)
     dl = np.stack([traces[t][:, g] for t, g in zip(neurons.trial, neurons.grating)], axis=1)
     x, gaps = drv.fill_gaps(dl)
-    currents = drv.currents(x)
+    with np.errstate(over="ignore", invalid="ignore"):
+        currents = drv.currents(x)
+    bad = ~np.isfinite(currents)
+    if bad.any():
+        j, i = (int(v) for v in np.argwhere(bad)[0])
+        raise ValueError(f"the front end's current of neuron {i} is {currents[j, i]!r} at sample "
+                         f"{j} (shifts up to {float(np.max(np.abs(x))):.3g} nm): lower the front "
+                         f"end's gain (frontend.gain_S, frontend.sa_gain, population gain)")
     if scene["frontend"]["window"] == "loading":
         # the front end sees the loading phase only (contact to stop), per trial
         t_ms = np.arange(dl.shape[0]) * 1000.0 / sen["sample_rate_hz"]
@@ -241,8 +312,19 @@ def run_golden(ctx) -> tuple[list, dict]:
     n = len(ctx["neurons"])
     params = [golden.to_params(p) for p in ctx["neurons"].preset]
     cur = drv.held(ctx["currents"], ctx["n_ticks"])
-    r = golden.simulate(params, cur, n_steps=ctx["n_ticks"], n_neurons=n, dt_ms=cfg.dt_ms,
-                        scheme="euler", progress=ctx.get("progress"))
+    try:
+        r = golden.simulate(params, cur, n_steps=ctx["n_ticks"], n_neurons=n, dt_ms=cfg.dt_ms,
+                            scheme="euler", progress=ctx.get("progress"))
+    except golden.DivergenceError as exc:
+        nn, i = ctx["neurons"], exc.neuron
+        peak = float(np.max(np.abs(ctx["currents"][:, i])))
+        raise ValueError(
+            f"the golden engine diverged: neuron {i} (trial {nn.trial[i]}, population "
+            f"{nn.population[i]!r}, grating {nn.grating[i]}) leaves |v|, |u| <= {exc.bound:g} at "
+            f"t = {(exc.step + 1) * exc.dt_ms:g} ms under front-end currents up to {peak:.3g} "
+            f"mV/ms (the core saturates at {cfg.I.max_value:g}); lower the front end's gain "
+            f"(frontend.gain_S, frontend.sa_gain, population gain) or the sensor effects' "
+            f"size") from None
     return [np.asarray(s) for s in r.spikes_ms], {"spikes": int(sum(len(s) for s in
                                                                     r.spikes_ms))}
 
@@ -250,10 +332,13 @@ def run_golden(ctx) -> tuple[list, dict]:
 def _run_transport(engine):
     def run(ctx):
         from ..izhikevich.engines import make_transport
+        from ..engines.waves import FORMATS
         kw = {"progress": ctx.get("progress")}
         if engine != "fixed":
             bd = ctx.get("build_dir")
             kw["build_dir"] = (Path(bd) / engine) if bd else None
+        if engine in FORMATS and ctx.get("waves"):
+            kw["waves"] = ctx["waves"]
         tr = make_transport(engine, **kw)
         tr.open(ctx["config"])
         res = ctx["driver"].stream(tr, None, ctx["n_ticks"], raw=ctx["raw"])
@@ -290,49 +375,73 @@ def _front_end_detail(scene: Scene, neurons: Neurons) -> list[str]:
     return out
 
 
+def waves_request(scene: Scene, waves=None):
+    """The waveform window of a run: ``waves`` when given, else the scene's ``run.waves``
+    (a directory; relative to the current one), ``run.waves_start_tick`` and
+    ``run.waves_ticks``; ``None`` when neither asks for waveforms."""
+    if waves is not None or not scene["run"]["waves"]:
+        return waves
+    from ..engines.waves import Waves
+    r = scene["run"]
+    return Waves(Path(r["waves"]), r["waves_start_tick"], r["waves_ticks"])
+
+
 def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None = None,
-        progress: bool = False, log=None) -> SceneRun:
-    """Run an afferent ``scene`` on its engines (or ``engines``)."""
+        progress: bool = False, log=None, waves=None) -> SceneRun:
+    """Run an afferent ``scene`` on its engines (or ``engines``); each stage reports through
+    :mod:`cuneate.sim.progress` (and ``log``, if given, gets one line per stage). ``waves``
+    (a :class:`~cuneate.sim.engines.waves.Waves` window, or the scene's ``run.waves``): the
+    RTL engines (amaranth, icarus, verilator) dump it."""
+    from .. import progress as prog
     timing: dict = {}
-    say = log or (lambda msg: None)
+
+    def say(msg):
+        prog.say(msg)
+        if log is not None:
+            log(msg)
     t0 = time.perf_counter()
-    classes, trial_class, traces, infos, effect_counts = synthesize(scene)
+    names = list(engines or scene.engines)
+    n_grasps = scene["scene"]["trials"] * len(scene.classes())
+    with prog.step(f"synthesizing the stimulus ({n_grasps} trial(s))"):
+        classes, trial_class, traces, infos, effect_counts = synthesize(scene)
     timing["stimulus_s"] = time.perf_counter() - t0
+    if scene["stimulus"]["kind"] == "recorded":     # its length is known now
+        from .runner import check_budget
+        check_budget(scene, names, n_samples=traces[0].shape[0])
     say(f"stimulus: {len(traces)} trial(s) of {traces[0].shape[0]} samples x "
         f"{traces[0].shape[1]} grating(s) ({timing['stimulus_s']:.2f} s)")
     t0 = time.perf_counter()
-    neurons = build_neurons(scene, len(traces))
-    models = sorted({p["model"] for p in scene.populations})
-    blocks, cfg = [], None
-    for m in models:
-        cfg_m, desc = BLOCKS[m](scene, neurons)
-        blocks.append(desc)
-        cfg = cfg_m
-    drv, currents, gaps = front_end(scene, neurons, traces, infos, cfg)
-    raw, sat = drv.quantize(currents)
+    with prog.step("front end: filtering and quantizing the currents"):
+        neurons = build_neurons(scene, len(traces))
+        models = sorted({p["model"] for p in scene.populations})
+        blocks, cfg = [], None
+        for m in models:
+            cfg_m, desc = BLOCKS[m](scene, neurons)
+            blocks.append(desc)
+            cfg = cfg_m
+        drv, currents, gaps = front_end(scene, neurons, traces, infos, cfg)
+        raw, sat = drv.quantize(currents)
     sat["gaps_held"] = gaps
     n_ticks = currents.shape[0] * drv.hold_ticks
+    # samples whose tick (j R + L) falls at or after the run's end are never applied: counted
+    sat["samples"] = int(currents.shape[0])
+    sat["samples_past_end"] = int(np.count_nonzero(
+        drv.tick_of_sample(np.arange(currents.shape[0])) >= n_ticks))
+    if sat["samples_past_end"]:
+        say(f"warning: latency of {drv.latency_ticks} ticks puts {sat['samples_past_end']} of "
+            f"{sat['samples']} samples past the run's end: never applied")
     timing["front_end_s"] = time.perf_counter() - t0
     ctx = {"config": cfg, "driver": drv, "neurons": neurons, "currents": currents, "raw": raw,
-           "n_ticks": n_ticks, "build_dir": build_dir}
-    names = list(engines or scene.engines)
+           "n_ticks": n_ticks, "build_dir": build_dir, "waves": waves_request(scene, waves)}
     for e in names:
         if e not in ENGINES:
             raise ValueError(f"unknown engine {e!r}; known: {', '.join(ENGINES)}")
     results: dict = {}
 
-    def one(e, position):
+    def one(e):
         t0 = time.perf_counter()
-        bar = None
-        if progress:
-            from tqdm import tqdm
-            bar = tqdm(total=n_ticks, desc=e, unit="tick", leave=False, position=position)
-        c = dict(ctx, progress=(lambda k, b=bar: b.update(k - b.n)) if bar else None)
-        try:
-            sp, cnt = ENGINES[e](c)
-        finally:
-            if bar:
-                bar.close()
+        with prog.step(f"engine {e}", total=n_ticks, unit="tick") as st:
+            sp, cnt = ENGINES[e](dict(ctx, progress=st.set, step=st))
         results[e] = (sp, cnt, time.perf_counter() - t0)
         say(f"engine {e}: {sum(len(x) for x in sp)} spikes ({results[e][2]:.1f} s)")
 
@@ -346,14 +455,14 @@ def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None =
         from concurrent.futures import ThreadPoolExecutor
 
         def hdl():
-            for i, e in enumerate(background):
-                one(e, 1 + i)
+            for e in background:
+                one(e)
         pool = ThreadPoolExecutor(max_workers=1)
         fut = pool.submit(hdl)
     try:
         for e in names:
             if e not in background:
-                one(e, 0)
+                one(e)
     finally:
         if pool is not None:
             try:
@@ -369,12 +478,14 @@ def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None =
     dec = scene["decoder"]
     decoded = {}
     if dec["kind"] != "none":
-        window = dec["window_ms"]
         for e, sp in spikes.items():
-            fn = isi_samples if dec["features"] == "isi" else trial_features
-            X, y = fn(sp, neurons.trial, neurons.grating, trial_class, window)
-            decoded[e] = decode(X, y, classes, dec["kind"], dec["cv_folds"], dec["max_depth"],
-                                dec["neighbours"], scene["scene"]["seed"], dec["features"])
+            with prog.step(f"decoding {e} ({dec['kind']} on {dec['features']} features, "
+                           f"grasp-grouped and published protocols)"):
+                decoded[e] = decode_trials(
+                    sp, neurons.trial, neurons.grating, trial_class, classes, dec["kind"],
+                    dec["features"], dec["cv_folds"], dec["max_depth"], dec["neighbours"],
+                    scene["scene"]["seed"], dec["window_ms"], dec["decision"],
+                    dec["permutations"])
     timing["decode_s"] = time.perf_counter() - t0
     agreement = {}
     names = list(spikes)
@@ -402,9 +513,19 @@ def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None =
            "front_end": sorted({f"{e.mode}" for e in neurons.encoding}),
            "front_end_detail": _front_end_detail(scene, neurons),
            "stimulus": scene["stimulus"]["kind"]}
+    files = {}
+    wv = ctx["waves"]
+    if wv:
+        from ..engines.waves import FORMATS
+        wrote = [e for e in names if e in FORMATS]
+        files["waves"] = wv.to_dict() | {
+            "files": {e: {"dump": str(wv.path(e)), "gtkw": str(wv.path(e).with_suffix(".gtkw"))}
+                      for e in wrote},
+            "note": "" if wrote else " (no engine of this run writes waveforms: amaranth, "
+                                     "icarus or verilator do)"}
     return SceneRun(scene, classes, trial_class, traces, infos, neurons, currents, sat, cfg,
                     cfg.dt_ms, n_ticks, spikes, counters, decoded, agreement, ran, timing,
-                    dec_agree)
+                    dec_agree, files=files)
 
 
 # --------------------------------------------------------------------------- results
@@ -414,35 +535,36 @@ def summary(run: SceneRun) -> dict:
     return summary_dict(run)
 
 
+def write_spike_files(run: SceneRun, out: Path) -> dict:
+    """Write ``spikes_<engine>.npz`` per engine into ``out`` (:mod:`cuneate.sim.spikes`:
+    neuron table population, trial, grating, class); returns ``{engine: file name}``."""
+    from ..spikes import write_spikes
+    nn = run.neurons
+    files = {}
+    for e, trains in run.spikes.items():
+        name = f"spikes_{e}.npz"
+        write_spikes(Path(out) / name, trains, e, run.n_ticks * run.dt_ms, nn.population,
+                     nn.trial, nn.grating, [run.trial_class[t] for t in nn.trial], run.dt_ms)
+        files[e] = name
+    return files
+
+
 def write_report(run: SceneRun, out: Path) -> Path:
-    """Write ``index.html``, ``run.json`` and figures into ``out``; returns the HTML path."""
+    """Write the spike files, ``index.html``, ``run.json`` and figures into ``out``; returns
+    the HTML path."""
     from ..report import write_report as write
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    run.files["spikes"] = write_spike_files(run, out)
+    w = run.files.get("waves")
+    if w:
+        for x in w["files"].values():
+            for k in ("dump", "gtkw"):
+                x[k] = os.path.relpath(x[k], out.resolve())
     return write(run, out)
 
 
 def format_run(run: SceneRun) -> str:
     """The lines ``cuneate run`` prints for an afferent scene."""
-    scene = run.scene
-    out = [f"{scene.name}: {len(run.trial_class)} trials, {len(run.neurons)} neurons, "
-           f"engines {', '.join(run.spikes)}"]
-    for e, t in run.timing["engines_s"].items():
-        d = run.decoded.get(e)
-        acc = "-" if d is None else (f"{100 * d.accuracy:.1f} %" if d.accuracy is not None
-                                     else d.reason)
-        out.append(f"  {e:10s} accuracy {acc:>8s}  ({t:.1f} s)")
-    for k, v in run.decode_agreement.items():
-        out.append(f"  accuracy {k}: differs by {100 * v['difference']:.1f} points (tolerance "
-                   f"{100 * v['tolerance']:.1f}): {'within' if v['within'] else 'OUTSIDE'}")
-    s = run.saturations
-    for e, sp in run.spikes.items():
-        if not any(len(x) for x in sp):
-            out.append(f"  warning: {e}: no neuron spiked (currents peak at "
-                       f"{s['max_mV_per_ms']:.2f} mV/ms; an RS neuron needs about 3.8)")
-    n_sat = s.get("format_low", 0) + s.get("format_high", 0)
-    if n_sat:
-        out.append(f"  warning: {n_sat} of {s['values']} currents saturated to {s['format']} "
-                   f"(range {s['min_mV_per_ms']:.1f} .. {s['max_mV_per_ms']:.1f} mV/ms)")
-    for k, v in run.agreement.items():
-        out.append(f"  {k}: {v['identical_trains']}/{v['neurons']} identical trains, mean "
-                   f"|spike count diff| {v['mean_abs_count_diff']:.2f}")
-    return "\n".join(out)
+    from ..report import format_run as fmt_run
+    return fmt_run(run)

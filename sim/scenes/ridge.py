@@ -31,7 +31,7 @@ from pathlib import Path
 import numpy as np
 
 __all__ = ["validate", "RidgeSceneRun", "run", "summary", "write_report", "format_run",
-           "spec_of"]
+           "spec_of", "estimate"]
 
 
 def validate(V, raw: dict, sections: dict, pops: list, projs: list) -> None:
@@ -127,6 +127,20 @@ def validate(V, raw: dict, sections: dict, pops: list, projs: list) -> None:
     if sc["trials"] < 2:
         V.err("scene.trials", "a ridge scene needs at least 2 trials per angle (half train "
                               "the lookup table)")
+    from ..coincidence.experiments import ridge_problem
+    bad = ridge_problem(spec_of(_Sections(sections, pops, projs)))
+    if bad is not None:
+        V.err(f"stimulus.{bad[0]}", bad[1])
+
+
+class _Sections:
+    """The parts of a scene :func:`spec_of` reads, while the scene is being validated."""
+
+    def __init__(self, sections, populations, projections):
+        self.sections, self.populations, self.projections = sections, populations, projections
+
+    def __getitem__(self, key):
+        return self.sections[key]
 
 
 def spec_of(scene):
@@ -153,6 +167,13 @@ def spec_of(scene):
                      trials_per_angle=sc["trials"], spread_speed=st["spread_speed"],
                      spread_force=st["spread_force"], jitter_ms=st["jitter_ms"], seed=sc["seed"],
                      update_hz=hw["update_hz"], delays_ticks=delays)
+
+
+def estimate(scene, engines: list[str]) -> dict:
+    """Memory (bytes) and time (s) of the ridge scene on ``engines``
+    (:func:`cuneate.sim.coincidence.experiments.ridge_estimate` of its experiment)."""
+    from ..coincidence.experiments import ridge_estimate
+    return ridge_estimate(spec_of(scene), engines)
 
 
 @dataclass
@@ -188,6 +209,7 @@ def run(scene, engines=None, build_dir=None, progress=False, log=None):
            "blocks": [{"block": "izhikevich_core", "neurons": 4, "role": "SA and FA afferents"},
                       {"block": "coincidence_detector", "neurons": cfg.n_targets,
                        "sources": cfg.n_sources, "delays_ticks": cfg.delays.tolist(),
+                       "delays_ms": (cfg.delays * cfg.dt_ms).tolist(), "dt_ms": cfg.dt_ms,
                        "weights_mV_per_ms": cfg.weights_real.tolist()}]}
     return RidgeSceneRun(scene, results, ran, timing)
 
@@ -213,7 +235,7 @@ def format_run(run: RidgeSceneRun) -> str:
 
 def write_report(run: RidgeSceneRun, out: Path) -> Path:
     """Write ``index.html``, ``run.json`` and one figure per engine into ``out``."""
-    from ..report import html_table, pyplot, write_page
+    from ..report import DPI, html_table, pyplot, write_page
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     (out / "run.json").write_text(json.dumps(summary(run), indent=2, default=float))
@@ -233,7 +255,7 @@ def write_report(run: RidgeSceneRun, out: Path) -> Path:
                yticks=range(len(r.angles)), yticklabels=[f"{a:+g} deg" for a in r.angles],
                title=f"{e}: mean spikes per trial ({100 * r.accuracy:.0f} % decoded)")
         fig.tight_layout()
-        fig.savefig(out / f"ridge_{e}.png", dpi=90)
+        fig.savefig(out / f"ridge_{e}.png", dpi=DPI)
         plt.close(fig)
         figs.append(f"ridge_{e}.png")
     acc_rows = [[e, f"{100 * r.accuracy:.1f}", len(r.trial_angle),
@@ -242,7 +264,7 @@ def write_report(run: RidgeSceneRun, out: Path) -> Path:
     first = next(iter(run.results.values()))
     same = [[e, "yes" if r.patterns == first.patterns else "NO",
              "yes" if np.array_equal(r.counts, first.counts) else "no"]
-            for e, r in run.results.items()]
+            for e, r in list(run.results.items())[1:]]
     cn = run.ran["blocks"][1]
     body = f"""
 <p>Scene: {html.escape(run.scene.source)}. Two stacked force sensors, SA and FA afferents per
@@ -250,12 +272,15 @@ sensor, {cn['neurons']} cuneate neurons that differ only in their conduction del
 <h2>Decoding (lookup table from every other trial of each angle)</h2>
 {html_table(acc_rows, ["engine", "accuracy %", "trials", "table", "run s"])}
 <h2>Agreement with {html.escape(next(iter(run.results)))}</h2>
-{html_table(same, ["engine", "same patterns", "same spike counts"])}
+{html_table(same, ["engine", "same patterns", "same spike counts"]) if same else
+ "<p>(one engine ran: nothing to compare)</p>"}
 <h2>What ran</h2>
 <ul><li>stimulus: ridges at {html.escape(', '.join(f'{a:+g}' for a in first.angles))} degrees</li>
 <li>effects: none (force sensors)</li>
 <li>blocks: Izhikevich core (4 afferents), coincidence detector ({cn['neurons']} x
-{cn['sources']}, delays {html.escape(str(cn['delays_ticks']))} ticks)</li>
+{cn['sources']}, delays (ms, upper and lower sensor per cuneate neuron)
+{html.escape(str([[round(x, 4) for x in row] for row in cn['delays_ms']]))}, ticks of
+{cn['dt_ms']:g} ms)</li>
 <li>engines: {html.escape(', '.join(run.results))}</li></ul>
 """
     return write_page(out, run.scene.name, body, figs)

@@ -12,7 +12,7 @@ import numpy as np
 
 from .registry import kind_module
 
-__all__ = ["run_scene", "agreement", "kind_of"]
+__all__ = ["run_scene", "agreement", "kind_of", "check_budget"]
 
 
 def kind_of(run_or_scene) -> str:
@@ -21,25 +21,55 @@ def kind_of(run_or_scene) -> str:
 
 
 def run_scene(scene, engines: list[str] | None = None, build_dir: Path | None = None,
-              progress: bool = False, log=None):
+              progress: bool = False, log=None, waves=None):
     """Run ``scene`` on its engines (or ``engines``) with its kind's module; returns that
-    kind's run (``run.kind`` names the kind; ``run.ran`` lists exactly what was computed)."""
-    return kind_module(scene.kind).run(scene, engines, build_dir, progress, log)
+    kind's run (``run.kind`` names the kind; ``run.ran`` lists exactly what was computed).
+    ``progress``: show what each stage does (:mod:`cuneate.sim.progress`, on stderr) when no
+    command has chosen how yet. ``waves``: a :class:`~cuneate.sim.engines.waves.Waves` window
+    (afferent scenes; the others refuse it).
+
+    The kind's estimate of the run's memory and time is checked first
+    (:func:`check_budget`): a run that would exhaust the machine's memory or exceed the time
+    limit in force is refused before anything is allocated."""
+    from .. import progress as prog
+    if progress and prog.mode() == "quiet":
+        prog.configure("auto")
+    check_budget(scene, list(engines or scene.engines))
+    mod = kind_module(scene.kind)
+    if waves is not None or scene["run"]["waves"]:
+        if scene.kind != "afferent":
+            raise ValueError(f"waveforms are written for afferent scenes (the Izhikevich "
+                             f"core); a {scene.kind} scene has none")
+        return mod.run(scene, engines, build_dir, progress, log, waves=waves)
+    return mod.run(scene, engines, build_dir, progress, log)
+
+
+def check_budget(scene, engines: list[str], **known) -> dict:
+    """The kind's ``estimate(scene, engines, **known)`` checked against the memory and time
+    limits (:func:`cuneate.golden.budget.check`; ``BudgetError`` refuses, one line)."""
+    from ...golden import budget
+    est = kind_module(scene.kind).estimate(scene, engines, **known)
+    budget.check(f"the scene ({est['what']})", est["bytes"], est["seconds"],
+                 "fewer trials or neurons, a shorter scene.duration_ms, a lower update rate "
+                 "or faster engines")
+    return est
 
 
 def agreement(a: list, b: list, dt_ms: float) -> dict:
     """How the spike trains ``a`` and ``b`` (one per neuron, ms) agree: totals, identical
-    trains, spike-count differences, Victor-Purpura distance at q = 1/ms and the fraction of
-    spikes within one tick of ``dt_ms``."""
+    trains, spike-count differences, Victor-Purpura distance at q = 5/s
+    (:data:`~cuneate.golden.metrics.VP_Q_PER_MS`, the sweep's and the README's) and the
+    fraction of spikes within one tick of ``dt_ms``."""
     from ...golden import metrics
     cnt_a = np.array([len(s) for s in a])
     cnt_b = np.array([len(s) for s in b])
-    vp = [metrics.victor_purpura(x, y, 1.0) for x, y in zip(a, b)]
+    vp = [metrics.victor_purpura(x, y, metrics.VP_Q_PER_MS) for x, y in zip(a, b)]
     within = [metrics.fraction_within(x, y, dt_ms) for x, y in zip(a, b)]
     within = [w for w in within if w is not None]
     return {"neurons": len(a), "spikes_a": int(cnt_a.sum()), "spikes_b": int(cnt_b.sum()),
             "identical_trains": int(sum(np.array_equal(x, y) for x, y in zip(a, b))),
             "mean_abs_count_diff": float(np.mean(np.abs(cnt_a - cnt_b))) if a else 0.0,
             "max_abs_count_diff": int(np.max(np.abs(cnt_a - cnt_b))) if a else 0,
-            "mean_victor_purpura_q1": float(np.mean(vp)) if vp else 0.0,
+            "mean_victor_purpura": float(np.mean(vp)) if vp else 0.0,
+            "victor_purpura_q_per_s": 1000.0 * metrics.VP_Q_PER_MS,
             "fraction_within_1_tick": float(np.mean(within)) if within else None}

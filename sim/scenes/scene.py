@@ -163,6 +163,10 @@ def parse_scene(text: str, source: str = "<scene>", base_dir: Path | None = None
                                  f"does not list (it would not be computed)")
         sensor[e] = V.table(f"sensor.{e}", given or {}, params) if e in sensor["effects"] \
             else {}
+    sat = sensor.get("saturation") or {}
+    if sat and not sat["min_nm"] < sat["max_nm"]:
+        V.err("sensor.saturation", f"min_nm ({sat['min_nm']:g}) must be below max_nm "
+                                   f"({sat['max_nm']:g})")
     st = sections["stimulus"]
     kind = kind_for(st["kind"])
     if taxels and kind.name == "afferent":
@@ -200,6 +204,10 @@ def parse_scene(text: str, source: str = "<scene>", base_dir: Path | None = None
     if st["kind"] == "pulses":
         if not st["pulse_amplitudes_N"] or any(a <= 0 for a in st["pulse_amplitudes_N"]):
             V.err("stimulus.pulse_amplitudes_N", "must list amplitudes > 0")
+        amps = [f"{a:g}" for a in st["pulse_amplitudes_N"]]
+        if len(set(amps)) != len(amps):
+            V.err("stimulus.pulse_amplitudes_N", f"lists an amplitude twice ({', '.join(amps)}): "
+                                                 f"each amplitude is one class")
         if len(st["coupling_microstrain_per_N"]) != sensor["channels"]:
             V.err("stimulus.coupling_microstrain_per_N",
                   f"needs one value per channel ({sensor['channels']}), got "
@@ -252,6 +260,14 @@ def parse_scene(text: str, source: str = "<scene>", base_dir: Path | None = None
     if dec["window_ms"] is not None and (len(dec["window_ms"]) != 2
                                          or not dec["window_ms"][0] < dec["window_ms"][1]):
         V.err("decoder.window_ms", "must be [start, end] with start < end")
+    elif dec["window_ms"] is not None and st["kind"] != "recorded":
+        dur = sections["scene"]["duration_ms"]
+        if dec["window_ms"][0] >= dur or dec["window_ms"][1] <= 0:
+            V.err("decoder.window_ms", f"[{dec['window_ms'][0]:g}, {dec['window_ms'][1]:g}] ms "
+                                       f"lies outside the run (0 .. {dur:g} ms): no spike "
+                                       f"would be decoded")
+    if kind.name == "afferent":
+        _check_afferent_decoder(V, dec, st, sections["scene"]["trials"])
     # populations and projections
     pops_raw = raw.get("population", [])
     for key in ("population", "projection"):
@@ -343,13 +359,38 @@ def _projections(V, raw: dict, names: list) -> list:
     return projs
 
 
+def _check_afferent_decoder(V, dec: dict, st: dict, trials: int) -> None:
+    """An afferent scene decodes with a tree or k nearest neighbours (``winner`` and
+    ``pattern`` belong to the skin and ridge scenes); per-trial kNN needs more training samples
+    in the smallest fold than ``neighbours``."""
+    if dec["kind"] in ("winner", "pattern"):
+        what = "a taxel skin" if dec["kind"] == "winner" else "ridge scenes"
+        V.err("decoder.kind", f"{dec['kind']!r} decodes {what}; a scene of FBG afferents "
+                              f"takes \"tree\", \"knn\" or \"none\"")
+    if dec["kind"] != "knn" or dec["features"] != "trial" or st["kind"] == "recorded":
+        return
+    n_classes = len(st.get({"grasp": "materials", "slide": "periods_mm",
+                            "pulses": "pulse_amplitudes_N"}.get(st["kind"], ""), []) or [0])
+    n = trials * n_classes
+    folds = min(dec["cv_folds"], trials)
+    train = n - -(-n // folds)
+    if folds >= 2 and dec["neighbours"] > train:
+        V.err("decoder.neighbours", f"{dec['neighbours']} neighbours, but the smallest training "
+                                    f"fold holds {train} trial(s) ({trials} trials x "
+                                    f"{n_classes} classes, {folds} folds)")
+
+
 def load_scene(path) -> Scene:
     """Read and validate a scene file (errors name the file)."""
     p = Path(path)
     try:
-        text = p.read_text()
+        text = p.read_bytes().decode("utf-8")
     except OSError as exc:
         raise SceneError(f"{p}: cannot read scene: {exc.strerror or exc}") from None
+    except UnicodeDecodeError as exc:
+        line = p.read_bytes()[:exc.start].count(b"\n") + 1
+        raise SceneError(f"{p}: line {line}: not UTF-8 text (byte {exc.object[exc.start]:#04x} "
+                         f"at offset {exc.start}); TOML scene files are UTF-8") from None
     return parse_scene(text, str(p), p.parent)
 
 

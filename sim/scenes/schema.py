@@ -53,7 +53,7 @@ EFFECT_PARAMS = {
 SCHEMA: dict = {
     "scene": {"name": F(str, "scene"), "description": F(str, ""),
               "duration_ms": F(NUM, 700.0, lo=1, hi=600_000),
-              "trials": F(int, 10, lo=1, hi=10_000), "seed": F(int, 1, lo=0)},
+              "trials": F(int, 10, lo=1, hi=10_000), "seed": F(int, 1, lo=0, hi=2**32 - 1)},
     "sensor": {"kind": F(str, "fbg", choices=("fbg", "taxels")),
                "channels": F(int, 2, lo=1, hi=1024),
                "grid": F(list, None, items=int),
@@ -139,8 +139,13 @@ SCHEMA: dict = {
                 "cv_folds": F(int, 50, lo=2, hi=10_000), "max_depth": F(int, 3, lo=1, hi=64),
                 "neighbours": F(int, 3, lo=1, hi=1000),
                 "window_ms": F(list, None, items=NUM),
+                "decision": F(str, "soft", choices=("soft", "majority")),
+                "permutations": F(int, 0, lo=0, hi=10_000),
                 "tolerance": F(NUM, 0.10, lo=0, hi=1)},
-    "run": {"engines": F(list, ["golden", "fixed", "verilator"], items=str)},
+    "run": {"engines": F(list, ["golden", "fixed", "verilator"], items=str),
+            "waves": F(str, ""),
+            "waves_start_tick": F(int, 0, lo=0),
+            "waves_ticks": F(int, 100, lo=1, hi=100_000_000)},
 }
 POPULATION = {"name": F(str, required=True), "model": F(str, "izhikevich", choices=MODELS),
               "preset": F(str, None), "size": F(int, None, lo=1, hi=1_000_000),

@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 
 __all__ = ["LIF_PRESETS", "validate", "SkinSceneRun", "run", "summary", "write_report",
-           "format_run"]
+           "format_run", "estimate"]
 
 #: LIF parameter sets a skin population may name (the brief's two cells).
 LIF_PRESETS = {
@@ -130,6 +130,23 @@ def validate(V, raw: dict, sections: dict, pops: list, projs: list) -> None:
     elif dec["kind"] not in ("winner", "none"):
         V.err("decoder.kind", f"a taxel skin decodes the pressed taxel (kind = \"winner\" or "
                               f"\"none\"), got {dec['kind']!r}")
+
+
+def estimate(scene, engines: list[str]) -> dict:
+    """Memory (bytes) and time (s) of the skin scene on ``engines``: the force and current
+    arrays per tick and taxel (and each engine's program), each engine's updates (or cycles)
+    at the registry's speed."""
+    from ...golden.budget import BASE_BYTES, array_bytes
+    from ..engines.registry import ENGINES, estimate_seconds
+    rows, cols = scene["sensor"]["grid"]
+    n = rows * cols
+    n_ticks = scene["scene"]["duration_ms"] * scene["hardware"]["update_hz"] / 1000.0
+    per_tick = array_bytes(n_ticks, n)
+    nbytes = BASE_BYTES + 3 * per_tick + sum(3 * per_tick for _ in engines)
+    seconds = sum(estimate_seconds("lif", e, n_ticks * (n + 8 if ENGINES[e].hdl else n))
+                  for e in engines)
+    return {"bytes": nbytes, "seconds": seconds,
+            "what": f"a {rows}x{cols} skin, {n_ticks:.3g} ticks on {', '.join(engines)}"}
 
 
 @dataclass
@@ -245,7 +262,7 @@ def format_run(run: SkinSceneRun) -> str:
 
 
 def _figures(run: SkinSceneRun, out: Path) -> list[str]:
-    from ..report import pyplot
+    from ..report import DPI, pyplot
     plt = pyplot()
     names = []
     first = next(iter(run.results.values()))
@@ -259,7 +276,7 @@ def _figures(run: SkinSceneRun, out: Path) -> list[str]:
     ax[1].set(xlabel="time (ms)", ylabel="current (mV)", title="taxel currents")
     ax[1].legend(fontsize=6, ncol=3)
     fig.tight_layout()
-    fig.savefig(out / "press.png", dpi=90)
+    fig.savefig(out / "press.png", dpi=DPI)
     plt.close(fig)
     names.append("press.png")
     for e, r in run.results.items():
@@ -278,7 +295,7 @@ def _figures(run: SkinSceneRun, out: Path) -> list[str]:
             ax[1].axvspan(p["start_ms"], p["start_ms"] + p["width_ms"], color="0.9", zorder=0)
         ax[1].set(xlabel="time (ms)", ylabel="taxel", title=f"spikes: {e} (grey: pulses)")
         fig.tight_layout()
-        fig.savefig(out / f"skin_{e}.png", dpi=90)
+        fig.savefig(out / f"skin_{e}.png", dpi=DPI)
         plt.close(fig)
         names.append(f"skin_{e}.png")
     return names

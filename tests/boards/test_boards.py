@@ -61,6 +61,13 @@ def test_cli_lists_boards_and_refuses_in_one_line(capsys, tmp_path):
     assert err.count("\n") == 1 and "cycles per tick limit" in err
     assert main(["build", "atlys", "--out", str(tmp_path), "--no-bitstream"]) == 0
     assert (tmp_path / "cuneate_atlys_core.v").exists()
+    # --board is the positional's other spelling; without a board, the hint names both
+    assert main(["build", "--board", "arty", "--out", str(tmp_path), "--no-bitstream"]) == 0
+    assert (tmp_path / "cuneate_arty_core.v").exists()
+    capsys.readouterr()
+    assert main(["build", "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "cuneate build BOARD, or --board BOARD" in err
 
 
 @pytest.mark.long

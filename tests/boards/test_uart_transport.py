@@ -51,7 +51,8 @@ def test_lockstep_spikes_equal_the_twin_with_writes_at_their_sweeps():
     assert got[0].tolist() == ticks and got[1].tolist() == neurons and len(ticks) > 50
     c = t.check()
     assert c["spikes_received"] == len(ticks)
-    assert c["writes_sent"] == 4 and c["currents_sent"] == 210
+    assert c["writes_sent"] == 3 and c["write_frames_sent"] == 4 and c["currents_sent"] == 210
+    assert c["writes"] == 3 and c["frames_lost"] == 0 and c["spikes"] == len(ticks)
     assert c["device_frames_ok"] > 0 and c["device_late_writes"] == 0
     t.close()
 

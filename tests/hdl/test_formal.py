@@ -43,6 +43,52 @@ def test_datapath_cannot_wrap(preset, tmp_path):
     assert r["status"] == "pass", r
 
 
+def test_the_core_steps_compute_the_four_stage_update(tmp_path):
+    """The pipelined steps (the core's and the twin's arithmetic) give the four-stage update's
+    v, u, spike and clamp flags for every state of the box and every accepted current; their
+    own narrowings hold; the q w product is compared over every v of the box."""
+    cfg = _cfg("RS")
+    r = prove(cfg, tmp_path, "steps", solver="yices")
+    record("formal_steps_RS", 1, 0, int(r["status"] != "pass"), "SymbiYosys, yices + numpy")
+    assert r["status"] == "pass", r
+    t = r["products"]
+    assert t["mismatches"] == 0 and t["states"] == cfg.VTH.raw - cfg.v_floor_raw + 1
+
+
+def test_the_steps_property_catches_a_fault(tmp_path, monkeypatch):
+    """Each half of the steps property fails on a fault in the steps: u one LSB high in the
+    last step (the solver), and the q rounding's w multiple dropped (the product table)."""
+    from cuneate.hdl.izhikevich import datapath as izh
+    cfg = _cfg("RS")
+    true_select, true_product2 = izh.select_step, izh.product2_step
+
+    def u_high(cfg_, x):
+        out = dict(true_select(cfg_, x))
+        out["u_next"] = out["u_next"] + 1
+        return out
+    monkeypatch.setattr(izh, "select_step", u_high)
+    r = prove(cfg, tmp_path / "u", "steps", solver="yices")
+    assert r["status"] == "fail" and any("check" in f for f in r["failed"]), r
+    monkeypatch.setattr(izh, "select_step", true_select)
+
+    def no_rounding(cfg_, x):
+        return true_product2(cfg_, dict(x, qbit=0 * x["qbit"]))
+    monkeypatch.setattr(izh, "product2_step", no_rounding)
+    r = prove(cfg, tmp_path / "p", "steps", solver="yices")
+    assert r["status"] == "fail" and r["failed"] == ["steps: q w product"], r
+    assert r["products"]["mismatches"] > 0
+
+
+@pytest.mark.long
+@pytest.mark.parametrize("sets", [("RS",), ("IB",), ("CH",), ("FS",), ("LTS",), ("RZ",),
+                                  ("IB", "FS")], ids="+".join)
+def test_the_core_steps_compute_the_four_stage_update_for_every_preset(sets, tmp_path):
+    r = prove(_cfg(*sets), tmp_path, "steps", solver="yices")
+    record(f"formal_steps_{'_'.join(sets)}", 1, 0, int(r["status"] != "pass"),
+           "SymbiYosys, yices + numpy")
+    assert r["status"] == "pass" and r["products"]["mismatches"] == 0, r
+
+
 def test_cli_prove(capsys):
     from cuneate.sim.cli import main
     assert main(["prove", "--preset", "IB", "--preset", "FS"]) == 0

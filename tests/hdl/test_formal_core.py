@@ -35,15 +35,9 @@ def test_a_host_write_timing_fault_is_caught(tmp_path):
     assert r["status"] == "fail" and r["step"] is not None and 6 <= r["step"] <= 8, r
 
 
-def test_a_datapath_fault_in_the_core_is_caught(tmp_path, monkeypatch):
+def test_a_datapath_fault_in_the_core_is_caught(tmp_path, v_one_high):
     """The core built with a faulty last stage (v one LSB high; the
     reference keeps the true stage functions) fails at its first update."""
-    true_select = izh.select_step
-
-    def faulty(cfg, x):
-        out = dict(true_select(cfg, x))
-        out["v_next"] = out["v_next"] + 1
-        return out
-    monkeypatch.setattr(izh, "select_step", faulty)
+    v_one_high(izh, "select_step", "v_next")
     r = prove_core(_cfg(), tmp_path, depth=8, timeout_s=600)
     assert r["status"] == "fail" and r["step"] == 6, r

@@ -75,9 +75,10 @@ def test_bad_arguments_exit_2_with_one_line(capsys, argv, match):
 
 
 def test_simulate_divergence_is_reported_not_nan(capsys):
-    rc, out, err = run_cli(capsys, ["simulate", "izhikevich", "--current", "-2000", "--dt-ms",
-                                    "1", "--duration-ms", "50", "--json"])
-    assert rc == 1 and out == "" and "diverged" in err and "neuron 0" in err
+    rc, out, err = run_cli(capsys, ["-q", "simulate", "izhikevich", "--current", "-2000",
+                                    "--dt-ms", "1", "--duration-ms", "50", "--json"])
+    assert rc == 2 and out == "" and "diverged" in err and "neuron 0" in err
+    assert len(err.strip().splitlines()) == 1
 
 
 def test_filter_check(capsys):

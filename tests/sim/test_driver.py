@@ -9,7 +9,7 @@ from cuneate.hdl.izhikevich import IzhikevichTwin
 from cuneate.sim.host.driver import AfferentEncoding, FbgDriver, GapError
 from cuneate.sim.izhikevich.engines import engine_core
 from cuneate.sim.engines.toolchain import SIMULATORS
-from cuneate.sim.host.transport import SpikeBatch, Transport, TransportError
+from cuneate.sim.host.transport import COUNTERS, SpikeBatch, Transport, TransportError
 from cuneate.sim.izhikevich.engines import (AmaranthTransport, CocotbTransport, TwinTransport,
                                     make_transport)
 
@@ -40,7 +40,7 @@ class Recorder(Transport):
         return SpikeBatch()
 
     def counters(self):
-        return {"writes": self.n_writes, "spikes": 0, "spikes_counted": 0}
+        return dict.fromkeys(COUNTERS, 0) | {"writes": self.n_writes}
 
 
 def _cfg(n=4):
@@ -145,7 +145,16 @@ class Overflow(TwinTransport):
         return super().counters() | {"overflow": 1}
 
 
-@pytest.mark.parametrize("cls,msg", [(DropWrite, "sequence gap"),
+class Silent(TwinTransport):
+    def counters(self):
+        c = super().counters()
+        del c["writes"]                 # a transport that does not report writes
+        return c
+
+
+@pytest.mark.parametrize("cls,msg", [(DropWrite, r"8 of 9 current writes were applied by the "
+                                                r"core \(1 lost\)"),
+                                     (Silent, "does not report writes"),
                                      (DropSpike, "spikes lost on the way"),
                                      (Overflow, "overflow: 1")])
 def test_loss_is_detected(cls, msg):

@@ -5,7 +5,8 @@ refractory counter, spike, accumulated input, clamp flags) and against the float
 from the DUT's own state (within the derived bound for every unflagged update), while the host
 rewrites currents during sweeps and input spikes arrive between ticks. Three cases: continuous
 with two parameter sets and a multiplier, continuous shift-and-subtract, discrete with 4-bit
-weights; AMPA/GABA synaptic traces (each trace update also within its golden bound); and one
+weights; AMPA/GABA synaptic traces (each trace update also within its golden bound); a
+current-based synapse with per-source input delays (NIR's CubaLIF and Delay); and one
 that narrows formats so that every clamp kind acts and is flagged and counted.
 """
 
@@ -53,6 +54,15 @@ CASES = {
                  "input_types": ["exc", "inh", "exc", "exc"], "update_hz": 4000.0,
                  "param_sets": [{"tau_m_ms": 4.0, "t_ref_ms": 1.0}]},
         "sweeps": 100, "current_range": [0.0, 20.0], "input_spike_p": 0.4},
+    # NIR's CubaLIF: a signed current-based synapse, and per-source input delays
+    "discrete_cuba_delays": {
+        "core": {"n_neurons": 12, "tick_source": "external", "form": "discrete",
+                 "weights": _W[:12, :6].tolist(), "weight_bits": 6, "current_format": [4, 12],
+                 "syn_alpha": 0.75, "input_delays": [0, 1, 3, 0, 2, 5],
+                 "param_sets": [{"alpha": 0.9, "u_th": 0.8},
+                                {"alpha": 0.6, "u_th": 0.5, "refractory_steps": 1}],
+                 "neuron_sets": [i % 2 for i in range(12)]},
+        "sweeps": 100, "current_range": [-0.1, 0.2], "input_spike_p": 0.4},
     # the default size: 2500 neurons at 40 MHz / 16 kHz, brief's excitatory cell
     "n2500_default": {
         "core": {"n_neurons": 2500, "clock_hz": 40e6, "tick_source": "external",
@@ -96,7 +106,7 @@ def test_scoreboard(simulator, case, build_root):
         assert r["input_spikes"] > 0 and r["merged_flag"] == r["merged_expected"]
     if case == "discrete_weight_writes":
         assert r["weight_writes"] > 20
-    if case == "synapses":
+    if case in ("synapses", "discrete_cuba_delays"):
         assert r["trace_bound_violations"] == 0 and 0 < r["trace_golden_max_ratio"] <= 1.0
     if case == "clamps":
         assert all(r["clamp_counts"][k] > 0 for k in CLAMP_KINDS), r["clamp_counts"]

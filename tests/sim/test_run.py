@@ -41,6 +41,27 @@ def test_golden_and_fixed_decode_alike(small_run):
     assert r.saturations["format_high"] == 0 and r.saturations["format_low"] == 0
 
 
+def test_spike_files_load_back_equal_to_the_engines_trains(small_run, tmp_path):
+    from cuneate.sim.spikes import load_spikes
+    files = scene_run.write_spike_files(small_run, tmp_path)
+    nn = small_run.neurons
+    for e, trains in small_run.spikes.items():
+        sf = load_spikes(tmp_path / files[e])
+        assert sf.engine == e and sf.dt_ms == small_run.dt_ms
+        assert sf.t_stop_ms == small_run.n_ticks * small_run.dt_ms
+        assert len(sf.trains()) == len(trains)
+        for got, want in zip(sf.trains(), trains):
+            assert np.array_equal(got, np.asarray(want, dtype=float))
+        assert list(sf.trial) == list(nn.trial) and list(sf.grating) == list(nn.grating)
+        assert list(sf.population) == list(nn.population)
+        assert list(sf.classes) == [small_run.trial_class[t] for t in nn.trial]
+        neo = load_spikes(tmp_path / files[e], as_neo=True)
+        i = int(np.argmax([len(t) for t in trains]))
+        assert np.array_equal(neo[i].rescale("ms").magnitude, np.asarray(trains[i]))
+        assert neo[i].annotations["class"] == small_run.trial_class[nn.trial[i]]
+        assert neo[i].annotations["trial"] == nn.trial[i]
+
+
 def test_report_lists_exactly_what_ran(small_run):
     ran = small_run.ran
     assert ran["effects"] == ["strain"]
@@ -89,8 +110,8 @@ def test_cli_run_writes_report_with_every_figure(tmp_path, capsys):
     out = tmp_path / "rep"
     assert cli.main(["run", str(p), "--out", str(out)]) == 0
     text = capsys.readouterr().out
-    assert re.search(r"golden\s+accuracy\s+\d+\.\d %", text)
-    assert re.search(r"fixed\s+accuracy\s+\d+\.\d %", text)
+    assert re.search(r"golden\s+balanced accuracy\s+\d+\.\d %.*published", text)
+    assert re.search(r"fixed\s+balanced accuracy\s+\d+\.\d %.*published", text)
     page = (out / "index.html").read_text()
     links = re.findall(r'src="([^"]+)"', page)
     assert {"traces.png", "currents.png", "raster_golden.png", "raster_fixed.png",
@@ -101,6 +122,23 @@ def test_cli_run_writes_report_with_every_figure(tmp_path, capsys):
     summ = json.loads((out / "run.json").read_text())
     assert summ["ran"]["engines"] == ["golden", "fixed"]
     assert set(summ["accuracy"]) == {"golden", "fixed"}
+    # the headline is the grouped per-grasp balanced accuracy; the published row is kept
+    for e in ("golden", "fixed"):
+        rows = summ["decoded"][e]["protocols"]
+        assert rows[0]["name"] == "grasp-grouped, per grasp"
+        assert summ["accuracy"][e] == rows[0]["balanced_accuracy"]
+        assert rows[0]["chance_balanced"] == 0.25 and set(rows[0]["recall"]) == set(
+            summ["classes"])
+        assert rows[-1]["name"].startswith("published")
+    assert "published protocol" in page and "balanced accuracy" in page
+    # spike files, linked from run.json, load back equal to what the engines produced
+    from cuneate.sim.spikes import load_spikes
+    assert summ["spike_files"] == {"golden": "spikes_golden.npz", "fixed": "spikes_fixed.npz"}
+    sf = load_spikes(out / "spikes_fixed.npz")
+    assert sf.engine == "fixed" and len(sf) == summ["neurons"]
+    assert sum(t.size for t in sf.trains()) == summ["spike_counts"]["fixed"]
+    assert summ["provenance"]["cuneate"] == summ["version"]
+    assert summ["provenance"]["tools"]["numpy"] == np.__version__
 
 
 @pytest.mark.parametrize("name,front_end", [("slide_texture", ["FA", "SA"]),
@@ -150,7 +188,7 @@ def test_default_scene_on_golden_fixed_and_verilator(tmp_path, capsys):
     assert cli.main(["run", "--out", str(tmp_path)]) == 0
     text = capsys.readouterr().out
     for e in ("golden", "fixed", "verilator"):
-        assert re.search(rf"{e}\s+accuracy\s+\d+\.\d %", text)
+        assert re.search(rf"{e}\s+balanced accuracy\s+\d+\.\d %", text)
     summ = json.loads((tmp_path / "run.json").read_text())
     assert summ["ran"]["engines"] == ["golden", "fixed", "verilator"]
     assert summ["agreement"]["verilator vs fixed"]["identical_trains"] == 80
@@ -158,13 +196,25 @@ def test_default_scene_on_golden_fixed_and_verilator(tmp_path, capsys):
     assert summ["accuracy"]["verilator"] == summ["accuracy"]["fixed"] > 0.6
 
 
-def test_scene_on_amaranth_simulator_equals_twin():
+def test_scene_on_amaranth_simulator_equals_twin(tmp_path):
+    from cuneate.sim.engines.waves import Waves
     text = SMALL.replace("trials = 4", "trials = 1").replace("duration_ms = 700",
                                                              "duration_ms = 150")
-    r = run_scene(_scene(text, engines=("fixed", "amaranth")))
+    r = run_scene(_scene(text, engines=("fixed", "amaranth")),
+                  waves=Waves(tmp_path / "w", start=100, ticks=20))
     a = r.agreement["amaranth vs fixed"]
     assert a["spikes_a"] > 0 and a["identical_trains"] == a["neurons"] == 8
     assert r.counters["amaranth"]["writes"] == r.counters["fixed"]["writes"] > 0
+    # the waveform window: only the RTL engine dumps, 20 of the run's 2400 ticks (each tick a
+    # sweep of 8 cycles plus the host's writes and the spike drain, ~36 clock edges)
+    w = r.files["waves"]
+    assert list(w["files"]) == ["amaranth"] and w["start_tick"] == 100
+    vcd = (tmp_path / "w" / "amaranth.vcd").read_text()
+    assert "$enddefinitions" in vcd and " i_wr_en $end" in vcd and " spike_valid $end" in vcd
+    stamps = [ln for ln in vcd.splitlines() if ln.startswith("#")]
+    assert r.n_ticks == 2400 and 20 * 8 <= len(stamps) <= 22 * 50
+    assert int(stamps[0][1:]) > 0                      # opens after tick 99, not at time 0
+    assert (tmp_path / "w" / "amaranth.gtkw").is_file()
 
 
 def test_a_silent_scene_reports_why_without_warnings(tmp_path, capsys, recwarn):
@@ -175,5 +225,29 @@ def test_a_silent_scene_reports_why_without_warnings(tmp_path, capsys, recwarn):
     assert "too few samples to cross-validate (0 samples" in out.out
     assert re.search(r"warning: fixed: no neuron spiked \(currents peak at 0\.\d\d mV/ms",
                      out.out)
-    assert out.err == "" and len(recwarn) == 0
+    # stderr (not a terminal here) holds only the timestamped progress lines
+    assert out.err and all(re.match(r"\[\d\d:\d\d:\d\d\] ", x)
+                           for x in out.err.splitlines())
+    assert "warning" not in out.err.lower() and len(recwarn) == 0
     assert (tmp_path / "o" / "isi_fixed.png").is_file()
+    assert cli.main(["-q", "run", str(p), "--engines", "fixed", "--out",
+                     str(tmp_path / "q")]) == 0
+    assert capsys.readouterr().err == ""
+
+
+def test_list_examples_marks_the_default_and_describes_each(capsys):
+    from cuneate.sim.scenes.scene import example_names
+    assert cli.main(["run", "--list-examples"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0] == "(default: run without SCENE) four-material grasp"
+    heads = [i for i, x in enumerate(lines) if x.startswith("examples/")]
+    assert len(heads) == len(example_names())
+    for i in heads:                      # every example has a description under it
+        assert lines[i + 1].startswith("    ") and len(lines[i + 1].strip()) > 10
+
+
+def test_help_states_defaults(capsys):
+    with pytest.raises(SystemExit):
+        cli.main(["run", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    assert "(default: out/run)" in text and "(default: 100)" in text

@@ -74,6 +74,8 @@ def test_given_delays_set_the_cuneate_neurons():
     run = run_scene(s, engines=["fixed"])
     r = run.results["fixed"]
     assert run.ran["blocks"][1]["delays_ticks"] == [[200, 200, 0, 0], [0, 0, 0, 0]]
+    # the report speaks the scene's unit: ms
+    assert run.ran["blocks"][1]["delays_ms"] == [[12.5, 12.5, 0, 0], [0, 0, 0, 0]]
     by = {a: {p for p, x in zip(r.patterns, r.trial_angle) if x == a} for a in r.angles}
     assert by[45.0] == {(0,)} and by[0.0] == {(1,)} and by[-45.0] == {()}
 
@@ -113,3 +115,5 @@ def test_ridge_report_renders(tmp_path, chromium):
     assert main(["run", str(scene), "--engines", "golden", "--out", str(out)]) == 0
     dom, console = chromium(out / "index.html")
     assert console == [] and "ridge angle" in dom and dom.count("<img ") == 1
+    # one engine: no table comparing golden with itself; delays in ms
+    assert "one engine ran: nothing to compare" in dom and "delays (ms" in dom

@@ -2,6 +2,7 @@
 
 import csv
 import json
+import re
 
 import numpy as np
 import pytest
@@ -37,6 +38,15 @@ def test_small_sweep_on_a_local_dask_cluster(tmp_path, capsys):
         assert len(list(csv.DictReader(f))) == 6
     assert (out / "pareto.png").stat().st_size > 5000
     assert "Pareto" in (out / "index.html").read_text()
+    # the headline is the error against the reference and the deterministic costs; host
+    # seconds of points run one at a time (one worker) are not marked as parallel
+    line = next(x for x in text.splitlines() if x.strip().startswith("fixed 16 kHz w18 v.18 "
+                                                                       "u.20 nearest"))
+    assert re.search(r"count error \d+, VP \d+\.\d{3}, same-dt 0\.\d{4}; 2500 neurons/core, "
+                     r"4 mult, \d+ state bits; host [\d.]+ s/bio s$", line.strip()), line
+    assert fx["updates_per_bio_s"] == 16000.0 and fx["host_time"] == "one point at a time"
+    pareto = json.loads((out / "sweep.json").read_text())["pareto"]
+    assert set(pareto) == {"updates_per_bio_s", "state_bits", "multipliers"}
 
 
 def test_interrupted_sweep_resumes_from_its_cache(tmp_path):
@@ -160,7 +170,13 @@ def test_pareto_front_by_hand():
             for k, a, c in (("a", 0.9, 1.0), ("b", 0.95, 2.0), ("c", 0.9, 3.0),
                             ("d", 0.99, 10.0), ("e", 0.5, 0.5))]
     rows.append({"key": "f", "status": "refused"})
-    assert sorted(pareto_front(rows, "cost")) == ["a", "b", "d", "e"]
+    assert sorted(pareto_front(rows, "cost", "fraction_within_tick",
+                               lower_is_better=False)) == ["a", "b", "d", "e"]
+    # the default accuracy is an error (mean VP to the reference): lower is better
+    err = [{"key": k, "status": "ok", "mean_vp": v, "cost": c}
+           for k, v, c in (("a", 0.1, 1.0), ("b", 0.05, 2.0), ("c", 0.1, 3.0),
+                           ("d", 0.01, 10.0), ("e", 0.5, 0.5))]
+    assert sorted(pareto_front(err, "cost")) == ["a", "b", "d", "e"]
 
 
 @pytest.mark.parametrize("argv,expect", [
@@ -208,3 +224,15 @@ def test_hardcases_summary_prints_the_records(tmp_path, capsys):
     record("c_case", 1, 10, 2, path=tmp_path)            # a mismatch makes it fail
     assert main(["hardcases", "summary", "--dir", str(tmp_path)]) == 1
     assert main(["hardcases", "summary", "--dir", str(tmp_path / "none")]) == 2
+
+
+def test_repeats_keep_the_fastest_host_time_and_the_same_accuracy(tmp_path):
+    spec = SweepSpec(duration_ms=100.0)
+    pts = grid(update_hz=(16e3,), operand_width=(18,), floats=())
+    once = run_sweep(pts, spec, tmp_path / "a", scheduler="sync")[0]
+    rep = run_sweep(pts, spec, tmp_path / "b", scheduler="sync", repeats=3)[0]
+    runs = rep["host_s_per_bio_s_runs"]
+    assert len(runs) == 3 and rep["host_s_per_bio_s"] == min(runs)
+    assert rep["host_time"] == "one point at a time, fastest of 3 runs"
+    for k in ("count_error", "mean_vp", "fraction_within_tick", "vs_euler_fraction_within_tick"):
+        assert rep[k] == once[k]

@@ -159,7 +159,7 @@ def test_block_batteries_through_the_cli(tmp_path, capsys):
     assert [r["weight_bits"] for r in rows] == ["4", "8"]
     assert float(rows[0]["vs_float64_fraction_within_tick"]) < \
         float(rows[1]["vs_float64_fraction_within_tick"])
-    assert "of float64 at its dt" in capsys.readouterr().out
+    assert "of float64 at the same dt" in capsys.readouterr().out
     out = tmp_path / "cun"
     assert main(["sweep", "--out", str(out), "--battery", "cuneate-afferents", "--no-float",
                  "--scheduler", "sync", "--duration-ms", "200"]) == 0

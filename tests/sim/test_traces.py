@@ -85,6 +85,6 @@ def test_recorded_scene_runs_and_bad_trace_exits_2(tmp_path, capsys):
     x = np.stack([ramp, ramp], axis=1)
     x[123, 0] = np.nan
     np.savez(tmp_path / "rec.npz", Time=t, DeltaBraggW=x)
-    assert cli.main(["run", str(tmp_path / "s.toml"), "--out", str(tmp_path / "o")]) == 2
+    assert cli.main(["-q", "run", str(tmp_path / "s.toml"), "--out", str(tmp_path / "o")]) == 2
     err = capsys.readouterr().err
     assert "rec.npz: row 123, grating 0: sample is nan" in err and err.count("\n") == 1

@@ -1,0 +1,119 @@
+"""The pipelined Izhikevich core against its one-step datapath, for every input sequence of
+every length (k-induction) or of a bounded length (BMC), with SymbiYosys.
+
+The harness is :class:`cuneate.hdl.lib.core_proof.SweepCoreProof` (the contract, the pipeline
+invariants, the tracked neuron, the uninterpreted products: see there and docs/formal.md); this
+module gives it the core and the reference: one combinational composition of the pipelined
+steps (:data:`~cuneate.hdl.izhikevich.datapath.STEPS`, their functions bound at import, so a
+fault injected into the core's copy in :mod:`cuneate.hdl.izhikevich.datapath` does not reach the
+reference) from the tracked neuron's state word, current and set. The steps' products are the
+ones the core forms (same source lines), so each is one uninterpreted function on both sides;
+that the steps compute the four-stage update's integers is proven per configuration by the
+``steps`` property of :mod:`cuneate.hdl.izhikevich.formal`.
+
+The pipeline's depth is read from the core, not assumed: the latency ``L`` is the last stage of
+its ``pipeline_tags``, and every stage's tag is checked against the fetch of ``k - 1`` cycles
+before. The induction needs ``L + 1`` steps (the data registers between the stages are a
+function of the last ``L`` cycles); :func:`prove_core` uses ``L + 2``.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from amaranth import Cat
+
+from ..lib.core_proof import MUTANTS, SweepCoreProof
+from ..flow.sby import SOLVER
+from ..lib.formal import ProofResult, free_memories, run_proof
+from . import core as core_module
+from . import datapath
+from .config import CLAMP_KINDS, ConfigError, IzhikevichConfig
+from .core import IzhikevichCore
+
+#: the reference keeps the true step functions, bound at import (a test may fault the core's)
+_TRUE_STEPS = tuple((s.fn, s.reads) for s in datapath.STEPS)
+
+
+def reference_update(cfg: IzhikevichConfig, v, u, i, sel) -> dict:
+    """One update by the pipelined steps as bound at import (see
+    :func:`~cuneate.hdl.izhikevich.datapath.one_update`)."""
+    return datapath.one_update(cfg, v, u, i, sel, _TRUE_STEPS)
+
+__all__ = ["IzhikevichCoreProof", "reference_update", "core_harness", "prove_core", "proof_config", "induction_depth", "MUTANTS", "ABSTRACTIONS"]
+
+#: what the proof abstracts, for reports
+ABSTRACTIONS = ["products of the datapath uninterpreted (same function per multiplier in core "
+                "and reference)", "tick free (covers the internal divider)",
+                "memories with free initial contents"]
+
+
+class IzhikevichCoreProof(SweepCoreProof):
+    """The Izhikevich core (see :class:`~cuneate.hdl.lib.core_proof.SweepCoreProof`)."""
+
+    core_module = core_module
+    datapath_files = (datapath.__file__,)
+    clamp_kinds = CLAMP_KINDS
+    off_by_one_register = ("u", 4)          # stage 4's u: the previous neuron's
+
+    def make_core(self):
+        return IzhikevichCore(self.cfg)
+
+    def reference(self, words, inputs):
+        cfg = self.cfg
+        st = words["state_mem"]
+        v, u = st[:cfg.V.width].as_signed(), st[cfg.V.width:].as_signed()
+        i, sel = words["cur_mem"], words["sel_mem"]
+        o = reference_update(cfg, v, u, i, sel)
+        flags = datapath.step_flags(o)
+        v_new, u_new = o["v"], o["u"]
+        return {"words": {"state_mem": Cat(v_new[:cfg.V.width], u_new[:cfg.U.width])},
+                "ports": {"upd_v": v_new, "upd_u": u_new, "upd_spike": o["spike"],
+                          "upd_clamp": Cat(*(flags[k] for k in CLAMP_KINDS)),
+                          "upd_current": i}}
+
+
+def proof_config(n_neurons: int | None = None, **kwargs) -> IzhikevichConfig:
+    """The configuration a core proof runs on: external tick (the harness drives it freely,
+    which covers the internal divider), ``n_neurons`` neurons or, by default, the fewest the
+    configuration accepts (one per pipeline stage: the smallest core is the hardest, a neuron
+    is fetched again right after its write-back), ``kwargs`` passed on (``pipeline_stages``,
+    formats ...)."""
+    if n_neurons is not None:
+        return IzhikevichConfig(n_neurons=n_neurons, clock_hz=n_neurons * 16e3,
+                                update_hz=16e3, tick_source="external", **kwargs)
+    last = None
+    for n in range(1, 65):
+        try:
+            return proof_config(n, **kwargs)
+        except ConfigError as exc:
+            last = exc
+    raise last
+
+
+def core_harness(cfg: IzhikevichConfig, mutant: str | None = None) -> str:
+    """RTLIL of the harness (top ``core_eq``), the memories' initial contents removed."""
+    from amaranth.back import rtlil
+    top = IzhikevichCoreProof(cfg, mutant)
+    il = rtlil.convert(top, name="core_eq", ports=top.ports)
+    return free_memories(il, ("state_mem", "cur_mem", "sel_mem"))
+
+
+def induction_depth(cfg: IzhikevichConfig) -> int:
+    """The k of the k-induction: the core's latency (read from its tags) + 2."""
+    from amaranth.back import rtlil
+    top = IzhikevichCoreProof(cfg)
+    rtlil.convert(top, name="core_eq", ports=top.ports)
+    return top.latency + 2
+
+
+def prove_core(cfg: IzhikevichConfig, workdir: Path, mode: str = "prove",
+               depth: int | None = None, mutant: str | None = None,
+               timeout_s: float = 3600, engine: str = "smtbmc",
+               solver: str = SOLVER) -> ProofResult:
+    """Prove (``mode="prove"``: k-induction of ``depth`` steps, default the core's latency + 2)
+    or check to a bound (``mode="bmc"``) that the core equals its one-step reference."""
+    if depth is None:
+        depth = induction_depth(cfg)
+    return run_proof("core equals one-step datapath", core_harness(cfg, mutant), workdir,
+                     "core_eq", mode, depth, timeout_s, engine, ABSTRACTIONS, solver)

@@ -1,0 +1,88 @@
+"""k-induction of the pipelined Izhikevich core against its one-step datapath
+(hdl/izhikevich/formal_core.py): the unbounded proof (long lane), and the faults it must catch,
+each found by a shallow bounded run from the initial state (default lane, seconds each)."""
+
+import pytest
+
+from cuneate.hdl.izhikevich import IzhikevichConfig, datapath
+from cuneate.hdl.izhikevich.formal_core import (MUTANTS, induction_depth, proof_config,
+                                                prove_core)
+from cuneate.sim.hardcases import record
+
+#: the assertion each fault breaks first
+EXPECTED = {
+    "skipped_write": ("memory_state_mem_tracked_word", 6),   # the tracked neuron's word went stale
+    "stage_off_by_one": ("tracked_update_upd_u", 7),         # stage 4's u is the previous neuron's
+    "late_host_write": ("memory_cur_mem_tracked_word", 1),   # the current lands a cycle late
+    "tag_off_by_one": ("stage_5_neuron", 5),                 # the write-back addressed one off
+}
+
+
+def test_every_mutant_has_an_expectation():
+    assert set(EXPECTED) == set(MUTANTS)
+
+
+@pytest.fixture(scope="module")
+def cfg():
+    return proof_config()
+
+
+@pytest.mark.parametrize("mutant", sorted(EXPECTED))
+def test_the_proof_catches_the_fault(cfg, mutant, tmp_path):
+    """A bounded run from the initial state, just deep enough, finds a counterexample in the
+    first step where the fault can show, naming the broken invariant (so the unbounded proof
+    cannot pass either)."""
+    check, step = EXPECTED[mutant]
+    r = prove_core(cfg, tmp_path, mode="bmc", depth=step + 1, mutant=mutant, timeout_s=600)
+    assert r.status == "fail" and r.phase == "basecase" and r.step == step, r
+    assert check in r.failed, r
+
+
+def test_a_datapath_fault_in_the_core_is_caught(cfg, tmp_path, v_one_high):
+    """The core built with a faulty last stage (v one LSB high; the reference keeps the true
+    stage functions, bound at import) fails at the tracked neuron's first update: the
+    uninterpreted products do not hide the arithmetic around them."""
+    v_one_high(datapath, "select_step", "v_next")
+    r = prove_core(cfg, tmp_path, mode="bmc", depth=induction_depth(cfg), timeout_s=600)
+    assert r.status == "fail", r
+    assert "tracked_update_upd_v" in r.failed, r
+
+
+@pytest.mark.long
+@pytest.mark.parametrize("n_neurons", [None, 8], ids=["smallest", "N=8-counter-wraps"])
+def test_the_pipelined_core_equals_the_one_step_datapath_for_every_input_sequence(n_neurons,
+                                                                                   tmp_path):
+    """k-induction: the base case and the induction step both pass at the core's latency + 2,
+    so the core equals its one-step datapath for every input sequence of every length; on the
+    smallest core and on one whose issue counter wraps to 0 (a power of two, see
+    docs/formal.md)."""
+    cfg = proof_config(n_neurons)
+    r = prove_core(cfg, tmp_path, mode="prove", timeout_s=2400)
+    record(f"formal_core_k_induction_n{cfg.n_neurons}", 1, 0, int(not r.passed),
+           f"SymbiYosys prove, k={r.depth}, {r.solver}, {r.seconds:.0f} s, N={cfg.n_neurons}")
+    assert r.passed and r.mode == "prove", r
+
+
+def test_cuneate_prove_core_reports_a_caught_fault_as_json(capsys):
+    """``cuneate prove core --json``: exit 1 on a failed proof, with the mode, depth, solver
+    and the broken assertion in the record."""
+    import json
+
+    from cuneate.sim.cli import main
+    rc = main(["prove", "core", "--mutant", "late_host_write", "--depth", "3", "--json"])
+    rec = json.loads(capsys.readouterr().out)
+    assert rc == 1
+    assert (rec["status"], rec["mode"], rec["depth"]) == ("fail", "bmc", 3), rec
+    assert rec["solver"] == "yices" and rec["n_neurons"] == proof_config().n_neurons, rec
+    assert "memory_cur_mem_tracked_word" in rec["failed"], rec
+
+
+@pytest.mark.long
+def test_the_default_configuration_core_equals_the_one_step_datapath(tmp_path):
+    """The default configuration itself (2500 neurons, internal tick divider - the harness
+    drives the tick freely, which covers the divider): k-induction closes at the same k."""
+    cfg = IzhikevichConfig()
+    r = prove_core(cfg, tmp_path, mode="prove", timeout_s=2400)
+    record("formal_core_k_induction_default", 1, 0, int(not r.passed),
+           f"SymbiYosys prove, k={r.depth}, {r.solver}, {r.seconds:.0f} s, N={cfg.n_neurons}")
+    assert cfg.n_neurons == 2500 and r.passed and r.mode == "prove", r

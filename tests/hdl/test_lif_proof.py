@@ -1,0 +1,80 @@
+"""k-induction of the pipelined LIF core (no input spikes, no traces) against its one-step
+datapath (hdl/lif/formal_core.py), and the faults it must catch."""
+
+import pytest
+
+from cuneate.hdl.lib.config import ConfigError
+from cuneate.hdl.lif import core as lif_core
+from cuneate.hdl.lif.formal_core import MUTANTS, LifCoreProof, lif_proof_config, prove_lif
+
+EXPECTED = {
+    "skipped_write": ("memory_state_mem_tracked_word", 6),
+    "stage_off_by_one": ("tracked_update_upd_v", 7),    # stage 4's v is the previous neuron's
+    "late_host_write": ("memory_cur_mem_tracked_word", 1),
+    "tag_off_by_one": ("stage_5_neuron", 5),
+}
+
+REFRACTORY_MIX = {"param_sets": [{"tau_m_ms": 20.0, "t_ref_ms": 2.0}, {"tau_m_ms": 10.0}]}
+DISCRETE_SHIFT = {"decay": "shift", "form": "discrete",
+                  "param_sets": [{"alpha": 0.875, "refractory_steps": 3}]}
+
+
+def test_every_mutant_has_an_expectation():
+    assert set(EXPECTED) == set(MUTANTS)
+
+
+@pytest.mark.parametrize("kwargs", [{}, REFRACTORY_MIX,
+                                    pytest.param(DISCRETE_SHIFT, marks=pytest.mark.long)],
+                         ids=["default", "refractory-mix", "discrete-shift"])
+def test_the_lif_core_equals_the_one_step_datapath_for_every_input_sequence(kwargs, tmp_path):
+    """k-induction at the latency + 2 with yices (seconds; the discrete form with a shift
+    decay, about 30 s, in the long lane): base case and step both pass."""
+    r = prove_lif(lif_proof_config(**kwargs), tmp_path, mode="prove", timeout_s=900)
+    assert r.passed and r.mode == "prove" and r.depth == 7, r
+
+
+@pytest.mark.parametrize("mutant", sorted(EXPECTED))
+def test_the_lif_proof_catches_the_fault(mutant, tmp_path):
+    check, step = EXPECTED[mutant]
+    r = prove_lif(lif_proof_config(), tmp_path, mode="bmc", depth=step + 1, mutant=mutant,
+                  timeout_s=600)
+    assert r.status == "fail" and r.phase == "basecase" and r.step == step, r
+    assert check in r.failed, r
+
+
+def test_a_datapath_fault_in_the_lif_core_is_caught(tmp_path, v_one_high):
+    """The core's last stage gives v + 1 (the reference keeps the true stage function)."""
+    v_one_high(lif_core)
+    r = prove_lif(lif_proof_config(), tmp_path, mode="bmc", depth=7, timeout_s=600)
+    assert r.status == "fail" and "tracked_update_upd_v" in r.failed, r
+
+
+INPUTS = {"form": "discrete", "weights": [[0.5, -0.25, 0.125]] * 8, "current_format": (4, 12)}
+
+
+def test_cores_with_traces_are_refused_not_half_proven():
+    with pytest.raises(ConfigError, match="without synaptic traces"):
+        LifCoreProof(lif_proof_config(weights=[[0.5, 0.25]] * 8, synapses=True))
+
+
+@pytest.mark.long
+@pytest.mark.parametrize("writable", [False, True], ids=["fixed-weights", "host-weights"])
+def test_the_lif_core_with_input_spikes_equals_the_one_step_datapath(writable, tmp_path):
+    """Three input sources, weights any contents of the weight memory (fixed) or written by
+    the host: k-induction with the contract's pending/active spike vectors (30-45 s)."""
+    r = prove_lif(lif_proof_config(**INPUTS, weights_writable=writable), tmp_path,
+                  mode="prove", timeout_s=1800)
+    assert r.passed and r.mode == "prove", r
+
+
+def test_an_input_spike_fault_is_caught(tmp_path, monkeypatch):
+    """The core ignores source 0's spikes (the reference keeps the true ``gather_input``):
+    the first update of a sweep with that spike active breaks the tracked update."""
+    true_gather = lif_core.gather_input
+
+    def faulty(cfg, I, x, w, traces=None):
+        return true_gather(cfg, I, [x[0] & 0] + list(x[1:]), w, traces)
+    monkeypatch.setattr(lif_core, "gather_input", faulty)
+    r = prove_lif(lif_proof_config(**INPUTS), tmp_path, mode="bmc", depth=8, timeout_s=600)
+    assert r.status == "fail" and r.step == 7, r
+    assert "tracked_update_upd_acc" in r.failed, r
