@@ -239,8 +239,8 @@ def one_step(cfg: IzhikevichConfig, prop: str = "datapath"):
     if prop not in PROPERTIES:
         raise ValueError(f"unknown property {prop!r}; known: {', '.join(PROPERTIES)}")
     top = _OneStep(cfg, prop)
-    return top, [top.v, top.u, top.I, top.sel] + ([top.p_free, top.m_free, top.b_free] if prop == "steps"
-                                                else [])
+    free = [top.p_free, top.m_free, top.b_free] if prop == "steps" else []
+    return top, [top.v, top.u, top.I, top.sel] + free
 
 
 def prove(cfg: IzhikevichConfig, workdir: Path, prop: str = "datapath",
