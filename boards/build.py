@@ -88,13 +88,16 @@ def build_target(board: str, out: Path, n_neurons: int | None = None,
     out.mkdir(parents=True, exist_ok=True)
     (out / f"{name}_core.v").write_text(verilog_text(LinkedCore(lcfg), f"{name}_core"))
     report = {"board": board, "device": target["device"], "name": name,
+              "neurons": lcfg.n_neurons, "requested_neurons": sized["requested_neurons"],
+              "cores": lcfg.n_cores, "neurons_per_core": lcfg.core.n_neurons,
+              "pipeline_stages": lcfg.core.pipeline_stages,
               "core": lcfg.core.to_kwargs(), "link": lcfg.to_dict(),
               "clock_plan": sized["plan"], "estimate": sized["estimate"],
               "bitstream": None, "seed": seed}
     if target.get("bitstream") and bitstream:
         from .top import BoardTop
         platform = target["platform"]()
-        top = BoardTop(lcfg, target["pll"], target.get("uart_tx_enable", False))
+        top = BoardTop(lcfg, sized["pll"], target.get("uart_tx_enable", False))
         opts = f"--report {name}.nextpnr.json --timing-allow-fail --seed {seed}"
         plan = platform.prepare(top, name=name, nextpnr_opts=opts,
                                 **target.get("prepare_opts", {}))
@@ -111,6 +114,7 @@ def build_target(board: str, out: Path, n_neurons: int | None = None,
         report["bitstream"] = str(bit) if bit.exists() else None
         report["place_route"] = _nextpnr_report(out / f"{name}.nextpnr.json", target,
                                                 lcfg.core.clock_hz)
+        report["timing_met"] = report["place_route"]["timing_met"]
     if target.get("synth_family") and bitstream:
         with prog.step(f"{board}: yosys synth_{target['synth_family']} resource estimate"):
             report["yosys_estimate"] = _yosys_estimate(out, f"{name}_core", target)
@@ -122,9 +126,18 @@ def build_target(board: str, out: Path, n_neurons: int | None = None,
 
 
 def format_report(r: dict) -> str:
-    lines = [f"{r['board']} ({r['device']}): {r['core']['n_neurons']} neurons, "
-             f"{r['core']['clock_hz'] / 1e6:g} MHz, {r['core']['update_hz'] / 1e3:g} kHz "
-             f"updates, UART {r['link']['baud'] / 1e6:g} Mbaud"]
+    pr = r.get("place_route")
+    lines = []
+    if pr and not pr["timing_met"]:
+        lines.append(f"TIMING NOT MET: {pr['min_fmax_mhz']} MHz reached, "
+                     f"{pr['requested_mhz']:g} MHz requested")
+    cores = r.get("cores", 1)
+    lines.append(f"{r['board']} ({r['device']}): {r.get('neurons', r['core']['n_neurons'])} "
+                 f"neurons ({cores} core{'s' if cores > 1 else ''} of "
+                 f"{r['core']['n_neurons']}, pipeline depth "
+                 f"{r['core'].get('pipeline_stages', 5)}), {r['core']['clock_hz'] / 1e6:g} MHz, "
+                 f"{r['core']['update_hz'] / 1e3:g} kHz updates, UART "
+                 f"{r['link']['baud'] / 1e6:g} Mbaud")
     est = r.get("estimate") or {}
     if est:
         lines.append("estimate: " + ", ".join(f"{k} {v}" for k, v in est.items()))
@@ -133,7 +146,6 @@ def format_report(r: dict) -> str:
         lines.append("yosys synth_xilinx estimate (BRAM in 18 Kbit blocks):")
         for kind, v in ye.items():
             lines.append(f"{kind:5s} {v['used']:8g} / {v['available']} ({v['percent']:.1f} %)")
-    pr = r.get("place_route")
     if pr:
         for kind, v in pr["resources"].items():
             pct = f" ({v['percent']:.1f} %)" if v["percent"] is not None else ""

@@ -1,10 +1,16 @@
-"""Size a core for a device and refuse, naming the limit, what the device cannot hold.
+"""Size the Izhikevich cores for a device and refuse, naming the limit, what it cannot hold.
 
-Limits checked (each refusal is one line naming it): cycles per sweep (one update per clock:
-``n_neurons <= clock_hz / update_hz``), block RAM (state, current, parameter-set and link
-buffers, counted in whole blocks of the device's geometry) and hardware multipliers (four
-products per update; an ``operand_width``-bit product takes ``ceil(w / dsp_width)**2``
-multiplier blocks of the device).
+A build holds ``n_cores`` cores of ``n_neurons`` each (one core, or an
+:class:`~cuneate.hdl.izhikevich.array.IzhikevichArray` behind the link). For the requested
+neuron count the sizing takes each of the target's PLL plans whose clock the pipeline depth's
+fmax bound allows, the fewest cores whose sweeps fit the cycles per tick
+(``n_neurons + LINK_IDLE_CYCLES <= clock_hz / update_hz``) and whose memories, multipliers and
+logic fit the device, and the plan that needs the fewest cores. Limits checked (each refusal
+is one line naming it): cycles per sweep, block RAM (state, current, parameter-set memories and
+the spike FIFO of every core plus the link's buffers, counted in whole blocks of the device's
+best shape for each memory), hardware multipliers (four products per update; an
+``operand_width``-bit product takes ``ceil(w / dsp_width)**2`` multiplier blocks), logic
+(measured cells per core, where the target gives them) and the link's 65 536 neuron ids.
 """
 
 from __future__ import annotations
@@ -16,11 +22,20 @@ from ..hdl.link import LinkConfig
 from ..hdl.link.codec import HEADER_BYTES, MAX_FRAME
 from .top import ClockPlan
 
-__all__ = ["size_core", "estimate"]
+__all__ = ["size_core", "estimate", "limits", "clock_plans", "MAX_LINK_NEURONS"]
 
 MULTIPLIERS = 4
 #: idle cycles per sweep kept for host writes (the link writes between sweeps)
 LINK_IDLE_CYCLES = 16
+#: the share of a core's measured (out of context) fmax the sizing clocks a board build at
+FMAX_MARGIN = 0.9
+#: neuron ids the link's 16-bit addresses reach
+MAX_LINK_NEURONS = 1 << 16
+
+
+def clock_plans(target: dict) -> list:
+    """``[(ClockPlan, pll builder)]`` of ``target``, its default plan first."""
+    return list(target.get("clock_plans") or [(target["clock_plan"], target.get("pll"))])
 
 
 def _blocks(depth: int, width: int, target: dict) -> int:
@@ -32,57 +47,190 @@ def _blocks(depth: int, width: int, target: dict) -> int:
     return best
 
 
-def estimate(lcfg: LinkConfig, target: dict) -> dict:
+def _core_memories(cfg: IzhikevichConfig, n: int) -> list:
+    """``(depth, width)`` of one core's memories at ``n`` neurons."""
+    return [(n, cfg.V.width + cfg.U.width), (n, cfg.I.width), (n, max(cfg.sel_bits, 1)),
+            (cfg.spike_fifo_depth, 16 + cfg.sweep_number_width)]
+
+
+def _link_memories(lcfg: LinkConfig) -> list:
     cfg = lcfg.core
-    N = cfg.n_neurons
-    mems = [(N, cfg.V.width + cfg.U.width), (N, cfg.I.width), (N, max(cfg.sel_bits, 1)),
-            (cfg.spike_fifo_depth, 16 + cfg.sweep_number_width),
-            (lcfg.rx_fifo_depth, 8), (2 * lcfg.batch_capacity, 24), (MAX_FRAME, 8),
+    return [(lcfg.rx_fifo_depth, 8), (2 * lcfg.batch_capacity, 24), (MAX_FRAME, 8),
             ((MAX_FRAME - HEADER_BYTES - 2) // lcfg.current_bytes + 1, cfg.I.width)]
-    bram = sum(_blocks(d, w, target) for d, w in mems if d * w > target.get("lutram_bits", 0))
-    dsp = MULTIPLIERS * math.ceil(cfg.operand_width / target["dsp_width"]) ** 2
-    return {"BRAM": bram, "DSP": dsp}
+
+
+def _count(mems, target: dict) -> int:
+    return sum(_blocks(d, w, target) for d, w in mems if d * w > target.get("lutram_bits", 0))
+
+
+def _estimate(cfg: IzhikevichConfig, lcfg: LinkConfig, n: int, cores: int,
+              target: dict) -> dict:
+    bram = cores * _count(_core_memories(cfg, n), target) + _count(_link_memories(lcfg), target)
+    dsp = cores * MULTIPLIERS * math.ceil(cfg.operand_width / target["dsp_width"]) ** 2
+    out = {"BRAM": bram, "DSP": dsp, "cores": cores}
+    logic = target.get("logic_per_core")
+    if logic:
+        out["LUT"] = cores * logic + target.get("logic_link", 0)
+    return out
+
+
+def estimate(lcfg: LinkConfig, target: dict) -> dict:
+    """Block RAMs, multiplier blocks (and logic cells where the target gives a per-core
+    figure) the linked cores of ``lcfg`` need on ``target``."""
+    return _estimate(lcfg.core, lcfg, lcfg.core.n_neurons, lcfg.n_cores, target)
+
+
+def _fits(est: dict, target: dict) -> str | None:
+    """The first device limit ``est`` exceeds, as a phrase, or None."""
+    res = target["resources"]
+    for kind, what, limit in (("BRAM", "block RAMs", "RAM limit"),
+                              ("DSP", "multiplier blocks", "DSP limit"),
+                              ("LUT", "logic cells", "logic limit")):
+        if kind in est and est[kind] > res[kind]:
+            return (f"about {est[kind]} {what}, the {target['device']} has {res[kind]} "
+                    f"({limit})")
+    return None
+
+
+def _fmax_bound(target: dict, depth: int) -> float | None:
+    """The fmax (Hz) the target's measurements give a core of pipeline ``depth``."""
+    table = target.get("fmax_mhz") or {}
+    known = [d for d in table if d <= depth]
+    return table[max(known)] * 1e6 if known else None
+
+
+def _choose(target: dict, N: int, plans: list, cfg: IzhikevichConfig, lcfg_of, depth: int):
+    """``(plan, pll, cores, per-core neurons, estimate)`` for ``N`` neurons: per plan the
+    fewest cores that fit, then the plan with the fewest cores (the lower clock on a tie);
+    raises :class:`ConfigError` naming the limit when none fits."""
+    best, why = None, []
+    fmax = _fmax_bound(target, depth)
+    for plan, pll in plans:
+        if fmax is not None and plan.clock_hz > FMAX_MARGIN * fmax and len(plans) > 1:
+            why.append(f"the {plan.clock_hz / 1e6:g} MHz plan is above {FMAX_MARGIN:g} x "
+                       f"the {fmax / 1e6:.4g} MHz fmax of a depth-{depth} core (fmax limit; "
+                       f"a deeper pipeline_stages is faster)")
+            continue
+        per_core = plan.cycles_per_tick - LINK_IDLE_CYCLES
+        if per_core < 1:
+            continue
+        k_min = math.ceil(N / per_core)
+        dsp_core = MULTIPLIERS * math.ceil(cfg.operand_width / target["dsp_width"]) ** 2
+        k_max = max(k_min, target["resources"]["DSP"] // dsp_core)
+        for k in range(k_min, k_max + 1):
+            n = math.ceil(N / k)
+            est = _estimate(cfg, lcfg_of(n, k, plan), n, k, target)
+            over = _fits(est, target)
+            if over is None:
+                if best is None or k < best[2]:
+                    best = (plan, pll, k, n, est)
+                break
+            if k == k_min:
+                why.insert(0, f"{N} neurons as {k} core{'s' if k > 1 else ''} of {n} at "
+                              f"{plan.clock_hz / 1e6:g} MHz need {over}; more cores do not "
+                              f"fit either")
+    if best is None:
+        raise ConfigError(f"{target['name']}: {'; '.join(why)}")
+    return best
+
+
+def limits(target: dict, pipeline_stages: int = 5) -> dict:
+    """The bounds on neurons at the target's update rate: ``bram`` (every block RAM bit used
+    by state, current and set at the best shapes' packing), ``multiplier`` (every multiplier
+    block in a core at the fastest plan's cycles per tick), ``fmax`` (cores as many as the
+    logic holds, each at the measured fmax), ``largest`` (what the sizing accepts) and the
+    clock, cores and per-core neurons of the largest."""
+    plans = clock_plans(target)
+    cfg = _width_config(target)
+    res = target["resources"]
+    per_bits = cfg.V.width + cfg.U.width + cfg.I.width + max(cfg.sel_bits, 1)
+    block_bits = max(d * w for d, w in target["bram_shapes"])
+    dsp_core = MULTIPLIERS * math.ceil(cfg.operand_width / target["dsp_width"]) ** 2
+    fastest = max(p.clock_hz for p, _ in plans)
+    upd = plans[0][0].update_hz
+    fmax = _fmax_bound(target, pipeline_stages)
+    logic = target.get("logic_per_core")
+    cores_by_logic = (res["LUT"] - target.get("logic_link", 0)) // logic if logic else None
+    lo, hi = 1, MAX_LINK_NEURONS
+    largest = None
+    while lo <= hi:                        # the sizing's acceptance is monotone in N
+        mid = (lo + hi) // 2
+        try:
+            largest = (mid, size_plan(target, mid, pipeline_stages))
+            lo = mid + 1
+        except ConfigError:
+            hi = mid - 1
+    out = {"bram": res["BRAM"] * block_bits // per_bits,
+           "multiplier": (res["DSP"] // dsp_core) * (int(fastest // upd) - LINK_IDLE_CYCLES),
+           "fmax": (cores_by_logic * int(fmax // upd) if fmax and cores_by_logic else None),
+           "fmax_mhz": fmax / 1e6 if fmax else None, "update_hz": upd,
+           "bits_per_neuron": per_bits}
+    if largest:
+        n, (plan, _, k, per, est) = largest
+        out.update(largest=n, clock_hz=plan.clock_hz, cores=k, per_core=per, estimate=est)
+    return out
+
+
+def _width_config(target: dict, **core_kwargs) -> IzhikevichConfig:
+    """A small configuration with the target's formats (widths do not depend on N)."""
+    kw = dict(target.get("core_defaults", {}))
+    kw.update(core_kwargs)
+    kw.update(n_neurons=16, clock_hz=16 * 16e3, update_hz=16e3, tick_source="external")
+    kw.setdefault("spike_fifo_depth", 256)
+    kw.pop("neuron_sets", None)
+    return IzhikevichConfig(**kw)
+
+
+def _link_of(target: dict, cfg: IzhikevichConfig):
+    def make(n, k, plan):
+        # the link's buffers do not depend on N: its configuration on the small core
+        return LinkConfig(cfg, clocks_per_bit=plan.clocks_per_bit,
+                          batch_sweeps=max(1, int(round(plan.update_hz / 1000))),
+                          **target.get("link_defaults", {}))
+    return make
+
+
+def size_plan(target: dict, N: int, pipeline_stages: int = 5, plans=None, **core_kwargs):
+    """``(plan, pll, cores, per-core neurons, estimate)`` for ``N`` neurons on ``target``
+    (arithmetic only: no core is elaborated)."""
+    if N > MAX_LINK_NEURONS:
+        raise ConfigError(f"{target['name']}: {N} neurons exceed the link's "
+                          f"{MAX_LINK_NEURONS} neuron ids (link limit)")
+    cfg = _width_config(target, pipeline_stages=pipeline_stages, **core_kwargs)
+    return _choose(target, N, plans or clock_plans(target), cfg, _link_of(target, cfg),
+                   pipeline_stages)
 
 
 def size_core(target: dict, n_neurons: int | None = None, clock_hz: float | None = None,
               update_hz: float | None = None, **core_kwargs) -> dict:
-    """The link configuration for ``target`` (defaults from the target), its clock plan and
-    resource estimate; :class:`ConfigError` names the first limit exceeded."""
-    plan: ClockPlan = target["clock_plan"]
-    if update_hz is not None and update_hz != plan.update_hz or \
-            clock_hz is not None and clock_hz != plan.clock_hz:
-        plan = ClockPlan(plan.osc_hz, clock_hz or plan.clock_hz, update_hz or plan.update_hz,
-                         plan.baud)
-        if clock_hz is not None and clock_hz not in target.get("pll_clocks", [plan.clock_hz]):
+    """The link configuration for ``target`` (defaults from the target): its clock plan (the
+    requested ``clock_hz`` or the one :func:`size_plan` chooses), cores and resource estimate;
+    :class:`ConfigError` names the first limit exceeded."""
+    plans = clock_plans(target)
+    if clock_hz is not None:
+        chosen = [(p, pll) for p, pll in plans if p.clock_hz == clock_hz]
+        if not chosen:
             raise ConfigError(f"{target['name']}: the PLL plans give "
-                              f"{', '.join(f'{c / 1e6:g}' for c in target.get('pll_clocks', []))}"
+                              f"{', '.join(f'{p.clock_hz / 1e6:g}' for p, _ in plans)}"
                               f" MHz, not {clock_hz / 1e6:g} MHz")
+        plans = chosen
+    if update_hz is not None and update_hz != plans[0][0].update_hz:
+        plans = [(ClockPlan(p.osc_hz, p.clock_hz, update_hz, p.baud), pll) for p, pll in plans]
     N = n_neurons or target["default_neurons"]
-    cpt = plan.cycles_per_tick
-    if N + LINK_IDLE_CYCLES > cpt:
-        raise ConfigError(f"{target['name']}: {N} neurons need {N + LINK_IDLE_CYCLES} cycles "
-                          f"per sweep ({LINK_IDLE_CYCLES} idle for host writes), the "
-                          f"{plan.clock_hz / 1e6:g} MHz clock gives {cpt} at "
-                          f"{plan.update_hz / 1e3:g} kHz (cycles per tick limit)")
+    depth = core_kwargs.get("pipeline_stages", 5)
+    plan, pll, k, n, est = size_plan(target, N, plans=plans, **core_kwargs)
     kw = dict(target.get("core_defaults", {}))
     kw.update(core_kwargs)
-    kw.update(n_neurons=N, clock_hz=plan.clock_hz, update_hz=plan.update_hz,
+    kw.update(n_neurons=n, clock_hz=plan.clock_hz, update_hz=plan.update_hz,
               tick_source="external")
     kw.setdefault("spike_fifo_depth", 256)
     core = IzhikevichConfig(**kw)
     lcfg = LinkConfig(core, clocks_per_bit=plan.clocks_per_bit,
-                      batch_sweeps=max(1, int(round(plan.update_hz / 1000))),
+                      batch_sweeps=max(1, int(round(plan.update_hz / 1000))), n_cores=k,
                       **target.get("link_defaults", {}))
-    est = estimate(lcfg, target)
-    res = target["resources"]
-    if est["BRAM"] > res["BRAM"]:
-        raise ConfigError(f"{target['name']}: {N} neurons need about {est['BRAM']} block RAMs, "
-                          f"the {target['device']} has {res['BRAM']} (RAM limit)")
-    if est["DSP"] > res["DSP"]:
-        raise ConfigError(f"{target['name']}: {core.operand_width}-bit operands need "
-                          f"{est['DSP']} multiplier blocks, the {target['device']} has "
-                          f"{res['DSP']} (DSP limit; try operand_width=16)")
-    return {"link": lcfg, "estimate": est,
+    return {"link": lcfg, "estimate": estimate(lcfg, target), "pll": pll,
+            "requested_neurons": N, "pipeline_stages": depth,
             "plan": {"osc_hz": plan.osc_hz, "clock_hz": plan.clock_hz,
                      "update_hz": plan.update_hz, "baud": plan.baud,
-                     "cycles_per_tick": cpt, "clocks_per_bit": plan.clocks_per_bit}}
+                     "cycles_per_tick": plan.cycles_per_tick,
+                     "clocks_per_bit": plan.clocks_per_bit}}

@@ -6,6 +6,11 @@ phase detector at 5 MHz). 60 MHz is the nearest plan with integer ratios for bot
 a UART rate the FT231X can produce: 3750 cycles per 16 kHz sweep (up to 3750 neurons) and 20
 clocks per bit at 3 Mbaud. (48 MHz, which would give 3000 cycles and 16 clocks per bit, needs
 an input divider of 25, below the PLL's 3.125 MHz phase-detector minimum.)
+
+A second plan, 90 MHz (25 / 5 * 18, VCO 540 MHz), gives 5625 cycles per sweep and 30 clocks per
+bit at 3 Mbaud: the sizing takes it for arrays of cores when the pipeline's fmax allows (the
+measured fmax below, out of context on the LFE5U-85F -6, lowest of three placement seeds, less
+the sizing's 10 % margin for the board build).
 """
 
 from __future__ import annotations
@@ -63,7 +68,15 @@ TARGET = {
     "bram_shapes": [(16384, 1), (8192, 2), (4096, 4), (2048, 9), (1024, 18), (512, 36)],
     "lutram_bits": 512, "dsp_width": 18,
     "default_neurons": 2500,
-    "pll_clocks": [60e6],
+    "pll_clocks": [60e6, 90e6],
+    "clock_plans": [(ClockPlan(osc_hz=25e6, clock_hz=60e6, update_hz=16e3, baud=3e6),
+                     _pll(5, 12, 10, 60.0)),
+                    (ClockPlan(osc_hz=25e6, clock_hz=90e6, update_hz=16e3, baud=3e6),
+                     _pll(5, 18, 6, 90.0))],
+    # fmax (MHz) of one core by pipeline depth: out of context, lowest of seeds 1-3
+    # (docs/architecture.md); the TRELLIS_COMB cells of one core and of the link
+    "fmax_mhz": {5: 90.9, 8: 108.7},
+    "logic_per_core": 1900, "logic_link": 3000,
     "nextpnr_cells": {"LUT": "TRELLIS_COMB", "FF": "TRELLIS_FF", "BRAM": "DP16KD",
                       "DSP": "MULT18X18D"},
     "bitstream_ext": "bit",

@@ -18,10 +18,10 @@ from .config import CLAMP_KINDS, PIPELINE_DEPTH, SATURATION, ConfigError, Izhike
 from .core import IzhikevichCore, generate_izhikevich, izhikevich_verilog
 from .datapath import clamp_bits, multiply1, multiply2, operands, update_state
 from .twin import IzhikevichArrayTwin, IzhikevichTwin
-from .array import IzhikevichArray
+from .array import IzhikevichArray, izhikevich_array_verilog
 
 __all__ = ["ConfigError", "IzhikevichConfig", "IzhikevichTwin", "IzhikevichCore",
-           "IzhikevichArray", "IzhikevichArrayTwin",
+           "IzhikevichArray", "IzhikevichArrayTwin", "izhikevich_array_verilog",
            "PIPELINE_DEPTH", "CLAMP_KINDS", "SATURATION", "operands", "multiply1",
            "multiply2", "update_state", "clamp_bits", "izhikevich_verilog",
            "generate_izhikevich"]

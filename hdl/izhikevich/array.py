@@ -22,7 +22,10 @@ global: neuron ``n`` of core ``k`` is ``k * n_neurons + n``.
   (``spike_sweep``, ``spike_index``): every spike carries both.
 
 The array's bit-exact model is :class:`~cuneate.hdl.izhikevich.twin.IzhikevichArrayTwin`
-(one twin per core).
+(one twin per core). With ``probes=True`` the array also has each core's update ports as its
+own outputs (``p<k>_valid``, ``p<k>_index``, ``p<k>_v``, ``p<k>_u``, ``p<k>_spike``,
+``p<k>_clamp``, ``p<k>_current``: core ``k``'s ``upd_*``, local index), for the per-cycle
+scoreboard of the generated Verilog (:func:`izhikevich_array_verilog`).
 """
 
 from __future__ import annotations
@@ -31,10 +34,14 @@ from amaranth import Module, Mux, Signal
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
+from ..flow.verilog import verilog_text
 from .config import CLAMP_KINDS, ConfigError, IzhikevichConfig
 from .core import IzhikevichCore
 
-__all__ = ["IzhikevichArray"]
+__all__ = ["IzhikevichArray", "izhikevich_array_verilog", "PROBES"]
+
+#: the per-core update ports an array built with ``probes=True`` brings out
+PROBES = ("valid", "index", "v", "u", "spike", "clamp", "current")
 
 
 class IzhikevichArray(wiring.Component):
@@ -49,7 +56,7 @@ class IzhikevichArray(wiring.Component):
         the per-core update probes).
     """
 
-    def __init__(self, config: IzhikevichConfig, n_cores: int):
+    def __init__(self, config: IzhikevichConfig, n_cores: int, probes: bool = False):
         if isinstance(n_cores, bool) or not isinstance(n_cores, int) or n_cores < 1:
             self._MustUse__silence = True       # refused: never elaborated
             raise ConfigError(f"n_cores must be an integer >= 1, got {n_cores!r}")
@@ -69,8 +76,12 @@ class IzhikevichArray(wiring.Component):
         }
         if config.tick_source == "external":
             sig["tick"] = In(1)
+        if probes:
+            core = self.cores[0]
+            for k in range(n_cores):
+                sig |= {f"p{k}_{n}": Out(getattr(core, f"upd_{n}").shape()) for n in PROBES}
         super().__init__(sig)
-        self.n_total = total
+        self.n_total, self.probes = total, probes
 
     def _route_write(self, m: Module, en, addr, data, port: str):
         """Register a host write and hand it to the core owning the global id ``addr``."""
@@ -109,6 +120,10 @@ class IzhikevichArray(wiring.Component):
             m.d.comb += core.spike_ready.eq(self.spike_ready & core.spike_valid & ~earlier)
             earlier = earlier | core.spike_valid
 
+        if self.probes:
+            for k, core in enumerate(self.cores):
+                m.d.comb += [getattr(self, f"p{k}_{n}").eq(getattr(core, f"upd_{n}"))
+                             for n in PROBES]
         c0 = self.cores[0]
         total = 0
         overrun = overflow = flags = 0
@@ -121,3 +136,10 @@ class IzhikevichArray(wiring.Component):
                      self.overrun.eq(overrun), self.spike_overflow.eq(overflow),
                      self.clamp_flags.eq(flags)]
         return m
+
+
+def izhikevich_array_verilog(config: IzhikevichConfig, n_cores: int, probes: bool = False,
+                             name: str = "izhikevich_array") -> str:
+    """Verilog text of an array of ``n_cores`` cores (``probes``: with the per-core update
+    ports, for the scoreboard)."""
+    return verilog_text(IzhikevichArray(config, n_cores, probes), name)

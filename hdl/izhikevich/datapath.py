@@ -283,7 +283,8 @@ def align_step(cfg: IzhikevichConfig, x):
         h = (1 << (sq - 1)) if r == "nearest" else 0
         qq_f = (pq >> sq) + (qi >> sq)
         if is_hdl(pq):
-            qbit = (pq[:sq] + qi[:sq] + h)[sq:]
+            qi_low = qi[:sq] if is_hdl(qi) else (int(qi) & ((1 << sq) - 1))
+            qbit = (pq[:sq] + qi_low + h)[sq:]
         else:
             qbit = ((pq & ((1 << sq) - 1)) + (qi & ((1 << sq) - 1)) + h) >> sq
     else:

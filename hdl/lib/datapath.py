@@ -34,7 +34,10 @@ def lookup(table: Sequence[int], sel, width: int | None = None):
 
 
 def select_by(sel, options):
-    """``options[sel]`` (a mux in RTL, per-element choice in the twin)."""
+    """``options[sel]`` (a mux in RTL, per-element choice in the twin; a plain index when
+    ``sel`` is a Python integer)."""
+    if isinstance(sel, int):
+        return options[sel]
     if is_hdl(sel):
         out = options[-1]
         for i in range(len(options) - 2, -1, -1):

@@ -14,13 +14,15 @@ class LinkConfig:
 
     def __init__(self, core: IzhikevichConfig, clocks_per_bit: int = 16, batch_sweeps: int = 16,
                  batch_capacity: int = 79, rx_fifo_depth: int = 512, tx_fifo_depth: int = 16,
-                 counter_width: int = 32):
+                 counter_width: int = 32, n_cores: int = 1):
         if core.tick_source != "external":
             raise ConfigError("the host link drives the core's ticks: the core needs "
                               "tick_source='external'")
-        if core.n_neurons > 1 << 16:
+        if isinstance(n_cores, bool) or not isinstance(n_cores, int) or n_cores < 1:
+            raise ConfigError(f"n_cores must be an integer >= 1, not {n_cores!r}")
+        if core.n_neurons * n_cores > 1 << 16:
             raise ConfigError(f"the link addresses at most 65536 neurons, "
-                              f"not {core.n_neurons}")
+                              f"not {core.n_neurons * n_cores}")
         if not 1 <= batch_sweeps <= 255:
             raise ConfigError(f"batch_sweeps must be 1..255, not {batch_sweeps}")
         max_spikes = (MAX_FRAME - MIN_FRAME - SPIKE_HEADER) // 3
@@ -36,6 +38,10 @@ class LinkConfig:
             raise ConfigError(f"counter_width must be 8..32, not {counter_width}")
         self.counter_width = int(counter_width)
         self.core = core
+        #: cores behind the link (an :class:`~cuneate.hdl.izhikevich.array.IzhikevichArray`
+        #: when more than one) and the global neuron ids it addresses
+        self.n_cores = int(n_cores)
+        self.n_neurons = core.n_neurons * self.n_cores
         self.clocks_per_bit = int(clocks_per_bit)
         self.batch_sweeps = int(batch_sweeps)
         self.batch_capacity = int(batch_capacity)
@@ -54,7 +60,8 @@ class LinkConfig:
                 "batch_sweeps": self.batch_sweeps, "batch_capacity": self.batch_capacity,
                 "rx_fifo_depth": self.rx_fifo_depth, "tx_fifo_depth": self.tx_fifo_depth,
                 "current_bytes": self.current_bytes, "max_currents": self.max_currents,
-                "counter_width": self.counter_width}
+                "counter_width": self.counter_width, "n_cores": self.n_cores,
+                "n_neurons": self.n_neurons}
 
 
 def link_config(core_kwargs: dict | None = None, **link_kwargs) -> LinkConfig:

@@ -42,7 +42,7 @@ from amaranth.lib.fifo import SyncFIFOBuffered
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
-from ..izhikevich import IzhikevichCore
+from ..izhikevich import IzhikevichArray, IzhikevichCore
 from ..flow.verilog import verilog_text
 from ..lib.uart import UartRx, UartTx
 from .codec import (COUNTER_NAMES, CRC_BYTES, CRC_INIT, CRC_RESIDUE, MAX_FRAME, MIN_FRAME, MSG_CONTROL, MSG_COUNTERS,
@@ -70,7 +70,7 @@ class HostLink(wiring.Component):
     def __init__(self, lcfg: LinkConfig):
         self.lcfg = lcfg
         cfg = lcfg.core
-        N = cfg.n_neurons
+        N = lcfg.n_neurons
         super().__init__({
             "rx": In(1, init=1), "tx": Out(1, init=1),
             "i_wr_en": Out(1), "i_wr_addr": Out(range(N)), "i_wr_data": Out(cfg.I.width),
@@ -82,7 +82,7 @@ class HostLink(wiring.Component):
 
     def elaborate(self, platform):
         lc, cfg = self.lcfg, self.lcfg.core
-        N, W, B, CAP = cfg.n_neurons, lc.current_bytes, lc.batch_sweeps, lc.batch_capacity
+        N, W, B, CAP = lc.n_neurons, lc.current_bytes, lc.batch_sweeps, lc.batch_capacity
         m = Module()
 
         # --- counters ---------------------------------------------------------------------
@@ -466,16 +466,18 @@ class HostLink(wiring.Component):
 
 
 class LinkedCore(wiring.Component):
-    """An Izhikevich core behind a :class:`HostLink`: the pins are ``rx`` and ``tx``; status
-    outputs ``running`` and ``overflow`` (core spike FIFO or overrun flag) for LEDs. The two
-    parts are the attributes ``core`` and ``link``."""
+    """An Izhikevich core (or, with ``lcfg.n_cores > 1``, an :class:`~cuneate.hdl.izhikevich
+    .array.IzhikevichArray` over global ids) behind a :class:`HostLink`: the pins are ``rx``
+    and ``tx``; status outputs ``running`` and ``overflow`` (core spike FIFO or overrun flag)
+    for LEDs. The two parts are the attributes ``core`` and ``link``."""
 
     def __init__(self, lcfg: LinkConfig):
         self.lcfg = lcfg
         super().__init__({"rx": In(1, init=1), "tx": Out(1, init=1), "running": Out(1),
                           "overflow": Out(1)})
         # built here so that a simulation can watch the writes toward the core
-        self.core = IzhikevichCore(lcfg.core)
+        self.core = IzhikevichArray(lcfg.core, lcfg.n_cores) if lcfg.n_cores > 1 else \
+            IzhikevichCore(lcfg.core)
         self.link = HostLink(lcfg)
 
     def elaborate(self, platform):

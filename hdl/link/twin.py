@@ -26,9 +26,9 @@ class LinkModel:
     """
 
     def __init__(self, lcfg):
-        from ..izhikevich import IzhikevichTwin
+        from ..izhikevich import IzhikevichArrayTwin
         self.lcfg = lcfg
-        self.twin = IzhikevichTwin(lcfg.core)
+        self.twin = IzhikevichArrayTwin(lcfg.core, lcfg.n_cores)
         self.counters = {n: 0 for n in COUNTER_NAMES}
         self.S = 0
         self.free = False
@@ -107,7 +107,7 @@ class LinkModel:
                     for i in range(0, n, W)]
             w = self.lcfg.current_width
             vals = [((v & ((1 << w) - 1)) ^ (1 << (w - 1))) - (1 << (w - 1)) for v in vals]
-            if first + len(vals) > self.lcfg.core.n_neurons:
+            if first + len(vals) > self.lcfg.n_neurons:
                 c["range_errors"] += 1
                 return
             c["frames_ok"] += 1
@@ -119,7 +119,8 @@ class LinkModel:
             if self.S > msg.tick:
                 c["late_writes"] += 1
                 return
-            self.twin.I[first:first + len(vals)] = vals
+            for n, raw in enumerate(vals, start=first):
+                self.twin.set_current_raw(n, raw)
         elif (msg.type == MSG_CONTROL and len(msg.payload) == CONTROL_PAYLOAD
               and OP_START <= msg.payload[0] <= OP_CLEAR_COUNTERS):
             c["frames_ok"] += 1

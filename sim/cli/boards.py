@@ -10,22 +10,37 @@ __all__ = ["register"]
 
 
 def cmd_boards(args) -> int:
+    from ...boards.sizing import limits
     from ...boards.targets import TARGETS
+    from ...hdl.izhikevich.config import PIPELINE_STAGES
     rows = []
     for name, t in TARGETS.items():
         plan = t["clock_plan"]
+        per_depth = {d: limits(t, d) for d in (PIPELINE_STAGES[0], PIPELINE_STAGES[-1])}
         rows.append({"name": name, "device": t["device"], "description": t["description"],
                      "bitstream": bool(t.get("bitstream")), "clock_mhz": plan.clock_hz / 1e6,
+                     "plans_mhz": [p.clock_hz / 1e6 for p, _ in t.get("clock_plans", [])]
+                     or [plan.clock_hz / 1e6],
                      "update_khz": plan.update_hz / 1e3, "baud": plan.baud,
-                     "max_neurons": plan.cycles_per_tick - 16,
+                     "max_neurons_one_core": plan.cycles_per_tick - 16,
+                     "largest": {str(d): lim for d, lim in per_depth.items()},
                      "default_neurons": t["default_neurons"], "resources": t["resources"]})
     if args.json:
-        print(json.dumps(rows, indent=2))
+        print(json.dumps(rows, indent=2, default=str))
     else:
         for r in rows:
-            print(f"{r['name']:11s} {r['device']:20s} {r['clock_mhz']:g} MHz, "
-                  f"{r['update_khz']:g} kHz, up to {r['max_neurons']} neurons, "
-                  f"{'bitstream' if r['bitstream'] else 'Verilog + estimate'}")
+            print(f"{r['name']:11s} {r['device']:20s} "
+                  f"{'bitstream' if r['bitstream'] else 'Verilog + estimate'}, PLL plans "
+                  f"{', '.join(f'{c:g}' for c in r['plans_mhz'])} MHz, "
+                  f"{r['update_khz']:g} kHz updates")
+            for d, lim in r["largest"].items():
+                tight = min(x for x in (lim["bram"], lim["multiplier"], lim["fmax"]) if x)
+                print(f"{'':11s} depth {d}: largest {lim['largest']} neurons "
+                      f"({lim['cores']} x {lim['per_core']} at {lim['clock_hz'] / 1e6:g} MHz, "
+                      f"{lim['estimate']['BRAM']} block RAMs); bounds: block RAM "
+                      f"{lim['bram']}, multipliers {lim['multiplier']}"
+                      + (f", fmax {lim['fmax']}" if lim["fmax"] else "")
+                      + f" ({100 * lim['largest'] / tight:.0f} % of the tightest)")
     return 0
 
 

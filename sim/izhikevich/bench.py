@@ -21,6 +21,11 @@ figures to ``CUNEATE_BENCH_REPORT``. Two tests:
     ``icarus``/``verilator`` engines of ``cuneate simulate``.
 ``play``
     Plays a host driver's write schedule (the ``icarus``/``verilator`` transports).
+``array_check``
+    The same per-update check for :class:`~cuneate.hdl.izhikevich.array.IzhikevichArray`
+    (generated with its per-core probe ports): every update of every core against that core's
+    twin and golden, the spike stream against the spiking updates as global ids, the summed
+    ``sweep_count`` per sweep.
 """
 
 from __future__ import annotations
@@ -28,6 +33,7 @@ from __future__ import annotations
 import random
 import time
 
+import numpy as np
 import cocotb
 from cocotb.clock import Clock
 from cocotb.triggers import ClockCycles, FallingEdge, RisingEdge
@@ -257,3 +263,121 @@ async def play(dut):
     bench_report(rep)
     assert rep["writes_left"] == 0, f"{rep['writes_left']} writes past the last tick"
     assert rep["sweep_tag_mismatches"] == 0, "spike sweep tags disagree with the sweep run"
+
+
+@cocotb.test()
+async def array_check(dut):
+    """An array of ``cores`` cores: the host writes every global id, then rewrites random ones
+    during the sweeps; each core's updates (its ``p<k>_*`` probes) are checked sweep by sweep by
+    its own :class:`SweepChecker` (twin exact, golden bounded) and must have used a current the
+    host wrote to that global id; the stream must carry every spike once as ``(k * N + n,
+    sweep)``, each core's spikes in that core's order; ``sweep_count`` is the sum over the
+    cores; nothing overruns or overflows."""
+    from cuneate.hdl.izhikevich.array import PROBES
+    cfgj = bench_config()
+    cfg = make_config(cfgj["core"])
+    K, N = int(cfgj["cores"]), cfg.n_neurons
+    d = dut
+    cocotb.start_soon(Clock(d.clk, 10, unit="ns").start())
+    d.rst.value = 1
+    for s in (d.i_wr_en, d.sel_wr_en, d.i_wr_addr, d.i_wr_data, d.sel_wr_addr, d.sel_wr_data,
+              d.clamp_clear):
+        s.value = 0
+    d.spike_ready.value = 1
+    if cfg.tick_source == "external":
+        d.tick.value = 0
+    await RisingEdge(d.clk)
+    await RisingEdge(d.clk)
+    await FallingEdge(d.clk)
+    d.rst.value = 0
+    rng = random.Random(cfgj.get("seed", 1))
+    lo, hi = cfgj.get("current_range", [0.0, 40.0])
+    rewrites = cfgj.get("writes_per_sweep", 4)
+    written = {n: {0} for n in range(K * N)}          # the current RAMs start at zero
+
+    async def driver():
+        todo = list(range(K * N))
+        while True:
+            n = todo.pop(0) if todo else (rng.randrange(K * N)
+                                          if rng.random() < rewrites / N else None)
+            if n is not None:
+                raw = cfg.I.to_raw(rng.uniform(lo, hi))
+                written[n].add(int(raw))
+                d.i_wr_addr.value, d.i_wr_data.value, d.i_wr_en.value = n, int(raw), 1
+            await FallingEdge(d.clk)
+            d.i_wr_en.value = 0
+
+    cocotb.start_soon(driver())
+    checkers = [SweepChecker(cfg) for _ in range(K)]
+    probes = [{n: getattr(d, f"p{k}_{n}") for n in PROBES} for k in range(K)]
+    bufs = [{n: np.zeros(N, dtype=np.int64) for n in ("v", "u", "i", "spike", "clamp")}
+            for _ in range(K)]
+    fill = [0] * K
+    spikes_per_sweep: dict[int, int] = {}
+    expected, stream, done = [], [], []
+    extra = {"order_errors": 0, "current_violations": 0}
+    n_sweeps, cycles = cfgj["sweeps"], 0
+    width = cfg.sweep_number_width
+    t0 = time.perf_counter()
+
+    def sample_stream():
+        if int(d.spike_valid.value):
+            stream.append((int(d.spike_index.value), int(d.spike_sweep.value)))
+        if int(d.sweep_done.value):
+            done.append((int(d.sweep_number.value), int(d.sweep_count.value)))
+
+    while min(c.stats.sweeps_checked for c in checkers) < n_sweeps:
+        await FallingEdge(d.clk)
+        cycles += 1
+        sample_stream()
+        for k in range(K):
+            p, b = probes[k], bufs[k]
+            if not int(p["valid"].value):
+                continue
+            idx = int(p["index"].value)
+            if idx != fill[k]:
+                extra["order_errors"] += 1
+                fill[k] = idx
+            b["v"][idx], b["u"][idx] = p["v"].value.to_signed(), p["u"].value.to_signed()
+            b["i"][idx] = p["current"].value.to_signed()
+            b["spike"][idx], b["clamp"][idx] = int(p["spike"].value), int(p["clamp"].value)
+            fill[k] = idx + 1
+            if fill[k] < N:
+                continue
+            fill[k] = 0
+            sweep = checkers[k].stats.sweeps_checked
+            extra["current_violations"] += sum(int(b["i"][n]) not in written[k * N + n]
+                                               for n in range(N))
+            checkers[k].check(b["v"], b["u"], b["i"], b["spike"], b["clamp"])
+            spk = np.flatnonzero(b["spike"])
+            spikes_per_sweep[sweep] = spikes_per_sweep.get(sweep, 0) + len(spk)
+            expected += [(k * N + int(n), sweep % (1 << width)) for n in spk]
+    for _ in range(cfg.spike_fifo_depth * K + 4):
+        await FallingEdge(d.clk)
+        sample_stream()
+    elapsed = time.perf_counter() - t0
+    got = stream[:len(expected)]
+    extra["stream_matches"] = sorted(got, key=lambda x: (x[1], x[0])) == \
+        sorted(expected, key=lambda x: (x[1], x[0]))
+    extra["stream_core_order"] = all(
+        [x for x in got if x[0] // N == k] == [x for x in expected if x[0] // N == k]
+        for k in range(K))
+    exp_done = [(s % (1 << width), spikes_per_sweep[s]) for s in range(n_sweeps)]
+    extra["count_mismatches"] = sum(a != b for a, b in zip(done, exp_done)) + \
+        max(0, n_sweeps - len(done))
+    totals = [c.stats.to_dict() for c in checkers]
+    stats = {k: sum(t[k] for t in totals) for k in
+             ("sweeps_checked", "updates_checked", "twin_mismatches", "flag_mismatches",
+              "golden_bound_violations", "spike_disagreements", "flagged_updates", "spikes")}
+    stats["golden_v_max_ratio"] = max(t["golden_v_max_ratio"] for t in totals)
+    stats |= extra | {"cores": K, "cycles": cycles, "wall_s": elapsed,
+                      "overrun": int(d.overrun.value),
+                      "spike_overflow": int(d.spike_overflow.value)}
+    bench_report(stats)
+    failures = [f"core {k}: {f}" for k, c in enumerate(checkers) for f in c.failures()]
+    assert not failures, "; ".join(failures)
+    assert extra["order_errors"] == 0, "a core's updates left out of index order"
+    assert extra["current_violations"] == 0, "an update used a current the host never wrote"
+    assert extra["stream_matches"] and extra["stream_core_order"], "spike stream differs"
+    assert extra["count_mismatches"] == 0, "sweep_count differs from the cores' spikes"
+    assert stats["overrun"] == 0 and stats["spike_overflow"] == 0

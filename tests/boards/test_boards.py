@@ -21,15 +21,44 @@ def test_clock_plans_have_integer_ratios():
 
 
 @pytest.mark.parametrize("board,kw,match", [
-    ("ulx3s", dict(n_neurons=3800), "cycles per tick limit"),
+    ("ulx3s", dict(n_neurons=60000), "17 cores of 3530 at 60 MHz need about 344 block RAMs.*"
+                                     r"\(RAM limit\)"),
+    ("ulx3s", dict(n_neurons=40000), r"RAM limit.*90 MHz plan is above.*\(fmax limit"),
+    ("ulx3s", dict(n_neurons=70000), "65536 neuron ids \\(link limit\\)"),
     ("icebreaker", dict(n_neurons=500, operand_width=18), "DSP limit"),
     ("icebreaker", dict(n_neurons=700, spike_fifo_depth=4096), "RAM limit"),
-    ("icebreaker", dict(n_neurons=1000), "cycles per tick limit"),
-    ("ulx3s", dict(clock_hz=48e6), "PLL plans give 60 MHz"),
+    ("icebreaker", dict(n_neurons=1000), "2 cores of 500 .* \\(RAM limit\\)"),
+    ("ulx3s", dict(clock_hz=48e6), "PLL plans give 60, 90 MHz"),
 ])
 def test_refusals_name_the_limit(board, kw, match):
     with pytest.raises(ConfigError, match=match):
         size_core(TARGETS[board], **kw)
+
+
+def test_sizing_fills_the_ulx3s_with_cores():
+    """40 000 neurons at 16 kHz: the depth-8 pipeline's fmax allows the 90 MHz plan, whose
+    5625 cycles per sweep hold 4000 neurons per core with 204 of the 208 block RAMs; a core
+    count below the link's id limit is refused only by the device."""
+    r = size_core(TARGETS["ulx3s"], n_neurons=40000, pipeline_stages=8)
+    lc = r["link"]
+    assert (lc.n_cores, lc.core.n_neurons, lc.n_neurons) == (10, 4000, 40000)
+    assert r["plan"]["clock_hz"] == 90e6 and r["plan"]["clocks_per_bit"] == 30
+    assert r["estimate"]["BRAM"] == 204 and r["estimate"]["DSP"] == 40
+    assert lc.core.pipeline_stages == 8
+
+
+def test_limits_per_board():
+    """The bounds on neurons at 16 kHz and the largest count each board's sizing accepts."""
+    from cuneate.boards.sizing import limits
+    u5, u8 = limits(TARGETS["ulx3s"], 5), limits(TARGETS["ulx3s"], 8)
+    assert (u5["largest"], u5["cores"], u5["clock_hz"]) == (37340, 10, 60e6)
+    assert (u8["largest"], u8["cores"], u8["clock_hz"]) == (40960, 10, 90e6)
+    # every device bit at 76 bits per neuron: the block-RAM bound is the tightest
+    assert u8["bram"] == 208 * 18432 // 76 < min(u8["multiplier"], u8["fmax"])
+    ice = limits(TARGETS["icebreaker"], 5)
+    assert (ice["largest"], ice["cores"]) == (734, 1)
+    atlys = limits(TARGETS["atlys"], 5)
+    assert atlys["largest"] == 20480 > 8 * 2500       # the reference held 2 500
 
 
 def test_ulx3s_verilog_and_board_top_elaborate(tmp_path):
@@ -56,9 +85,9 @@ def test_cli_lists_boards_and_refuses_in_one_line(capsys, tmp_path):
     assert main(["build", "nosuch", "--out", str(tmp_path)]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "unknown board 'nosuch'" in err
-    assert main(["build", "ulx3s", "--neurons", "9000", "--out", str(tmp_path)]) == 2
+    assert main(["build", "ulx3s", "--neurons", "60000", "--out", str(tmp_path)]) == 2
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "cycles per tick limit" in err
+    assert err.count("\n") == 1 and "(RAM limit)" in err
     assert main(["build", "atlys", "--out", str(tmp_path), "--no-bitstream"]) == 0
     assert (tmp_path / "cuneate_atlys_core.v").exists()
     # --board is the positional's other spelling; without a board, the hint names both
@@ -79,6 +108,20 @@ def test_ulx3s_bitstream_meets_60mhz(tmp_path):
     assert pr["resources"]["BRAM"]["used"] <= r["estimate"]["BRAM"]
     assert pr["timing_met"], pr["fmax_mhz"]
     print("\n" + (tmp_path / "cuneate_ulx3s.report.txt").read_text())
+
+
+@pytest.mark.long
+def test_ulx3s_holds_40000_neurons_at_16khz(tmp_path):
+    """The device filled: 10 cores of 4000 neurons (depth-8 pipelines) at 90 MHz behind the
+    link, 640 M neuron updates/s, placed and routed with timing met and a bitstream."""
+    r = build_target("ulx3s", tmp_path, n_neurons=40000, pipeline_stages=8, seed=1)
+    print("\n" + (tmp_path / "cuneate_ulx3s.report.txt").read_text())
+    assert (r["neurons"], r["cores"], r["neurons_per_core"]) == (40000, 10, 4000)
+    assert r["bitstream"] and (tmp_path / "cuneate_ulx3s.bit").stat().st_size > 100_000
+    pr = r["place_route"]
+    assert pr["resources"]["DSP"]["used"] == 40
+    assert pr["resources"]["BRAM"]["used"] <= 208
+    assert r["timing_met"] and pr["min_fmax_mhz"] >= 90, pr["fmax_mhz"]
 
 
 @pytest.mark.long

@@ -86,3 +86,17 @@ def test_the_default_configuration_core_equals_the_one_step_datapath(tmp_path):
     record("formal_core_k_induction_default", 1, 0, int(not r.passed),
            f"SymbiYosys prove, k={r.depth}, {r.solver}, {r.seconds:.0f} s, N={cfg.n_neurons}")
     assert cfg.n_neurons == 2500 and r.passed and r.mode == "prove", r
+
+
+@pytest.mark.long
+@pytest.mark.parametrize("depth", [6, 7, 8])
+def test_every_deeper_pipeline_equals_the_one_step_datapath(depth, tmp_path):
+    """k-induction of every deeper pipeline on its smallest core (N = depth: a neuron is read
+    again the cycle after its write-back) at its own latency + 2."""
+    from cuneate.hdl.izhikevich.config import PIPELINE_STAGES
+    assert max(PIPELINE_STAGES) == 8
+    cfg = proof_config(pipeline_stages=depth)
+    r = prove_core(cfg, tmp_path, mode="prove", timeout_s=2400)
+    record(f"formal_core_k_induction_depth{depth}", 1, 0, int(not r.passed),
+           f"SymbiYosys prove, k={r.depth}, {r.solver}, {r.seconds:.0f} s, N={cfg.n_neurons}")
+    assert r.passed and r.depth == depth + 2 and cfg.n_neurons == depth, r

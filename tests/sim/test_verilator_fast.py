@@ -94,13 +94,13 @@ def test_harness_refuses_bad_schedules(tmp_path):
 # injected faults: the RTL is generated from a faulty stage function (the twin stays right)
 
 def _flip_product_bit(cfg):
-    orig = izh.multiply2
+    orig = izh.product2_step
 
-    def faulty(cfg_, *args):
-        out = orig(cfg_, *args)
-        out["p"] = out["p"] ^ (1 << (cfg.shift_p + 1))     # bit 1 of v' in the product
+    def faulty(cfg_, x):
+        out = orig(cfg_, x)
+        out["p2"] = out["p2"] ^ (1 << (cfg.shift_p + 1))   # bit 1 of v' in the q w product
         return out
-    return "multiply2", faulty
+    return "product2_step", faulty
 
 
 def _truncate_w(cfg):
