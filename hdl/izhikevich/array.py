@@ -10,12 +10,15 @@ global: neuron ``n`` of core ``k`` is ``k * n_neurons + n``.
   after it was presented, one more than on a single core).
 * **One tick for all cores**: with ``tick_source="external"`` the ``tick`` input goes to every
   core; with the internal divider every core runs its own, identical, divider from the same
-  reset. The cores sweep in lock step: ``sweep_done``, ``sweep_number`` and ``busy`` are core
-  0's, ``sweep_count`` is the sum over the cores, ``overrun``, ``spike_overflow`` and the sticky
-  ``clamp_flags`` are ORs (``clamp_clear`` goes to every core).
+  reset. The cores sweep in lock step: ``busy`` is core 0's; ``sweep_done`` and
+  ``sweep_number`` are core 0's one cycle later, beside ``sweep_count``, the sum over the
+  cores, and ``overrun``, ``spike_overflow`` and the sticky ``clamp_flags``, ORs over the cores
+  (``clamp_clear`` goes to every core).
 * **Spike order**: each core queues its spikes in its own FIFO in its update order (sweep, then
-  index). The stream takes, in each cycle, the head of the lowest-numbered core whose FIFO is
-  not empty, with ``spike_index`` the global id and ``spike_sweep`` the sweep. So the spikes of
+  index). Each core's head moves into a register of the array (its global id formed there);
+  the stream is a register that, whenever it is empty or being taken, loads the
+  lowest-numbered core's head register that holds a spike, with ``spike_index`` the global id
+  and ``spike_sweep`` the sweep. So the spikes of
   one core keep their order; between cores the order follows the arbitration (the cores update
   their neurons ``n`` in the same cycle, so with the stream always ready a sweep's spikes leave
   roughly by local index, ties to the lower core). A host needing one global order sorts by
@@ -106,24 +109,44 @@ class IzhikevichArray(wiring.Component):
         self._route_write(m, self.i_wr_en, self.i_wr_addr, self.i_wr_data, "i_wr")
         self._route_write(m, self.sel_wr_en, self.sel_wr_addr, self.sel_wr_data, "sel_wr")
 
-        # the spike stream: the lowest-numbered core with a pending spike
-        valid, index, sweep = 0, 0, 0
-        for k in reversed(range(self.n_cores)):
-            core = self.cores[k]
-            valid = Mux(core.spike_valid, 1, valid)
-            index = Mux(core.spike_valid, core.spike_index + k * N, index)
-            sweep = Mux(core.spike_valid, core.spike_sweep, sweep)
-        m.d.comb += [self.spike_valid.eq(valid), self.spike_index.eq(index),
-                     self.spike_sweep.eq(sweep)]
+        # the spike stream in two registered steps, so that no path crosses more than one
+        # level of logic between the cores' FIFOs and the consumer: each core's head moves into
+        # a register of its own (its global id formed there), then the output register loads
+        # the lowest-numbered core's register whenever it is free or being taken
+        take = Signal(name="spike_take")
+        out_valid = Signal(name="spike_out_valid")
+        out_index = Signal.like(self.spike_index, name="spike_out_index")
+        out_sweep = Signal.like(self.spike_sweep, name="spike_out_sweep")
+        m.d.comb += take.eq(~out_valid | self.spike_ready)
+        heads = []
         earlier = 0
-        for core in self.cores:
-            m.d.comb += core.spike_ready.eq(self.spike_ready & core.spike_valid & ~earlier)
-            earlier = earlier | core.spike_valid
+        for k, core in enumerate(self.cores):
+            hv = Signal(name=f"spike_head{k}_valid")
+            hi = Signal.like(self.spike_index, name=f"spike_head{k}_index")
+            hs = Signal.like(self.spike_sweep, name=f"spike_head{k}_sweep")
+            grant = Signal(name=f"spike_grant{k}")
+            m.d.comb += grant.eq(take & hv & ~earlier)
+            earlier = earlier | hv
+            load = ~hv | grant
+            m.d.comb += core.spike_ready.eq(load)
+            with m.If(load):
+                m.d.sync += [hv.eq(core.spike_valid), hi.eq(core.spike_index + k * N),
+                             hs.eq(core.spike_sweep)]
+            heads.append((hv, hi, hs))
+        valid, index, sweep = 0, 0, 0
+        for hv, hi, hs in reversed(heads):
+            valid, index, sweep = Mux(hv, 1, valid), Mux(hv, hi, index), Mux(hv, hs, sweep)
+        with m.If(take):
+            m.d.sync += [out_valid.eq(valid), out_index.eq(index), out_sweep.eq(sweep)]
+        m.d.comb += [self.spike_valid.eq(out_valid), self.spike_index.eq(out_index),
+                     self.spike_sweep.eq(out_sweep)]
 
         if self.probes:
             for k, core in enumerate(self.cores):
                 m.d.comb += [getattr(self, f"p{k}_{n}").eq(getattr(core, f"upd_{n}"))
                              for n in PROBES]
+        # the per-sweep figures one cycle after core 0's (the sum of the cores' counts and
+        # the ORed flags registered beside them)
         c0 = self.cores[0]
         total = 0
         overrun = overflow = flags = 0
@@ -131,10 +154,10 @@ class IzhikevichArray(wiring.Component):
             total = total + core.sweep_count
             overrun, overflow = overrun | core.overrun, overflow | core.spike_overflow
             flags = flags | core.clamp_flags
-        m.d.comb += [self.sweep_done.eq(c0.sweep_done), self.sweep_number.eq(c0.sweep_number),
-                     self.busy.eq(c0.busy), self.sweep_count.eq(total),
-                     self.overrun.eq(overrun), self.spike_overflow.eq(overflow),
-                     self.clamp_flags.eq(flags)]
+        m.d.sync += [self.sweep_done.eq(c0.sweep_done), self.sweep_number.eq(c0.sweep_number),
+                     self.sweep_count.eq(total), self.overrun.eq(overrun),
+                     self.spike_overflow.eq(overflow), self.clamp_flags.eq(flags)]
+        m.d.comb += self.busy.eq(c0.busy)
         return m
 
 
