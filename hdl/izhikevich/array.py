@@ -9,7 +9,8 @@ global: neuron ``n`` of core ``k`` is ``k * n_neurons + n``.
   and hands it to the owning core one cycle later (so a write reaches the core's RAM two cycles
   after it was presented, one more than on a single core).
 * **One tick for all cores**: with ``tick_source="external"`` the ``tick`` input goes to every
-  core; with the internal divider every core runs its own, identical, divider from the same
+  core through a register of its own (a sweep starts one cycle after the tick; ``busy`` is
+  high from the cycle after the tick, as on a single core); with the internal divider every core runs its own, identical, divider from the same
   reset. The cores sweep in lock step: ``busy`` is core 0's; ``sweep_done`` and
   ``sweep_number`` are core 0's one cycle later, beside ``sweep_count``, the sum over the
   cores, and ``overrun``, ``spike_overflow`` and the sticky ``clamp_flags``, ORs over the cores
@@ -101,11 +102,18 @@ class IzhikevichArray(wiring.Component):
     def elaborate(self, platform):
         m = Module()
         N = self.cfg.n_neurons
+        external = self.cfg.tick_source == "external"
+        ticks = []
         for k, core in enumerate(self.cores):
             m.submodules[f"core{k}"] = core
             m.d.comb += core.clamp_clear.eq(self.clamp_clear)
-            if self.cfg.tick_source == "external":
-                m.d.comb += core.tick.eq(self.tick)
+            if external:
+                # a register per core, so that the tick's fan-out across the device is one
+                # net into each core's own register (the sweep starts a cycle later)
+                t = Signal(name=f"tick{k}")
+                m.d.sync += t.eq(self.tick)
+                m.d.comb += core.tick.eq(t)
+                ticks.append(t)
         self._route_write(m, self.i_wr_en, self.i_wr_addr, self.i_wr_data, "i_wr")
         self._route_write(m, self.sel_wr_en, self.sel_wr_addr, self.sel_wr_data, "sel_wr")
 
@@ -157,7 +165,9 @@ class IzhikevichArray(wiring.Component):
         m.d.sync += [self.sweep_done.eq(c0.sweep_done), self.sweep_number.eq(c0.sweep_number),
                      self.sweep_count.eq(total), self.overrun.eq(overrun),
                      self.spike_overflow.eq(overflow), self.clamp_flags.eq(flags)]
-        m.d.comb += self.busy.eq(c0.busy)
+        # busy from the cycle after a tick, as on a single core (the tick waits a cycle in the
+        # cores' tick registers)
+        m.d.comb += self.busy.eq(c0.busy | (ticks[0] if external else 0))
         return m
 
 

@@ -97,12 +97,17 @@ class HostLink(wiring.Component):
         # --- UART and receive FIFO --------------------------------------------------------
         m.submodules.uart_rx = urx = UartRx(lc.clocks_per_bit)
         m.submodules.uart_tx = utx = UartTx(lc.clocks_per_bit)
-        m.submodules.rx_fifo = rxf = SyncFIFOBuffered(width=8, depth=lc.rx_fifo_depth)
+        m.submodules.rx_fifo = rx_store = SyncFIFOBuffered(width=8, depth=lc.rx_fifo_depth)
+        # a two-entry register FIFO after the receive buffer: the decoder reads registers, not
+        # the block RAM's output (its clock-to-output would start the decoder's paths)
+        m.submodules.rx_head = rxf = SyncFIFOBuffered(width=8, depth=2)
+        m.d.comb += [rxf.w_data.eq(rx_store.r_data), rxf.w_en.eq(rx_store.r_rdy),
+                     rx_store.r_en.eq(rxf.w_rdy)]
         m.submodules.tx_fifo = txf = SyncFIFOBuffered(width=8, depth=lc.tx_fifo_depth)
         m.d.comb += [urx.rx.eq(self.rx), self.tx.eq(utx.tx),
-                     rxf.w_data.eq(urx.data), rxf.w_en.eq(urx.valid),
+                     rx_store.w_data.eq(urx.data), rx_store.w_en.eq(urx.valid),
                      utx.data.eq(txf.r_data), utx.valid.eq(txf.r_rdy), txf.r_en.eq(utx.ready)]
-        m.d.comb += inc["rx_overflows"].eq(urx.valid & ~rxf.w_rdy)
+        m.d.comb += inc["rx_overflows"].eq(urx.valid & ~rx_store.w_rdy)
         cobs_error = Signal()
         m.d.comb += inc["framing_errors"].eq(cobs_error + urx.frame_error)
 
