@@ -17,9 +17,9 @@ global: neuron ``n`` of core ``k`` is ``k * n_neurons + n``.
   (``clamp_clear`` goes to every core).
 * **Spike order**: each core queues its spikes in its own FIFO in its update order (sweep, then
   index). Each core's head moves into a register of the array (its global id formed there);
-  the stream is a register that, whenever it is empty or being taken, loads the
-  lowest-numbered core's head register that holds a spike, with ``spike_index`` the global id
-  and ``spike_sweep`` the sweep. So the spikes of
+  a two-entry FIFO takes, whenever it has room, the lowest-numbered core's head register that
+  holds a spike, and the stream is that FIFO's output, with ``spike_index`` the global id and
+  ``spike_sweep`` the sweep. So the spikes of
   one core keep their order; between cores the order follows the arbitration (the cores update
   their neurons ``n`` in the same cycle, so with the stream always ready a sweep's spikes leave
   roughly by local index, ties to the lower core). A host needing one global order sorts by
@@ -34,7 +34,8 @@ scoreboard of the generated Verilog (:func:`izhikevich_array_verilog`).
 
 from __future__ import annotations
 
-from amaranth import Module, Mux, Signal
+from amaranth import Cat, Module, Mux, Signal
+from amaranth.lib.fifo import SyncFIFOBuffered
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
@@ -117,15 +118,14 @@ class IzhikevichArray(wiring.Component):
         self._route_write(m, self.i_wr_en, self.i_wr_addr, self.i_wr_data, "i_wr")
         self._route_write(m, self.sel_wr_en, self.sel_wr_addr, self.sel_wr_data, "sel_wr")
 
-        # the spike stream in two registered steps, so that no path crosses more than one
-        # level of logic between the cores' FIFOs and the consumer: each core's head moves into
-        # a register of its own (its global id formed there), then the output register loads
-        # the lowest-numbered core's register whenever it is free or being taken
-        take = Signal(name="spike_take")
-        out_valid = Signal(name="spike_out_valid")
-        out_index = Signal.like(self.spike_index, name="spike_out_index")
-        out_sweep = Signal.like(self.spike_sweep, name="spike_out_sweep")
-        m.d.comb += take.eq(~out_valid | self.spike_ready)
+        # the spike stream in registered steps, so that no path crosses the device through
+        # more than one level of logic: each core's head moves into a register of its own
+        # (its global id formed there); a two-entry FIFO takes the lowest-numbered core's head
+        # whenever it has room (its room a register, not the consumer's ready); the consumer
+        # reads the FIFO
+        iw, sw = len(self.spike_index), len(self.spike_sweep)
+        m.submodules.spike_out = out = SyncFIFOBuffered(width=iw + sw, depth=2)
+        take = out.w_rdy
         heads = []
         earlier = 0
         for k, core in enumerate(self.cores):
@@ -144,10 +144,9 @@ class IzhikevichArray(wiring.Component):
         valid, index, sweep = 0, 0, 0
         for hv, hi, hs in reversed(heads):
             valid, index, sweep = Mux(hv, 1, valid), Mux(hv, hi, index), Mux(hv, hs, sweep)
-        with m.If(take):
-            m.d.sync += [out_valid.eq(valid), out_index.eq(index), out_sweep.eq(sweep)]
-        m.d.comb += [self.spike_valid.eq(out_valid), self.spike_index.eq(out_index),
-                     self.spike_sweep.eq(out_sweep)]
+        m.d.comb += [out.w_en.eq(take & valid), out.w_data.eq(Cat(index, sweep)),
+                     self.spike_valid.eq(out.r_rdy), self.spike_index.eq(out.r_data[:iw]),
+                     self.spike_sweep.eq(out.r_data[iw:]), out.r_en.eq(self.spike_ready)]
 
         if self.probes:
             for k, core in enumerate(self.cores):
