@@ -93,10 +93,13 @@ def _fits(est: dict, target: dict) -> str | None:
 
 
 def _fmax_bound(target: dict, depth: int) -> float | None:
-    """The fmax (Hz) the target's measurements give a core of pipeline ``depth``."""
+    """The fmax (Hz) the target's measurements give a build with cores of pipeline ``depth``:
+    the core's (out of context) or the link's (in a board build), whichever is lower."""
     table = target.get("fmax_mhz") or {}
     known = [d for d in table if d <= depth]
-    return table[max(known)] * 1e6 if known else None
+    bounds = ([table[max(known)]] if known else []) + \
+        ([target["link_fmax_mhz"]] if target.get("link_fmax_mhz") else [])
+    return min(bounds) * 1e6 if bounds else None
 
 
 def _choose(target: dict, N: int, plans: list, cfg: IzhikevichConfig, lcfg_of, depth: int):
@@ -108,8 +111,8 @@ def _choose(target: dict, N: int, plans: list, cfg: IzhikevichConfig, lcfg_of, d
     for plan, pll in plans:
         if fmax is not None and plan.clock_hz > FMAX_MARGIN * fmax and len(plans) > 1:
             why.append(f"the {plan.clock_hz / 1e6:g} MHz plan is above {FMAX_MARGIN:g} x "
-                       f"the {fmax / 1e6:.4g} MHz fmax of a depth-{depth} core (fmax limit; "
-                       f"a deeper pipeline_stages is faster)")
+                       f"the {fmax / 1e6:.4g} MHz fmax of the link and depth-{depth} cores "
+                       f"(fmax limit)")
             continue
         per_core = plan.cycles_per_tick - LINK_IDLE_CYCLES
         if per_core < 1:

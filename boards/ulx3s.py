@@ -8,9 +8,9 @@ clocks per bit at 3 Mbaud. (48 MHz, which would give 3000 cycles and 16 clocks p
 an input divider of 25, below the PLL's 3.125 MHz phase-detector minimum.)
 
 A second plan, 90 MHz (25 / 5 * 18, VCO 540 MHz), gives 5625 cycles per sweep and 30 clocks per
-bit at 3 Mbaud: the sizing takes it for arrays of cores when the pipeline's fmax allows (the
-measured fmax below, out of context on the LFE5U-85F -6, lowest of three placement seeds, less
-the sizing's 10 % margin for the board build).
+bit at 3 Mbaud: the sizing takes it when the measured fmax allows (the core's out of context on
+the LFE5U-85F -6, lowest of three placement seeds, and the host link's in a board build, less
+the sizing's 10 % margin). Today the link's frame decoder (70.8 MHz) rules it out.
 """
 
 from __future__ import annotations
@@ -76,6 +76,9 @@ TARGET = {
     # fmax (MHz) of one core by pipeline depth: out of context, lowest of seeds 1-3
     # (docs/architecture.md); the TRELLIS_COMB cells of one core and of the link
     "fmax_mhz": {5: 90.9, 8: 108.7},
+    # the host link's fmax in a board build (its frame decoder: 70.8 MHz in the 40 000-neuron
+    # build, where the cores' paths were no longer critical)
+    "link_fmax_mhz": 70.8,
     "logic_per_core": 1900, "logic_link": 3000,
     "nextpnr_cells": {"LUT": "TRELLIS_COMB", "FF": "TRELLIS_FF", "BRAM": "DP16KD",
                       "DSP": "MULT18X18D"},
