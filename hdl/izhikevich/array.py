@@ -10,16 +10,16 @@ global: neuron ``n`` of core ``k`` is ``k * n_neurons + n``.
   after it was presented, one more than on a single core).
 * **One tick for all cores**: with ``tick_source="external"`` the ``tick`` input goes to every
   core through a register of its own (a sweep starts one cycle after the tick; ``busy`` is
-  high from the cycle after the tick, as on a single core); with the internal divider every core runs its own, identical, divider from the same
-  reset. The cores sweep in lock step: ``busy`` is core 0's; ``sweep_done`` and
+  high from the cycle after the tick, as on a single core); with the internal divider every
+  core runs its own, identical, divider from the same reset. The cores sweep in lock step: ``busy`` is core 0's; ``sweep_done`` and
   ``sweep_number`` are core 0's one cycle later, beside ``sweep_count``, the sum over the
   cores, and ``overrun``, ``spike_overflow`` and the sticky ``clamp_flags``, ORs over the cores
   (``clamp_clear`` goes to every core).
 * **Spike order**: each core queues its spikes in its own FIFO in its update order (sweep, then
   index). Each core's head moves into a register of the array (its global id formed there);
-  a two-entry FIFO takes, whenever it has room, the lowest-numbered core's head register that
-  holds a spike, and the stream is that FIFO's output, with ``spike_index`` the global id and
-  ``spike_sweep`` the sweep. So the spikes of
+  a four-entry FIFO takes, whenever it has room (one spike a cycle), the lowest-numbered
+  core's head register that holds a spike, and the stream is that FIFO's output, with
+  ``spike_index`` the global id and ``spike_sweep`` the sweep. So the spikes of
   one core keep their order; between cores the order follows the arbitration (the cores update
   their neurons ``n`` in the same cycle, so with the stream always ready a sweep's spikes leave
   roughly by local index, ties to the lower core). A host needing one global order sorts by
@@ -120,11 +120,11 @@ class IzhikevichArray(wiring.Component):
 
         # the spike stream in registered steps, so that no path crosses the device through
         # more than one level of logic: each core's head moves into a register of its own
-        # (its global id formed there); a two-entry FIFO takes the lowest-numbered core's head
-        # whenever it has room (its room a register, not the consumer's ready); the consumer
-        # reads the FIFO
+        # (its global id formed there); a four-entry FIFO (one spike a cycle) takes the
+        # lowest-numbered core's head whenever it has room (its room a register, not the
+        # consumer's ready); the consumer reads the FIFO
         iw, sw = len(self.spike_index), len(self.spike_sweep)
-        m.submodules.spike_out = out = SyncFIFOBuffered(width=iw + sw, depth=2)
+        m.submodules.spike_out = out = SyncFIFOBuffered(width=iw + sw, depth=4)
         take = out.w_rdy
         heads = []
         earlier = 0

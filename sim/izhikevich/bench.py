@@ -356,7 +356,10 @@ async def array_check(dut):
         await FallingEdge(d.clk)
         sample_stream()
     elapsed = time.perf_counter() - t0
-    got = stream[:len(expected)]
+    # the stream's spikes of the checked sweeps (a later sweep's spikes of a low-numbered core
+    # may pass a high-numbered core's backlog: the arbitration favours the lower core)
+    checked = {s % (1 << width) for s in range(n_sweeps)}
+    got = [x for x in stream if x[1] in checked]
     extra["stream_matches"] = sorted(got, key=lambda x: (x[1], x[0])) == \
         sorted(expected, key=lambda x: (x[1], x[0]))
     extra["stream_core_order"] = all(

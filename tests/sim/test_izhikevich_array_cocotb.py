@@ -16,9 +16,9 @@ from cuneate.sim.engines.toolchain import SIMULATORS
 from cuneate.sim.izhikevich.bench import make_config
 
 
-def _case(cores, n, depth, sweeps, **extra):
+def _case(cores, n, depth, sweeps, current_range=(-5.0, 150.0), **extra):
     sets = ["RS", "IB", "CH", "FS"]
-    return {"cores": cores, "sweeps": sweeps, "current_range": [-5.0, 150.0],
+    return {"cores": cores, "sweeps": sweeps, "current_range": list(current_range),
             "writes_per_sweep": 3,
             "core": {"n_neurons": n, "clock_hz": 16e3 * (n + 4), "update_hz": 16e3,
                      "param_sets": sets, "neuron_sets": [i % 4 for i in range(n)],
@@ -26,7 +26,8 @@ def _case(cores, n, depth, sweeps, **extra):
 
 
 CASES = {f"k3_n12_depth{d}": _case(3, 12, d, 60) for d in (5, max(PIPELINE_STAGES))}
-LONG = {"k8_n500": _case(8, 500, 5, 4, spike_fifo_depth=512)}
+# 4000 neurons: the first writes take 8 sweeps; strong currents so that every core spikes
+LONG = {"k8_n500": _case(8, 500, 5, 32, current_range=(60.0, 200.0), spike_fifo_depth=512)}
 
 
 def _run(simulator, case, spec, build_root):
