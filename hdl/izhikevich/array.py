@@ -11,8 +11,8 @@ global: neuron ``n`` of core ``k`` is ``k * n_neurons + n``.
 * **One tick for all cores**: with ``tick_source="external"`` the ``tick`` input goes to every
   core through a register of its own (a sweep starts one cycle after the tick; ``busy`` is
   high from the cycle after the tick, as on a single core); with the internal divider every
-  core runs its own, identical, divider from the same reset. The cores sweep in lock step: ``busy`` is core 0's; ``sweep_done`` and
-  ``sweep_number`` are core 0's one cycle later, beside ``sweep_count``, the sum over the
+  core runs its own, identical, divider from the same reset. The cores sweep in lock step:
+  ``busy`` is core 0's; ``sweep_done`` and ``sweep_number`` are core 0's one cycle later, beside ``sweep_count``, the sum over the
   cores, and ``overrun``, ``spike_overflow`` and the sticky ``clamp_flags``, ORs over the cores
   (``clamp_clear`` goes to every core).
 * **Spike order**: each core queues its spikes in its own FIFO in its update order (sweep, then
