@@ -12,8 +12,9 @@ global: neuron ``n`` of core ``k`` is ``k * n_neurons + n``.
   core through a register of its own (a sweep starts one cycle after the tick; ``busy`` is
   high from the cycle after the tick, as on a single core); with the internal divider every
   core runs its own, identical, divider from the same reset. The cores sweep in lock step:
-  ``busy`` is core 0's; ``sweep_done`` and ``sweep_number`` are core 0's one cycle later, beside ``sweep_count``, the sum over the
-  cores, and ``overrun``, ``spike_overflow`` and the sticky ``clamp_flags``, ORs over the cores
+  ``busy`` is core 0's; ``sweep_done`` and ``sweep_number`` are core 0's one cycle later,
+  beside ``sweep_count``, the sum over the cores, and ``overrun``, ``spike_overflow`` and the
+  sticky ``clamp_flags``, ORs over the cores
   (``clamp_clear`` goes to every core).
 * **Spike order**: each core queues its spikes in its own FIFO in its update order (sweep, then
   index). Each core's head moves into a register of the array (its global id formed there);
