@@ -63,10 +63,15 @@ def _count(mems, target: dict) -> int:
     return sum(_blocks(d, w, target) for d, w in mems if d * w > target.get("lutram_bits", 0))
 
 
+def _dsp_per_core(cfg: IzhikevichConfig, target: dict) -> int:
+    """Multiplier blocks of one core: four products, each ``ceil(w / dsp_width)**2`` blocks."""
+    return MULTIPLIERS * math.ceil(cfg.operand_width / target["dsp_width"]) ** 2
+
+
 def _estimate(cfg: IzhikevichConfig, lcfg: LinkConfig, n: int, cores: int,
               target: dict) -> dict:
     bram = cores * _count(_core_memories(cfg, n), target) + _count(_link_memories(lcfg), target)
-    dsp = cores * MULTIPLIERS * math.ceil(cfg.operand_width / target["dsp_width"]) ** 2
+    dsp = cores * _dsp_per_core(cfg, target)
     out = {"BRAM": bram, "DSP": dsp, "cores": cores}
     logic = target.get("logic_per_core")
     if logic:
@@ -102,7 +107,7 @@ def _fmax_bound(target: dict, depth: int) -> float | None:
     return min(bounds) * 1e6 if bounds else None
 
 
-def _choose(target: dict, N: int, plans: list, cfg: IzhikevichConfig, lcfg_of, depth: int):
+def _choose(target: dict, N: int, plans: list, cfg: IzhikevichConfig, depth: int):
     """``(plan, pll, cores, per-core neurons, estimate)`` for ``N`` neurons: per plan the
     fewest cores that fit, then the plan with the fewest cores (the lower clock on a tie);
     raises :class:`ConfigError` naming the limit when none fits."""
@@ -118,11 +123,11 @@ def _choose(target: dict, N: int, plans: list, cfg: IzhikevichConfig, lcfg_of, d
         if per_core < 1:
             continue
         k_min = math.ceil(N / per_core)
-        dsp_core = MULTIPLIERS * math.ceil(cfg.operand_width / target["dsp_width"]) ** 2
-        k_max = max(k_min, target["resources"]["DSP"] // dsp_core)
+        k_max = max(k_min, target["resources"]["DSP"] // _dsp_per_core(cfg, target))
+        link = _link_config(target, cfg, plan)      # its buffers do not depend on N
         for k in range(k_min, k_max + 1):
             n = math.ceil(N / k)
-            est = _estimate(cfg, lcfg_of(n, k, plan), n, k, target)
+            est = _estimate(cfg, link, n, k, target)
             over = _fits(est, target)
             if over is None:
                 if best is None or k < best[2]:
@@ -148,7 +153,7 @@ def limits(target: dict, pipeline_stages: int = 5) -> dict:
     res = target["resources"]
     per_bits = cfg.V.width + cfg.U.width + cfg.I.width + max(cfg.sel_bits, 1)
     block_bits = max(d * w for d, w in target["bram_shapes"])
-    dsp_core = MULTIPLIERS * math.ceil(cfg.operand_width / target["dsp_width"]) ** 2
+    dsp_core = _dsp_per_core(cfg, target)
     fastest = max(p.clock_hz for p, _ in plans)
     upd = plans[0][0].update_hz
     fmax = _fmax_bound(target, pipeline_stages)
@@ -174,23 +179,29 @@ def limits(target: dict, pipeline_stages: int = 5) -> dict:
     return out
 
 
-def _width_config(target: dict, **core_kwargs) -> IzhikevichConfig:
-    """A small configuration with the target's formats (widths do not depend on N)."""
+def _core_config(target: dict, core_kwargs: dict, n: int, clock_hz: float,
+                 update_hz: float) -> IzhikevichConfig:
+    """A core of ``n`` neurons for ``target`` (its ``core_defaults``, then ``core_kwargs``;
+    external tick: the link drives it)."""
     kw = dict(target.get("core_defaults", {}))
     kw.update(core_kwargs)
-    kw.update(n_neurons=16, clock_hz=16 * 16e3, update_hz=16e3, tick_source="external")
+    kw.update(n_neurons=n, clock_hz=clock_hz, update_hz=update_hz, tick_source="external")
     kw.setdefault("spike_fifo_depth", 256)
-    kw.pop("neuron_sets", None)
     return IzhikevichConfig(**kw)
 
 
-def _link_of(target: dict, cfg: IzhikevichConfig):
-    def make(n, k, plan):
-        # the link's buffers do not depend on N: its configuration on the small core
-        return LinkConfig(cfg, clocks_per_bit=plan.clocks_per_bit,
-                          batch_sweeps=max(1, int(round(plan.update_hz / 1000))),
-                          **target.get("link_defaults", {}))
-    return make
+def _width_config(target: dict, **core_kwargs) -> IzhikevichConfig:
+    """A small configuration with the target's formats (widths do not depend on N)."""
+    core_kwargs.pop("neuron_sets", None)
+    return _core_config(target, core_kwargs, 16, 16 * 16e3, 16e3)
+
+
+def _link_config(target: dict, core: IzhikevichConfig, plan: ClockPlan,
+                 n_cores: int = 1) -> LinkConfig:
+    """The link for ``n_cores`` cores of ``core`` at ``plan`` (one spike batch a millisecond)."""
+    return LinkConfig(core, clocks_per_bit=plan.clocks_per_bit,
+                      batch_sweeps=max(1, int(round(plan.update_hz / 1000))), n_cores=n_cores,
+                      **target.get("link_defaults", {}))
 
 
 def size_plan(target: dict, N: int, pipeline_stages: int = 5, plans=None, **core_kwargs):
@@ -200,8 +211,7 @@ def size_plan(target: dict, N: int, pipeline_stages: int = 5, plans=None, **core
         raise ConfigError(f"{target['name']}: {N} neurons exceed the link's "
                           f"{MAX_LINK_NEURONS} neuron ids (link limit)")
     cfg = _width_config(target, pipeline_stages=pipeline_stages, **core_kwargs)
-    return _choose(target, N, plans or clock_plans(target), cfg, _link_of(target, cfg),
-                   pipeline_stages)
+    return _choose(target, N, plans or clock_plans(target), cfg, pipeline_stages)
 
 
 def size_core(target: dict, n_neurons: int | None = None, clock_hz: float | None = None,
@@ -222,15 +232,8 @@ def size_core(target: dict, n_neurons: int | None = None, clock_hz: float | None
     N = n_neurons or target["default_neurons"]
     depth = core_kwargs.get("pipeline_stages", 5)
     plan, pll, k, n, est = size_plan(target, N, plans=plans, **core_kwargs)
-    kw = dict(target.get("core_defaults", {}))
-    kw.update(core_kwargs)
-    kw.update(n_neurons=n, clock_hz=plan.clock_hz, update_hz=plan.update_hz,
-              tick_source="external")
-    kw.setdefault("spike_fifo_depth", 256)
-    core = IzhikevichConfig(**kw)
-    lcfg = LinkConfig(core, clocks_per_bit=plan.clocks_per_bit,
-                      batch_sweeps=max(1, int(round(plan.update_hz / 1000))), n_cores=k,
-                      **target.get("link_defaults", {}))
+    core = _core_config(target, core_kwargs, n, plan.clock_hz, plan.update_hz)
+    lcfg = _link_config(target, core, plan, n_cores=k)
     return {"link": lcfg, "estimate": estimate(lcfg, target), "pll": pll,
             "requested_neurons": N, "pipeline_stages": depth,
             "plan": {"osc_hz": plan.osc_hz, "clock_hz": plan.clock_hz,

@@ -191,8 +191,8 @@ def clamp_bits(flags: dict):
 # step: the rounding increments that :func:`operands` and :func:`multiply2` add before the
 # products are added as ``increment * operand`` terms beside them, and the clamp tests of
 # :func:`update_state` become signs of sums formed in parallel. The integers are the same
-# (``round(x) * c == floor(x) * c + bit * c``); ``test_izhikevich_datapath`` proves the two
-# forms equal over the state box.
+# (``round(x) * c == floor(x) * c + bit * c``); the ``steps`` property of
+# :mod:`cuneate.hdl.izhikevich.formal` proves the two forms equal over the state box.
 #
 # Every step is ``f(cfg, x) -> dict`` over a mapping ``x`` of named values; :data:`STEPS` lists
 # them with the names each reads, so that the RTL registers exactly the values still needed at
