@@ -51,7 +51,7 @@ from ..lib.datapath import lookup
 from ..lib.synapses import trace_products, trace_update
 from ..lib.tick import tick_strobe
 from .config import CLAMP_KINDS, CoincidenceConfig
-from .datapath import accumulate, clamp_bits_hdl, psp_current
+from .datapath import accumulate, clamp_bits_hdl, history_slot, psp_current
 
 __all__ = ["synth_resources", "CoincidenceDetector", "coincidence_verilog", "generate_coincidence",
            "COUNTER_BITS"]
@@ -153,8 +153,7 @@ class CoincidenceDetector(wiring.Component):
         m.d.sync += [vB.eq(issuing), sB.eq(src), lastB.eq(src == S - 1)]
         d_B = dw_rd.data[:db]
         w_B = dw_rd.data[db:]
-        diff = Signal(range(-D, D))
-        m.d.comb += [diff.eq(slot - d_B), hist_rd.addr.eq(Mux(diff < 0, diff + D, diff))]
+        m.d.comb += hist_rd.addr.eq(history_slot(slot, d_B, D))
         m.d.sync += [vC.eq(vB), sC.eq(sB), lastC.eq(lastB), wC.eq(w_B)]
         bit_C = hist_rd.data.bit_select(sC, 1)
         with m.If(vC):

@@ -1,5 +1,6 @@
 """The coincidence detector's own stage functions, written once for the twin and the RTL: the
-delayed input sum (:func:`accumulate`, one input per cycle) and the PSP current with the trace
+delayed input sum (:func:`accumulate`, one input per cycle, each read from the history slot
+:func:`history_slot` names) and the PSP current with the trace
 inputs (:func:`psp_current`, update cycle 1). The traces are the shared ones of
 :mod:`cuneate.hdl.lib.synapses`, the targets' update the Izhikevich datapath's; the schedule
 and the formats are in :mod:`cuneate.hdl.coincidence.core` and
@@ -13,7 +14,14 @@ from amaranth import Cat
 from ..lib.fixed import narrow, round_shift, select
 from .config import CLAMP_KINDS, CoincidenceConfig
 
-__all__ = ["accumulate", "psp_current", "clamp_bits_hdl"]
+__all__ = ["history_slot", "accumulate", "psp_current", "clamp_bits_hdl"]
+
+
+def history_slot(slot, delay, depth: int):
+    """The ring slot holding the spikes stamped ``delay`` ticks before the tick stamped into
+    ``slot`` (``0 <= slot, delay < depth``): ``(slot - delay) mod depth``."""
+    diff = slot - delay
+    return select(diff < 0, diff + depth, diff)
 
 
 def accumulate(acc, bit, w):

@@ -11,7 +11,7 @@ from ..izhikevich import IzhikevichTwin
 from ..lib.fixed import tally_clamps
 from ..lib.synapses import trace_products, trace_update
 from .config import CLAMP_KINDS, CoincidenceConfig
-from .datapath import accumulate, psp_current
+from .datapath import accumulate, history_slot, psp_current
 
 __all__ = ["CoincidenceTwin"]
 
@@ -68,7 +68,8 @@ class CoincidenceTwin:
     def inputs(self) -> np.ndarray:
         """``a`` (raw weight LSBs) of every target at the current tick (history stamped)."""
         cfg = self.cfg
-        idx = (self.ticks - cfg.delays) % cfg.max_delay_ticks
+        D = cfg.max_delay_ticks
+        idx = history_slot(self.ticks % D, cfg.delays, D)
         bits = self.history[idx, np.arange(cfg.n_sources)[None, :]]
         a = np.zeros(cfg.n_targets, dtype=np.int64)
         for s in range(cfg.n_sources):

@@ -1,7 +1,9 @@
 """``cuneate prove``: SymbiYosys checks of the Izhikevich datapath
-(:mod:`cuneate.hdl.izhikevich.formal`) and ``cuneate prove core|lif``: the pipelined Izhikevich or LIF core
-against its one-step datapath (:mod:`cuneate.hdl.izhikevich.formal_core`,
-:mod:`cuneate.hdl.lif.formal_core`; k-induction with ``--unbounded``)."""
+(:mod:`cuneate.hdl.izhikevich.formal`); ``cuneate prove core|lif``: the pipelined Izhikevich or
+LIF core against its one-step datapath (:mod:`cuneate.hdl.izhikevich.formal_core`,
+:mod:`cuneate.hdl.lif.formal_core`); ``cuneate prove coincidence``: the coincidence detector
+against its one-tick reference (:mod:`cuneate.hdl.coincidence.formal_core`); k-induction with
+``--unbounded``."""
 
 from __future__ import annotations
 
@@ -12,24 +14,56 @@ from .options import CliError, CommandGroups, positive_float, positive_int
 __all__ = ["register", "cmd_prove"]
 
 
+def _proof_target(args):
+    """The configuration and the prove function of ``args.target`` (core, lif, coincidence)."""
+    from ...hdl.coincidence import CoincidenceConfig
+    from ...hdl.coincidence.formal_core import coincidence_proof_config, prove_coincidence
+    from ...hdl.izhikevich import IzhikevichConfig
+    from ...hdl.izhikevich.formal_core import proof_config, prove_core
+    from ...hdl.lif import LifConfig
+    from ...hdl.lif.formal_core import lif_proof_config, prove_lif
+    configure, default, prove = {
+        "core": (proof_config, IzhikevichConfig, prove_core),
+        "lif": (lif_proof_config, LifConfig, prove_lif),
+        "coincidence": (coincidence_proof_config, CoincidenceConfig, prove_coincidence),
+    }[args.target]
+    if args.target == "coincidence":
+        if args.default_config:
+            raise CliError("cuneate prove coincidence: --default-config is not offered (its "
+                           "513-tick history is proven by the argument of docs/formal.md, not "
+                           "by size); use --targets/--sources")
+        if args.neurons or args.mutant in ("stage_off_by_one", "late_host_write",
+                                           "tag_off_by_one"):
+            raise CliError("cuneate prove coincidence: --neurons and the core's mutants do "
+                           "not apply (use --targets, --sources, --history and its mutants "
+                           "skipped_write, wrong_slot, stamp_wrong_slot)")
+        kw = {k: v for k, v in (("n_targets", args.targets), ("n_sources", args.sources),
+                                ("max_delay_ticks", args.history)) if v}
+        if kw:
+            S, M = kw.get("n_sources", 2), kw.get("n_targets", 2)
+            D = kw.get("max_delay_ticks", 3)
+            kw.update(delays_ticks=[[(t + s) % D for s in range(S)] for t in range(M)],
+                      weights=[[8.0 / (1 + (t + 2 * s) % 4) for s in range(S)]
+                               for t in range(M)])
+        return coincidence_proof_config(**kw), prove
+    if args.mutant in ("wrong_slot", "stamp_wrong_slot"):
+        raise CliError(f"cuneate prove {args.target}: mutant {args.mutant} is the coincidence "
+                       f"detector's")
+    if args.default_config:
+        return default(), prove
+    return (configure(args.neurons) if args.neurons else configure()), prove
+
+
 def cmd_prove_core(args) -> int:
-    """``cuneate prove core|lif``: bounded (``--depth``, default the induction depth) or, with
-    ``--unbounded``, k-induction; PASS/FAIL with mode, depth, solver and time."""
+    """``cuneate prove core|lif|coincidence``: bounded (``--depth``, default the induction
+    depth) or, with ``--unbounded``, k-induction; PASS/FAIL with mode, depth, solver and
+    time."""
     import json
     import tempfile
     from ...hdl.izhikevich import ConfigError
     from ...hdl.izhikevich.formal import FormalError
-    from ...hdl.izhikevich.formal_core import proof_config, prove_core
-    from ...hdl.lif.formal_core import lif_proof_config, prove_lif
-    configure, prove = ((proof_config, prove_core) if args.target == "core"
-                        else (lif_proof_config, prove_lif))
     try:
-        if args.default_config:
-            from ...hdl.izhikevich import IzhikevichConfig
-            from ...hdl.lif import LifConfig
-            cfg = IzhikevichConfig() if args.target == "core" else LifConfig()
-        else:
-            cfg = configure(args.neurons) if args.neurons else configure()
+        cfg, prove = _proof_target(args)
     except ConfigError as exc:
         raise CliError(f"cuneate prove {args.target}: {exc}") from None
     with tempfile.TemporaryDirectory(prefix="cuneate-prove-") as d:
@@ -37,25 +71,44 @@ def cmd_prove_core(args) -> int:
             r = prove(cfg, Path(args.work_dir) if args.work_dir else Path(d),
                            mode="prove" if args.unbounded else "bmc", depth=args.depth,
                            mutant=args.mutant, timeout_s=args.timeout_s, solver=args.solver)
+            slot = ring = None
+            if args.target == "coincidence" and not args.mutant:
+                # the ring address at the default detector's 513-tick history (the scale
+                # argument of docs/formal.md rests on it)
+                from ...hdl.coincidence import CoincidenceConfig
+                from ...hdl.coincidence.formal_core import prove_history_slot
+                ring = CoincidenceConfig().max_delay_ticks
+                slot = prove_history_slot(CoincidenceConfig(), Path(d) / "history_slot",
+                                          args.timeout_s, args.solver)
         except FormalError as exc:
             raise CliError(f"cuneate prove {args.target}: {exc}") from None
-    out = r.to_dict() | {"n_neurons": cfg.n_neurons, "mutant": args.mutant}
+    size = ({"n_targets": cfg.n_targets, "n_sources": cfg.n_sources,
+             "max_delay_ticks": cfg.max_delay_ticks} if args.target == "coincidence"
+            else {"n_neurons": cfg.n_neurons})
+    out = r.to_dict() | size | {"mutant": args.mutant}
+    if slot is not None:
+        out["history_slot"] = slot.to_dict() | {"max_delay_ticks": ring}
     if args.json:
         print(json.dumps(out))
     else:
         what = "k-induction" if r.mode == "prove" else "bounded from the initial state"
         print(f"{r.property}: {r.status.upper()} ({what}, depth {r.depth}, {r.engine} "
-              f"{r.solver}, {r.seconds:.1f} s, N = {cfg.n_neurons}"
+              f"{r.solver}, {r.seconds:.1f} s, "
+              + ", ".join(f"{k} = {v}" for k, v in size.items())
               + (f", mutant {args.mutant}" if args.mutant else "") + ")")
         if r.failed:
             print(f"  failed in step {r.step} ({r.phase}): {', '.join(r.failed)}")
         for a in r.abstractions:
             print(f"  abstraction: {a}")
-    return 0 if r.passed else 1
+        if slot is not None:
+            print(f"{slot.property}: {slot.status.upper()} (every slot and delay of the "
+                  f"default {ring}-tick history, {slot.engine} {slot.solver}, "
+                  f"{slot.seconds:.1f} s)")
+    return 0 if r.passed and (slot is None or slot.passed) else 1
 
 
 def cmd_prove(args) -> int:
-    if args.target in ("core", "lif"):
+    if args.target in ("core", "lif", "coincidence"):
         return cmd_prove_core(args)
     import json
     import tempfile
@@ -98,13 +151,15 @@ def cmd_prove(args) -> int:
 
 def register(groups: CommandGroups) -> None:
     from ...hdl.flow.sby import SOLVER, SOLVERS
+    from ...hdl.coincidence.formal_core import MUTANTS as DETECTOR_MUTANTS
     from ...hdl.lib.core_proof import MUTANTS
     f = groups.root.add_parser("prove", help="SymbiYosys checks of the one-update datapath "
                                "and of the pipelined core")
-    f.add_argument("target", nargs="?", choices=("datapath", "core", "lif"),
+    f.add_argument("target", nargs="?", choices=("datapath", "core", "lif", "coincidence"),
                    default="datapath",
                    help="datapath (default): one update's range properties; core, lif: the "
-                   "pipelined Izhikevich or LIF core equals its one-step datapath")
+                   "pipelined Izhikevich or LIF core equals its one-step datapath; "
+                   "coincidence: the detector equals its one-tick reference")
     f.add_argument("--unbounded", action="store_true",
                    help="core: k-induction (every input sequence of every length)")
     f.add_argument("--depth", type=positive_int, default=None,
@@ -114,8 +169,15 @@ def register(groups: CommandGroups) -> None:
     f.add_argument("--default-config", action="store_true",
                    help="core, lif: the block's default configuration (e.g. 2500 neurons, "
                    "internal tick) instead of the smallest core")
-    f.add_argument("--mutant", choices=MUTANTS, default=None,
-                   help="core: build this fault into the core (the proof must fail)")
+    f.add_argument("--targets", type=positive_int, default=None,
+                   help="coincidence: targets (default 2)")
+    f.add_argument("--sources", type=positive_int, default=None,
+                   help="coincidence: sources (default 2)")
+    f.add_argument("--history", type=positive_int, default=None,
+                   help="coincidence: history depth in ticks (default 3)")
+    f.add_argument("--mutant", choices=tuple(dict.fromkeys(MUTANTS + DETECTOR_MUTANTS)),
+                   default=None, help="core, lif, coincidence: build this fault into the "
+                   "block (the proof must fail)")
     f.add_argument("--solver", choices=SOLVERS, default=SOLVER)
     f.add_argument("--preset", action="append", default=None,
                    help="parameter set(s) (repeat for a mix; default RS)")
