@@ -158,14 +158,15 @@ def _statements(stmts):
 def signal_named(fragment: Fragment, name: str) -> Signal:
     """The one signal called ``name`` that ``fragment`` (not its subfragments) assigns."""
     found = {}
+
     for stmts in fragment.statements.values():
         for s in _statements(stmts):
             if isinstance(s, Assign):
-                lhs = s.lhs
-                while not isinstance(lhs, Signal) and hasattr(lhs, "value"):
-                    lhs = lhs.value
-                if isinstance(lhs, Signal) and lhs.name == name:
-                    found[id(lhs)] = lhs
+                # every signal the target may write (through slices, parts and Array
+                # elements)
+                for sig in s.lhs._lhs_signals():
+                    if sig.name == name:
+                        found[id(sig)] = sig
     if len(found) != 1:
         raise FormalError(f"expected one register {name!r} in the elaborated core, "
                           f"found {len(found)}")

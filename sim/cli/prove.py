@@ -15,18 +15,29 @@ __all__ = ["register", "cmd_prove"]
 
 
 def _proof_target(args):
-    """The configuration and the prove function of ``args.target`` (core, lif, coincidence)."""
+    """The configuration and the prove function of ``args.target`` (core, lif, coincidence,
+    link)."""
     from ...hdl.coincidence import CoincidenceConfig
     from ...hdl.coincidence.formal_core import coincidence_proof_config, prove_coincidence
     from ...hdl.izhikevich import IzhikevichConfig
     from ...hdl.izhikevich.formal_core import proof_config, prove_core
     from ...hdl.lif import LifConfig
     from ...hdl.lif.formal_core import lif_proof_config, prove_lif
+    from ...hdl.link.config import link_config
+    from ...hdl.link.formal_core import MUTANTS as LINK_MUTANTS
+    from ...hdl.link.formal_core import decoder_proof_config, prove_decoder
     configure, default, prove = {
         "core": (proof_config, IzhikevichConfig, prove_core),
         "lif": (lif_proof_config, LifConfig, prove_lif),
         "coincidence": (coincidence_proof_config, CoincidenceConfig, prove_coincidence),
+        "link": (decoder_proof_config, link_config, prove_decoder),
     }[args.target]
+    if args.target == "link":
+        if args.mutant and args.mutant not in LINK_MUTANTS:
+            raise CliError(f"cuneate prove link: mutant {args.mutant} is not the link's (its "
+                           f"mutants: {', '.join(LINK_MUTANTS)})")
+    elif args.mutant in LINK_MUTANTS:
+        raise CliError(f"cuneate prove {args.target}: mutant {args.mutant} is the link's")
     if args.target == "coincidence":
         if args.default_config:
             raise CliError("cuneate prove coincidence: --default-config is not offered (its "
@@ -84,6 +95,8 @@ def cmd_prove_core(args) -> int:
             raise CliError(f"cuneate prove {args.target}: {exc}") from None
     size = ({"n_targets": cfg.n_targets, "n_sources": cfg.n_sources,
              "max_delay_ticks": cfg.max_delay_ticks} if args.target == "coincidence"
+            else {"n_neurons": cfg.n_neurons, "current_bytes": cfg.current_bytes,
+                  "rx_fifo_depth": cfg.rx_fifo_depth} if args.target == "link"
             else {"n_neurons": cfg.n_neurons})
     out = r.to_dict() | size | {"mutant": args.mutant}
     if slot is not None:
@@ -108,7 +121,7 @@ def cmd_prove_core(args) -> int:
 
 
 def cmd_prove(args) -> int:
-    if args.target in ("core", "lif", "coincidence"):
+    if args.target in ("core", "lif", "coincidence", "link"):
         return cmd_prove_core(args)
     import json
     import tempfile
@@ -153,13 +166,16 @@ def register(groups: CommandGroups) -> None:
     from ...hdl.flow.sby import SOLVER, SOLVERS
     from ...hdl.coincidence.formal_core import MUTANTS as DETECTOR_MUTANTS
     from ...hdl.lib.core_proof import MUTANTS
+    from ...hdl.link.formal_core import MUTANTS as LINK_MUTANTS
     f = groups.root.add_parser("prove", help="SymbiYosys checks of the one-update datapath "
                                "and of the pipelined core")
-    f.add_argument("target", nargs="?", choices=("datapath", "core", "lif", "coincidence"),
+    f.add_argument("target", nargs="?",
+                   choices=("datapath", "core", "lif", "coincidence", "link"),
                    default="datapath",
                    help="datapath (default): one update's range properties; core, lif: the "
                    "pipelined Izhikevich or LIF core equals its one-step datapath; "
-                   "coincidence: the detector equals its one-tick reference")
+                   "coincidence: the detector equals its one-tick reference; link: the host "
+                   "link's frame decoder meets the wire format")
     f.add_argument("--unbounded", action="store_true",
                    help="core: k-induction (every input sequence of every length)")
     f.add_argument("--depth", type=positive_int, default=None,
@@ -175,9 +191,10 @@ def register(groups: CommandGroups) -> None:
                    help="coincidence: sources (default 2)")
     f.add_argument("--history", type=positive_int, default=None,
                    help="coincidence: history depth in ticks (default 3)")
-    f.add_argument("--mutant", choices=tuple(dict.fromkeys(MUTANTS + DETECTOR_MUTANTS)),
-                   default=None, help="core, lif, coincidence: build this fault into the "
-                   "block (the proof must fail)")
+    f.add_argument("--mutant",
+                   choices=tuple(dict.fromkeys(MUTANTS + DETECTOR_MUTANTS + LINK_MUTANTS)),
+                   default=None, help="core, lif, coincidence, link: build this fault into "
+                   "the block (the proof must fail)")
     f.add_argument("--solver", choices=SOLVERS, default=SOLVER)
     f.add_argument("--preset", action="append", default=None,
                    help="parameter set(s) (repeat for a mix; default RS)")
