@@ -238,6 +238,8 @@ class HostLink(wiring.Component):
                     # first + values > N, values = nvals - CRC_BYTES // W (the CRC's bytes
                     # were assembled as values too)
                     out_of_range.eq(first + nvals > N + CRC_BYTES // W),
+                    # set for every frame: only WAIT and WRITE read it, and only an accepted
+                    # write leads there
                     count.eq(nvals - (CRC_BYTES // W)),
                     is_control.eq((typ == MSG_CONTROL)
                                   & (flen == MIN_FRAME + CONTROL_PAYLOAD)
