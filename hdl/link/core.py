@@ -11,12 +11,13 @@ Receive path
     counted ``rx_overflows``) -> streaming COBS decoder with running CRC-32; the header is kept
     in registers and the currents are assembled into a value RAM as they arrive, so nothing
     acts before the frame is checked (size, CRC residue, version, ``len`` against the size, in
-    that order, then the sequence number and the type's layout). A good frame is then executed
-    while the FIFO holds further bytes (back-pressure). ``WRITE`` waits until the core is
-    between sweep ``tick - 1`` and sweep ``tick`` and writes one current per cycle; the tick
-    generator holds the next tick while a write is in progress (jitter of at most ``count + 1``
-    cycles, no drift), so the currents are in effect exactly from sweep ``tick``. A write whose
-    sweep has started is refused (``late_writes``).
+    that order, then the sequence number and the type's layout). After the delimiter the
+    checks' outcomes are registered in one cycle and acted on, in that order, in the next. A
+    good frame is then executed while the FIFO holds further bytes (back-pressure).
+    ``WRITE`` waits until the core is between sweep ``tick - 1`` and sweep ``tick`` and writes
+    one current per cycle; the tick generator holds the next tick while a write is in progress
+    (jitter of at most ``count + 1`` cycles, no drift), so the currents are in effect exactly
+    from sweep ``tick``. A write whose sweep has started is refused (``late_writes``).
 Tick generator
     Divider of ``cycles_per_tick``; runs freely (``OP_START``), for ``arg`` sweeps
     (``OP_STEP``) or not at all (``OP_STOP``, the state after reset). A tick due while the
@@ -28,10 +29,13 @@ Transmit path
     frame, empty or not; spikes that do not fit are counted in the frame and in
     ``spikes_dropped``; a batch that closes while both buffers are busy is dropped whole and
     counted ``batches_dropped`` (the host sees the gap in ticks). Frames are built into a byte
-    RAM with their CRC-32, then COBS-encoded by scanning, into a small FIFO feeding the UART.
+    RAM with their CRC-32, then COBS-encoded by scanning, into a small FIFO feeding the UART
+    (the spike and frame RAMs' outputs are registered before anything decides on them: a
+    read takes two cycles, and the encoder six cycles a byte against the UART's ten bits).
 
-Counters (``counter_width`` bits, 32 by default, saturating, never wrapping):
-:data:`~cuneate.hdl.link.codec.COUNTER_NAMES`.
+Counters (``counter_width`` bits, 32 by default, saturating, never wrapping; each counts its
+events one cycle after them, its increment registered): :data:`~cuneate.hdl.link.codec
+.COUNTER_NAMES`.
 """
 
 from __future__ import annotations
@@ -45,10 +49,10 @@ from amaranth.lib.wiring import In, Out
 from ..izhikevich import IzhikevichArray, IzhikevichCore
 from ..flow.verilog import verilog_text
 from ..lib.uart import UartRx, UartTx
-from .codec import (COUNTER_NAMES, CRC_BYTES, CRC_INIT, CRC_RESIDUE, MAX_FRAME, MIN_FRAME, MSG_CONTROL, MSG_COUNTERS,
-                         MSG_SPIKES, MSG_WRITE, OP_CLEAR_COUNTERS, OP_READ_COUNTERS,
-                         OP_START, OP_STEP, OP_STOP, SPIKE_HEADER, CONTROL_PAYLOAD,
-                         HEADER_BYTES, VERSION)
+from .codec import (COUNTER_NAMES, CRC_BYTES, CRC_INIT, CRC_RESIDUE, MAX_FRAME, MIN_FRAME,
+                    MSG_CONTROL, MSG_COUNTERS, MSG_SPIKES, MSG_WRITE, OP_CLEAR_COUNTERS,
+                    OP_READ_COUNTERS, OP_START, OP_STEP, OP_STOP, SPIKE_HEADER, CONTROL_PAYLOAD,
+                    HEADER_BYTES, VERSION)
 from .config import LinkConfig
 from .datapath import crc32_update
 
@@ -90,9 +94,17 @@ class HostLink(wiring.Component):
         ctr = {name: Signal(cw, name=f"ctr_{name}") for name in COUNTER_NAMES}
         inc = {name: Signal(8, name=f"inc_{name}") for name in COUNTER_NAMES}
         clear = Signal()
+        # increments and the clear are registered before the adders: the conditions that
+        # raise them (decoder, tick generator, batch logic) would otherwise lead into each
+        # counter's carry chain. A counter lags its event by one cycle; the counters frame
+        # reads them at least ten cycles after the frame that asked for it was decided.
+        inc_r = {name: Signal(8, name=f"inc_r_{name}") for name in COUNTER_NAMES}
+        clear_r = Signal()
+        m.d.sync += [inc_r[name].eq(inc[name]) for name in COUNTER_NAMES]
+        m.d.sync += clear_r.eq(clear)
         for name in COUNTER_NAMES:
-            total = ctr[name] + inc[name]
-            m.d.sync += ctr[name].eq(Mux(clear, 0, Mux(total[cw], (1 << cw) - 1, total[:cw])))
+            total = ctr[name] + inc_r[name]
+            m.d.sync += ctr[name].eq(Mux(clear_r, 0, Mux(total[cw], (1 << cw) - 1, total[:cw])))
 
         # --- UART and receive FIFO --------------------------------------------------------
         m.submodules.uart_rx = urx = UartRx(lc.clocks_per_bit)
@@ -186,8 +198,10 @@ class HostLink(wiring.Component):
 
         count = Signal(range(max_vals + 1))
         widx = Signal(range(max_vals + 1))
-        seq_gap = Signal(8)
-        m.d.comb += seq_gap.eq(seq - exp_seq)
+        # the checks' outcomes, registered in CHECK for DECIDE
+        bad_size, bad_crc, bad_version, bad_len = Signal(), Signal(), Signal(), Signal()
+        is_write, out_of_range, is_control = Signal(), Signal(), Signal()
+        gap = Signal(8)
         counters_req = Signal()
         m.d.comb += vrd.addr.eq(widx)
         m.d.sync += self.i_wr_en.eq(0)
@@ -211,31 +225,49 @@ class HostLink(wiring.Component):
                         m.d.comb += [emit.eq(1), ebyte.eq(b)]
                         m.d.sync += remain.eq(remain - 1)
             with m.State("CHECK"):
+                # every check's outcome registered (from registered operands only); DECIDE
+                # acts on them in the next cycle, in the order of the checks
+                m.d.sync += [
+                    bad_size.eq(overlong | (flen < MIN_FRAME)),
+                    bad_crc.eq(crc != CRC_RESIDUE),
+                    bad_version.eq(ver != VERSION),
+                    bad_len.eq(flen != plen + MIN_FRAME),
+                    gap.eq(seq - exp_seq),
+                    is_write.eq((typ == MSG_WRITE) & (flen >= MIN_FRAME + 2)
+                                & (phase == (CRC_BYTES % W))),
+                    # first + values > N, values = nvals - CRC_BYTES // W (the CRC's bytes
+                    # were assembled as values too)
+                    out_of_range.eq(first + nvals > N + CRC_BYTES // W),
+                    # set for every frame: only WAIT and WRITE read it, and only an accepted
+                    # write leads there
+                    count.eq(nvals - (CRC_BYTES // W)),
+                    is_control.eq((typ == MSG_CONTROL)
+                                  & (flen == MIN_FRAME + CONTROL_PAYLOAD)
+                                  & (op >= OP_START) & (op <= OP_CLEAR_COUNTERS)),
+                ]
+                m.next = "DECIDE"
+            with m.State("DECIDE"):
                 m.d.sync += frame_reset()
                 m.next = "RECV"
-                values = nvals - (CRC_BYTES // W)
-                with m.If(overlong | (flen < MIN_FRAME)):
+                with m.If(bad_size):
                     m.d.comb += inc["length_errors"].eq(1)
-                with m.Elif(crc != CRC_RESIDUE):
+                with m.Elif(bad_crc):
                     m.d.comb += inc["crc_errors"].eq(1)
-                with m.Elif(ver != VERSION):
+                with m.Elif(bad_version):
                     m.d.comb += inc["version_errors"].eq(1)
-                with m.Elif(flen != plen + MIN_FRAME):
+                with m.Elif(bad_len):
                     m.d.comb += inc["length_errors"].eq(1)
                 with m.Else():
-                    m.d.comb += inc["seq_gaps"].eq(seq_gap)
+                    m.d.comb += inc["seq_gaps"].eq(gap)
                     m.d.sync += exp_seq.eq(seq + 1)
-                    with m.If((typ == MSG_WRITE) & (flen >= MIN_FRAME + 2)
-                              & (phase == (CRC_BYTES % W))):
-                        with m.If(first + values > N):
+                    with m.If(is_write):
+                        with m.If(out_of_range):
                             m.d.comb += inc["range_errors"].eq(1)
                         with m.Else():
                             m.d.comb += inc["frames_ok"].eq(1)
-                            m.d.sync += [count.eq(values), widx.eq(0)]
+                            m.d.sync += widx.eq(0)
                             m.next = "WAIT"
-                    with m.Elif((typ == MSG_CONTROL)
-                                & (flen == MIN_FRAME + CONTROL_PAYLOAD)
-                                & (op >= OP_START) & (op <= OP_CLEAR_COUNTERS)):
+                    with m.Elif(is_control):
                         m.d.comb += inc["frames_ok"].eq(1)
                         with m.Switch(op):
                             with m.Case(OP_START):
@@ -258,7 +290,6 @@ class HostLink(wiring.Component):
                     with m.If(count == 0):
                         m.next = "RECV"
                     with m.Else():
-                        m.d.comb += writing.eq(1)
                         m.d.sync += widx.eq(1)
                         m.next = "WRITE"
             with m.State("WRITE"):
@@ -271,9 +302,10 @@ class HostLink(wiring.Component):
         # a continuous assignment (not a process of the FSM): simulators that start
         # combinational processes only on an input change see it from time 0
         m.d.comb += rxf.r_en.eq(rx_fsm.ongoing("RECV"))
-        # the held tick may go once the last write is registered toward the core
-        # (writing covers WAIT->WRITE and WRITE; the write lands one cycle later, before the
-        # fetch of that neuron, which is at least one cycle after the tick)
+        # the held tick may go once the last write is registered toward the core (the write
+        # lands one cycle later, before the fetch of that neuron, which is at least one cycle
+        # after the tick). writing is WRITE alone: in the cycle WAIT leaves for WRITE no tick
+        # is pending (a condition of leaving), so the tick does not wait on WAIT's compares.
 
         # --- spike batches ----------------------------------------------------------------
         m.submodules.smem = smem = Memory(shape=24, depth=2 * CAP, init=[])
@@ -332,7 +364,15 @@ class HostLink(wiring.Component):
         # --- transmit: frame builder and COBS encoder -------------------------------------
         m.submodules.tmem = tmem = Memory(shape=8, depth=MAX_FRAME, init=[])
         twr, trd = tmem.write_port(), tmem.read_port()
+        # the frame RAM's output registered once more before the encoder decides on it (a
+        # block RAM's clock-to-output would start those paths): a read takes two cycles
+        tdat = Signal(8)
+        m.d.sync += tdat.eq(trd.data)
         srd = smem.read_port()
+        # the spike RAM's output registered once more (as the frame RAM's below): a spike
+        # is read in two cycles
+        sdat = Signal(24)
+        m.d.sync += sdat.eq(srd.data)
         tx_half = Signal()
         tx_seq = Signal(8)
         kind_spikes = Signal()
@@ -342,6 +382,7 @@ class HostLink(wiring.Component):
         cb = Signal(range(CRC_BYTES))                     # CRC byte being written
         L = Signal(range(MAX_FRAME + 1))
         start = Signal(range(MAX_FRAME + 1))
+        code = Signal(8)
         p = Signal(range(MAX_FRAME + 1))
         q = Signal(range(MAX_FRAME + 1))
         zero_end = Signal()
@@ -404,10 +445,12 @@ class HostLink(wiring.Component):
                 with m.If(k == h_count):
                     m.next = "CRC_WAIT"
                 with m.Else():
-                    m.next = "SPK0"
+                    m.next = "SPK_WAIT"
+            with m.State("SPK_WAIT"):
+                m.next = "SPK0"
             for n_, (lo, nxt) in enumerate([(0, "SPK1"), (8, "SPK2"), (16, "SPK_NEXT")]):
                 with m.State(f"SPK{n_}"):
-                    m.d.comb += [put.eq(1), pbyte.eq(srd.data[lo:lo + 8])]
+                    m.d.comb += [put.eq(1), pbyte.eq(sdat[lo:lo + 8])]
                     m.next = nxt
             with m.State("SPK_NEXT"):
                 m.d.sync += k.eq(k + 1)
@@ -418,37 +461,42 @@ class HostLink(wiring.Component):
                 # the CRC's bytes, inverted (final xor), least significant first
                 m.d.sync += [j.eq(j + 1), cb.eq(cb + 1)]
                 with m.If(cb == CRC_BYTES - 1):
-                    m.d.sync += [L.eq(j + 1), start.eq(0), p.eq(0)]
+                    m.d.sync += [L.eq(j + 1), start.eq(0), p.eq(0), code.eq(1)]
                     m.next = "SCAN"
             # COBS encoder: find the block [start, p), emit p - start + 1, then the block
+            # (code = p - start + 1 kept as p advances: no subtractor before the decisions)
             with m.State("SCAN"):
+                m.next = "SCAN_RD"
+            with m.State("SCAN_RD"):
                 m.next = "SCAN_CHK"
             with m.State("SCAN_CHK"):
-                with m.If((p < L) & (trd.data != 0) & (p - start < 254)):
-                    m.d.sync += p.eq(p + 1)
+                with m.If((p < L) & (tdat != 0) & (code != 255)):
+                    m.d.sync += [p.eq(p + 1), code.eq(code + 1)]
                     m.next = "SCAN"
                 with m.Else():
-                    m.d.sync += [zero_end.eq((p < L) & (trd.data == 0) & (p - start < 254)),
+                    m.d.sync += [zero_end.eq((p < L) & (tdat == 0) & (code != 255)),
                                  q.eq(start)]
                     m.next = "CODE"
             with m.State("CODE"):
-                m.d.comb += [push.eq(1), txf.w_data.eq(p - start + 1)]
+                m.d.comb += [push.eq(1), txf.w_data.eq(code)]
                 with m.If(room):
                     m.next = "EMIT_RD"
             with m.State("EMIT_RD"):
                 with m.If(q == p):
                     with m.If(zero_end):
-                        m.d.sync += [start.eq(p + 1), p.eq(p + 1)]
+                        m.d.sync += [start.eq(p + 1), p.eq(p + 1), code.eq(1)]
                         m.next = "SCAN"
                     with m.Elif(p < L):
-                        m.d.sync += start.eq(p)
+                        m.d.sync += [start.eq(p), code.eq(1)]
                         m.next = "SCAN"
                     with m.Else():
                         m.next = "DELIM"
                 with m.Else():
-                    m.next = "EMIT"
+                    m.next = "EMIT_WAIT"
+            with m.State("EMIT_WAIT"):
+                m.next = "EMIT"
             with m.State("EMIT"):
-                m.d.comb += [push.eq(1), txf.w_data.eq(trd.data)]
+                m.d.comb += [push.eq(1), txf.w_data.eq(tdat)]
                 with m.If(room):
                     m.d.sync += q.eq(q + 1)
                     m.next = "EMIT_RD"
@@ -465,7 +513,8 @@ class HostLink(wiring.Component):
         m.d.comb += [
             twr.en.eq(put_r | crc_st), twr.addr.eq(Mux(crc_st, j, jw)),
             twr.data.eq(Mux(crc_st, ~tcrc.word_select(cb, 8), pbyte_r)),
-            trd.addr.eq(Mux(tx_fsm.ongoing("EMIT_RD") | tx_fsm.ongoing("EMIT"), q, p)),
+            trd.addr.eq(Mux(tx_fsm.ongoing("EMIT_RD") | tx_fsm.ongoing("EMIT_WAIT")
+                            | tx_fsm.ongoing("EMIT"), q, p)),
         ]
         return m
 

@@ -38,14 +38,15 @@ def test_refusals_name_the_limit(board, kw, match):
 def test_sizing_fills_the_ulx3s_with_cores():
     """The largest ULX3S build: 10 cores of 3734 at 60 MHz (204 of the 208 block RAMs);
     40 000 is refused naming both limits: 11 cores at 60 MHz need more block RAM, and the
-    90 MHz plan (4000 a core would fit) is above the link's measured fmax."""
+    90 MHz plan (4000 a core would fit) is above 0.9 x the fmax the filled board build
+    measured (the target's ``link_fmax_mhz``, below the depth-8 core's out of context)."""
     r = size_core(TARGETS["ulx3s"], n_neurons=37340)
     lc = r["link"]
     assert (lc.n_cores, lc.core.n_neurons, lc.n_neurons) == (10, 3734, 37340)
     assert r["plan"]["clock_hz"] == 60e6 and r["plan"]["clocks_per_bit"] == 20
     assert r["estimate"]["BRAM"] == 204 and r["estimate"]["DSP"] == 40
     with pytest.raises(ConfigError, match=r"224 block RAMs.*\(RAM limit\).*90 MHz plan is "
-                                          r"above 0.9 x the 70.8 MHz fmax"):
+                                          r"above 0.9 x the 80 MHz fmax"):
         size_core(TARGETS["ulx3s"], n_neurons=40000, pipeline_stages=8)
 
 
@@ -54,7 +55,11 @@ def test_limits_per_board():
     from cuneate.boards.sizing import limits
     u5, u8 = limits(TARGETS["ulx3s"], 5), limits(TARGETS["ulx3s"], 8)
     assert (u5["largest"], u5["cores"], u5["clock_hz"]) == (37340, 10, 60e6)
-    assert u8["largest"] == 37340 and u8["fmax_mhz"] == 70.8        # the link's fmax rules
+    # the board build's fmax rules both depths: below 90 MHz / 0.9, so the 90 MHz plan (10
+    # cores of 4096 would fit) is refused and the largest stays the 60 MHz one
+    t = TARGETS["ulx3s"]
+    assert u8["fmax_mhz"] == t["link_fmax_mhz"] == 80.0 < min(t["fmax_mhz"][8], 90 / 0.9)
+    assert u8["largest"] == u5["largest"] == 37340
     # every device bit at 76 bits per neuron: the block-RAM bound is the tightest
     assert u8["bram"] == 208 * 18432 // 76 < min(u8["multiplier"], u8["fmax"])
     ice = limits(TARGETS["icebreaker"], 5)

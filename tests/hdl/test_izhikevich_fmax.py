@@ -8,8 +8,9 @@ import pytest
 from cuneate.hdl.flow.synth import available, nextpnr_ecp5, synthesize
 from cuneate.hdl.izhikevich import IzhikevichConfig, izhikevich_verilog
 
-#: the lowest fmax (MHz) accepted per depth, seed 1 (depth 8 is placed in the 40 000-neuron
-#: ULX3S build of the long lane; docs/architecture.md has both depths measured)
+#: the lowest fmax (MHz) accepted per depth, seed 1 (docs/architecture.md has both depths
+#: measured; the long lane's filled ULX3S build is depth 5, the sizing's largest, and the
+#: 40 000-neuron depth-8 build is measured in docs/boards.md)
 FLOORS = {5: 85.0}
 
 
