@@ -110,12 +110,18 @@ class UninterpretedProducts:
         whenever their operands are equal."""
         ref = [p for p in self.products if p.role == "reference"]
         held = []
-        for p in ref:
+        for j, p in enumerate(ref):
             r = Signal(p.y.shape(), name=f"{p.y.name}_held")
             with m.If(capture):
                 m.d.sync += r.eq(AnySeq(p.y.shape()))
-            m.d.comb += p.y.eq(r)
-            held.append(r)
+            # one function per source line: a reference product whose operands equal an
+            # earlier one's of the same line (a loop over traces sharing a constant) is it
+            out = r
+            for q in reversed(ref[:j]):
+                if q.site == p.site and (len(q.a), len(q.b)) == (len(p.a), len(p.b)):
+                    out = Mux((p.a == q.a) & (p.b == q.b), q.y, out)
+            m.d.comb += p.y.eq(out)
+            held.append(p.y)
         for p in self.products:
             if p.role == "reference":
                 continue
@@ -124,8 +130,9 @@ class UninterpretedProducts:
                 if q.site != p.site:
                     continue
                 if (len(q.a), len(q.b)) != (len(p.a), len(p.b)):
-                    raise FormalError(f"products at {Path(p.site[0]).name}:{p.site[1]} have "
-                                      f"operands of different widths in design and reference")
+                    # one line forming products of several shapes (a loop over traces with
+                    # their own constants): a function per shape, so these two are unrelated
+                    continue
                 out = Mux((p.a == q.a) & (p.b == q.b), r, out)
             m.d.comb += p.y.eq(out)
 

@@ -7,20 +7,23 @@ module gives it the LIF core and the reference: one combinational step of the st
 (``gather_input``, ``leak_operand``, ``leak_product``, ``update_state``, bound at import) from
 the tracked neuron's state word (``v`` and the refractory counter), current and set.
 
-Covered: cores without synaptic traces, with or without input spikes (the contract's pending
-and active spike vectors are modelled in :meth:`LifCoreProof.fetched_inputs`; weights fixed,
-with any contents, or host-written). Cores with traces are refused.
+Covered: every LIF core: with or without input spikes (the contract's pending and active spike
+vectors are modelled in :meth:`LifCoreProof.fetched_inputs`; weights fixed, with any contents,
+or host-written), with synaptic traces (AMPA/GABA's four, or the current synapse's one: the
+trace memory is a second state memory, written back with the state, its products
+uninterpreted like the leak's) or without.
 """
 
 from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
+
 from amaranth import Cat, Const, Mux, Signal
 from amaranth.hdl._ast import AnySeq
 
 from ..flow.sby import SOLVER
-from ..lib.config import ConfigError
 from ..lib.core_proof import MUTANTS, SweepCoreProof
 from ..lib.formal import (ProofResult, assert_all, assume_all, free_memories, run_proof,
                           signal_named)
@@ -29,6 +32,8 @@ from . import datapath
 from .config import CLAMP_KINDS, LifConfig
 from .core import LifCore
 from .datapath import gather_input, leak_operand, leak_product, update_state
+from ..lib import synapses
+from ..lib.synapses import trace_products, trace_update
 
 __all__ = ["LifCoreProof", "lif_harness", "prove_lif", "lif_proof_config", "MUTANTS",
            "ABSTRACTIONS"]
@@ -40,7 +45,7 @@ ABSTRACTIONS = ["products of the datapath uninterpreted (same function per multi
 
 
 class LifCoreProof(SweepCoreProof):
-    """The LIF core without synaptic traces (see
+    """The LIF core, with or without synaptic traces (see
     :class:`~cuneate.hdl.lib.core_proof.SweepCoreProof`)."""
 
     core_module = core_module
@@ -49,11 +54,12 @@ class LifCoreProof(SweepCoreProof):
     off_by_one_register = ("v", 4)          # stage 4's v: the previous neuron's
 
     def __init__(self, cfg: LifConfig, mutant: str | None = None):
-        if cfg.traces:
-            self._MustUse__silence = True        # refused: never elaborated, nothing to warn of
-            raise ConfigError("the LIF core proof covers cores without synaptic traces; got "
-                              f"{len(cfg.traces)} traces")
         super().__init__(cfg, mutant)
+        if cfg.traces:
+            # the traces are a second state memory, written back with the state; their
+            # products (one per trace) are uninterpreted like the leak's
+            self.state_memories = ("state_mem", "trace_mem")
+            self.datapath_files = (datapath.__file__, synapses.__file__)
 
     def make_core(self):
         return LifCore(self.cfg)
@@ -103,18 +109,30 @@ class LifCoreProof(SweepCoreProof):
         F, wb = cfg.n_inputs, cfg.W.width
         x = inputs.get("x")
         w = words.get("weight_mem")
+        tr = None
+        if cfg.traces:
+            offs = np.cumsum([0] + [t.T.width for t in cfg.traces])
+            tw = words["trace_mem"]
+            tr = [tw[offs[j]:offs[j + 1]].as_signed() for j in range(len(cfg.traces))]
         g = gather_input(cfg, i, [x[k] for k in range(F)],
-                         [w[wb * k: wb * (k + 1)].as_signed() for k in range(F)], None)
+                         [w[wb * k: wb * (k + 1)].as_signed() for k in range(F)], tr)
         p = leak_product(cfg, leak_operand(cfg, v, g["d"], sel), sel)
         o = update_state(cfg, v, p, g["d"], ref, sel)
         flags = {"current": g["current"], "input": g["input"], "v_low": o["v_low"]}
         v_new, ref_new = o["v"], o["ref"]
         word = Cat(v_new[:V.width], ref_new[:R]) if R else v_new[:V.width]
-        return {"words": {"state_mem": word},
-                "ports": {"upd_v": v_new, "upd_ref": ref_new[:max(1, R)],
-                          "upd_spike": o["spike"],
-                          "upd_clamp": Cat(*(flags[k] for k in CLAMP_KINDS)),
-                          "upd_current": i, "upd_acc": g["acc"]}}
+        out = {"words": {"state_mem": word},
+               "ports": {"upd_v": v_new, "upd_ref": ref_new[:max(1, R)],
+                         "upd_spike": o["spike"],
+                         "upd_clamp": Cat(*(flags[k] for k in CLAMP_KINDS)),
+                         "upd_current": i, "upd_acc": g["acc"]}}
+        if cfg.traces:
+            new = trace_update(cfg, g["ys"], trace_products(cfg, g["ys"]))
+            fields = [x[:t.T.width] for t, x in zip(cfg.traces, new)]
+            out["words"]["trace_mem"] = Cat(*fields)
+            out["ports"] |= {f"upd_{t.name}": x.as_signed()     # the ports are signed
+                             for t, x in zip(cfg.traces, fields)}
+        return out
 
 
 def lif_proof_config(n_neurons: int = 8, **kwargs) -> LifConfig:
@@ -130,7 +148,8 @@ def lif_harness(cfg: LifConfig, mutant: str | None = None) -> tuple[str, int]:
     from amaranth.back import rtlil
     top = LifCoreProof(cfg, mutant)
     il = rtlil.convert(top, name="lif_eq", ports=top.ports)
-    return free_memories(il, ("state_mem", "cur_mem", "sel_mem", "weight_mem")), top.latency
+    return (free_memories(il, ("state_mem", "cur_mem", "sel_mem", "weight_mem", "trace_mem")),
+            top.latency)
 
 
 def prove_lif(cfg: LifConfig, workdir: Path, mode: str = "prove", depth: int | None = None,

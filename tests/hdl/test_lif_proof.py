@@ -3,7 +3,6 @@ datapath (hdl/lif/formal_core.py), and the faults it must catch."""
 
 import pytest
 
-from cuneate.hdl.lib.config import ConfigError
 from cuneate.hdl.lif import core as lif_core
 from cuneate.hdl.lif.formal_core import MUTANTS, LifCoreProof, lif_proof_config, prove_lif
 
@@ -52,9 +51,32 @@ def test_a_datapath_fault_in_the_lif_core_is_caught(tmp_path, v_one_high):
 INPUTS = {"form": "discrete", "weights": [[0.5, -0.25, 0.125]] * 8, "current_format": (4, 12)}
 
 
-def test_cores_with_traces_are_refused_not_half_proven():
-    with pytest.raises(ConfigError, match="without synaptic traces"):
-        LifCoreProof(lif_proof_config(weights=[[0.5, 0.25]] * 8, synapses=True))
+SYNAPSES = {"weights": [[0.5, 0.25]] * 8, "synapses": True}        # AMPA and GABA: 4 traces
+CURRENT_SYNAPSE = {"weights": [[0.5, 0.25]] * 8, "syn_alpha": 0.875}  # one current trace
+
+
+@pytest.mark.parametrize("kwargs", [SYNAPSES, CURRENT_SYNAPSE],
+                         ids=["four-traces", "current-synapse"])
+def test_the_lif_core_with_synaptic_traces_equals_the_one_step_datapath(kwargs, tmp_path):
+    """The trace memory as a second state memory, each trace's product uninterpreted
+    (seconds)."""
+    cfg = lif_proof_config(**kwargs)
+    assert cfg.traces and LifCoreProof(cfg).state_memories == ("state_mem", "trace_mem")
+    r = prove_lif(cfg, tmp_path, mode="prove", timeout_s=900)
+    assert r.passed and r.mode == "prove" and r.depth == 7, r
+
+
+def test_a_trace_fault_is_caught(tmp_path, monkeypatch):
+    """The core's trace update gives the first trace one LSB high (the reference keeps the
+    true ``trace_update``)."""
+    true_update = lif_core.trace_update
+
+    def faulty(cfg, ys, ps):
+        out = list(true_update(cfg, ys, ps))
+        return [out[0] + 1] + out[1:]
+    monkeypatch.setattr(lif_core, "trace_update", faulty)
+    r = prove_lif(lif_proof_config(**SYNAPSES), tmp_path, mode="bmc", depth=7, timeout_s=600)
+    assert r.status == "fail" and "tracked_update_upd_xd_ampa" in r.failed, r
 
 
 @pytest.mark.long
