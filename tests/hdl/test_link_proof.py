@@ -17,7 +17,7 @@ EXPECTED = {
 FROM_RESET = {
     "wrong_residue": ("verdict_crc_errors", 15),
     "values_swapped": ("state_tracked_value_assembled", 14),
-    "value_read_ahead": ("writes_the_tracked_value", 22),
+    "value_read_ahead": ("writes_the_tracked_value", 23),
 }
 
 
