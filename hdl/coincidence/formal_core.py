@@ -148,6 +148,10 @@ class CoincidenceProof(Elaboratable):
             core_m = core.elaborate(platform)
         for mem in made:
             core_m.d.comb += getattr(mem, "_mutant", [])
+        names = ("dw_mem", "hist_mem", "state_mem")
+        if [core_m.submodules[n] for n in names] != made:
+            raise RuntimeError("the detector's memories were not built in the order "
+                               + ", ".join(names))
         return core, core_m, made
 
     def elaborate(self, platform):
