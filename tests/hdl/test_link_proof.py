@@ -53,3 +53,12 @@ def test_the_fault_has_a_counterexample_from_reset(mutant, tmp_path):
                       mutant=mutant, timeout_s=2400)
     assert r.status == "fail" and r.phase == "basecase" and r.step == step, r
     assert check in r.failed, r
+
+
+@pytest.mark.long
+def test_the_default_links_decoder_meets_the_wire_format(tmp_path):
+    """The default link (2 500 neurons, a 512-byte receive buffer): k-induction, about 25 s."""
+    from cuneate.hdl.link.config import link_config
+    lcfg = link_config()
+    r = prove_decoder(lcfg, tmp_path, mode="prove", timeout_s=1800)
+    assert r.passed and r.depth == induction_depth(lcfg), r
