@@ -64,7 +64,7 @@ from ..izhikevich import multiply1, multiply2, operands, update_state
 from ..lib import synapses
 from ..lib.datapath import lookup
 from ..lib.formal import (ProofResult, UninterpretedProducts, assert_all, assume_all,
-                          free_memories, patched, run_proof, signal_named)
+                          harness_rtlil, patched, run_proof, signal_named)
 from ..lib.synapses import trace_products, trace_update
 from . import core as core_module
 from .config import CLAMP_KINDS, CoincidenceConfig
@@ -352,10 +352,8 @@ def coincidence_proof_config(**kwargs) -> CoincidenceConfig:
 def coincidence_harness(cfg: CoincidenceConfig, mutant: str | None = None) -> str:
     """RTLIL of the harness (top ``coincidence_eq``), the state and history memories' initial
     contents removed."""
-    from amaranth.back import rtlil
-    top = CoincidenceProof(cfg, mutant)
-    il = rtlil.convert(top, name="coincidence_eq", ports=top.ports)
-    return free_memories(il, ("state_mem", "hist_mem"))
+    return harness_rtlil(CoincidenceProof(cfg, mutant), "coincidence_eq",
+                         ("state_mem", "hist_mem"))
 
 
 def induction_depth(cfg: CoincidenceConfig) -> int:
@@ -403,8 +401,7 @@ def prove_history_slot(cfg: CoincidenceConfig, workdir: Path, timeout_s: float =
                        solver: str = SOLVER) -> ProofResult:
     """The history address of ``cfg``'s detector (its ring depth and delay field width) is the
     delayed tick's slot for every slot and delay: one combinational step, every input."""
-    from amaranth.back import rtlil
-    top = HistorySlotProof(cfg.max_delay_ticks, cfg.history_addr_bits)
-    il = rtlil.convert(top, name="history_slot", ports=top.ports)
+    il = harness_rtlil(HistorySlotProof(cfg.max_delay_ticks, cfg.history_addr_bits),
+                       "history_slot")
     return run_proof("history slot is the delayed tick's", il, workdir, "history_slot", "bmc",
                      1, timeout_s, "smtbmc", [], solver)

@@ -25,7 +25,7 @@ from amaranth import Cat
 
 from ..lib.core_proof import MUTANTS, SweepCoreProof
 from ..flow.sby import SOLVER
-from ..lib.formal import ProofResult, free_memories, run_proof
+from ..lib.formal import ProofResult, harness_rtlil, run_proof
 from . import core as core_module
 from . import datapath
 from .config import CLAMP_KINDS, ConfigError, IzhikevichConfig
@@ -91,20 +91,25 @@ def proof_config(n_neurons: int | None = None, **kwargs) -> IzhikevichConfig:
     raise last
 
 
+#: memories of the core that start with any contents
+MEMORIES = ("state_mem", "cur_mem", "sel_mem")
+
+
 def core_harness(cfg: IzhikevichConfig, mutant: str | None = None) -> str:
     """RTLIL of the harness (top ``core_eq``), the memories' initial contents removed."""
-    from amaranth.back import rtlil
-    top = IzhikevichCoreProof(cfg, mutant)
-    il = rtlil.convert(top, name="core_eq", ports=top.ports)
-    return free_memories(il, ("state_mem", "cur_mem", "sel_mem"))
+    return harness_rtlil(IzhikevichCoreProof(cfg, mutant), "core_eq", MEMORIES)
+
+
+def _depth(top: IzhikevichCoreProof) -> int:
+    # the latency + 2: the data registers between the stages need L + 1 cycles of history
+    return top.latency + 2
 
 
 def induction_depth(cfg: IzhikevichConfig) -> int:
     """The k of the k-induction: the core's latency (read from its tags) + 2."""
-    from amaranth.back import rtlil
     top = IzhikevichCoreProof(cfg)
-    rtlil.convert(top, name="core_eq", ports=top.ports)
-    return top.latency + 2
+    harness_rtlil(top, "core_eq", MEMORIES)
+    return _depth(top)
 
 
 def prove_core(cfg: IzhikevichConfig, workdir: Path, mode: str = "prove",
@@ -113,7 +118,7 @@ def prove_core(cfg: IzhikevichConfig, workdir: Path, mode: str = "prove",
                solver: str = SOLVER) -> ProofResult:
     """Prove (``mode="prove"``: k-induction of ``depth`` steps, default the core's latency + 2)
     or check to a bound (``mode="bmc"``) that the core equals its one-step reference."""
-    if depth is None:
-        depth = induction_depth(cfg)
-    return run_proof("core equals one-step datapath", core_harness(cfg, mutant), workdir,
-                     "core_eq", mode, depth, timeout_s, engine, ABSTRACTIONS, solver)
+    top = IzhikevichCoreProof(cfg, mutant)
+    il = harness_rtlil(top, "core_eq", MEMORIES)            # one elaboration: the RTLIL and k
+    return run_proof("core equals one-step datapath", il, workdir, "core_eq", mode,
+                     depth or _depth(top), timeout_s, engine, ABSTRACTIONS, solver)

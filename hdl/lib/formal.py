@@ -39,6 +39,7 @@ from amaranth.hdl._ast import AnySeq, Assign, Switch
 from ..flow.sby import SOLVER, FormalError, parse_sby_log, run_sby
 
 __all__ = ["UninterpretedProducts", "patched", "signal_named", "delay_line", "free_memories",
+           "harness_rtlil",
            "ProofResult", "run_proof", "assert_all", "check_id", "assume_all", "FormalError"]
 
 
@@ -226,6 +227,14 @@ def free_memories(il: str, memids) -> str:
             raise FormalError(f"expected at most one initializer of {memid} in the netlist, "
                               f"found {n}")
     return il
+
+
+def harness_rtlil(top, name: str, memories=()) -> str:
+    """RTLIL of the proof harness ``top`` (top module ``name``), the initial contents of the
+    memories ``memories`` removed. Converting elaborates the harness, which is when it reads
+    what it needs from the design (its latency)."""
+    from amaranth.back import rtlil
+    return free_memories(rtlil.convert(top, name=name, ports=top.ports), memories)
 
 
 # ----------------------------------------------------------------------------------------------

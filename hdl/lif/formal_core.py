@@ -25,7 +25,7 @@ from amaranth.hdl._ast import AnySeq
 
 from ..flow.sby import SOLVER
 from ..lib.core_proof import MUTANTS, SweepCoreProof
-from ..lib.formal import (ProofResult, assert_all, assume_all, free_memories, run_proof,
+from ..lib.formal import (ProofResult, assert_all, assume_all, harness_rtlil, run_proof,
                           signal_named)
 from . import core as core_module
 from . import datapath
@@ -145,11 +145,10 @@ def lif_proof_config(n_neurons: int = 8, **kwargs) -> LifConfig:
 def lif_harness(cfg: LifConfig, mutant: str | None = None) -> tuple[str, int]:
     """RTLIL of the harness (top ``lif_eq``), the memories' initial contents removed, and the
     core's latency."""
-    from amaranth.back import rtlil
     top = LifCoreProof(cfg, mutant)
-    il = rtlil.convert(top, name="lif_eq", ports=top.ports)
-    return (free_memories(il, ("state_mem", "cur_mem", "sel_mem", "weight_mem", "trace_mem")),
-            top.latency)
+    il = harness_rtlil(top, "lif_eq", ("state_mem", "cur_mem", "sel_mem", "weight_mem",
+                                       "trace_mem"))
+    return il, top.latency
 
 
 def prove_lif(cfg: LifConfig, workdir: Path, mode: str = "prove", depth: int | None = None,

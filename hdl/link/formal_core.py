@@ -51,7 +51,7 @@ from amaranth.hdl import Fragment
 from amaranth.hdl._ast import AnyConst, AnySeq
 
 from ..flow.sby import SOLVER
-from ..lib.formal import (ProofResult, assert_all, assume_all, free_memories, patched,
+from ..lib.formal import (ProofResult, assert_all, assume_all, harness_rtlil, patched,
                           run_proof, signal_named)
 from . import core as core_module
 from .codec import (CONTROL_PAYLOAD, CRC_INIT, CRC_RESIDUE, HEADER_BYTES, MAX_FRAME,
@@ -114,7 +114,7 @@ class DecoderProof(Elaboratable):
         if mutant is not None and mutant not in MUTANTS:
             raise ValueError(f"unknown mutant {mutant!r}; known: {', '.join(MUTANTS)}")
         self.lcfg, self.mutant = lcfg, mutant
-        self.latency = None
+        self.latency = None                    # the decision latency, read when elaborated
         self.cd = ClockDomain("sync", reset_less=True)
         self.ports = [self.cd.clk]
 
@@ -388,10 +388,6 @@ class DecoderProof(Elaboratable):
                    (~(st["WAIT"] | st["WRITE"]) | (kt >= wcount) | (vport.data == wval[:I]),
                     "state: tracked value to write")]
         assert_all(m, checks)
-        #: the reference's events, for reachability checks of the harness itself
-        self.events = {"take": take, "emit": emit, "delimiter": delim, "cobs_error": cobs_err,
-                       "good": delim & good, "write": wr, "owed": owed} | {
-                           k: delim & x for k, x in v.items()}
         return m
 
 
@@ -421,22 +417,28 @@ def decoder_proof_config(n_neurons: int = 8, **kwargs) -> LinkConfig:
     return link_config(dict(n_neurons=n_neurons, clock_hz=n_neurons * 16e3 * 4), **kw)
 
 
+#: memories of the link that start with any contents
+MEMORIES = ("vmem", "smem", "tmem")
+
+
 def decoder_harness(lcfg: LinkConfig, mutant: str | None = None) -> str:
     """RTLIL of the harness (top ``decoder_eq``), the memories' initial contents removed."""
-    from amaranth.back import rtlil
-    top = DecoderProof(lcfg, mutant)
-    il = rtlil.convert(top, name="decoder_eq", ports=top.ports)
-    return free_memories(il, ("vmem", "smem", "tmem"))
+    return harness_rtlil(DecoderProof(lcfg, mutant), "decoder_eq", MEMORIES)
+
+
+def _depth(top: DecoderProof) -> int:
+    # the decision latency + 5: the write port's and the value RAM's pipelines, the receive
+    # FIFO's head
+    return top.latency + 5
 
 
 def induction_depth(lcfg: LinkConfig) -> int:
     """The k of the k-induction: the decoder's decision latency (cycles from the delimiter to
     the verdict, read from its states) + 5 (the write port's and the value RAM's pipelines,
     the receive FIFO's head)."""
-    from amaranth.back import rtlil
     top = DecoderProof(lcfg)
-    rtlil.convert(top, name="decoder_eq", ports=top.ports)
-    return top.latency + 5
+    harness_rtlil(top, "decoder_eq", MEMORIES)
+    return _depth(top)
 
 
 def prove_decoder(lcfg: LinkConfig, workdir: Path, mode: str = "prove",
@@ -447,6 +449,7 @@ def prove_decoder(lcfg: LinkConfig, workdir: Path, mode: str = "prove",
     :func:`induction_depth`) or check to a bound (``mode="bmc"``) that the link's frame
     decoder gives every frame its specified verdict and loses or reorders no accepted
     write."""
-    return run_proof("link frame decoder meets the wire format", decoder_harness(lcfg, mutant),
-                     workdir, "decoder_eq", mode, depth or induction_depth(lcfg), timeout_s,
-                     engine, ABSTRACTIONS, solver)
+    top = DecoderProof(lcfg, mutant)
+    il = harness_rtlil(top, "decoder_eq", MEMORIES)         # one elaboration: the RTLIL and k
+    return run_proof("link frame decoder meets the wire format", il, workdir, "decoder_eq",
+                     mode, depth or _depth(top), timeout_s, engine, ABSTRACTIONS, solver)

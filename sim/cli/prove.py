@@ -88,8 +88,9 @@ def cmd_prove_core(args) -> int:
                 # argument of docs/formal.md rests on it)
                 from ...hdl.coincidence import CoincidenceConfig
                 from ...hdl.coincidence.formal_core import prove_history_slot
-                ring = CoincidenceConfig().max_delay_ticks
-                slot = prove_history_slot(CoincidenceConfig(), Path(d) / "history_slot",
+                detector = CoincidenceConfig()
+                ring = detector.max_delay_ticks
+                slot = prove_history_slot(detector, Path(d) / "history_slot",
                                           args.timeout_s, args.solver)
         except FormalError as exc:
             raise CliError(f"cuneate prove {args.target}: {exc}") from None
