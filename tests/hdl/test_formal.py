@@ -14,10 +14,20 @@ def _cfg(*sets):
     return IzhikevichConfig(n_neurons=8, clock_hz=16e3 * 8, param_sets=tuple(sets))
 
 
-def test_datapath_cannot_wrap_for_a_mix_of_sets(tmp_path):
-    r = prove(_cfg("IB", "FS"), tmp_path, "datapath")
+def test_datapath_cannot_wrap_for_a_mix_of_sets(capsys):
+    """Through the command a user types (the per-preset proofs through the API are in the long
+    lane): a pass, a counterexample, and a refusal."""
+    import json
+    from cuneate.sim.cli import main
+    code = main(["prove", "--preset", "IB", "--preset", "FS", "--json"])
+    r = json.loads(capsys.readouterr().out)
     record("formal_datapath_IB_FS", 1, 0, int(r["status"] != "pass"), "SymbiYosys, z3")
-    assert r["status"] == "pass", r
+    assert code == 0 and r["status"] == "pass" and r["param_sets"] == ["IB", "FS"], r
+    assert r["property"] == "datapath" and not r["counterexample"]
+    assert main(["prove", "--property", "state_box"]) == 1
+    out = capsys.readouterr().out
+    assert "FAIL" in out and "counterexample: v = " in out
+    assert main(["prove", "--preset", "XX"]) == 2
 
 
 def test_state_box_is_not_inductive_and_the_clamp_flags_it(tmp_path):
@@ -55,6 +65,7 @@ def test_the_core_steps_compute_the_four_stage_update(tmp_path):
     assert t["mismatches"] == 0 and t["states"] == cfg.VTH.raw - cfg.v_floor_raw + 1
 
 
+@pytest.mark.long
 def test_the_steps_property_catches_a_fault(tmp_path, monkeypatch):
     """Each half of the steps property fails on a fault in the steps: u one LSB high in the
     last step (the solver), and the q rounding's w multiple dropped (the product table)."""
@@ -87,13 +98,3 @@ def test_the_core_steps_compute_the_four_stage_update_for_every_preset(sets, tmp
     record(f"formal_steps_{'_'.join(sets)}", 1, 0, int(r["status"] != "pass"),
            "SymbiYosys, yices + numpy")
     assert r["status"] == "pass" and r["products"]["mismatches"] == 0, r
-
-
-def test_cli_prove(capsys):
-    from cuneate.sim.cli import main
-    assert main(["prove", "--preset", "IB", "--preset", "FS"]) == 0
-    assert "PASS" in capsys.readouterr().out
-    assert main(["prove", "--property", "state_box"]) == 1
-    out = capsys.readouterr().out
-    assert "FAIL" in out and "counterexample: v = " in out
-    assert main(["prove", "--preset", "XX"]) == 2

@@ -62,15 +62,17 @@ for _depth in PIPELINE_STAGES:
 CASES[f"depth{max(PIPELINE_STAGES)}_clamps"] = dict(
     CASES["clamps"], core=dict(CASES["clamps"]["core"], pipeline_stages=max(PIPELINE_STAGES)))
 # the default lane runs the reference depth and the deepest; the depths between (also proven
-# by k-induction in the long lane) run in the long lane
-LONG_CASES = {f"depth{d}_back_to_back" for d in PIPELINE_STAGES
+# by k-induction in the long lane) run in the long lane, as does the 2200-sweep full-scale run
+# on Verilator (Icarus runs it in the default lane)
+LONG_CASES = {(s, f"depth{d}_back_to_back") for d in PIPELINE_STAGES for s in SIMULATORS
               if d not in (min(PIPELINE_STAGES), max(PIPELINE_STAGES))}
+LONG_CASES.add(("verilator", "full_scale_long"))
 
 
 @pytest.mark.cocotb
-@pytest.mark.parametrize("case", [pytest.param(c, marks=pytest.mark.long) if c in LONG_CASES
-                                  else c for c in CASES])
-@pytest.mark.parametrize("simulator", SIMULATORS)
+@pytest.mark.parametrize("simulator,case", [
+    pytest.param(s, c, id=f"{s}-{c}", marks=pytest.mark.long if (s, c) in LONG_CASES else ())
+    for s in SIMULATORS for c in CASES])
 def test_scoreboard(simulator, case, build_root):
     spec = dict(CASES[case], seed=11)
     cfg = make_config(spec["core"])

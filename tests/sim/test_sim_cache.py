@@ -9,9 +9,9 @@ from cuneate.sim.engines import cocotb as runner
 from cuneate.sim.lif.engines import LifProgram, engine_config, run_lif
 
 
-def _run(build_dir, current=25.0):
-    cfg = engine_config({"update_hz": 1000.0}, 8)
-    return run_lif("verilator", cfg, LifProgram.constant(np.full(8, current), 40),
+def _run(build_dir, current=25.0, n=8):
+    cfg = engine_config({"update_hz": 1000.0}, n)
+    return run_lif("verilator", cfg, LifProgram.constant(np.full(n, current), 40),
                    build_dir=build_dir)
 
 
@@ -33,6 +33,18 @@ def test_verilator_model_is_built_once_and_reused(tmp_path, monkeypatch):
     assert binary.stat().st_mtime_ns == built_at
     assert not (tmp_path / "b" / "lif_core").exists() and (tmp_path / "b").is_dir()
     assert a.spikes_ms == b.spikes_ms and sum(map(len, a.spikes_ms)) > 0
+    # another design: a new entry, built on the runtime library the first build kept (copied
+    # in before Verilator wrote the entry's makefile, and not recompiled after it)
+    c = _run(tmp_path / "c", n=9)
+    new = [e for e in cache.glob("verilator-lif_core-*") if e not in entries]
+    assert len(new) == 1
+    kept = list(cache.glob("runtime-*"))
+    assert len(kept) == 1
+    for obj in runner.RUNTIME_OBJECTS:
+        copied = new[0] / f"{obj}.o"
+        assert copied.read_bytes() == (kept[0] / f"{obj}.o").read_bytes()
+        assert copied.stat().st_mtime_ns < (new[0] / "Vtop.mk").stat().st_mtime_ns
+    assert c.spikes_ms[:8] == a.spikes_ms and sum(map(len, c.spikes_ms)) > 0
 
 
 @pytest.mark.cocotb

@@ -119,7 +119,8 @@ def _faulty_verilog(cfg, fault, monkeypatch):
         return izhikevich_verilog(cfg)
 
 
-@pytest.mark.parametrize("fault", list(FAULTS))
+@pytest.mark.parametrize("fault", [f if f == "flipped-product-bit" else
+                                   pytest.param(f, marks=pytest.mark.long) for f in FAULTS])
 def test_dump_checker_catches_injected_faults_verilator(
         fault, tmp_path, monkeypatch):
     cfg = flag_config()
