@@ -32,7 +32,7 @@ import zlib
 
 import pytest
 
-from cuneate.boards.link_faults import single_bit_flips
+from cuneate.sim.link.faults import single_bit_flips
 from cuneate.hdl.link.codec import (MAX_PAYLOAD, MSG_WRITE, CobsError, FrameDecoder, Message,
                                     cobs_decode, cobs_encode)
 

@@ -1,6 +1,6 @@
 """The host link's wire format: COBS framing, CRC-32 and the message layout (format version 1).
 
-This module is the codec of the host side (:mod:`cuneate.boards.uart`) and of the device
+This module is the codec of the host side (:mod:`cuneate.sim.host.uart`) and of the device
 model (:mod:`cuneate.hdl.link.twin`); the gateware (:mod:`cuneate.hdl.link.core`) shares its
 constants and its CRC step (:mod:`cuneate.hdl.link.datapath`). One frame on the wire is::
 

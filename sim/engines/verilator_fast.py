@@ -29,7 +29,8 @@ import numpy as np
 
 from ...hdl.izhikevich import CLAMP_KINDS, IzhikevichConfig
 
-__all__ = ["HARNESS_SOURCE", "HarnessError", "HarnessRun", "build_harness", "run_harness",
+__all__ = ["HARNESS_SOURCE", "HarnessError", "HarnessRun", "compile_harness", "build_harness",
+           "run_harness",
            "raw_cycle_rate", "check_dump", "default_build_root"]
 
 HARNESS_SOURCE = Path(__file__).with_name("harness.cpp")
@@ -85,6 +86,36 @@ def _verilator() -> str:
     return exe
 
 
+def compile_harness(text: str, top: str, source: Path, defines: dict,
+                    build_root: Path | None = None, prefix: str | None = None,
+                    jobs: int = 2) -> Path:
+    """Build (or reuse) an executable of the Verilog ``text`` (top module ``top``, Verilator's
+    class ``prefix``, by default ``V<top>``) linked with the C++ harness ``source``, compiled
+    with ``-D`` ``defines``; cached under ``build_root`` by the Verilog, the harness and the
+    defines. Returns its path."""
+    src = Path(source).read_bytes()
+    prefix = prefix or f"V{top}"
+    flags = " ".join(f"-D{k}={v}" for k, v in sorted(defines.items()))
+    key = hashlib.sha256(text.encode() + b"\0" + src + b"\0" + flags.encode()
+                         + prefix.encode()).hexdigest()[:20]
+    root = Path(build_root) if build_root is not None else default_build_root()
+    out = root / key
+    exe = out / "obj" / "Vharness"
+    if exe.is_file():
+        return exe
+    out.mkdir(parents=True, exist_ok=True)
+    (out / f"{top}.v").write_text(text)
+    cmd = [_verilator(), "--cc", "--exe", "--build", "-j", str(jobs), "-O3", "--x-assign",
+           "fast", "--x-initial", "fast", "--noassert", "-Wno-fatal", "-Wno-WIDTHEXPAND",
+           "-Wno-WIDTHTRUNC", "--top-module", top, "--prefix", prefix, "--Mdir", "obj",
+           "-o", "Vharness", "-CFLAGS", f"-O2 {flags}".strip(), f"{top}.v", str(source)]
+    proc = subprocess.run(cmd, cwd=out, capture_output=True, text=True)
+    if proc.returncode != 0 or not exe.is_file():
+        tail = (proc.stderr or proc.stdout).strip().splitlines()[-12:]
+        raise HarnessError("verilator build of the harness failed:\n" + "\n".join(tail))
+    return exe
+
+
 def build_harness(cfg: IzhikevichConfig, build_root: Path | None = None,
                   jobs: int = 2) -> Path:
     """Build (or reuse) the harness executable for ``cfg``; returns its path."""
@@ -92,26 +123,9 @@ def build_harness(cfg: IzhikevichConfig, build_root: Path | None = None,
     for fmt, name in ((cfg.V, "v"), (cfg.U, "u"), (cfg.I, "current")):
         if fmt.width > 64:
             raise HarnessError(f"the harness reads ports up to 64 bits; {name} has {fmt.width}")
-    text = izhikevich_verilog(cfg, name=TOP)
-    src = HARNESS_SOURCE.read_bytes()
-    key = hashlib.sha256(text.encode() + b"\0" + src).hexdigest()[:20]
-    root = Path(build_root) if build_root is not None else default_build_root()
-    out = root / key
-    exe = out / "obj" / "Vharness"
-    if exe.is_file():
-        return exe
-    out.mkdir(parents=True, exist_ok=True)
-    (out / f"{TOP}.v").write_text(text)
-    cmd = [_verilator(), "--cc", "--exe", "--build", "-j", str(jobs), "-O3", "--x-assign",
-           "fast", "--x-initial", "fast", "--noassert", "-Wno-fatal", "-Wno-WIDTHEXPAND",
-           "-Wno-WIDTHTRUNC", "--top-module", TOP, "--Mdir", "obj", "-o", "Vharness",
-           "-CFLAGS", f"-O2 -DCUNEATE_PIPELINE_DEPTH={cfg.pipeline_stages}", f"{TOP}.v",
-           str(HARNESS_SOURCE)]
-    proc = subprocess.run(cmd, cwd=out, capture_output=True, text=True)
-    if proc.returncode != 0 or not exe.is_file():
-        tail = (proc.stderr or proc.stdout).strip().splitlines()[-12:]
-        raise HarnessError("verilator build of the harness failed:\n" + "\n".join(tail))
-    return exe
+    return compile_harness(izhikevich_verilog(cfg, name=TOP), TOP, HARNESS_SOURCE,
+                           {"CUNEATE_PIPELINE_DEPTH": cfg.pipeline_stages}, build_root,
+                           jobs=jobs)
 
 
 def _schedule_bytes(cfg: IzhikevichConfig, segments, n_sweeps: int) -> bytes:

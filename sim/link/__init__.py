@@ -1,2 +1,4 @@
-"""The host link in simulation: the cocotb bench of the linked core (:mod:`.bench`). The host
-side of the link (the UART transport) lives with the boards (:mod:`cuneate.boards.uart`)."""
+"""The host link in simulation: the cocotb bench of the linked core (:mod:`.bench`), the link
+gateware behind a simulated serial port (:mod:`.engines`: the Amaranth simulator, and the
+``board`` engine's compiled board top) and line faults (:mod:`.faults`). The host side of the
+link (the UART transport) is :mod:`cuneate.sim.host.uart`."""

@@ -1,7 +1,7 @@
 """The host link's gateware behind a serial port: :class:`AmaranthSerial` runs
 :class:`~cuneate.hdl.link.LinkedCore` in the Amaranth simulator and drives its ``rx`` pin and
 reads its ``tx`` pin bit by bit (8N1 at the link's ``clocks_per_bit``), so that the host's
-:class:`~cuneate.boards.uart.UartTransport` (and the host driver over it) talks to the very
+:class:`~cuneate.sim.host.uart.UartTransport` (and the host driver over it) talks to the very
 gateware a board runs, cycle by cycle.
 
 The simulation advances only when the host waits for an answer: ``read`` runs it a block of
@@ -9,20 +9,28 @@ cycles at a time until bytes arrive. ``silent`` tells the transport that nothing
 (nothing left to send, and no byte from the device for longer than a frame and a batch take),
 so a lost answer is reported at once instead of after a wall-clock timeout. Line faults can be
 injected in both directions (``corrupt`` on the device's bytes, ``corrupt_host`` on the
-host's), as with :class:`~cuneate.boards.uart.ModelSerial`.
+host's), as with :class:`~cuneate.sim.host.uart.ModelSerial`.
 """
 
 from __future__ import annotations
 
+import json
+import struct
+import subprocess
+import time
 from collections import deque
+from pathlib import Path
 
 from amaranth.sim import Simulator
 
-from ...hdl.link import LinkedCore
+from ...hdl.izhikevich import ConfigError, IzhikevichConfig
+from ...hdl.link import LinkConfig, LinkedCore
 from ...hdl.link.codec import MAX_FRAME
 from ..host.transport import SimulatedSerial
+from ..host.uart import UartTransport
 
-__all__ = ["AmaranthSerial"]
+__all__ = ["AmaranthSerial", "VerilatorSerial", "BoardTransport", "board_link_config",
+           "BOARD_CLOCKS_PER_BIT"]
 
 CLOCK_S = 1e-6
 
@@ -124,3 +132,190 @@ class AmaranthSerial(SimulatedSerial):
 
     def close(self):
         self.is_open = False
+
+
+# --------------------------------------------------------------------------- the board engine
+
+#: Clocks per UART bit on the ``board`` engine's simulated line (both ends: the gateware's
+#: receiver and transmitter and the harness's line model): bit-time acceleration, so that a
+#: scene's bytes cost simulated cycles in proportion to the sweeps, not the real baud's.
+BOARD_CLOCKS_PER_BIT = 4
+SERIAL_HARNESS = Path(__file__).with_name("serial_harness.cpp")
+BOARD_TOP = "board"
+
+
+def board_link_config(core: IzhikevichConfig, clocks_per_bit: int = BOARD_CLOCKS_PER_BIT,
+                      n_cores: int = 1) -> LinkConfig:
+    """The link of the ``board`` engine for the core ``core`` (its arithmetic, clock and
+    sweep rate; the link drives its ticks) and ``clocks_per_bit`` on the line: one spike batch
+    a millisecond, as on the boards (:func:`cuneate.boards.sizing.size_core`), or more sweeps
+    a batch when a full spike frame takes longer than that on the line (a small core at a low
+    clock), so that batches never pile up behind the transmitter."""
+    ext = IzhikevichConfig.from_kwargs(core.to_kwargs(tick_source="external"))
+    frame_cycles = (MAX_FRAME + 2) * 10 * clocks_per_bit
+    batch = max(int(round(ext.update_hz / 1000)), -(-frame_cycles // ext.cycles_per_tick))
+    if batch > 255:
+        raise ConfigError(f"a spike frame takes {frame_cycles} cycles on the line at "
+                          f"{clocks_per_bit} clocks per bit, more than 255 sweeps of "
+                          f"{ext.cycles_per_tick} cycles")
+    return LinkConfig(ext, clocks_per_bit=clocks_per_bit, batch_sweeps=batch, n_cores=n_cores)
+
+
+class VerilatorSerial(SimulatedSerial):
+    """A serial port whose far end is the board top (:class:`~cuneate.hdl.link.LinkedCore`:
+    the link and the blocks behind it, the PLL and I/O buffers replaced by a clock and wires)
+    compiled by Verilator with ``serial_harness.cpp``: the harness drives ``rx`` with the
+    host's bytes and decodes ``tx``, 8N1 at the link's ``clocks_per_bit``, in its own process;
+    the simulation advances only while the host waits for an answer (as
+    :class:`AmaranthSerial`, whose line faults, ``silent`` and ``cycles`` it shares).
+
+    Parameters
+    ----------
+    lcfg
+        The link configuration.
+    corrupt, corrupt_host
+        Called on each chunk of bytes the device sends / the host writes (line faults).
+    build_root
+        Where compiled harnesses are cached (default: the ``verilator-fast`` cache).
+    """
+
+    def __init__(self, lcfg: LinkConfig, corrupt=None, corrupt_host=None,
+                 build_root: Path | None = None):
+        from ...hdl.link import link_verilog
+        from ..engines.verilator_fast import compile_harness
+        self.lcfg = lcfg
+        self.corrupt, self.corrupt_host = corrupt, corrupt_host
+        cpb = lcfg.clocks_per_bit
+        self.quiet_cycles = 2 * (MAX_FRAME + 2) * 10 * cpb + \
+            2 * lcfg.batch_sweeps * lcfg.core.cycles_per_tick
+        #: idle cycles on ``tx`` after a byte that end a read (a frame's bytes come back to
+        #: back: three byte times of silence mean the frame is whole)
+        self.gap_cycles = 30 * cpb
+        self.max_cycles = max(self.quiet_cycles, 1 << 20)
+        t0 = time.perf_counter()
+        self.exe = compile_harness(link_verilog(lcfg, name=BOARD_TOP), BOARD_TOP,
+                                   SERIAL_HARNESS, {"CUNEATE_CLOCKS_PER_BIT": cpb},
+                                   build_root, prefix="Vboard")
+        self.build_s = time.perf_counter() - t0
+        self._proc = subprocess.Popen([str(self.exe)], stdin=subprocess.PIPE,
+                                      stdout=subprocess.PIPE)
+        self._out = bytearray()                  # bytes to send with the next request
+        self._rx = bytearray()
+        self._cycle = 0
+        self._quiet = False
+        self.sim_s = 0.0
+        self.totals: dict = {}
+        self.is_open = True
+
+    def write(self, data: bytes) -> int:
+        n = len(data)
+        if self.corrupt_host is not None:
+            data = self.corrupt_host(bytes(data))
+        self._out += bytes(data)
+        self._quiet = False
+        return n
+
+    def _request(self, payload: bytes) -> tuple[bytes, int, int]:
+        p = self._proc
+        t0 = time.perf_counter()
+        p.stdin.write(b"R" + struct.pack("<I", len(payload)) + payload +
+                      struct.pack("<QQQ", self.gap_cycles, self.quiet_cycles,
+                                  self.max_cycles))
+        p.stdin.flush()
+        head = p.stdout.read(4)
+        if len(head) != 4:
+            raise RuntimeError(f"the board harness ended (exit {p.wait()})")
+        (m,) = struct.unpack("<I", head)
+        data = p.stdout.read(m)
+        cycle, why = struct.unpack("<QB", p.stdout.read(9))
+        self.sim_s += time.perf_counter() - t0
+        return data, cycle, why
+
+    def _fill(self) -> None:
+        if not self.is_open:
+            return
+        payload, self._out = bytes(self._out), bytearray()
+        data, self._cycle, why = self._request(payload)
+        if data:
+            self._rx += self.corrupt(data) if self.corrupt is not None else data
+        self._quiet = why == 1
+
+    @property
+    def silent(self) -> bool:
+        """Nothing left to send and no byte from the device for :attr:`quiet_cycles`."""
+        return not self._rx and not self._out and self._quiet
+
+    @property
+    def cycles(self) -> int:
+        """Clock cycles simulated so far."""
+        return self._cycle
+
+    def close(self):
+        if not self.is_open:
+            return
+        self.is_open = False
+        p = self._proc
+        try:
+            p.stdin.write(b"Q")
+            p.stdin.flush()
+            line = p.stdout.readline()
+            self.totals = json.loads(line) if line.strip() else {}
+        except (OSError, ValueError):
+            self.totals = {}
+        finally:
+            p.stdin.close()
+            p.wait()
+
+
+class BoardTransport(UartTransport):
+    """The ``board`` engine: the real host stack (:class:`~cuneate.sim.host.uart.UartTransport`:
+    COBS/CRC frames, sequence numbers, lockstep, every counter) over :class:`VerilatorSerial`,
+    the board top sized to the core the driver opens it with.
+
+    Line faults (``corrupt``, ``corrupt_host``) reach the simulated line; :meth:`figures` gives
+    what the run cost: simulated cycles, wall time, bytes and frames each way."""
+
+    name = "board"
+
+    def __init__(self, build_dir: Path | None = None, progress=None, waves=None,
+                 clocks_per_bit: int = BOARD_CLOCKS_PER_BIT, corrupt=None, corrupt_host=None,
+                 timeout_s: float = 600.0):
+        if waves:
+            raise ValueError("engine 'board' writes no waveforms (those that do: amaranth, "
+                             "icarus, verilator)")
+        self.clocks_per_bit = clocks_per_bit
+        self._faults = (corrupt, corrupt_host)
+        self.progress = progress
+        super().__init__(None, timeout_s=timeout_s)
+
+    def open(self, config) -> None:
+        self.lcfg = board_link_config(config, self.clocks_per_bit)
+        self.batch_sweeps = self.lcfg.batch_sweeps
+        self.serial = VerilatorSerial(self.lcfg, *self._faults)
+        self._port_arg = self.serial
+        self._t0 = time.perf_counter()
+        super().open(self.lcfg.core)
+
+    def run(self, n_ticks: int) -> None:
+        super().run(n_ticks)
+        if self.progress is not None:
+            self.progress(self._ticks)
+
+    @property
+    def sim_s(self) -> float:
+        """Wall time of the simulation proper (the harness answering the host)."""
+        return self.serial.sim_s
+
+    def figures(self) -> dict:
+        """Cycles, wall time and rate, and the line's bytes and frames each way."""
+        s = self.serial
+        wall = time.perf_counter() - self._t0
+        line = s.totals or {}
+        return {"cycles": s.cycles, "wall_s": round(wall, 3),
+                "cycles_per_s": round(s.cycles / s.sim_s) if s.sim_s else 0,
+                "build_s": round(s.build_s, 3), "clocks_per_bit": self.lcfg.clocks_per_bit,
+                "bytes_to_device": line.get("bytes_to_device"),
+                "bytes_from_device": line.get("bytes_from_device"),
+                "line_framing_errors": line.get("framing_errors"),
+                "frames_to_device": self._counts["frames_sent"],
+                "frames_from_device": self._counts["frames_received"]}

@@ -20,7 +20,7 @@ from collections import Counter
 
 import pytest
 
-from cuneate.boards.link_faults import (KINDS, chunks, corrupt, edge_messages, single_bit_flips,
+from cuneate.sim.link.faults import (KINDS, chunks, corrupt, edge_messages, single_bit_flips,
                                         single_byte_drops, wire_of)
 from cuneate.hdl.link.codec import (CRC_BYTES, MAX_FRAME, MIN_FRAME, MSG_CONTROL,
                                     MSG_COUNTERS, MSG_SPIKES, MSG_WRITE, CobsError,

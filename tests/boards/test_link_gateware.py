@@ -188,9 +188,9 @@ def test_damaged_frames_are_counted_never_accepted(structured):
     intact frames are accepted, and the core receives exactly the intact frames' currents.
     Structured: every bit of the first and last code bytes and the delimiter of a frame that
     ends in 0x00 (the truncating flip among them) and the 254-byte one-block frame; sampled:
-    four of every corruption class (:data:`~cuneate.boards.link_faults.KINDS`)."""
+    four of every corruption class (:data:`~cuneate.sim.link.faults.KINDS`)."""
     import random
-    from cuneate.boards.link_faults import fault_plan, plan_outcome
+    from cuneate.sim.link.faults import fault_plan, plan_outcome
     lc = link_config(ERR_CORE, clocks_per_bit=CPB, batch_sweeps=16, batch_capacity=20)
     if structured:
         plan = fault_plan(lc.current_width, lc.core.n_neurons, random.Random("amaranth"),

@@ -2,7 +2,7 @@
 ``UartTransport`` to the protocol model (``ModelSerial``) and to the link gateware in the
 Amaranth simulator (``AmaranthSerial``, bytes on the rx/tx pins), with every counter of the
 transport contract checked; spikes equal the bit-exact twin's streamed the same way. With line
-faults injected (``cuneate.boards.link_faults``) on a frame of either direction the run fails,
+faults injected (``cuneate.sim.link.faults``) on a frame of either direction the run fails,
 naming the loss and the counters that saw it: nothing lost is silent, nothing hangs."""
 
 import random
@@ -10,8 +10,8 @@ import random
 import numpy as np
 import pytest
 
-from cuneate.boards.link_faults import KINDS, corrupt, flip
-from cuneate.boards.uart import ModelSerial, UartTransport
+from cuneate.sim.link.faults import KINDS, corrupt, flip
+from cuneate.sim.host.uart import ModelSerial, UartTransport
 from cuneate.hdl.link import link_config
 from cuneate.hdl.link.codec import (MSG_CONTROL, MSG_SPIKES, MSG_WRITE, Message, cobs_decode,
                                     encode_frame)

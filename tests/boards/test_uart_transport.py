@@ -7,8 +7,8 @@ import struct
 import numpy as np
 import pytest
 
-from cuneate.boards.uart import HOST_ERRORS, ModelSerial, UartTransport
-from cuneate.boards.link_faults import KINDS, corrupt
+from cuneate.sim.host.uart import HOST_ERRORS, ModelSerial, UartTransport
+from cuneate.sim.link.faults import KINDS, corrupt
 from cuneate.hdl.izhikevich import IzhikevichTwin
 from cuneate.hdl.link import link_config
 from cuneate.hdl.link.codec import MSG_SPIKES, MSG_WRITE, Message, encode_frame

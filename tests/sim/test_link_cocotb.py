@@ -6,7 +6,7 @@ change at its sweep; a corrupted, a truncated, a late, an out-of-range, a runt a
 frame and a missing sequence number are each counted in the right counter; and a burst that
 overruns the receive FIFO while a write waits for its sweep (back-pressure) is counted as
 dropped bytes, with every frame it damaged missing from the accepted count (no silent loss);
-and damaged frames of every corruption class (:mod:`cuneate.boards.link_faults`) are each
+and damaged frames of every corruption class (:mod:`cuneate.sim.link.faults`) are each
 counted, never accepted, while the core's write port receives only intact currents.
 Icarus 11 runs the yosys-lowered netlist of the same design (``link_verilog(lowered=True)``):
 it mis-schedules some combinational processes of the transmit FSM in the direct output.
@@ -154,7 +154,7 @@ def test_link_damaged_frames_counted_never_accepted(simulator, build_root):
     exactly the intact frames' currents (watched at its write port) and spikes as the twin
     with those currents says."""
     import random
-    from cuneate.boards.link_faults import fault_plan, plan_outcome, wire_of
+    from cuneate.sim.link.faults import fault_plan, plan_outcome, wire_of
     lc = link_config(CORE, clocks_per_bit=CPB, batch_sweeps=16, batch_capacity=60)
     N, W = lc.core.n_neurons, lc.current_width
     plan = fault_plan(W, N, random.Random("cocotb"), per_kind=2, code_bytes=("last",),

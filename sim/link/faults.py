@@ -2,7 +2,7 @@
 exercise the edge cases of COBS and the CRC.
 
 Used by the link's error-detection tests (host codec, Amaranth simulator, cocotb) and for
-fault injection (:class:`~cuneate.boards.uart.ModelSerial` takes a ``corrupt`` function). A
+fault injection (:class:`~cuneate.sim.host.uart.ModelSerial` takes a ``corrupt`` function). A
 *wire* is one encoded frame as sent: its COBS bytes and the 0x00 delimiter
 (:func:`~cuneate.hdl.link.codec.encode_frame`). Every corruption works on the wire, delimiter
 included, as the UART would deliver it:
@@ -33,7 +33,7 @@ import random
 import struct
 from dataclasses import dataclass
 
-from ..hdl.link.codec import (COUNTER_NAMES, CRC_BYTES, MAX_PAYLOAD, MSG_CONTROL, MSG_COUNTERS,
+from ...hdl.link.codec import (COUNTER_NAMES, CRC_BYTES, MAX_PAYLOAD, MSG_CONTROL, MSG_COUNTERS,
                               MSG_SPIKES, MSG_WRITE, OP_CLEAR_COUNTERS, OP_READ_COUNTERS,
                               OP_START, OP_STEP, Message, cobs_encode, control_message,
                               encode_frame, write_message)

@@ -34,13 +34,13 @@ import time
 
 import numpy as np
 
-from ..hdl.link.codec import (COUNTER_NAMES, FRAME_ERRORS, MSG_COUNTERS, MSG_SPIKES,
+from ...hdl.link.codec import (COUNTER_NAMES, FRAME_ERRORS, MSG_COUNTERS, MSG_SPIKES,
                               OP_CLEAR_COUNTERS, OP_READ_COUNTERS, OP_STEP, OP_STOP,
                               FrameDecoder, FrameError, control_message, current_bytes,
                               encode_frame, parse_counters, parse_spikes, write_message)
-from ..hdl.link.twin import LinkModel
-from ..hdl.link.codec import MAX_FRAME, MIN_FRAME
-from ..sim.host.transport import SimulatedSerial, SpikeBatch, Transport, TransportError
+from ...hdl.link.twin import LinkModel
+from ...hdl.link.codec import MAX_FRAME, MIN_FRAME
+from .transport import SimulatedSerial, SpikeBatch, Transport, TransportError
 
 __all__ = ["UartTransport", "ModelSerial", "DEVICE_ERRORS", "HOST_ERRORS"]
 
@@ -60,7 +60,7 @@ class ModelSerial(SimulatedSerial):
     what is written is fed to the model, which runs each step at once; ``read`` returns its
     answers. ``corrupt``, if given, is called on every chunk the device sends and
     ``corrupt_host`` on every chunk the host writes (line faults, e.g. from
-    :mod:`cuneate.boards.link_faults`)."""
+    :mod:`cuneate.sim.link.faults`)."""
 
     def __init__(self, lcfg, corrupt=None, corrupt_host=None):
         self.model = LinkModel(lcfg)
