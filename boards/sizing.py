@@ -18,15 +18,13 @@ from __future__ import annotations
 import math
 
 from ..hdl.izhikevich.config import ConfigError, IzhikevichConfig
-from ..hdl.link import LinkConfig
+from ..hdl.link.config import LINK_IDLE_CYCLES, LinkConfig
 from ..hdl.link.codec import HEADER_BYTES, MAX_FRAME
 from .top import ClockPlan
 
 __all__ = ["size_core", "estimate", "limits", "clock_plans", "MAX_LINK_NEURONS"]
 
 MULTIPLIERS = 4
-#: idle cycles per sweep kept for host writes (the link writes between sweeps)
-LINK_IDLE_CYCLES = 16
 #: the share of a core's measured (out of context) fmax the sizing clocks a board build at
 FMAX_MARGIN = 0.9
 #: neuron ids the link's 16-bit addresses reach

@@ -6,7 +6,11 @@ from __future__ import annotations
 from ..izhikevich import ConfigError, IzhikevichConfig
 from .codec import MAX_FRAME, MIN_FRAME, SPIKE_HEADER, current_bytes
 
-__all__ = ["LinkConfig", "link_config"]
+__all__ = ["LinkConfig", "link_config", "LINK_IDLE_CYCLES"]
+
+#: idle cycles per sweep a core behind the link keeps beyond its ``n_neurons`` (the sweep's
+#: pipeline tail and the tick generator's jitter: a sweep must end before the next tick is due)
+LINK_IDLE_CYCLES = 16
 
 
 class LinkConfig:

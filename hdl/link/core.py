@@ -329,7 +329,11 @@ class HostLink(wiring.Component):
         offset = Signal(cfg.sweep_number_width)
         m.d.comb += offset.eq(ss - bt[:cfg.sweep_number_width])
         next_batch = offset >= B
-        last_of_batch = (in_batch == B - 1) | (~free & (steps == 0) & ~pending)
+        # a step's end closes the batch at the sweep_done of the last sweep started: when the
+        # ticks come as fast as the sweeps (cycles per tick near n_neurons + the pipeline) the
+        # step's last tick goes before the previous sweep is done
+        last_started = (bt + in_batch + 1)[:32] == S
+        last_of_batch = (in_batch == B - 1) | (~free & (steps == 0) & ~pending & last_started)
         m.d.comb += self.spike_ready.eq(~sv | ~next_batch)
         with m.If(self.spike_ready):
             m.d.sync += [sv.eq(self.spike_valid), si.eq(self.spike_index),

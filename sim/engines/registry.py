@@ -56,6 +56,9 @@ ENGINES: dict[str, Engine] = {e.name: e for e in (
     Engine("verilator", "rtl", "verilator", True, "cocotb on the generated Verilog, Verilator"),
     Engine("verilator-fast", "rtl", "verilator", True,
            "the generated Verilog compiled by Verilator with a C++ harness (no Python per cycle)"),
+    Engine("board", "rtl", "verilator", True,
+           "the board top (UART link + blocks) compiled by Verilator, driven by the host stack "
+           "through a simulated serial line"),
 )}
 
 

@@ -20,8 +20,9 @@ class EngineRun:
 
     ``spikes_ms``: one array or list of spike times (ms) per neuron, in the block's neuron
     order; with several populations (``populations``: name -> ``(first, count)``) they follow
-    each other. ``clamp_counts``: updates clamped per kind; ``clamp_sticky``: the sticky flags
-    (per kind, or the block's bit mask); ``counters``: what the engine counted besides
+    each other. ``clamp_counts``: updates clamped per kind (``None`` where the engine cannot
+    see them: the ``board`` engine's link carries spikes, not clamps); ``clamp_sticky``: the
+    sticky flags (per kind, or the block's bit mask); ``counters``: what the engine counted besides
     (writes, merged input events, link events, ...).
     """
 

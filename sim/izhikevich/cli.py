@@ -255,7 +255,9 @@ def cmd_simulate(args) -> int:
             except ValueError as exc:
                 raise CliError(f"cuneate simulate: {exc}") from None
             spikes = run.spikes_ms
-            saturation = {"counts": run.clamp_counts, "sticky": run.clamp_sticky}
+            # the board's link carries no clamp counters
+            saturation = None if run.clamp_counts is None else \
+                {"counts": run.clamp_counts, "sticky": run.clamp_sticky}
     write_simulate_spikes(args, spikes, "izhikevich", n_sweeps * dt_ms, dt_ms)
     params = sets[0].to_dict() if len(sets) == 1 else [s.to_dict() for s in sets]
     if isinstance(params, dict):

@@ -44,7 +44,7 @@ from ...hdl.izhikevich import (CLAMP_KINDS, IzhikevichConfig, IzhikevichCore,
                                IzhikevichTwin, izhikevich_verilog)
 from ..engines.amaranth import simulate, write_currents
 from ..engines.registry import block_engines, check_engine
-from ..engines.run import EngineRun, TickUnwrap
+from ..engines.run import EngineRun, TickUnwrap, times_from_pairs
 from ..host.transport import SpikeBatch, Transport, TransportError
 
 __all__ = ["HARDWARE_ENGINES", "EngineRun", "engine_core", "run_engine", "engine_config",
@@ -105,6 +105,26 @@ def _run_verilator_fast(cfg, cur, n_sweeps, n, build_dir, progress, waves=None):
     ks = run.spikes_per_neuron(n)
     return ([((k + 1) * cfg.dt_ms).tolist() for k in ks], dict(run.summary["clamp_counts"]),
             run.clamp_sticky())
+
+
+def _run_board(cfg, cur, n_sweeps, n, build_dir, progress, waves=None):
+    """The board top through its serial line: the currents written once, the sweeps run, the
+    spikes read back and every counter checked. The link carries no clamp counters: none
+    are reported (``None``)."""
+    from ..host.transport import check_counters
+    tr = make_transport("board", progress=progress, waves=waves)
+    tr.open(cfg)
+    try:
+        raw = np.asarray(cfg.I.to_raw(cur), dtype=np.int64)
+        tr.write_currents(0, 0, raw)
+        tr.run(n_sweeps)
+        batch = tr.collect()
+        check_counters(tr, tr.counters(), 1, len(batch))
+    finally:
+        tr.close()
+    keep = batch.neuron < n
+    pairs = zip(batch.tick[keep].tolist(), batch.neuron[keep].tolist())
+    return [t.tolist() for t in times_from_pairs(pairs, n, cfg.dt_ms)], None, None
 
 
 def _to_times(spike_sweeps, n, dt_ms):
@@ -197,7 +217,8 @@ def _cocotb_runner(simulator):
 #: Engine name -> whole-run runner ``(cfg, currents, n_sweeps, n, build_dir, progress, waves)
 #: -> (spikes per neuron, clamp counts, sticky flags)`` (``waves``: the RTL engines' window).
 RUNNERS = {"fixed": _run_fixed, "amaranth": _run_amaranth, "icarus": _cocotb_runner("icarus"),
-           "verilator": _cocotb_runner("verilator"), "verilator-fast": _run_verilator_fast}
+           "verilator": _cocotb_runner("verilator"), "verilator-fast": _run_verilator_fast,
+           "board": _run_board}
 
 
 def run_engine(engine: str, core: dict, currents, duration_ms: float,
@@ -226,8 +247,8 @@ def run_engine(engine: str, core: dict, currents, duration_ms: float,
                              f"[{cfg.I.min_value:g}, {cfg.I.max_value:g}]")
     t0 = time.perf_counter()
     spikes, counts, sticky = RUNNERS[engine](cfg, cur, n_sweeps, n, build_dir, progress, waves)
-    return EngineRun(engine, cfg.dt_ms, n_sweeps, spikes, dict(counts), sticky,
-                     time.perf_counter() - t0)
+    return EngineRun(engine, cfg.dt_ms, n_sweeps, spikes,
+                     None if counts is None else dict(counts), sticky, time.perf_counter() - t0)
 
 
 def run_hardware_engine(engine: str, params: dict, currents, duration_ms: float,
@@ -504,7 +525,13 @@ TRANSPORTS = {
     "icarus": lambda **kw: CocotbTransport("icarus", **kw),
     "verilator": lambda **kw: CocotbTransport("verilator", **kw),
     "verilator-fast": lambda **kw: VerilatorFastTransport(**kw),
+    "board": lambda **kw: _board_transport(**kw),
 }
+
+
+def _board_transport(build_dir=None, progress=None, waves=None, **kw):
+    from ..link.engines import BoardTransport
+    return BoardTransport(build_dir=build_dir, progress=progress, waves=waves, **kw)
 
 
 def make_transport(engine: str, **kw) -> Transport:

@@ -23,8 +23,9 @@ from pathlib import Path
 
 from amaranth.sim import Simulator
 
-from ...hdl.izhikevich import ConfigError, IzhikevichConfig
+from ...hdl.izhikevich import IzhikevichConfig
 from ...hdl.link import LinkConfig, LinkedCore
+from ...hdl.link.config import LINK_IDLE_CYCLES
 from ...hdl.link.codec import MAX_FRAME
 from ..host.transport import SimulatedSerial
 from ..host.uart import UartTransport
@@ -146,18 +147,22 @@ BOARD_TOP = "board"
 
 def board_link_config(core: IzhikevichConfig, clocks_per_bit: int = BOARD_CLOCKS_PER_BIT,
                       n_cores: int = 1) -> LinkConfig:
-    """The link of the ``board`` engine for the core ``core`` (its arithmetic, clock and
-    sweep rate; the link drives its ticks) and ``clocks_per_bit`` on the line: one spike batch
-    a millisecond, as on the boards (:func:`cuneate.boards.sizing.size_core`), or more sweeps
-    a batch when a full spike frame takes longer than that on the line (a small core at a low
-    clock), so that batches never pile up behind the transmitter."""
-    ext = IzhikevichConfig.from_kwargs(core.to_kwargs(tick_source="external"))
+    """The link of the ``board`` engine for the core ``core`` (its arithmetic and sweep rate;
+    the link drives its ticks) and ``clocks_per_bit`` on the line: one spike batch a
+    millisecond, as on the boards (:func:`cuneate.boards.sizing.size_core`), or more sweeps a
+    batch when a full spike frame takes longer than that on the line, so that batches never
+    pile up behind the transmitter. A core at one update a clock (as the other engines run
+    it) gets the idle cycles a board keeps between sweeps (:data:`~cuneate.hdl.link.config
+    .LINK_IDLE_CYCLES`), and more if a frame does not fit in 255 of its sweeps: with the link's
+    external tick they change nothing but the time (the engines' results depend on the update
+    rate alone)."""
     frame_cycles = (MAX_FRAME + 2) * 10 * clocks_per_bit
+    min_cycles = max(-(-frame_cycles // 255), core.n_neurons + LINK_IDLE_CYCLES)
+    kw = core.to_kwargs(tick_source="external")
+    if core.clock_hz / core.update_hz < min_cycles:
+        kw["clock_hz"] = core.update_hz * min_cycles
+    ext = IzhikevichConfig.from_kwargs(kw)
     batch = max(int(round(ext.update_hz / 1000)), -(-frame_cycles // ext.cycles_per_tick))
-    if batch > 255:
-        raise ConfigError(f"a spike frame takes {frame_cycles} cycles on the line at "
-                          f"{clocks_per_bit} clocks per bit, more than 255 sweeps of "
-                          f"{ext.cycles_per_tick} cycles")
     return LinkConfig(ext, clocks_per_bit=clocks_per_bit, batch_sweeps=batch, n_cores=n_cores)
 
 
@@ -316,6 +321,6 @@ class BoardTransport(UartTransport):
                 "build_s": round(s.build_s, 3), "clocks_per_bit": self.lcfg.clocks_per_bit,
                 "bytes_to_device": line.get("bytes_to_device"),
                 "bytes_from_device": line.get("bytes_from_device"),
-                "line_framing_errors": line.get("framing_errors"),
+                "framing_errors": line.get("framing_errors"),
                 "frames_to_device": self._counts["frames_sent"],
                 "frames_from_device": self._counts["frames_received"]}

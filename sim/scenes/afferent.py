@@ -347,6 +347,8 @@ def _run_transport(engine):
         cnt = dict(res.counters)
         if hasattr(tr, "sim_s"):    # batch engines: the simulation without generation/build
             cnt["simulate_ms"] = int(round(tr.sim_s * 1000))
+        if hasattr(tr, "figures"):  # the board engine: cycles, bytes and frames on its line
+            cnt.update({f"line_{k}": v for k, v in tr.figures().items()})
         return res.spikes.times_ms(ctx["config"].dt_ms, n), cnt
     return run
 
