@@ -148,21 +148,21 @@ BOARD_TOP = "board"
 def board_link_config(core: IzhikevichConfig, clocks_per_bit: int = BOARD_CLOCKS_PER_BIT,
                       n_cores: int = 1) -> LinkConfig:
     """The link of the ``board`` engine for the core ``core`` (its arithmetic and sweep rate;
-    the link drives its ticks) and ``clocks_per_bit`` on the line: one spike batch a
-    millisecond, as on the boards (:func:`cuneate.boards.sizing.size_core`), or more sweeps a
-    batch when a full spike frame takes longer than that on the line, so that batches never
-    pile up behind the transmitter. A core at one update a clock (as the other engines run
-    it) gets the idle cycles a board keeps between sweeps (:data:`~cuneate.hdl.link.config
-    .LINK_IDLE_CYCLES`), and more if a frame does not fit in 255 of its sweeps: with the link's
-    external tick they change nothing but the time (the engines' results depend on the update
-    rate alone)."""
+    the link drives its ticks) and ``clocks_per_bit`` on the line, with one spike batch a
+    millisecond as on the boards (:func:`cuneate.boards.sizing.size_core`). The clock is the
+    core's, raised where needed (a core at one update a clock, as the other engines run it)
+    to keep the idle cycles a board keeps between sweeps
+    (:data:`~cuneate.hdl.link.config.LINK_IDLE_CYCLES`) and to let the largest spike frame
+    leave within a batch's sweeps (batches never pile up behind the transmitter). With the
+    link's external tick the clock changes nothing but the time: the engines' results depend
+    on the update rate alone."""
+    batch = max(1, int(round(core.update_hz / 1000)))
     frame_cycles = (MAX_FRAME + 2) * 10 * clocks_per_bit
-    min_cycles = max(-(-frame_cycles // 255), core.n_neurons + LINK_IDLE_CYCLES)
+    min_cycles = max(-(-frame_cycles // batch), core.n_neurons + LINK_IDLE_CYCLES)
     kw = core.to_kwargs(tick_source="external")
     if core.clock_hz / core.update_hz < min_cycles:
         kw["clock_hz"] = core.update_hz * min_cycles
     ext = IzhikevichConfig.from_kwargs(kw)
-    batch = max(int(round(ext.update_hz / 1000)), -(-frame_cycles // ext.cycles_per_tick))
     return LinkConfig(ext, clocks_per_bit=clocks_per_bit, batch_sweeps=batch, n_cores=n_cores)
 
 

@@ -13,8 +13,8 @@ import pytest
 from cuneate.sim.link.faults import KINDS, corrupt, flip
 from cuneate.sim.host.uart import ModelSerial, UartTransport
 from cuneate.hdl.link import link_config
-from cuneate.hdl.link.codec import (MSG_CONTROL, MSG_SPIKES, MSG_WRITE, Message, cobs_decode,
-                                    encode_frame)
+from cuneate.hdl.link.codec import (MSG_CONTROL, MSG_SPIKES, MSG_WRITE, OP_STEP, Message,
+                                    cobs_decode, encode_frame)
 from cuneate.sim.host.driver import AfferentEncoding, FbgDriver
 from cuneate.sim.host.transport import COUNTERS, TransportError
 from cuneate.sim.izhikevich.engines import TwinTransport
@@ -175,3 +175,29 @@ def test_a_damaged_write_to_the_gateware_fails_the_run_naming_the_loss():
                                              r"seq_gaps=1\)"):
         stream(AmaranthSerial(lc, corrupt_host=fault), lc, trace(9))
     assert fault.hit
+
+
+def test_steps_as_fast_as_the_sweeps_batch_every_sweep_in_its_frame():
+    """Ticks as fast as the sweeps (11 cycles a sweep for 8 neurons and a 5-stage pipeline: a
+    step's last tick goes before the previous sweep is done): each step's spike batch still
+    closes after the step's last sweep (one frame a step, covering all its sweeps, so every
+    spike arrives in the frame of its sweep) and the run equals the twin."""
+    from cuneate.hdl.link.codec import FrameDecoder, parse_spikes
+    lc = link_config(dict(CORE, clock_hz=4e3 * 11), clocks_per_bit=4, batch_sweeps=16)
+    host, dev, steps, batches = FrameDecoder(), FrameDecoder(), [], []
+
+    def sent(data):
+        steps.extend(int.from_bytes(m.payload[1:5], "little") for m in host.feed(data)
+                     if m.type == MSG_CONTROL and m.payload[0] == OP_STEP)
+        return data
+
+    def received(data):
+        batches.extend(parse_spikes(m)[1] for m in dev.feed(data) if m.type == MSG_SPIKES)
+        return data
+    x = trace(24)
+    ref = reference(lc, x)
+    got = stream(AmaranthSerial(lc, corrupt=received, corrupt_host=sent), lc, x)
+    assert len(steps) > 4 and batches == steps
+    assert np.array_equal(got.spikes.tick, ref.spikes.tick)
+    assert np.array_equal(got.spikes.neuron, ref.spikes.neuron)
+    assert got.counters["overrun"] == 0 and got.counters["frames_lost"] == 0

@@ -1,0 +1,189 @@
+"""The ``board`` engine: the board top (UART link + core) compiled by Verilator behind a
+simulated serial line, driven by the real host stack (``FbgDriver`` -> ``UartTransport`` ->
+COBS/CRC frames -> 8N1 bits -> the RTL, and back). Its spikes equal the twin's and the fixed
+engine's in a scene; every fault injected on the line, in either direction, is detected and
+counted, and none silently changes a spike."""
+
+import random
+
+import numpy as np
+import pytest
+
+from cuneate.hdl.izhikevich import IzhikevichConfig
+from cuneate.hdl.link.codec import MAX_FRAME, MSG_CONTROL, MSG_SPIKES, MSG_WRITE, cobs_decode
+from cuneate.sim.host.driver import AfferentEncoding, FbgDriver
+from cuneate.sim.host.transport import COUNTERS, TransportError
+from cuneate.sim.izhikevich.engines import TwinTransport, make_transport
+from cuneate.sim.link.engines import BoardTransport, board_link_config
+from cuneate.sim.link.faults import KINDS, corrupt
+
+# 24 neurons at one update a clock, as the other engines run a core: the board engine adds the
+# idle cycles a board keeps between sweeps
+CORE = IzhikevichConfig(n_neurons=24, clock_hz=4e3 * 24, update_hz=4e3, spike_fifo_depth=32)
+SA = AfferentEncoding("SA", gain=40.0, unit_pm=1000.0)
+
+
+def trace(n_samples: int, seed: int = 1) -> np.ndarray:
+    """Shifts (nm) of three gratings, held levels that change every third sample."""
+    rng = np.random.default_rng(seed)
+    levels = rng.uniform(0.0, 1.8, (max(1, n_samples // 3), 3))
+    return np.repeat(levels, 3, axis=0)[:n_samples]
+
+
+def driver():
+    return FbgDriver(CORE, [SA] * 3, first=5)
+
+
+def reference(x):
+    tw = TwinTransport()
+    tw.open(CORE)
+    return driver().stream(tw, x)
+
+
+def frame_type(wire: bytes) -> int:
+    return cobs_decode(bytes(wire).rstrip(b"\x00"))[1]
+
+
+def test_the_board_link_keeps_a_boards_idle_cycles_and_one_batch_a_millisecond():
+    lc = board_link_config(CORE)
+    assert lc.core.tick_source == "external" and lc.core.cycles_per_tick >= 24 + 16
+    assert lc.batch_sweeps == 4 and lc.clocks_per_bit == 4
+    # the largest frame (and its delimiters) leaves within a batch's sweeps on the line
+    assert lc.batch_sweeps * lc.core.cycles_per_tick >= (MAX_FRAME + 2) * 10 * lc.clocks_per_bit
+    # the arithmetic is the core's
+    assert lc.core.to_kwargs(clock_hz=0, tick_source="") == CORE.to_kwargs(clock_hz=0,
+                                                                          tick_source="")
+
+
+def test_board_engine_equals_the_twin_with_every_counter_checked(tmp_path):
+    x = trace(60)
+    ref = reference(x)
+    tr = make_transport("board")
+    tr.open(CORE)
+    got = driver().stream(tr, x)
+    tr.close()
+    assert len(ref.spikes) > 30 and ref.writes_sent > 10
+    assert np.array_equal(got.spikes.tick, ref.spikes.tick)
+    assert np.array_equal(got.spikes.neuron, ref.spikes.neuron)
+    c = got.counters
+    assert {k: c[k] for k in COUNTERS} == {
+        "writes": ref.writes_sent, "spikes": len(ref.spikes), "spikes_counted": len(ref.spikes),
+        "frames_lost": 0, "overflow": 0, "overrun": 0, "late_writes": 0}
+    f = tr.figures()
+    # every frame the host sent after the device cleared its counters was accepted, and every
+    # byte on the line arrived whole
+    assert c["device_frames_ok"] == c["frames_sent"] - 2
+    assert f["frames_to_device"] == c["frames_sent"] and f["framing_errors"] == 0
+    assert f["bytes_to_device"] > 0 and f["bytes_from_device"] > 0
+    assert f["cycles"] >= 60 * 4 * board_link_config(CORE).core.cycles_per_tick
+
+
+class OnFrame:
+    """A line fault on the ``nth`` frame of type ``typ`` the host writes (one frame a call)."""
+
+    def __init__(self, typ: int, damage, nth: int = 0):
+        self.typ, self.damage, self.nth, self.seen, self.hit = typ, damage, nth, 0, False
+
+    def __call__(self, data: bytes) -> bytes:
+        if frame_type(data) == self.typ:
+            self.seen += 1
+            if self.seen == self.nth + 1:
+                self.hit = True
+                return self.damage(data)
+        return data
+
+
+class OnDeviceBytes:
+    """A line fault on the ``nth`` chunk of bytes the device sends."""
+
+    def __init__(self, damage, nth: int):
+        self.damage, self.nth, self.seen, self.hit = damage, nth, 0, False
+
+    def __call__(self, data: bytes) -> bytes:
+        if data:
+            self.seen += 1
+            if self.seen == self.nth + 1:
+                self.hit = True
+                return self.damage(data)
+        return data
+
+
+def _fails(**faults) -> str:
+    tr = BoardTransport(timeout_s=60.0, **faults)
+    tr.open(CORE)
+    try:
+        with pytest.raises(TransportError) as err:
+            driver().stream(tr, trace(30))
+    finally:
+        tr.close()
+    return str(err.value)
+
+
+#: the default lane's corruption classes (a flipped bit, a lost byte, an extra byte); the long
+#: lane runs every class
+DEFAULT_KINDS = ("bit", "drop", "insert")
+
+
+@pytest.mark.parametrize("kinds", [
+    pytest.param(DEFAULT_KINDS, id="bit-drop-insert"),
+    pytest.param(tuple(k for k in KINDS if k not in DEFAULT_KINDS), id="the-others",
+                 marks=pytest.mark.long)])
+def test_every_fault_injected_on_the_line_is_detected_and_counted(kinds):
+    """Each corruption class on a host WRITE, a host STEP and a device SPIKES frame: each run
+    fails, naming the counters that saw the loss; none completes with different spikes."""
+    detected, injected = 0, 0
+    for kind in kinds:
+        rng = random.Random(kind)
+        for typ, nth in ((MSG_WRITE, 2), (MSG_CONTROL, 4)):
+            fault = OnFrame(typ, lambda w: corrupt(w, kind, rng), nth=nth)
+            msg = _fails(corrupt_host=fault)
+            injected += fault.hit
+            assert fault.hit, (kind, typ)
+            assert ("lost or damaged on the link" in msg or "no answer from the device" in msg
+                    or "spike batches lost" in msg), (kind, typ, msg)
+            assert "device" in msg, (kind, typ, msg)
+            detected += 1
+        dev = OnDeviceBytes(lambda w: corrupt(w, kind, rng), nth=3)
+        msg = _fails(corrupt=dev)
+        injected += dev.hit
+        assert dev.hit, kind
+        assert ("damaged frames from the device" in msg or "sequence gap" in msg
+                or "spike batches lost" in msg or "malformed frame" in msg), (kind, msg)
+        detected += 1
+    assert injected == detected == 3 * len(kinds)
+
+
+def test_scene_on_the_board_engine_equals_fixed(tmp_path):
+    from cuneate.sim.scenes.runner import run_scene
+    from cuneate.sim.scenes.scene import default_scene
+    run = run_scene(default_scene(), engines=["fixed", "board"], build_dir=tmp_path)
+    fixed, board = run.spikes["fixed"], run.spikes["board"]
+    assert sum(len(s) for s in fixed) > 1000
+    assert all(np.array_equal(a, b) for a, b in zip(fixed, board)) and len(fixed) == len(board)
+    c = run.counters["board"]
+    assert c["frames_lost"] == 0 and c["line_frames_from_device"] > 0
+    assert c["line_cycles_per_s"] > 0 and c["device_frames_ok"] == c["frames_sent"] - 2
+
+
+def test_spike_frames_carry_exactly_their_sweeps():
+    """Every SPIKES frame from the device holds spikes of its own sweeps only, and the frames'
+    sweeps follow each other without a gap (the link closes a step's last batch after the
+    step's last sweep, even when the ticks come as fast as the sweeps)."""
+    from cuneate.hdl.link.codec import FrameDecoder, parse_spikes
+    dec, batches = FrameDecoder(), []
+
+    def watch(data):
+        for msg in dec.feed(data):
+            if msg.type == MSG_SPIKES:
+                batches.append((msg.tick, parse_spikes(msg)))
+        return data
+    tr = BoardTransport(corrupt=watch)
+    tr.open(CORE)
+    driver().stream(tr, trace(45))
+    tr.close()
+    at = 0
+    for tick, (dropped, sweeps, spikes) in batches:
+        assert tick == at and dropped == 0
+        assert all(tick <= t < tick + sweeps for t, _ in spikes)
+        at += sweeps
+    assert at == 45 * 4 and sum(len(b[1][2]) for b in batches) > 20
