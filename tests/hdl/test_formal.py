@@ -14,9 +14,10 @@ def _cfg(*sets):
     return IzhikevichConfig(n_neurons=8, clock_hz=16e3 * 8, param_sets=tuple(sets))
 
 
+@pytest.mark.long
 def test_datapath_cannot_wrap_for_a_mix_of_sets(capsys):
-    """Through the command a user types (the per-preset proofs through the API are in the long
-    lane): a pass, a counterexample, and a refusal."""
+    """Through the command a user types (about a minute with z3; the per-preset proofs through
+    the API are in the long lane too)."""
     import json
     from cuneate.sim.cli import main
     code = main(["prove", "--preset", "IB", "--preset", "FS", "--json"])
@@ -24,6 +25,10 @@ def test_datapath_cannot_wrap_for_a_mix_of_sets(capsys):
     record("formal_datapath_IB_FS", 1, 0, int(r["status"] != "pass"), "SymbiYosys, z3")
     assert code == 0 and r["status"] == "pass" and r["param_sets"] == ["IB", "FS"], r
     assert r["property"] == "datapath" and not r["counterexample"]
+
+
+def test_cli_prove_names_a_counterexample_and_refuses_an_unknown_preset(capsys):
+    from cuneate.sim.cli import main
     assert main(["prove", "--property", "state_box"]) == 1
     out = capsys.readouterr().out
     assert "FAIL" in out and "counterexample: v = " in out
