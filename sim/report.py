@@ -347,6 +347,7 @@ features.</p>
 <h2>Engine agreement</h2>
 {html_table(agr_rows, ["pair", "spikes A", "spikes B", "identical trains", "mean |count diff|",
                    "max |count diff|", "mean VP (q = 5/s)", "within 1 tick"])}
+{_board_link_html(run.counters.get("board"))}
 <h2>Currents per class (mV/ms) and saturation</h2>
 {html_table(cur_rows, ["class", "lowest peak", "highest peak", "minimum"])}
 <p>Format {html.escape(str(s.get('format')))}: {n_sat} of {s.get('values')} values saturated by
@@ -365,6 +366,31 @@ never applied.</p>
 {html_table(stage_rows, ["stage", "wall s"])}
 {_files_html(getattr(run, "files", {}))}"""
     return write_page(out, run.scene.name, body, figure_names(run))
+
+
+def _board_link_html(board: dict | None) -> str:
+    """The board engine's line: frames, bytes and cycles, and the link budget table."""
+    if not board or "link_budget" not in board:
+        return ""
+    b = board["link_budget"]
+    rows = []
+    for what, budget in (("measured (this run)", b["measured"]),
+                         ("worst case (every current every sample)", b["worst_case"])):
+        for r in budget["rows"]:
+            rows.append([what, f"{r['baud']:,.0f}", f"{budget['in_bytes_per_s']:,.0f}",
+                         f"{100 * r['in_load']:.0f} %", f"{budget['out_bytes_per_s']:,.0f}",
+                         f"{100 * r['out_load']:.0f} %",
+                         "yes" if r["real_time"] else "NO"])
+    return f"""<h2>The board's link</h2>
+<p>The <code>board</code> engine ran the board top (UART link and core, Verilator) through a
+simulated serial line with the host stack a board uses: {board['frames_sent']} frames to the
+device and {board['frames_received']} back, {board['line_bytes_to_device']:,} and
+{board['line_bytes_from_device']:,} bytes, {board['frames_lost']} lost;
+{board['line_cycles']:,} cycles at {board['line_cycles_per_s']:,} cycles/s (simulated bit time
+{board['line_clocks_per_bit']} clocks a bit at both ends). Real time on a board needs the traffic
+below within the line rate, each way:</p>
+{html_table(rows, ["traffic", "baud", "to device B/s", "load", "from device B/s", "load",
+                   "real time"])}"""
 
 
 def format_run(run) -> str:
@@ -415,4 +441,12 @@ def format_run(run) -> str:
     for k, v in run.agreement.items():
         out.append(f"  {k}: {v['identical_trains']}/{v['neurons']} identical trains, mean "
                    f"|spike count diff| {v['mean_abs_count_diff']:.2f}")
+    board = run.counters.get("board") or {}
+    if "link_budget" in board:
+        from .host.uart import format_budget
+        out.append(f"  board link: {board['frames_sent']} frames to the device, "
+                   f"{board['frames_received']} back, {board['frames_lost']} lost; "
+                   f"{board['line_cycles']:,} cycles at {board['line_cycles_per_s']:,}/s; "
+                   f"in real time:")
+        out += [f"    {line}" for line in format_budget(board["link_budget"]["measured"])]
     return "\n".join(out)

@@ -42,7 +42,8 @@ from ...hdl.link.twin import LinkModel
 from ...hdl.link.codec import MAX_FRAME, MIN_FRAME
 from .transport import SimulatedSerial, SpikeBatch, Transport, TransportError
 
-__all__ = ["UartTransport", "ModelSerial", "DEVICE_ERRORS", "HOST_ERRORS"]
+__all__ = ["UartTransport", "ModelSerial", "DEVICE_ERRORS", "HOST_ERRORS", "link_budget",
+           "measured_budget", "format_budget", "BUDGET_BAUDS"]
 
 #: Device counters that mean something was lost or refused.
 DEVICE_ERRORS = tuple(n for n in COUNTER_NAMES if n != "frames_ok")
@@ -344,3 +345,79 @@ class UartTransport(Transport):
             raise TransportError("uart: the device counted errors: " +
                                  ", ".join(f"{k}={v}" for k, v in bad.items()))
         return c
+
+
+# --------------------------------------------------------------------------- the link budget
+
+#: Line rates the budget is stated at: the classic default and the rate the boards run (the
+#: ULX3S's FTDI FT231X runs 3 Mbaud).
+BUDGET_BAUDS = (115_200, 3_000_000)
+#: Bits on the line per byte (8N1: start, eight data bits, stop).
+BITS_PER_BYTE = 10
+
+
+def _wire_bytes(payload_bytes: int) -> int:
+    """Bytes on the line for a frame of ``payload_bytes``: header, payload, CRC, COBS code
+    bytes (one a block of 254) and the delimiter."""
+    n = MIN_FRAME + payload_bytes
+    return n + 1 + n // 254 + 1
+
+
+def link_budget(n_neurons: int, current_width: int, sample_hz: float, update_hz: float,
+                spikes_per_s: float, words_per_sample: float | None = None,
+                bauds=BUDGET_BAUDS) -> dict:
+    """What streaming a scene through the link costs in real time, each way, against the line
+    rates ``bauds``.
+
+    The host's protocol (:class:`UartTransport`): for each sample (``sample_hz``) one
+    ``STEP`` to the sample's sweep and the sample's currents in ``WRITE`` frames of at most
+    :data:`~cuneate.hdl.link.LinkConfig.max_currents` values; ``words_per_sample`` currents a
+    sample (default ``n_neurons``: every afferent's current changes every sample, the worst
+    case). The device: one ``SPIKES`` frame a batch (one a millisecond) and three bytes a spike
+    (``spikes_per_s``). The line is full duplex: each direction has ``baud / 10`` bytes a
+    second. Returns the bytes a second each way and per sweep, and per rate the load of each
+    direction and whether both fit (``real_time``).
+    """
+    from ...hdl.link.codec import SPIKE_HEADER, current_bytes
+    cb = current_bytes(current_width)
+    per_frame = (MAX_FRAME - MIN_FRAME - 2) // cb
+    words = float(n_neurons if words_per_sample is None else words_per_sample)
+    full, rest = divmod(int(np.ceil(words)), per_frame)
+    write = full * _wire_bytes(2 + per_frame * cb) + (_wire_bytes(2 + rest * cb) if rest else 0)
+    step = _wire_bytes(5)
+    bytes_in = sample_hz * (step + write)
+    batches = 1000.0
+    bytes_out = batches * _wire_bytes(SPIKE_HEADER) + 3.0 * spikes_per_s
+    rows = []
+    for baud in bauds:
+        cap = baud / BITS_PER_BYTE
+        rows.append({"baud": baud, "in_load": bytes_in / cap, "out_load": bytes_out / cap,
+                     "real_time": bytes_in <= cap and bytes_out <= cap})
+    return {"neurons": int(n_neurons), "words_per_sample": words, "sample_hz": sample_hz,
+            "spikes_per_s": float(spikes_per_s), "in_bytes_per_s": bytes_in,
+            "out_bytes_per_s": bytes_out, "in_bytes_per_sweep": bytes_in / update_hz,
+            "out_bytes_per_sweep": bytes_out / update_hz, "rows": rows}
+
+
+def measured_budget(bytes_in: int, bytes_out: int, seconds: float,
+                    bauds=BUDGET_BAUDS) -> dict:
+    """The load a run's measured line traffic (``bytes_in`` to the device, ``bytes_out``
+    from it, over ``seconds`` of simulated time) puts on each line rate."""
+    bin_s, bout_s = bytes_in / seconds, bytes_out / seconds
+    rows = [{"baud": b, "in_load": bin_s * BITS_PER_BYTE / b,
+             "out_load": bout_s * BITS_PER_BYTE / b,
+             "real_time": max(bin_s, bout_s) * BITS_PER_BYTE <= b} for b in bauds]
+    return {"in_bytes_per_s": bin_s, "out_bytes_per_s": bout_s, "seconds": seconds,
+            "rows": rows}
+
+
+def format_budget(budget: dict) -> list[str]:
+    """One line per line rate: bytes a second each way and the load."""
+    out = []
+    for r in budget["rows"]:
+        rate = f"{r['baud'] / 1e6:g} Mbaud" if r["baud"] >= 1e6 else f"{r['baud']:g} baud"
+        out.append(f"{rate}: to the device {budget['in_bytes_per_s']:,.0f} "
+                   f"B/s ({100 * r['in_load']:.0f} %), from it "
+                   f"{budget['out_bytes_per_s']:,.0f} B/s ({100 * r['out_load']:.0f} %): "
+                   f"{'real time' if r['real_time'] else 'NOT real time'}")
+    return out
