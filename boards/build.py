@@ -68,21 +68,33 @@ def _yosys_estimate(out: Path, top: str, target: dict) -> dict:
 def build_target(board: str, out: Path, n_neurons: int | None = None,
                  clock_hz: float | None = None, update_hz: float | None = None,
                  bitstream: bool = True, seed: int = 1, name: str | None = None,
-                 pipeline_stages: int | None = None) -> dict:
+                 pipeline_stages: int | None = None, scene=None) -> dict:
     """Size the core for ``board``, write its Verilog (``<name>.v`` of the linked core, the
     board top's ``<name>.debug.v``), build the bitstream when the board supports it and
     ``bitstream`` is true, and write ``<name>.report.json`` / ``.txt``. Returns the report.
-    Raises :class:`~cuneate.hdl.izhikevich.config.ConfigError` for a core the device cannot
-    hold and :class:`BuildError` for a failed tool."""
+    ``scene`` (a :class:`~cuneate.sim.scenes.scene.Scene`): the board holds exactly the
+    scene's blocks, sized to it (:func:`scene_request`), and the report gives the link's
+    budget for it. Raises :class:`~cuneate.hdl.izhikevich.config.ConfigError` for a core the
+    device cannot hold or a scene the link cannot carry in real time, and
+    :class:`BuildError` for a failed tool."""
     from ..sim import progress as prog
     from ..sim.provenance import provenance
     if board not in TARGETS:
         raise ConfigError(f"unknown board {board!r}; known: {', '.join(TARGETS)}")
     target = TARGETS[board]
     depth = {} if pipeline_stages is None else {"pipeline_stages": pipeline_stages}
+    request = scene_request(scene, target) if scene is not None else None
+    if request is not None:
+        n_neurons, update_hz = request["neurons"], request["core"]["update_hz"]
+        depth.update({k: v for k, v in request["core"].items() if k != "update_hz"})
     sized = size_core(target, n_neurons=n_neurons, clock_hz=clock_hz, update_hz=update_hz,
                       **depth)
     lcfg = sized["link"]
+    if request is not None and lcfg.n_cores > 1 and len(request["core"]["param_sets"]) > 1:
+        raise ConfigError(f"{board}: the scene needs {lcfg.n_cores} cores and mixes "
+                          f"{len(request['core']['param_sets'])} parameter sets; a board "
+                          f"holds one neuron-to-set table for all its cores (one set, or "
+                          f"{lcfg.core.n_neurons} neurons at most)")
     name = name or f"cuneate_{board}"
     out = Path(out).resolve()
     out.mkdir(parents=True, exist_ok=True)
@@ -94,6 +106,8 @@ def build_target(board: str, out: Path, n_neurons: int | None = None,
               "core": lcfg.core.to_kwargs(), "link": lcfg.to_dict(),
               "clock_plan": sized["plan"], "estimate": sized["estimate"],
               "bitstream": None, "seed": seed}
+    if request is not None:
+        report["scene"] = {k: v for k, v in request.items() if k not in ("core",)}
     if target.get("bitstream") and bitstream:
         from .top import BoardTop
         platform = target["platform"]()
@@ -125,6 +139,39 @@ def build_target(board: str, out: Path, n_neurons: int | None = None,
     return report
 
 
+def scene_request(scene, target: dict) -> dict:
+    """What a board for ``scene`` holds and whether its link carries the scene in real time at
+    the board's baud (worst case: every current every sample, every neuron at 200 Hz);
+    :class:`ConfigError` names the first limit it exceeds. Only afferent scenes (Izhikevich
+    afferents behind the link) build today."""
+    from ..sim.host.uart import BUDGET_BAUDS, format_budget, link_budget
+    from ..sim.scenes.registry import kind_for
+    kind = kind_for(scene["stimulus"]["kind"])
+    if kind.name != "afferent":
+        raise ConfigError(f"scene {scene.name!r} ({kind.name}) needs the {kind.block} block on "
+                          f"the board; board tops carry the Izhikevich afferents behind the "
+                          f"link (afferent scenes)")
+    from ..sim.scenes.afferent import board_request
+    req = board_request(scene)
+    from ..hdl.izhikevich.config import IzhikevichConfig
+    width = IzhikevichConfig(n_neurons=8, clock_hz=16 * req["core"]["update_hz"],
+                             update_hz=req["core"]["update_hz"],
+                             current_format=req["core"]["current_format"]).I.width
+    baud = target["clock_plan"].baud
+    budget = link_budget(req["neurons"], width, req["sample_hz"], req["core"]["update_hz"],
+                         200.0 * req["neurons"], bauds=sorted({*BUDGET_BAUDS, baud}))
+    req["link_budget"] = budget
+    row = next(r for r in budget["rows"] if r["baud"] == baud)
+    if not row["real_time"]:
+        worst = max(budget["in_bytes_per_s"], budget["out_bytes_per_s"])
+        raise ConfigError(f"{target['name']}: the scene's link traffic ({worst:,.0f} B/s "
+                          f"worst case: {req['neurons']} currents every sample at "
+                          f"{req['sample_hz']:g} Hz) exceeds the {baud / 1e6:g} Mbaud link's "
+                          f"{baud / 10:,.0f} B/s (link limit)")
+    req["link_budget_lines"] = format_budget(budget)
+    return req
+
+
 def format_report(r: dict) -> str:
     pr = r.get("place_route")
     lines = []
@@ -138,6 +185,13 @@ def format_report(r: dict) -> str:
                  f"{r['core'].get('pipeline_stages', 5)}), {r['core']['clock_hz'] / 1e6:g} MHz, "
                  f"{r['core']['update_hz'] / 1e3:g} kHz updates, UART "
                  f"{r['link']['baud'] / 1e6:g} Mbaud")
+    sc = r.get("scene")
+    if sc:
+        lines.append("scene blocks: " + "; ".join(
+            f"{b['block']} ({b['neurons']} neurons, sets {', '.join(b['param_sets'])})"
+            for b in sc["blocks"]))
+        lines.append("link budget (worst case: every current every sample, 200 Hz a neuron):")
+        lines += [f"  {x}" for x in sc["link_budget_lines"]]
     est = r.get("estimate") or {}
     if est:
         lines.append("estimate: " + ", ".join(f"{k} {v}" for k, v in est.items()))

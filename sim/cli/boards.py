@@ -50,6 +50,8 @@ def cmd_build(args) -> int:
     from ...hdl.lib.config import ConfigError
     from .options import start_progress
     if args.board_option is not None:
+        if args.board is not None and args.board != args.board_option and args.scene is None:
+            args.board, args.scene = args.board_option, args.board    # --board B SCENE
         if args.board is not None and args.board != args.board_option:
             raise CliError(f"cuneate build: two boards given ({args.board!r} and --board "
                            f"{args.board_option!r})")
@@ -61,12 +63,19 @@ def cmd_build(args) -> int:
     if args.board not in TARGETS:
         raise CliError(f"cuneate build: unknown board {args.board!r}; known: "
                        f"{', '.join(TARGETS)}")
+    scene = None
+    if args.scene is not None:
+        from .run import resolve_scene
+        if args.neurons is not None or args.update_hz is not None:
+            raise CliError("cuneate build: a scene sets the neurons and the update rate; give "
+                           "either SCENE or --neurons/--update-hz")
+        scene = resolve_scene(args.scene, "cuneate build")
     out = output_dir(args.out)
     try:
         report = build_target(args.board, out, n_neurons=args.neurons,
                               clock_hz=args.clock_hz, update_hz=args.update_hz,
                               bitstream=not args.no_bitstream, seed=args.seed,
-                              pipeline_stages=args.pipeline_stages)
+                              pipeline_stages=args.pipeline_stages, scene=scene)
     except ConfigError as exc:
         raise CliError(f"cuneate build: {exc}") from None
     except BuildError as exc:
@@ -119,6 +128,9 @@ def register(groups: CommandGroups) -> None:
     c = groups.root.add_parser("build", help="Verilog, bitstream and resource/timing report "
                                              "for a board")
     c.add_argument("board", nargs="?", default=None, help="target name (see cuneate boards)")
+    c.add_argument("scene", nargs="?", default=None,
+                   help="a scene (file or shipped example): the board holds its blocks, sized "
+                        "to it, and the report gives the link's budget for it")
     c.add_argument("--board", dest="board_option", default=None, metavar="BOARD",
                    help="the same as the positional BOARD")
     add_quiet_option(c)

@@ -260,15 +260,35 @@ def build_izhikevich(scene: Scene, neurons: Neurons):
     if n > capacity:
         raise ValueError(f"the scene needs {n} Izhikevich neurons but a core at "
                          f"{hw['clock_hz']:g} Hz / {hw['update_hz']:g} Hz holds {capacity}")
-    presets = sorted(set(neurons.preset))
-    core = {"param_sets": tuple(presets), "neuron_sets": [presets.index(p) for p in neurons.preset],
-            "update_hz": hw["update_hz"],
-            "current_format": QFormat(hw["current_int_bits"], hw["current_frac_bits"]),
-            "rounding": hw["rounding"]}
+    core = scene_core(scene, neurons)
+    presets = list(core["param_sets"])
     cfg = engine_core(core, n)
     return cfg, {"block": "izhikevich_core", "neurons": n, "core_neurons": cfg.n_neurons,
                  "capacity_at_clock": capacity, "param_sets": presets,
                  "current_format": str(cfg.I), "dt_ms": cfg.dt_ms}
+
+
+def scene_core(scene: Scene, neurons: Neurons) -> dict:
+    """The core keywords of ``neurons`` (parameter sets, each neuron's set, update rate,
+    current format, rounding): what the engines and a board built for the scene share."""
+    hw = scene["hardware"]
+    presets = sorted(set(neurons.preset))
+    return {"param_sets": tuple(presets),
+            "neuron_sets": [presets.index(p) for p in neurons.preset],
+            "update_hz": hw["update_hz"],
+            "current_format": QFormat(hw["current_int_bits"], hw["current_frac_bits"]),
+            "rounding": hw["rounding"]}
+
+
+def board_request(scene: Scene) -> dict:
+    """What a board built for ``scene`` must hold: ``neurons``, the ``core`` keywords, the
+    ``blocks`` (name and neurons) and the link traffic's inputs (``sample_hz``)."""
+    _, _, traces, _, _ = synthesize(scene)
+    neurons = build_neurons(scene, len(traces))
+    core = scene_core(scene, neurons)
+    return {"neurons": len(neurons), "core": core, "sample_hz": scene["sensor"]["sample_rate_hz"],
+            "blocks": [{"block": "izhikevich_core", "neurons": len(neurons),
+                        "param_sets": list(core["param_sets"])}]}
 
 
 #: Population model -> builder of its hardware configuration. Only the models a scene uses
