@@ -43,7 +43,7 @@ from ...hdl.link.codec import MAX_FRAME, MIN_FRAME
 from .transport import SimulatedSerial, SpikeBatch, Transport, TransportError
 
 __all__ = ["UartTransport", "ModelSerial", "DEVICE_ERRORS", "HOST_ERRORS", "link_budget",
-           "measured_budget", "format_budget", "BUDGET_BAUDS"]
+           "measured_budget", "run_budget", "format_budget", "BUDGET_BAUDS"]
 
 #: Device counters that mean something was lost or refused.
 DEVICE_ERRORS = tuple(n for n in COUNTER_NAMES if n != "frames_ok")
@@ -409,6 +409,17 @@ def measured_budget(bytes_in: int, bytes_out: int, seconds: float,
              "real_time": max(bin_s, bout_s) * BITS_PER_BYTE <= b} for b in bauds]
     return {"in_bytes_per_s": bin_s, "out_bytes_per_s": bout_s, "seconds": seconds,
             "rows": rows}
+
+
+def run_budget(counters: dict, seconds: float, n_neurons: int, current_width: int,
+               sample_hz: float, update_hz: float, n_spikes: int) -> dict:
+    """A board engine run's budget in real time: ``measured`` (the bytes its line carried,
+    ``counters`` ``line_bytes_*``, per second of scene time) and ``worst_case`` (every
+    current every sample, at the run's spike rate), each at :data:`BUDGET_BAUDS`."""
+    return {"measured": measured_budget(counters["line_bytes_to_device"],
+                                        counters["line_bytes_from_device"], seconds),
+            "worst_case": link_budget(n_neurons, current_width, sample_hz, update_hz,
+                                      n_spikes / seconds)}
 
 
 def format_budget(budget: dict) -> list[str]:

@@ -373,22 +373,6 @@ def _run_transport(engine):
     return run
 
 
-def _link_budget(scene: Scene, cfg, board: dict, n_ticks: int, spikes) -> dict:
-    """The board link's budget for this scene in real time: measured (the bytes the board
-    engine's run put on its line, per second of scene time) and the worst case (every
-    afferent's current changes every sample), each at the budget's line rates."""
-    from ..host.uart import link_budget, measured_budget
-    seconds = n_ticks / cfg.update_hz
-    n_spikes = sum(len(x) for x in spikes)
-    words = board["currents_sent"] / max(1, board["writes_sent"] or 1)
-    return {"measured": measured_budget(board["line_bytes_to_device"],
-                                        board["line_bytes_from_device"], seconds),
-            "worst_case": link_budget(cfg.n_neurons, cfg.I.width,
-                                      scene["sensor"]["sample_rate_hz"], cfg.update_hz,
-                                      n_spikes / seconds),
-            "words_per_write": words}
-
-
 #: Engine name -> runner, for every engine the Izhikevich block runs on (the registry's list):
 #: golden integrates the float currents, the others stream the quantized currents through the
 #: host driver. Only the scene's engines are looked up and called.
@@ -511,8 +495,10 @@ def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None =
     spikes = {e: results[e][0] for e in names}
     counters = {e: results[e][1] for e in names}
     if "board" in counters:
-        counters["board"]["link_budget"] = _link_budget(scene, cfg, counters["board"], n_ticks,
-                                                         spikes["board"])
+        from ..host.uart import run_budget
+        counters["board"]["link_budget"] = run_budget(
+            counters["board"], n_ticks / cfg.update_hz, cfg.n_neurons, cfg.I.width,
+            scene["sensor"]["sample_rate_hz"], cfg.update_hz, sum(map(len, spikes["board"])))
     eng_t = {e: results[e][2] for e in names}
     timing["engines_s"] = eng_t
     t0 = time.perf_counter()
