@@ -62,11 +62,12 @@ for _depth in PIPELINE_STAGES:
 CASES[f"depth{max(PIPELINE_STAGES)}_clamps"] = dict(
     CASES["clamps"], core=dict(CASES["clamps"]["core"], pipeline_stages=max(PIPELINE_STAGES)))
 # the default lane runs the reference depth and the deepest; the depths between (also proven
-# by k-induction in the long lane) run in the long lane, as does the 2200-sweep full-scale run
-# on Verilator (Icarus runs it in the default lane)
+# by k-induction in the long lane) run in the long lane, as do the 2200-sweep full-scale run
+# and the deepest pipeline's clamps on Verilator (Icarus runs them in the default lane)
 LONG_CASES = {(s, f"depth{d}_back_to_back") for d in PIPELINE_STAGES for s in SIMULATORS
               if d not in (min(PIPELINE_STAGES), max(PIPELINE_STAGES))}
-LONG_CASES.add(("verilator", "full_scale_long"))
+LONG_CASES |= {("verilator", "full_scale_long"),
+               ("verilator", f"depth{max(PIPELINE_STAGES)}_clamps")}
 
 
 @pytest.mark.cocotb

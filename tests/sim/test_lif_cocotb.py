@@ -80,9 +80,16 @@ CASES = {
 }
 
 
+#: cases Verilator runs in the long lane (Icarus runs them in the default lane): each Verilator
+#: case compiles its own model
+VERILATOR_LONG = {"continuous_shift", "discrete_int4", "discrete_cuba_delays"}
+
+
 @pytest.mark.cocotb
-@pytest.mark.parametrize("case", list(CASES))
-@pytest.mark.parametrize("simulator", SIMULATORS)
+@pytest.mark.parametrize("simulator,case", [
+    pytest.param(s, c, id=f"{s}-{c}",
+                 marks=pytest.mark.long if s == "verilator" and c in VERILATOR_LONG else ())
+    for s in SIMULATORS for c in CASES])
 def test_scoreboard(simulator, case, build_root):
     spec = dict(CASES[case], seed=5)
     cfg = LifConfig.from_kwargs(spec["core"])

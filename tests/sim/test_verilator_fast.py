@@ -45,7 +45,7 @@ def twin_updates(cfg, segments, n_sweeps):
     return np.concatenate(rows).astype(np.int64)
 
 
-@pytest.mark.parametrize("depth", [5, 8])
+@pytest.mark.parametrize("depth", [5, pytest.param(8, marks=pytest.mark.long)])
 def test_verilator_fast_equals_twin_every_update_with_a_schedule(tmp_path, depth):
     cfg = IzhikevichConfig.from_kwargs(flag_config().to_kwargs(pipeline_stages=depth))
     rng = np.random.default_rng(5)
