@@ -361,8 +361,10 @@ def _run_transport(engine):
             kw["waves"] = ctx["waves"]
         tr = make_transport(engine, **kw)
         tr.open(ctx["config"])
-        res = ctx["driver"].stream(tr, None, ctx["n_ticks"], raw=ctx["raw"])
-        tr.close()
+        try:
+            res = ctx["driver"].stream(tr, None, ctx["n_ticks"], raw=ctx["raw"])
+        finally:
+            tr.close()
         n = len(ctx["neurons"])
         cnt = dict(res.counters)
         if hasattr(tr, "sim_s"):    # batch engines: the simulation without generation/build
