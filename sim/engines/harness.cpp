@@ -1,7 +1,10 @@
-// Compiled run of the generated Izhikevich core: no Python per cycle.
+// Compiled run of the generated Izhikevich core, or of an array of cores: no Python per cycle.
 //
-// Built by Verilator together with the core's Verilog (top module `izhikevich_core`, class
-// Vizhikevich_core). Usage:
+// Built by Verilator together with the Verilog (class Vtop): a core (`izhikevich_core`), or,
+// with CUNEATE_CORES = K > 1, an `izhikevich_array` of K cores built with probes, whose per-core
+// update ports `p<k>_*` the generated `array_probes.inc` reads (one PROBE(k) per core). Neuron
+// ids are global (core k holds k * n .. (k + 1) * n - 1); ticks come every n = N / K cycles.
+// Usage:
 //
 //     harness <schedule.bin> <out_dir> [--dump] [--raw CYCLES]
 //
@@ -27,8 +30,15 @@
 #include <string>
 #include <vector>
 
-#include "Vizhikevich_core.h"
+#include "Vtop.h"
 #include "verilated.h"
+
+#ifndef CUNEATE_CORES
+#define CUNEATE_CORES 1
+#endif
+static const int CORES = CUNEATE_CORES;
+// an array registers the tick and the host writes once more on their way to its cores
+static const int ARRAY_EXTRA = CUNEATE_CORES > 1 ? 2 : 0;
 
 // the core's pipeline depth (pipeline_stages), set by the build
 #ifndef CUNEATE_PIPELINE_DEPTH
@@ -77,7 +87,9 @@ int main(int argc, char** argv) {
 
     auto ctx = std::make_unique<VerilatedContext>();
     ctx->commandArgs(1, argv);
-    auto top = std::make_unique<Vizhikevich_core>(ctx.get());
+    auto top = std::make_unique<Vtop>(ctx.get());
+    if (N % CORES) die("N must be a multiple of the cores");
+    const int64_t n_core = N / CORES;   // neurons of each core: one sweep every n_core cycles
     const uint64_t imask = (iw == 64) ? ~0ULL : ((1ULL << iw) - 1);
 
     long long cycles = 0;
@@ -116,34 +128,52 @@ int main(int argc, char** argv) {
     if (dump) upd.reserve(5 * 65536);
     long long n_spikes = 0, stream_spikes = 0, updates = 0, sweeps_done = 0;
     long long clamp_counts[5] = {0, 0, 0, 0, 0};
-    int64_t upd_sweep = 0;   // sweep of the next update leaving the pipeline
+    int64_t upd_sweep[CUNEATE_CORES] = {0};   // per core, sweep of its next update
+
+    // one update leaving core k's pipeline (local index)
+    auto on_update = [&](int k, int64_t local, bool spike, uint64_t v, uint64_t u,
+                         uint64_t current, unsigned clamp) {
+        int64_t idx = k * n_core + local;
+        if (spike) {
+            spk.push_back(upd_sweep[k]);
+            spk.push_back(idx);
+            ++n_spikes;
+            if (spk.size() >= (1u << 16)) {
+                std::fwrite(spk.data(), sizeof(int64_t), spk.size(), fs);
+                spk.clear();
+            }
+        }
+        if (dump) {
+            upd.push_back(sext(v, vw));
+            upd.push_back(sext(u, uw));
+            upd.push_back(sext(current, iw));
+            upd.push_back(spike);
+            upd.push_back(clamp);
+            if (upd.size() >= 5 * 65536) {
+                std::fwrite(upd.data(), sizeof(int64_t), upd.size(), fu);
+                upd.clear();
+            }
+        }
+        ++updates;
+        if (local == n_core - 1) ++upd_sweep[k];
+#if CUNEATE_CORES > 1
+        for (int b = 0; b < 5; ++b) clamp_counts[b] += (clamp >> b) & 1;
+#endif
+    };
 
     auto monitor = [&]() {
-        if (top->upd_valid) {
-            int64_t idx = (int64_t)top->upd_index;
-            if (top->upd_spike) {
-                spk.push_back(upd_sweep);
-                spk.push_back(idx);
-                ++n_spikes;
-                if (spk.size() >= (1u << 16)) {
-                    std::fwrite(spk.data(), sizeof(int64_t), spk.size(), fs);
-                    spk.clear();
-                }
-            }
-            if (dump) {
-                upd.push_back(sext(top->upd_v, vw));
-                upd.push_back(sext(top->upd_u, uw));
-                upd.push_back(sext(top->upd_current, iw));
-                upd.push_back(top->upd_spike);
-                upd.push_back(top->upd_clamp);
-                if (upd.size() >= 5 * 65536) {
-                    std::fwrite(upd.data(), sizeof(int64_t), upd.size(), fu);
-                    upd.clear();
-                }
-            }
-            ++updates;
-            if (idx == N - 1) ++upd_sweep;
-        }
+#if CUNEATE_CORES > 1
+#define PROBE(k)                                                                            \
+        if (top->p##k##_valid)                                                              \
+            on_update(k, (int64_t)top->p##k##_index, top->p##k##_spike, top->p##k##_v,      \
+                      top->p##k##_u, top->p##k##_current, top->p##k##_clamp);
+#include "array_probes.inc"
+#undef PROBE
+        if (top->sweep_done) ++sweeps_done;
+#else
+        if (top->upd_valid)
+            on_update(0, (int64_t)top->upd_index, top->upd_spike, top->upd_v, top->upd_u,
+                      top->upd_current, top->upd_clamp);
         if (top->sweep_done) {
             ++sweeps_done;
             clamp_counts[0] += top->sweep_clamps_v_low;
@@ -152,13 +182,13 @@ int main(int argc, char** argv) {
             clamp_counts[3] += top->sweep_clamps_current;
             clamp_counts[4] += top->sweep_clamps_y;
         }
+#endif
         if (top->spike_valid) ++stream_spikes;
     };
-
     auto t0 = std::chrono::steady_clock::now();
     if (raw_cycles >= 0) {
         for (long long c = 0; c < raw_cycles; ++c) {
-            top->tick = (c % N) == 0;
+            top->tick = (c % n_core) == 0;
             cycle();
         }
     } else {
@@ -169,7 +199,7 @@ int main(int argc, char** argv) {
             if (seg < n_seg && seg_start[seg] <= sweep) {
                 // drain the pipeline, then write the currents that change
                 top->tick = 0;
-                for (int k = 0; k < PIPELINE_DEPTH + 2; ++k) {
+                for (int k = 0; k < PIPELINE_DEPTH + 2 + ARRAY_EXTRA; ++k) {
                     cycle();
                     monitor();
                 }
@@ -184,6 +214,10 @@ int main(int argc, char** argv) {
                     monitor();
                 }
                 top->i_wr_en = 0;
+                for (int k = 0; k < ARRAY_EXTRA; ++k) {
+                    cycle();
+                    monitor();
+                }
                 ++seg;
                 continue;
             }
@@ -195,14 +229,16 @@ int main(int argc, char** argv) {
                 cycle();
                 monitor();
                 top->tick = 0;
-                for (int64_t c = 1; c < N; ++c) {
+                for (int64_t c = 1; c < n_core; ++c) {
                     cycle();
                     monitor();
                 }
             }
         }
         top->tick = 0;
-        for (int k = 0; k < PIPELINE_DEPTH + 4; ++k) {
+        // drain the pipeline (and an array's spike stream, one spike a cycle)
+        for (int64_t k = 0; k < PIPELINE_DEPTH + 4 + ARRAY_EXTRA ||
+                            (CORES > 1 && top->spike_valid && k < 2 * N + 16); ++k) {
             cycle();
             monitor();
         }

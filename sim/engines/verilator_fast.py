@@ -1,4 +1,5 @@
-"""Compiled Verilator run of the Izhikevich core: a C++ harness, no Python per cycle.
+"""Compiled Verilator run of the Izhikevich core, or of an array of cores: a C++ harness, no
+Python per cycle.
 
 :func:`build_harness` generates the core's Verilog for a configuration and lets Verilator
 build it together with ``harness.cpp`` into one executable (cached per Verilog text and
@@ -35,6 +36,7 @@ __all__ = ["HARNESS_SOURCE", "HarnessError", "HarnessRun", "compile_harness", "b
 
 HARNESS_SOURCE = Path(__file__).with_name("harness.cpp")
 TOP = "izhikevich_core"
+ARRAY_TOP = "izhikevich_array"
 
 
 class HarnessError(RuntimeError):
@@ -88,16 +90,18 @@ def _verilator() -> str:
 
 def compile_harness(text: str, top: str, source: Path, defines: dict,
                     build_root: Path | None = None, prefix: str | None = None,
-                    jobs: int = 2) -> Path:
+                    jobs: int = 2, includes: dict | None = None) -> Path:
     """Build (or reuse) an executable of the Verilog ``text`` (top module ``top``, Verilator's
     class ``prefix``, by default ``V<top>``) linked with the C++ harness ``source``, compiled
     with ``-D`` ``defines``; cached under ``build_root`` by the Verilog, the harness and the
-    defines. Returns its path."""
+    defines; ``includes`` (name -> text) are files the harness includes, written beside the
+    Verilog. Returns its path."""
     src = Path(source).read_bytes()
     prefix = prefix or f"V{top}"
     flags = " ".join(f"-D{k}={v}" for k, v in sorted(defines.items()))
+    extra = "".join(f"{k}\0{v}\0" for k, v in sorted((includes or {}).items()))
     key = hashlib.sha256(text.encode() + b"\0" + src + b"\0" + flags.encode()
-                         + prefix.encode()).hexdigest()[:20]
+                         + prefix.encode() + extra.encode()).hexdigest()[:20]
     root = Path(build_root) if build_root is not None else default_build_root()
     out = root / key
     exe = out / "obj" / "Vharness"
@@ -105,10 +109,13 @@ def compile_harness(text: str, top: str, source: Path, defines: dict,
         return exe
     out.mkdir(parents=True, exist_ok=True)
     (out / f"{top}.v").write_text(text)
+    for name, body in (includes or {}).items():
+        (out / name).write_text(body)
     cmd = [_verilator(), "--cc", "--exe", "--build", "-j", str(jobs), "-O3", "--x-assign",
            "fast", "--x-initial", "fast", "--noassert", "-Wno-fatal", "-Wno-WIDTHEXPAND",
            "-Wno-WIDTHTRUNC", "--top-module", top, "--prefix", prefix, "--Mdir", "obj",
-           "-o", "Vharness", "-CFLAGS", f"-O2 {flags}".strip(), f"{top}.v", str(source)]
+           "-o", "Vharness", "-CFLAGS", f"-O2 -I{out.resolve()} {flags}".strip(), f"{top}.v",
+           str(source)]
     proc = subprocess.run(cmd, cwd=out, capture_output=True, text=True)
     if proc.returncode != 0 or not exe.is_file():
         tail = (proc.stderr or proc.stdout).strip().splitlines()[-12:]
@@ -117,19 +124,27 @@ def compile_harness(text: str, top: str, source: Path, defines: dict,
 
 
 def build_harness(cfg: IzhikevichConfig, build_root: Path | None = None,
-                  jobs: int = 2) -> Path:
-    """Build (or reuse) the harness executable for ``cfg``; returns its path."""
+                  jobs: int = 2, n_cores: int = 1) -> Path:
+    """Build (or reuse) the harness executable for ``cfg`` (``n_cores`` > 1: an
+    :class:`~cuneate.hdl.izhikevich.array.IzhikevichArray` of that many cores of ``cfg``, its
+    per-core update probes read by the harness); returns its path."""
     from ...hdl.izhikevich import izhikevich_verilog
+    from ...hdl.izhikevich.array import izhikevich_array_verilog
     for fmt, name in ((cfg.V, "v"), (cfg.U, "u"), (cfg.I, "current")):
         if fmt.width > 64:
             raise HarnessError(f"the harness reads ports up to 64 bits; {name} has {fmt.width}")
-    return compile_harness(izhikevich_verilog(cfg, name=TOP), TOP, HARNESS_SOURCE,
-                           {"CUNEATE_PIPELINE_DEPTH": cfg.pipeline_stages}, build_root,
-                           jobs=jobs)
+    defines = {"CUNEATE_PIPELINE_DEPTH": cfg.pipeline_stages, "CUNEATE_CORES": n_cores}
+    if n_cores == 1:
+        return compile_harness(izhikevich_verilog(cfg, name=TOP), TOP, HARNESS_SOURCE,
+                               defines, build_root, prefix="Vtop", jobs=jobs)
+    probes = "".join(f"PROBE({k})\n" for k in range(n_cores))
+    return compile_harness(izhikevich_array_verilog(cfg, n_cores, probes=True, name=ARRAY_TOP),
+                           ARRAY_TOP, HARNESS_SOURCE, defines, build_root, prefix="Vtop",
+                           jobs=jobs, includes={"array_probes.inc": probes})
 
 
-def _schedule_bytes(cfg: IzhikevichConfig, segments, n_sweeps: int) -> bytes:
-    N = cfg.n_neurons
+def _schedule_bytes(cfg: IzhikevichConfig, segments, n_sweeps: int, n_cores: int = 1) -> bytes:
+    N = cfg.n_neurons * n_cores
     rows = [np.array([N, n_sweeps, len(segments), cfg.V.width, cfg.U.width, cfg.I.width],
                      dtype="<i8")]
     last = -1
@@ -147,21 +162,25 @@ def _schedule_bytes(cfg: IzhikevichConfig, segments, n_sweeps: int) -> bytes:
 
 
 def run_harness(cfg: IzhikevichConfig, currents, n_sweeps: int, *, dump: bool = False,
-                build_root: Path | None = None, work_dir: Path | None = None) -> HarnessRun:
-    """Run ``n_sweeps`` sweeps of the compiled core.
+                build_root: Path | None = None, work_dir: Path | None = None,
+                n_cores: int = 1) -> HarnessRun:
+    """Run ``n_sweeps`` sweeps of the compiled core (``n_cores`` > 1: of an array of that many
+    cores of ``cfg``, over global neuron ids; its dump holds the cores' updates in the order
+    they leave the cores, not per sweep, so :func:`check_dump` takes single cores only).
 
-    ``currents`` is a (n_neurons,) array of currents in mV/ms (quantized like the host driver
+    ``currents`` is a (neurons,) array of currents in mV/ms (quantized like the host driver
     does), or a list of ``(start_sweep, raw_currents)`` segments (raw integers in ``cfg.I``).
     """
+    total = cfg.n_neurons * n_cores
     if isinstance(currents, list) and currents and isinstance(currents[0], tuple):
         segments = [(int(k), np.asarray(r, dtype=np.int64)) for k, r in currents]
     else:
-        cur = np.broadcast_to(np.asarray(currents, dtype=np.float64), (cfg.n_neurons,))
-        segments = [(0, np.asarray(cfg.I.to_raw(cur), dtype=np.int64).reshape(cfg.n_neurons))]
-    exe = build_harness(cfg, build_root)
+        cur = np.broadcast_to(np.asarray(currents, dtype=np.float64), (total,))
+        segments = [(0, np.asarray(cfg.I.to_raw(cur), dtype=np.int64).reshape(total))]
+    exe = build_harness(cfg, build_root, n_cores=n_cores)
     with tempfile.TemporaryDirectory(prefix="cuneate-vfast-", dir=work_dir) as tmp:
         tmp = Path(tmp)
-        (tmp / "schedule.bin").write_bytes(_schedule_bytes(cfg, segments, n_sweeps))
+        (tmp / "schedule.bin").write_bytes(_schedule_bytes(cfg, segments, n_sweeps, n_cores))
         cmd = [str(exe), str(tmp / "schedule.bin"), str(tmp)] + (["--dump"] if dump else [])
         proc = subprocess.run(cmd, capture_output=True, text=True)
         if proc.returncode != 0:
@@ -171,18 +190,18 @@ def run_harness(cfg: IzhikevichConfig, currents, n_sweeps: int, *, dump: bool = 
         updates = np.fromfile(tmp / "updates.bin", dtype="<i8").reshape(-1, 5) if dump else None
     if summary["overrun"] or summary["spike_overflow"]:
         raise HarnessError(f"the core reported overrun/spike overflow: {summary}")
-    return HarnessRun(cfg.n_neurons, n_sweeps, pairs[:, 0].copy(), pairs[:, 1].copy(), summary,
+    return HarnessRun(total, n_sweeps, pairs[:, 0].copy(), pairs[:, 1].copy(), summary,
                       updates, segments)
 
 
 def raw_cycle_rate(cfg: IzhikevichConfig, cycles: int,
-                   build_root: Path | None = None) -> dict:
-    """Run the compiled core free for ``cycles`` cycles (ticks every ``n_neurons`` cycles,
-    nothing recorded); returns the harness summary (``cycles_per_s``)."""
-    exe = build_harness(cfg, build_root)
+                   build_root: Path | None = None, n_cores: int = 1) -> dict:
+    """Run the compiled core (or array of ``n_cores``) free for ``cycles`` cycles (ticks every
+    ``n_neurons`` cycles, nothing recorded); returns the harness summary (``cycles_per_s``)."""
+    exe = build_harness(cfg, build_root, n_cores=n_cores)
     with tempfile.TemporaryDirectory(prefix="cuneate-vfast-") as tmp:
         tmp = Path(tmp)
-        (tmp / "schedule.bin").write_bytes(_schedule_bytes(cfg, [], 0))
+        (tmp / "schedule.bin").write_bytes(_schedule_bytes(cfg, [], 0, n_cores))
         proc = subprocess.run([str(exe), str(tmp / "schedule.bin"), str(tmp), "--raw",
                                str(int(cycles))], capture_output=True, text=True)
         if proc.returncode != 0:
@@ -198,6 +217,9 @@ def check_dump(cfg: IzhikevichConfig, run: HarnessRun, checker=None):
     from ..izhikevich.scoreboard import SweepChecker
     if run.updates is None:
         raise ValueError("check_dump needs a run made with dump=True")
+    if run.n_neurons != cfg.n_neurons:
+        raise ValueError("check_dump checks a single core's run (an array's dump is in the "
+                         "order the cores' updates leave them)")
     N = cfg.n_neurons
     upd = run.updates
     if upd.shape[0] != N * run.n_sweeps:
