@@ -18,7 +18,9 @@ from .options import CliError, CommandGroups, add_max_minutes, output_dir
 __all__ = ["register", "cmd_run", "resolve_scene"]
 
 
-def resolve_scene(arg: str | None):
+def resolve_scene(arg: str | None, command: str = "cuneate run"):
+    """The scene ``arg`` names (a file, or a shipped example's name), the default scene
+    without one; a one-line refusal (naming ``command``) for anything else."""
     from ..scenes.scene import SceneError, default_scene, example_path, load_scene
     try:
         if arg is None:
@@ -29,10 +31,10 @@ def resolve_scene(arg: str | None):
         ex = example_path(arg)
         if ex is not None:
             return load_scene(ex)
-        raise CliError(f"cuneate run: scene {arg!r}: no such file or shipped example "
+        raise CliError(f"{command}: scene {arg!r}: no such file or shipped example "
                        f"(see cuneate run --list-examples)")
     except SceneError as exc:
-        raise CliError(f"cuneate run: {exc}") from None
+        raise CliError(f"{command}: {exc}") from None
 
 
 def _description(text: str) -> str:

@@ -39,7 +39,7 @@ from .scene import Scene
 
 __all__ = ["SceneRun", "run", "BLOCKS", "ENGINES", "synthesize", "build_neurons",
            "front_end", "summary", "write_report", "format_run", "write_spike_files",
-           "waves_request", "estimate", "n_driven"]
+           "waves_request", "estimate", "n_driven", "core_config"]
 
 
 @dataclass
@@ -339,13 +339,16 @@ def _run_transport(engine):
             kw["build_dir"] = (Path(bd) / engine) if bd else None
         if engine in FORMATS and ctx.get("waves"):
             kw["waves"] = ctx["waves"]
+        kw.update(ctx.get("engine_options", {}).get(engine, {}))
         tr = make_transport(engine, **kw)
-        tr.open(ctx["config"])
-        res = ctx["driver"].stream(tr, None, ctx["n_ticks"], raw=ctx["raw"])
-        tr.close()
+        try:
+            tr.open(ctx["config"])
+            res = ctx["driver"].stream(tr, None, ctx["n_ticks"], raw=ctx["raw"])
+        finally:
+            tr.close()
         n = len(ctx["neurons"])
         cnt = dict(res.counters)
-        if hasattr(tr, "sim_s"):    # batch engines: the simulation without generation/build
+        if getattr(tr, "sim_s", None) is not None:  # batch engines: the simulation alone
             cnt["simulate_ms"] = int(round(tr.sim_s * 1000))
         if hasattr(tr, "figures"):  # the board engine: cycles, bytes and frames on its line
             cnt.update({f"line_{k}": v for k, v in tr.figures().items()})
@@ -388,12 +391,31 @@ def waves_request(scene: Scene, waves=None):
     return Waves(Path(r["waves"]), r["waves_start_tick"], r["waves_ticks"])
 
 
+def _build_blocks(scene: Scene, neurons: Neurons):
+    """The core configuration of the scene's neurons and the description of every block
+    built (one per population model)."""
+    blocks, cfg = [], None
+    for m in sorted({p["model"] for p in scene.populations}):
+        cfg, desc = BLOCKS[m](scene, neurons)
+        blocks.append(desc)
+    return cfg, blocks
+
+
+def core_config(scene: Scene):
+    """The core configuration a run of ``scene`` streams to (what a board must hold to run
+    it: :class:`~cuneate.sim.link.pty.PtyBoard` serves one), without running anything."""
+    return _build_blocks(scene, build_neurons(scene, n_driven(scene)[0]))[0]
+
+
 def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None = None,
-        progress: bool = False, log=None, waves=None) -> SceneRun:
+        progress: bool = False, log=None, waves=None,
+        engine_options: dict | None = None) -> SceneRun:
     """Run an afferent ``scene`` on its engines (or ``engines``); each stage reports through
     :mod:`cuneate.sim.progress` (and ``log``, if given, gets one line per stage). ``waves``
     (a :class:`~cuneate.sim.engines.waves.Waves` window, or the scene's ``run.waves``): the
-    RTL engines (amaranth, icarus, verilator) dump it."""
+    RTL engines (amaranth, icarus, verilator) dump it. ``engine_options``: more keywords for
+    an engine's transport, by engine (``{"board": {"port": "/dev/ttyUSB0"}}``: the board
+    engine on a programmed board, ``cuneate stream``)."""
     from .. import progress as prog
     timing: dict = {}
 
@@ -415,12 +437,7 @@ def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None =
     t0 = time.perf_counter()
     with prog.step("front end: filtering and quantizing the currents"):
         neurons = build_neurons(scene, len(traces))
-        models = sorted({p["model"] for p in scene.populations})
-        blocks, cfg = [], None
-        for m in models:
-            cfg_m, desc = BLOCKS[m](scene, neurons)
-            blocks.append(desc)
-            cfg = cfg_m
+        cfg, blocks = _build_blocks(scene, neurons)
         drv, currents, gaps = front_end(scene, neurons, traces, infos, cfg)
         raw, sat = drv.quantize(currents)
     sat["gaps_held"] = gaps
@@ -434,7 +451,8 @@ def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None =
             f"{sat['samples']} samples past the run's end: never applied")
     timing["front_end_s"] = time.perf_counter() - t0
     ctx = {"config": cfg, "driver": drv, "neurons": neurons, "currents": currents, "raw": raw,
-           "n_ticks": n_ticks, "build_dir": build_dir, "waves": waves_request(scene, waves)}
+           "n_ticks": n_ticks, "build_dir": build_dir, "waves": waves_request(scene, waves),
+           "engine_options": engine_options or {}}
     for e in names:
         if e not in ENGINES:
             raise ValueError(f"unknown engine {e!r}; known: {', '.join(ENGINES)}")
