@@ -151,8 +151,12 @@ def scene_request(scene, target: dict) -> dict:
         raise ConfigError(f"scene {scene.name!r} ({kind.name}) needs the {kind.block} block on "
                           f"the board; board tops carry the Izhikevich afferents behind the "
                           f"link (afferent scenes)")
-    from ..sim.scenes.afferent import board_request
-    req = board_request(scene)
+    from ..sim.scenes.afferent import build_neurons, n_driven, scene_core
+    neurons = build_neurons(scene, n_driven(scene)[0])
+    core = scene_core(scene, neurons)
+    req = {"neurons": len(neurons), "core": core, "sample_hz": scene["sensor"]["sample_rate_hz"],
+           "blocks": [{"block": "izhikevich_core", "neurons": len(neurons),
+                       "param_sets": list(core["param_sets"])}]}
     from ..hdl.izhikevich.config import IzhikevichConfig
     width = IzhikevichConfig(n_neurons=8, clock_hz=16 * req["core"]["update_hz"],
                              update_hz=req["core"]["update_hz"],

@@ -381,14 +381,20 @@ def _board_link_html(board: dict | None) -> str:
                          f"{100 * r['in_load']:.0f} %", f"{budget['out_bytes_per_s']:,.0f}",
                          f"{100 * r['out_load']:.0f} %",
                          "yes" if r["real_time"] else "NO"])
+    if "line_port" in board:
+        where = (f"a programmed board on {html.escape(str(board['line_port']))} at "
+                 f"{board['line_baud']:,} baud")
+        sim = ""
+    else:
+        where = "the board top (UART link and core, Verilator) through a simulated serial line"
+        sim = (f"; {board['line_cycles']:,} cycles at {board['line_cycles_per_s']:,} cycles/s "
+               f"(simulated bit time {board['line_clocks_per_bit']} clocks a bit at both ends)")
     return f"""<h2>The board's link</h2>
-<p>The <code>board</code> engine ran the board top (UART link and core, Verilator) through a
-simulated serial line with the host stack a board uses: {board['frames_sent']} frames to the
-device and {board['frames_received']} back, {board['line_bytes_to_device']:,} and
-{board['line_bytes_from_device']:,} bytes, {board['frames_lost']} lost;
-{board['line_cycles']:,} cycles at {board['line_cycles_per_s']:,} cycles/s (simulated bit time
-{board['line_clocks_per_bit']} clocks a bit at both ends). Real time on a board needs the traffic
-below within the line rate, each way:</p>
+<p>The <code>board</code> engine ran {where} with the host stack a board uses:
+{board['frames_sent']} frames to the device and {board['frames_received']} back,
+{board['line_bytes_to_device']:,} and {board['line_bytes_from_device']:,} bytes,
+{board['frames_lost']} lost{sim}. Real time on a board needs the traffic below within the line
+rate, each way:</p>
 {html_table(rows, ["traffic", "baud", "to device B/s", "load", "from device B/s", "load",
                    "real time"])}"""
 
@@ -444,9 +450,10 @@ def format_run(run) -> str:
     board = run.counters.get("board") or {}
     if "link_budget" in board:
         from .host.uart import format_budget
+        sim = (f"; {board['line_cycles']:,} cycles at {board['line_cycles_per_s']:,}/s"
+               if "line_cycles" in board else f" on {board.get('line_port')}")
         out.append(f"  board link: {board['frames_sent']} frames to the device, "
-                   f"{board['frames_received']} back, {board['frames_lost']} lost; "
-                   f"{board['line_cycles']:,} cycles at {board['line_cycles_per_s']:,}/s; "
+                   f"{board['frames_received']} back, {board['frames_lost']} lost{sim}; "
                    f"in real time:")
         out += [f"    {line}" for line in format_budget(board["link_budget"]["measured"])]
     return "\n".join(out)

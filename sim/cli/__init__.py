@@ -3,9 +3,9 @@
 General commands live in this package, one module each: ``doctor`` and ``filter``
 (:mod:`.doctor`), ``demo`` (:mod:`.demo`), ``run`` (:mod:`.run`), ``sweep`` (:mod:`.sweep`),
 ``prove`` (:mod:`.prove`), ``hardcases`` (:mod:`.hardcases`), ``boards``/``build``/``program``
-(:mod:`.boards`). Each block adds its own commands from ``cuneate.sim.<block>.cli``
-(``simulate BLOCK``, ``generate BLOCK`` and block experiments). Every command module has a
-``register(groups)`` function.
+(:mod:`.boards`), ``stream`` (:mod:`.stream`). Each block adds its own commands from
+``cuneate.sim.<block>.cli`` (``simulate BLOCK``, ``generate BLOCK`` and block experiments).
+Every command module has a ``register(groups)`` function.
 
 Exit status and the one error path (:func:`main`):
 
@@ -33,7 +33,8 @@ from .options import CliError, CommandGroups, Parser, add_quiet_option, anticipa
 __all__ = ["main", "build_parser", "COMMAND_MODULES", "CliError", "block_command_modules"]
 
 #: General command modules of this package, in the order ``cuneate --help`` lists them.
-COMMAND_MODULES = ["doctor", "demo", "run", "sweep", "prove", "hardcases", "boards"]
+COMMAND_MODULES = ["doctor", "demo", "run", "sweep", "prove", "hardcases", "boards",
+                   "stream"]
 
 
 def block_command_modules() -> list[str]:

@@ -99,6 +99,22 @@ class Parser(argparse.ArgumentParser):
     def error(self, message):
         raise CliError(f"{self.prog}: {message}")
 
+    def parse_known_args(self, args=None, namespace=None):
+        """argparse's parse, then the arguments it left over that are no option given to the
+        optional positionals (``nargs="?"``, no type or choices) it left empty, in order:
+        argparse settles a required and an optional positional together when only the first
+        comes before an option (``cuneate stream BOARD --port PORT SCENE``) and would refuse
+        the second."""
+        ns, extras = super().parse_known_args(args, namespace)
+        for action in self._actions:
+            if not extras or extras[0].startswith("-"):
+                break
+            if (not action.option_strings and action.nargs == "?" and action.type is None
+                    and action.choices is None
+                    and getattr(ns, action.dest, None) == action.default):
+                setattr(ns, action.dest, extras.pop(0))
+        return ns, extras
+
 
 def add_quiet_option(p, root: bool = False) -> None:
     """``-q/--quiet``: no progress bars or progress lines (on the command or, with ``root``,

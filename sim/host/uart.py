@@ -120,14 +120,11 @@ class UartTransport(Transport):
     def open(self, config) -> None:
         self.cfg = config
         if isinstance(self._port_arg, str):
-            import serial
-            try:
-                self.port = serial.serial_for_url(self._port_arg, baudrate=self.baud,
-                                                  timeout=0.05)
-            except (serial.SerialException, ValueError) as exc:
-                raise TransportError(f"uart: cannot open {self._port_arg}: {exc}") from None
+            self.port = self.open_port(self._port_arg, self.baud)
         else:
             self.port = self._port_arg
+        #: bytes written to the line and read from it since ``open``
+        self.bytes_sent = self.bytes_received = 0
         self._dec = FrameDecoder()
         self._seq = 0
         self._dev_seq = None
@@ -146,6 +143,17 @@ class UartTransport(Transport):
         self._send(control_message(0, OP_CLEAR_COUNTERS))
         self._since_clear = 0           # frames sent after CLEAR_COUNTERS (the device counts)
 
+    @staticmethod
+    def open_port(url: str, baud: int = 3_000_000):
+        """The pyserial port ``url`` (a device path or any ``serial_for_url`` URL) opened
+        at ``baud`` the way the transport reads it (short read timeouts), or
+        :class:`TransportError` naming it (``uart: cannot open URL: why``)."""
+        import serial
+        try:
+            return serial.serial_for_url(url, baudrate=baud, timeout=0.05)
+        except (serial.SerialException, ValueError) as exc:
+            raise TransportError(f"uart: cannot open {url}: {exc}") from None
+
     def close(self) -> None:
         if self.port is not None:
             self.port.close()
@@ -155,7 +163,12 @@ class UartTransport(Transport):
     def _send(self, msg):
         msg = type(msg)(msg.type, self._seq, msg.tick, msg.payload)
         self._seq = (self._seq + 1) & 0xFF
-        self.port.write(encode_frame(msg))
+        wire = encode_frame(msg)
+        try:
+            self.port.write(wire)
+        except OSError as exc:              # pyserial's SerialException is an OSError
+            raise self._line_failed(exc) from None
+        self.bytes_sent += len(wire)
         self._counts["frames_sent"] += 1
         self._since_clear += 1
 
@@ -165,7 +178,11 @@ class UartTransport(Transport):
         the device's counters show, when it still answers)."""
         deadline = time.monotonic() + self.timeout_s
         while not until():
-            data = self.port.read(max(1, getattr(self.port, "in_waiting", 0) or 1))
+            try:
+                data = self.port.read(max(1, getattr(self.port, "in_waiting", 0) or 1))
+            except OSError as exc:
+                raise self._line_failed(exc) from None
+            self.bytes_received += len(data)
             if not data:
                 if time.monotonic() > deadline or getattr(self.port, "silent", False):
                     self._timeout(what)
@@ -179,6 +196,20 @@ class UartTransport(Transport):
                     ", ".join(f"{k}={v}" for k, v in new.items()))
             for msg in msgs:
                 self._accept(msg)
+
+    def _line_failed(self, exc: OSError) -> TransportError:
+        """The error for a line that fails under the transport (a device unplugged, a
+        simulated board whose far end ended)."""
+        return TransportError(f"uart: the line to {self.port_name} failed: {exc}")
+
+    @property
+    def port_name(self) -> str:
+        """The port's URL or device path (or, for a serial-like object, its ``port`` or
+        class name)."""
+        if isinstance(self._port_arg, str):
+            return self._port_arg
+        port = self.port if self.port is not None else self._port_arg
+        return str(getattr(port, "port", None) or type(port).__name__)
 
     def _timeout(self, what: str):
         msg = f"uart: no answer from the device while waiting for {what} ({self.timeout_s:g} s)"

@@ -10,6 +10,11 @@ cycles at a time until bytes arrive. ``silent`` tells the transport that nothing
 so a lost answer is reported at once instead of after a wall-clock timeout. Line faults can be
 injected in both directions (``corrupt`` on the device's bytes, ``corrupt_host`` on the
 host's), as with :class:`~cuneate.sim.host.uart.ModelSerial`.
+
+The ``board`` engine: :class:`VerilatorSerial` is the same far end compiled by Verilator (the
+board top behind ``serial_harness.cpp``, in its own process), :class:`BoardTransport` the host
+stack over it, or over a programmed board's serial port (``cuneate stream``).
+:class:`~cuneate.sim.link.pty.PtyBoard` serves a :class:`VerilatorSerial` on a pseudo-terminal.
 """
 
 from __future__ import annotations
@@ -223,10 +228,13 @@ class VerilatorSerial(SimulatedSerial):
     def _request(self, payload: bytes) -> tuple[bytes, int, int]:
         p = self._proc
         t0 = time.perf_counter()
-        p.stdin.write(b"R" + struct.pack("<I", len(payload)) + payload +
-                      struct.pack("<QQQ", self.gap_cycles, self.quiet_cycles,
-                                  self.max_cycles))
-        p.stdin.flush()
+        try:
+            p.stdin.write(b"R" + struct.pack("<I", len(payload)) + payload +
+                          struct.pack("<QQQ", self.gap_cycles, self.quiet_cycles,
+                                      self.max_cycles))
+            p.stdin.flush()
+        except BrokenPipeError:
+            raise RuntimeError(f"the board harness ended (exit {p.wait()})") from None
         head = p.stdout.read(4)
         if len(head) != 4:
             raise RuntimeError(f"the board harness ended (exit {p.wait()})")
@@ -245,6 +253,13 @@ class VerilatorSerial(SimulatedSerial):
             self._rx += self.corrupt(data) if self.corrupt is not None else data
         self._quiet = why == 1
 
+    def advance(self) -> None:
+        """Send the bytes written so far and run the simulation until a frame comes back,
+        the device falls quiet (:attr:`silent`) or ``max_cycles`` have run: what a read of an
+        empty buffer does, for a caller that relays the device's bytes itself
+        (:class:`~cuneate.sim.link.pty.PtyBoard`)."""
+        self._fill()
+
     @property
     def silent(self) -> bool:
         """Nothing left to send and no byte from the device for :attr:`quiet_cycles`."""
@@ -254,6 +269,12 @@ class VerilatorSerial(SimulatedSerial):
     def cycles(self) -> int:
         """Clock cycles simulated so far."""
         return self._cycle
+
+    def kill(self) -> None:
+        """End the harness at once (a simulation request in flight fails: the harness
+        ended); :meth:`close` still releases the port."""
+        if self._proc.poll() is None:
+            self._proc.kill()
 
     def close(self):
         if not self.is_open:
@@ -268,32 +289,59 @@ class VerilatorSerial(SimulatedSerial):
         except (OSError, ValueError):
             self.totals = {}
         finally:
-            p.stdin.close()
+            try:
+                p.stdin.close()
+            except OSError:                  # the harness already gone (killed, crashed)
+                pass
             p.wait()
 
 
 class BoardTransport(UartTransport):
     """The ``board`` engine: the real host stack (:class:`~cuneate.sim.host.uart.UartTransport`:
     COBS/CRC frames, sequence numbers, lockstep, every counter) over :class:`VerilatorSerial`,
-    the board top sized to the core the driver opens it with.
+    the board top sized to the core the driver opens it with; or, given ``port``, over that
+    serial port to a programmed board (``cuneate stream``: the same driver path, the same
+    report).
 
     Line faults (``corrupt``, ``corrupt_host``) reach the simulated line; :meth:`figures` gives
-    what the run cost: simulated cycles, wall time, bytes and frames each way."""
+    what the run cost: simulated cycles, wall time, bytes and frames each way.
+
+    Parameters
+    ----------
+    port
+        ``None``: the board top in Verilator; else a pyserial URL or device path, or an open
+        serial-like object (see :class:`~cuneate.sim.host.uart.UartTransport`), with a board
+        behind it programmed for the core.
+    baud
+        Line rate when ``port`` is a URL.
+    timeout_s
+        How long the host waits for the device (the simulated board answers as fast as
+        Verilator runs it: the default allows minutes).
+    """
 
     name = "board"
 
     def __init__(self, build_dir: Path | None = None, progress=None, waves=None,
                  clocks_per_bit: int = BOARD_CLOCKS_PER_BIT, corrupt=None, corrupt_host=None,
-                 timeout_s: float = 600.0):
+                 timeout_s: float = 600.0, port=None, baud: int = 3_000_000):
         if waves:
             raise ValueError("engine 'board' writes no waveforms (those that do: amaranth, "
                              "icarus, verilator)")
+        if port is not None and (corrupt is not None or corrupt_host is not None):
+            raise ValueError("line faults are injected on the simulated line only (no port)")
         self.clocks_per_bit = clocks_per_bit
         self._faults = (corrupt, corrupt_host)
         self.progress = progress
-        super().__init__(None, timeout_s=timeout_s)
+        self.device_port = port
+        self.serial = None
+        super().__init__(port, baud=baud, timeout_s=timeout_s)
 
     def open(self, config) -> None:
+        if self.device_port is not None:        # a programmed board: the core it was built for
+            self.lcfg = None
+            self._t0 = time.perf_counter()
+            super().open(config)
+            return
         self.lcfg = board_link_config(config, self.clocks_per_bit)
         self.batch_sweeps = self.lcfg.batch_sweeps
         self.serial = VerilatorSerial(self.lcfg, *self._faults)
@@ -307,20 +355,27 @@ class BoardTransport(UartTransport):
             self.progress(self._ticks)
 
     @property
-    def sim_s(self) -> float:
-        """Wall time of the simulation proper (the harness answering the host)."""
-        return self.serial.sim_s
+    def sim_s(self) -> float | None:
+        """Wall time of the simulation proper (the harness answering the host); ``None`` for
+        a board on a port."""
+        return None if self.serial is None else self.serial.sim_s
 
     def figures(self) -> dict:
-        """Cycles, wall time and rate, and the line's bytes and frames each way."""
+        """Wall time and the line's bytes and frames each way; on the simulated line also the
+        cycles, their rate, the harness's build time and the line's framing errors; on a port,
+        its name and rate."""
+        wall = round(time.perf_counter() - self._t0, 3)
+        frames = {"frames_to_device": self._counts["frames_sent"],
+                  "frames_from_device": self._counts["frames_received"]}
         s = self.serial
-        wall = time.perf_counter() - self._t0
+        if s is None:
+            return {"port": self.port_name, "baud": self.baud, "wall_s": wall,
+                    "bytes_to_device": self.bytes_sent,
+                    "bytes_from_device": self.bytes_received, **frames}
         line = s.totals or {}
-        return {"cycles": s.cycles, "wall_s": round(wall, 3),
+        return {"cycles": s.cycles, "wall_s": wall,
                 "cycles_per_s": round(s.cycles / s.sim_s) if s.sim_s else 0,
                 "build_s": round(s.build_s, 3), "clocks_per_bit": self.lcfg.clocks_per_bit,
                 "bytes_to_device": line.get("bytes_to_device"),
                 "bytes_from_device": line.get("bytes_from_device"),
-                "framing_errors": line.get("framing_errors"),
-                "frames_to_device": self._counts["frames_sent"],
-                "frames_from_device": self._counts["frames_received"]}
+                "framing_errors": line.get("framing_errors"), **frames}

@@ -39,7 +39,7 @@ from .scene import Scene
 
 __all__ = ["SceneRun", "run", "BLOCKS", "ENGINES", "synthesize", "build_neurons",
            "front_end", "summary", "write_report", "format_run", "write_spike_files",
-           "waves_request", "estimate", "n_driven"]
+           "waves_request", "estimate", "n_driven", "core_config"]
 
 
 @dataclass
@@ -269,26 +269,11 @@ def build_izhikevich(scene: Scene, neurons: Neurons):
 
 
 def scene_core(scene: Scene, neurons: Neurons) -> dict:
-    """The core keywords of ``neurons`` (parameter sets, each neuron's set, update rate,
-    current format, rounding): what the engines and a board built for the scene share."""
-    hw = scene["hardware"]
-    presets = sorted(set(neurons.preset))
-    return {"param_sets": tuple(presets),
-            "neuron_sets": [presets.index(p) for p in neurons.preset],
-            "update_hz": hw["update_hz"],
-            "current_format": QFormat(hw["current_int_bits"], hw["current_frac_bits"]),
-            "rounding": hw["rounding"]}
-
-
-def board_request(scene: Scene) -> dict:
-    """What a board built for ``scene`` must hold: ``neurons``, the ``core`` keywords, the
-    ``blocks`` (name and neurons) and the link traffic's inputs (``sample_hz``)."""
-    _, _, traces, _, _ = synthesize(scene)
-    neurons = build_neurons(scene, len(traces))
-    core = scene_core(scene, neurons)
-    return {"neurons": len(neurons), "core": core, "sample_hz": scene["sensor"]["sample_rate_hz"],
-            "blocks": [{"block": "izhikevich_core", "neurons": len(neurons),
-                        "param_sets": list(core["param_sets"])}]}
+    """The core keywords of ``neurons``: what the engines and a board for the scene share."""
+    hw, presets = scene["hardware"], sorted(set(neurons.preset))
+    return {"param_sets": tuple(presets), "update_hz": hw["update_hz"],
+            "neuron_sets": [presets.index(p) for p in neurons.preset], "rounding": hw["rounding"],
+            "current_format": QFormat(hw["current_int_bits"], hw["current_frac_bits"])}
 
 
 #: Population model -> builder of its hardware configuration. Only the models a scene uses
@@ -359,15 +344,16 @@ def _run_transport(engine):
             kw["build_dir"] = (Path(bd) / engine) if bd else None
         if engine in FORMATS and ctx.get("waves"):
             kw["waves"] = ctx["waves"]
+        kw.update(ctx.get("engine_options", {}).get(engine, {}))
         tr = make_transport(engine, **kw)
-        tr.open(ctx["config"])
         try:
+            tr.open(ctx["config"])
             res = ctx["driver"].stream(tr, None, ctx["n_ticks"], raw=ctx["raw"])
         finally:
             tr.close()
         n = len(ctx["neurons"])
         cnt = dict(res.counters)
-        if hasattr(tr, "sim_s"):    # batch engines: the simulation without generation/build
+        if getattr(tr, "sim_s", None) is not None:  # batch engines: the simulation alone
             cnt["simulate_ms"] = int(round(tr.sim_s * 1000))
         if hasattr(tr, "figures"):  # the board engine: cycles, bytes and frames on its line
             cnt.update({f"line_{k}": v for k, v in tr.figures().items()})
@@ -410,12 +396,31 @@ def waves_request(scene: Scene, waves=None):
     return Waves(Path(r["waves"]), r["waves_start_tick"], r["waves_ticks"])
 
 
+def _build_blocks(scene: Scene, neurons: Neurons):
+    """The core configuration of the scene's neurons and the description of every block
+    built (one per population model)."""
+    blocks, cfg = [], None
+    for m in sorted({p["model"] for p in scene.populations}):
+        cfg, desc = BLOCKS[m](scene, neurons)
+        blocks.append(desc)
+    return cfg, blocks
+
+
+def core_config(scene: Scene):
+    """The core configuration a run of ``scene`` streams to (what a board must hold to run
+    it: :class:`~cuneate.sim.link.pty.PtyBoard` serves one), without running anything."""
+    return _build_blocks(scene, build_neurons(scene, n_driven(scene)[0]))[0]
+
+
 def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None = None,
-        progress: bool = False, log=None, waves=None) -> SceneRun:
+        progress: bool = False, log=None, waves=None,
+        engine_options: dict | None = None) -> SceneRun:
     """Run an afferent ``scene`` on its engines (or ``engines``); each stage reports through
     :mod:`cuneate.sim.progress` (and ``log``, if given, gets one line per stage). ``waves``
     (a :class:`~cuneate.sim.engines.waves.Waves` window, or the scene's ``run.waves``): the
-    RTL engines (amaranth, icarus, verilator) dump it."""
+    RTL engines (amaranth, icarus, verilator) dump it. ``engine_options``: more keywords for
+    an engine's transport, by engine (``{"board": {"port": "/dev/ttyUSB0"}}``: the board
+    engine on a programmed board, ``cuneate stream``)."""
     from .. import progress as prog
     timing: dict = {}
 
@@ -437,12 +442,7 @@ def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None =
     t0 = time.perf_counter()
     with prog.step("front end: filtering and quantizing the currents"):
         neurons = build_neurons(scene, len(traces))
-        models = sorted({p["model"] for p in scene.populations})
-        blocks, cfg = [], None
-        for m in models:
-            cfg_m, desc = BLOCKS[m](scene, neurons)
-            blocks.append(desc)
-            cfg = cfg_m
+        cfg, blocks = _build_blocks(scene, neurons)
         drv, currents, gaps = front_end(scene, neurons, traces, infos, cfg)
         raw, sat = drv.quantize(currents)
     sat["gaps_held"] = gaps
@@ -456,7 +456,8 @@ def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None =
             f"{sat['samples']} samples past the run's end: never applied")
     timing["front_end_s"] = time.perf_counter() - t0
     ctx = {"config": cfg, "driver": drv, "neurons": neurons, "currents": currents, "raw": raw,
-           "n_ticks": n_ticks, "build_dir": build_dir, "waves": waves_request(scene, waves)}
+           "n_ticks": n_ticks, "build_dir": build_dir, "waves": waves_request(scene, waves),
+           "engine_options": engine_options or {}}
     for e in names:
         if e not in ENGINES:
             raise ValueError(f"unknown engine {e!r}; known: {', '.join(ENGINES)}")

@@ -1,0 +1,190 @@
+"""The host side of a real board, without the board: the board top in Verilator served on a
+pseudo-terminal (``PtyBoard``) and reached through pyserial by the device path, as a USB serial
+adapter is. ``FbgDriver.stream`` over ``UartTransport(path)`` equals the bit-exact twin with
+every counter of the transport contract checked; ``cuneate stream ulx3s --port PATH SCENE``
+runs a scene end to end and agrees with the fixed engine; a harness that dies is reported on
+both sides at once (nothing hangs); missing ports, unknown boards and scenes a board cannot
+run are refused in one line."""
+
+import json
+import time
+
+import numpy as np
+import pytest
+
+from cuneate.hdl.izhikevich import IzhikevichConfig
+from cuneate.sim.cli import main
+from cuneate.sim.host.driver import AfferentEncoding, FbgDriver
+from cuneate.sim.host.transport import COUNTERS, TransportError
+from cuneate.sim.host.uart import UartTransport
+from cuneate.sim.izhikevich.engines import TwinTransport
+from cuneate.sim.link.pty import PtyBoard, PtyBoardError
+from cuneate.sim.scenes.afferent import core_config
+from cuneate.sim.scenes.scene import load_scene
+
+# a small, fast core: 8 neurons, 16 cycles per sweep at 4 kHz (samples at 1 kHz held 4 ticks)
+CORE = IzhikevichConfig(n_neurons=8, clock_hz=4e3 * 16, update_hz=4e3, spike_fifo_depth=16)
+SA = AfferentEncoding("SA", gain=40.0, unit_pm=1000.0)
+
+# two grasps (one per material) of 200 ms, two gratings each: 4 FA neurons, 3200 sweeps
+TINY_SCENE = """\
+[scene]
+name = "two short grasps"
+duration_ms = 200
+trials = 1
+seed = 1
+
+[sensor]
+kind = "fbg"
+channels = 2
+sample_rate_hz = 1000
+effects = ["strain"]
+
+[stimulus]
+kind = "grasp"
+materials = ["dragon_skin", "aluminium"]
+velocity_mm_per_s = 1.5
+stop_nm = 0.01
+
+[frontend]
+filter_low_hz = 1
+filter_high_hz = 16
+gain_S = 180
+delta_lambda_unit_pm = 10
+window = "loading"
+
+[[population]]
+name = "fa"
+model = "izhikevich"
+preset = "RS"
+encoding = "FA"
+
+[hardware]
+clock_hz = 40e6
+update_hz = 16000
+
+[decoder]
+kind = "none"
+"""
+
+
+def trace(n_samples: int, seed: int = 1) -> np.ndarray:
+    """Shifts (nm) of three gratings: held levels that change now and then."""
+    rng = np.random.default_rng(seed)
+    levels = rng.uniform(0.0, 1.8, (max(1, n_samples // 3), 3))
+    return np.repeat(levels, 3, axis=0)[:n_samples]
+
+
+def driver():
+    return FbgDriver(CORE, [SA] * 3, first=2)
+
+
+def reference(x):
+    tw = TwinTransport()
+    tw.open(CORE)
+    return driver().stream(tw, x)
+
+
+def test_pyserial_through_the_pty_board_equals_the_twin_with_every_counter_checked():
+    x = trace(60)
+    ref = reference(x)
+    board = PtyBoard(CORE)
+    try:
+        host = UartTransport(board.path, timeout_s=30.0)
+        host.open(CORE)
+        got = driver().stream(host, x)
+        host.close()
+    finally:
+        board.close()
+    assert not board.serving
+    assert len(ref.spikes) > 30 and ref.writes_sent > 10
+    assert np.array_equal(got.spikes.tick, ref.spikes.tick)
+    assert np.array_equal(got.spikes.neuron, ref.spikes.neuron)
+    c = got.counters
+    assert {k: c[k] for k in COUNTERS} == {
+        "writes": ref.writes_sent, "spikes": len(ref.spikes), "spikes_counted": len(ref.spikes),
+        "frames_lost": 0, "overflow": 0, "overrun": 0, "late_writes": 0}
+    assert c["device_frames_ok"] == c["frames_sent"] - 2 and c["device_seq_gaps"] == 0
+    assert c["frames_received"] > 10
+    assert all(c[k] == 0 for k in c if k.startswith("rx_"))
+    # every byte crossed the pty, both ways, and the simulated line carried exactly those
+    t = board.totals
+    assert t["bytes_to_device"] == host.bytes_sent > 0
+    assert t["bytes_to_host"] == host.bytes_received > 0
+    assert t["line"]["bytes_to_device"] == t["bytes_to_device"]
+    assert t["line"]["bytes_from_device"] == t["bytes_to_host"]
+    assert t["line"]["framing_errors"] == 0 and t["cycles"] > 10_000
+
+
+def test_a_dead_harness_fails_the_host_at_once_and_is_reported_by_the_board():
+    board = PtyBoard(CORE)
+    host = UartTransport(board.path, timeout_s=30.0)
+    try:
+        host.open(CORE)
+        host.run(32)
+        assert len(host.collect()) == 0            # no current written: no spike, but an answer
+        board.serial.kill()
+        t0 = time.monotonic()
+        with pytest.raises(TransportError, match=f"uart: the line to {board.path} failed"):
+            host.run(32)
+            host.collect()
+        assert time.monotonic() - t0 < 5.0         # the hangup, not the 30 s timeout
+    finally:
+        host.close()
+        with pytest.raises(PtyBoardError, match="the board harness ended"):
+            board.close()
+    assert not board.serving
+
+
+def test_cuneate_stream_through_the_pty_board_agrees_with_the_fixed_engine(tmp_path, capsys):
+    path = tmp_path / "tiny.toml"
+    path.write_text(TINY_SCENE)
+    out = tmp_path / "out"
+    board = PtyBoard(core_config(load_scene(path)))
+    try:
+        # the port named between the board and the scene, as the usage line gives them
+        rc = main(["-q", "stream", "ulx3s", "--port", board.path, str(path), "--out", str(out)])
+    finally:
+        board.close()
+    printed = capsys.readouterr().out
+    assert rc == 0, printed
+    run = json.loads((out / "run.json").read_text())
+    agree = run["agreement"]["board vs fixed"]
+    assert agree["neurons"] == 4 and agree["spikes_a"] == agree["spikes_b"] > 10
+    assert agree["identical_trains"] == 4
+    c = run["counters"]["board"]
+    assert {k: c[k] for k in ("frames_lost", "overflow", "overrun", "late_writes")} == \
+        dict.fromkeys(("frames_lost", "overflow", "overrun", "late_writes"), 0)
+    assert c["writes"] == run["counters"]["fixed"]["writes"] > 10
+    assert c["spikes"] == c["spikes_counted"] == agree["spikes_a"]
+    assert c["line_port"] == board.path
+    assert c["line_bytes_to_device"] == board.bytes_to_device > 0
+    assert c["line_bytes_from_device"] == board.bytes_to_host > 0
+    assert c["line_frames_to_device"] == c["frames_sent"]
+    assert (out / "spikes_board.npz").is_file() and (out / "index.html").is_file()
+    assert f"board ulx3s on {board.path} (3000000 baud): {agree['spikes_a']} spikes" in printed
+    assert "board vs fixed: 4/4 identical trains" in printed
+
+
+@pytest.mark.parametrize("argv,message", [
+    (["stream", "ulx3s", "--port", "/dev/does-not-exist"],
+     "cuneate stream: cannot open /dev/does-not-exist: "),
+    (["stream", "ulx3s"], "cuneate stream: name the board's serial port: --port PORT"),
+    (["stream", "orangecrab", "--port", "/dev/ttyUSB0"],
+     "cuneate stream: unknown board 'orangecrab'; known: ulx3s, "),
+    (["stream", "ulx3s", "--port", "/dev/ttyUSB0", "skin_3x3"],
+     "is a skin scene; a board streams afferent scenes"),
+], ids=["missing-port", "no-port", "unknown-board", "not-afferent"])
+def test_stream_refuses_in_one_line(argv, message, capsys):
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and message in err, err
+
+
+def test_stream_refuses_a_scene_the_board_cannot_hold(tmp_path, capsys):
+    path = tmp_path / "big.toml"
+    path.write_text(TINY_SCENE.replace("trials = 1", "trials = 200"))   # 800 neurons
+    assert main(["stream", "icebreaker", "--port", "/dev/ttyUSB0", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1, err
+    assert "its core of 800 neurons at 16000 Hz does not fit the board: icebreaker:" in err
