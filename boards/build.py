@@ -84,17 +84,26 @@ def build_target(board: str, out: Path, n_neurons: int | None = None,
     target = TARGETS[board]
     depth = {} if pipeline_stages is None else {"pipeline_stages": pipeline_stages}
     request = scene_request(scene, target) if scene is not None else None
+    neuron_sets = None
     if request is not None:
         n_neurons, update_hz = request["neurons"], request["core"]["update_hz"]
-        depth.update({k: v for k, v in request["core"].items() if k != "update_hz"})
+        depth.update({k: v for k, v in request["core"].items()
+                      if k not in ("update_hz", "neuron_sets")})
+        if len(request["core"]["param_sets"]) > 1:
+            neuron_sets = request["core"]["neuron_sets"]
     sized = size_core(target, n_neurons=n_neurons, clock_hz=clock_hz, update_hz=update_hz,
                       **depth)
+    if neuron_sets is not None:
+        # the cores of an array share one neuron-to-set table: one core, or one set
+        k = sized["link"].n_cores
+        if k > 1:
+            raise ConfigError(f"{board}: the scene needs {k} cores and mixes "
+                              f"{len(request['core']['param_sets'])} parameter sets; the cores "
+                              f"share one neuron-to-set table (one set, or "
+                              f"{sized['link'].core.n_neurons} neurons at most)")
+        sized = size_core(target, n_neurons=n_neurons, clock_hz=clock_hz,
+                          update_hz=update_hz, neuron_sets=neuron_sets, **depth)
     lcfg = sized["link"]
-    if request is not None and lcfg.n_cores > 1 and len(request["core"]["param_sets"]) > 1:
-        raise ConfigError(f"{board}: the scene needs {lcfg.n_cores} cores and mixes "
-                          f"{len(request['core']['param_sets'])} parameter sets; a board "
-                          f"holds one neuron-to-set table for all its cores (one set, or "
-                          f"{lcfg.core.n_neurons} neurons at most)")
     name = name or f"cuneate_{board}"
     out = Path(out).resolve()
     out.mkdir(parents=True, exist_ok=True)
@@ -161,17 +170,29 @@ def scene_request(scene, target: dict) -> dict:
     width = IzhikevichConfig(n_neurons=8, clock_hz=16 * req["core"]["update_hz"],
                              update_hz=req["core"]["update_hz"],
                              current_format=req["core"]["current_format"]).I.width
+    from ..hdl.link.codec import MAX_FRAME, MIN_FRAME, SPIKE_HEADER
     baud = target["clock_plan"].baud
     budget = link_budget(req["neurons"], width, req["sample_hz"], req["core"]["update_hz"],
                          200.0 * req["neurons"], bauds=sorted({*BUDGET_BAUDS, baud}))
     req["link_budget"] = budget
     row = next(r for r in budget["rows"] if r["baud"] == baud)
+    cap = baud / 10
+    if budget["in_bytes_per_s"] > cap:
+        raise ConfigError(f"{target['name']}: the scene's currents take "
+                          f"{budget['in_bytes_per_s']:,.0f} B/s to the board (worst case: "
+                          f"{req['neurons']} currents every sample at {req['sample_hz']:g} Hz), "
+                          f"more than the {baud / 1e6:g} Mbaud link's {cap:,.0f} B/s (link limit)")
     if not row["real_time"]:
-        worst = max(budget["in_bytes_per_s"], budget["out_bytes_per_s"])
-        raise ConfigError(f"{target['name']}: the scene's link traffic ({worst:,.0f} B/s "
-                          f"worst case: {req['neurons']} currents every sample at "
-                          f"{req['sample_hz']:g} Hz) exceeds the {baud / 1e6:g} Mbaud link's "
-                          f"{baud / 10:,.0f} B/s (link limit)")
+        raise ConfigError(f"{target['name']}: the scene's spikes take "
+                          f"{budget['out_bytes_per_s']:,.0f} B/s from the board (worst case: "
+                          f"{req['neurons']} neurons at 200 Hz), more than the "
+                          f"{baud / 1e6:g} Mbaud link's {cap:,.0f} B/s (link limit)")
+    frame_spikes = (MAX_FRAME - MIN_FRAME - SPIKE_HEADER) // 3
+    if budget["spikes_per_batch"] > frame_spikes:
+        raise ConfigError(f"{target['name']}: {budget['spikes_per_batch']:.0f} spikes a batch "
+                          f"of {budget['batch_sweeps']} sweeps (worst case: {req['neurons']} "
+                          f"neurons at 200 Hz) exceed the {frame_spikes} a spike frame holds "
+                          f"(link limit)")
     req["link_budget_lines"] = format_budget(budget)
     return req
 
@@ -194,7 +215,7 @@ def format_report(r: dict) -> str:
         lines.append("scene blocks: " + "; ".join(
             f"{b['block']} ({b['neurons']} neurons, sets {', '.join(b['param_sets'])})"
             for b in sc["blocks"]))
-        lines.append("link budget (worst case: every current every sample, 200 Hz a neuron):")
+        lines.append("link bandwidth (worst case: every current every sample, 200 Hz a neuron):")
         lines += [f"  {x}" for x in sc["link_budget_lines"]]
     est = r.get("estimate") or {}
     if est:

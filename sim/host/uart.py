@@ -388,26 +388,28 @@ BITS_PER_BYTE = 10
 
 
 def _wire_bytes(payload_bytes: int) -> int:
-    """Bytes on the line for a frame of ``payload_bytes``: header, payload, CRC, COBS code
-    bytes (one a block of 254) and the delimiter."""
-    n = MIN_FRAME + payload_bytes
-    return n + 1 + n // 254 + 1
+    """Bytes on the line for a frame of ``payload_bytes``: header, payload and CRC (at most
+    :data:`~cuneate.hdl.link.codec.MAX_FRAME`, one COBS block), its COBS code byte and the
+    delimiter."""
+    return MIN_FRAME + payload_bytes + 2
 
 
 def link_budget(n_neurons: int, current_width: int, sample_hz: float, update_hz: float,
                 spikes_per_s: float, words_per_sample: float | None = None,
-                bauds=BUDGET_BAUDS) -> dict:
-    """What streaming a scene through the link costs in real time, each way, against the line
-    rates ``bauds``.
+                bauds=BUDGET_BAUDS, batch_sweeps: int | None = None) -> dict:
+    """The line bandwidth streaming a scene takes, each way, against the line rates ``bauds``.
 
     The host's protocol (:class:`UartTransport`): for each sample (``sample_hz``) one
     ``STEP`` to the sample's sweep and the sample's currents in ``WRITE`` frames of at most
     :data:`~cuneate.hdl.link.LinkConfig.max_currents` values; ``words_per_sample`` currents a
     sample (default ``n_neurons``: every afferent's current changes every sample, the worst
-    case). The device: one ``SPIKES`` frame a batch (one a millisecond) and three bytes a spike
-    (``spikes_per_s``). The line is full duplex: each direction has ``baud / 10`` bytes a
-    second. Returns the bytes a second each way and per sweep, and per rate the load of each
-    direction and whether both fit (``real_time``).
+    case). The device: a ``SPIKES`` frame for every batch of ``batch_sweeps`` sweeps (default:
+    a millisecond's), and one more at every step's end that is not a batch's, and three bytes a
+    spike (``spikes_per_s``). The line is full duplex: each direction has ``baud / 10`` bytes a
+    second. Returns the bytes a second each way and per sweep, the spikes of a batch at that
+    rate (``spikes_per_batch``, against the frame's capacity), and per rate the load of each
+    direction and whether both fit the line (``real_time``: a bandwidth bound; the lockstep
+    host also waits for each step's batch before its next writes, see docs/boards.md).
     """
     from ...hdl.link.codec import SPIKE_HEADER, current_bytes
     cb = current_bytes(current_width)
@@ -417,15 +419,18 @@ def link_budget(n_neurons: int, current_width: int, sample_hz: float, update_hz:
     write = full * _wire_bytes(2 + per_frame * cb) + (_wire_bytes(2 + rest * cb) if rest else 0)
     step = _wire_bytes(5)
     bytes_in = sample_hz * (step + write)
-    batches = 1000.0
+    B = batch_sweeps or max(1, int(round(update_hz / 1000)))
+    R = update_hz / sample_hz                      # sweeps a step (one step a sample)
+    batches = float(sample_hz * np.ceil(R / B))    # frames the steps' batches take
     bytes_out = batches * _wire_bytes(SPIKE_HEADER) + 3.0 * spikes_per_s
     rows = []
     for baud in bauds:
         cap = baud / BITS_PER_BYTE
         rows.append({"baud": baud, "in_load": bytes_in / cap, "out_load": bytes_out / cap,
-                     "real_time": bytes_in <= cap and bytes_out <= cap})
+                     "real_time": bool(bytes_in <= cap and bytes_out <= cap)})
     return {"neurons": int(n_neurons), "words_per_sample": words, "sample_hz": sample_hz,
-            "spikes_per_s": float(spikes_per_s), "in_bytes_per_s": bytes_in,
+            "spikes_per_s": float(spikes_per_s), "batch_sweeps": B,
+            "spikes_per_batch": spikes_per_s * min(B, R) / update_hz, "in_bytes_per_s": bytes_in,
             "out_bytes_per_s": bytes_out, "in_bytes_per_sweep": bytes_in / update_hz,
             "out_bytes_per_sweep": bytes_out / update_hz, "rows": rows}
 
@@ -461,5 +466,5 @@ def format_budget(budget: dict) -> list[str]:
         out.append(f"{rate}: to the device {budget['in_bytes_per_s']:,.0f} "
                    f"B/s ({100 * r['in_load']:.0f} %), from it "
                    f"{budget['out_bytes_per_s']:,.0f} B/s ({100 * r['out_load']:.0f} %): "
-                   f"{'real time' if r['real_time'] else 'NOT real time'}")
+                   f"{'fits the line' if r['real_time'] else 'does NOT fit the line'}")
     return out

@@ -40,5 +40,20 @@ def test_a_scene_the_link_cannot_carry_in_real_time_is_refused_with_the_figure(t
                  str(tmp_path / "b")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1, err
-    assert "exceeds the 3 Mbaud link's 300,000 B/s (link limit)" in err[0]
+    assert "take 4,400,000 B/s to the board" in err[0]
+    assert "more than the 3 Mbaud link's 300,000 B/s (link limit)" in err[0]
     assert "80 currents every sample at 16000 Hz" in err[0]
+
+
+def test_a_scene_whose_spikes_overflow_a_batch_frame_is_refused(tmp_path, capsys):
+    """400 afferents sampled at 100 Hz: their currents fit the line, but at 200 Hz a neuron a
+    millisecond's batch would hold 80 spikes, more than a frame carries."""
+    many = tmp_path / "many.toml"
+    many.write_text(DEFAULT_SCENE_TOML.replace("trials = 10", "trials = 50")
+                    .replace("sample_rate_hz = 1000", "sample_rate_hz = 100"))
+    assert main(["build", "ulx3s", str(many), "--no-bitstream", "--out",
+                 str(tmp_path / "b")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1, err
+    assert "80 spikes a batch of 16 sweeps" in err[0] and "exceed the 79 a spike frame holds" \
+        in err[0]
