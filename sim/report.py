@@ -388,7 +388,11 @@ def _board_link_html(board: dict | None) -> str:
     else:
         where = "the board top (UART link and core, Verilator) through a simulated serial line"
         sim = (f"; {board['line_cycles']:,} cycles at {board['line_cycles_per_s']:,} cycles/s "
-               f"(simulated bit time {board['line_clocks_per_bit']} clocks a bit at both ends)")
+               f"(simulated bit time {board['line_clocks_per_bit']} clocks a bit at both ends, "
+               f"{board['line_baud_equivalent']:,} baud at the board's clock); the device took "
+               f"{board['line_cycles_per_sweep_rate']:.3f} times its sweeps' time at the tick "
+               f"rate (1: it never waited for the host; writes sent "
+               f"{'ahead' if board.get('line_ahead') else 'in lockstep'})")
     return f"""<h2>The board's link</h2>
 <p>The <code>board</code> engine ran {where} with the host stack a board uses:
 {board['frames_sent']} frames to the device and {board['frames_received']} back,
@@ -450,10 +454,11 @@ def format_run(run) -> str:
     board = run.counters.get("board") or {}
     if "link_budget" in board:
         from .host.uart import format_budget
-        sim = (f"; {board['line_cycles']:,} cycles at {board['line_cycles_per_s']:,}/s"
+        sim = (f"; {board['line_cycles']:,} cycles at {board['line_cycles_per_s']:,}/s, "
+               f"{board['line_cycles_per_sweep_rate']:.3f} x the sweeps' time"
                if "line_cycles" in board else f" on {board.get('line_port')}")
         out.append(f"  board link: {board['frames_sent']} frames to the device, "
                    f"{board['frames_received']} back, {board['frames_lost']} lost{sim}; "
-                   f"in real time:")
+                   f"line load:")
         out += [f"    {line}" for line in format_budget(board["link_budget"]["measured"])]
     return "\n".join(out)

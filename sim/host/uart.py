@@ -105,14 +105,26 @@ class UartTransport(Transport):
         Sweeps per spike batch of the gateware (``LinkConfig.batch_sweeps``).
     timeout_s
         How long ``collect``/``counters`` wait for the device before raising.
+    ahead_bytes
+        ``None`` (lockstep): a sweep's writes are sent once the device is known to stand at it
+        (its spike batches cover every sweep before). Else the host sends writes ahead, the
+        STEPs between them in order: the device's decoder holds each write until its sweep
+        (``WAIT``), so nothing lands early and the device never waits for the host while
+        frames are queued; the host keeps at most ``ahead_bytes`` of frames the device may not
+        yet have taken (its receive FIFO's depth, ``LinkConfig.rx_fifo_depth``), learning
+        what it took from the spike batches.
     """
 
     name = "uart"
 
     def __init__(self, port, baud: int = 3_000_000, batch_sweeps: int = 16,
-                 timeout_s: float = 5.0):
+                 timeout_s: float = 5.0, ahead_bytes: int | None = None):
         self._port_arg, self.baud, self.batch_sweeps = port, baud, batch_sweeps
         self.timeout_s = timeout_s
+        if ahead_bytes is not None and ahead_bytes < MAX_FRAME + 2:
+            raise ValueError(f"ahead_bytes must hold a whole frame ({MAX_FRAME + 2} bytes), "
+                             f"not {ahead_bytes}")
+        self.ahead_bytes = ahead_bytes
         self.port = None
         self.cfg = None
 
@@ -137,6 +149,8 @@ class UartTransport(Transport):
                         "rx_seq_gaps": 0}
         self._last_counters = None
         self._device_tick = 0
+        self._inflight: list[tuple[int, int]] = []   # (sweep that frees it, wire bytes)
+        self._frontier = 0              # the latest sweep a sent write waits for
         self._diagnosing = False
         self._since_clear = 0
         self._send(control_message(0, OP_STOP))
@@ -160,10 +174,12 @@ class UartTransport(Transport):
             self.port = None
 
     # -- frames ------------------------------------------------------------------------------
-    def _send(self, msg):
+    def _send(self, msg, write_tick: int | None = None):
         msg = type(msg)(msg.type, self._seq, msg.tick, msg.payload)
         self._seq = (self._seq + 1) & 0xFF
         wire = encode_frame(msg)
+        if self.ahead_bytes is not None:
+            self._make_room(len(wire), write_tick)
         try:
             self.port.write(wire)
         except OSError as exc:              # pyserial's SerialException is an OSError
@@ -171,6 +187,22 @@ class UartTransport(Transport):
         self.bytes_sent += len(wire)
         self._counts["frames_sent"] += 1
         self._since_clear += 1
+
+    def _make_room(self, nbytes: int, write_tick: int | None) -> None:
+        """Ahead mode: wait until the frames the device may not have taken, and this one,
+        fit ``ahead_bytes``. The device takes frames in order and a write when it reaches the
+        write's sweep, so a frame is taken once the batches cover its sweep."""
+        if write_tick is not None:
+            self._frontier = max(self._frontier, write_tick)
+        while not self._diagnosing:         # READ_COUNTERS, asking why, goes at once
+            self._inflight = [(t, n) for t, n in self._inflight if t > self._covered]
+            if sum(n for _, n in self._inflight) + nbytes <= self.ahead_bytes:
+                break
+            start = self._covered
+            self._receive(lambda: self._covered > start,
+                          f"the spikes of sweep {start} (the device's receive buffer holds "
+                          f"{sum(n for _, n in self._inflight)} bytes not yet taken)")
+        self._inflight.append((self._frontier, nbytes))
 
     def _receive(self, until, what: str):
         """Read frames until ``until()`` is true; raise on a frame damaged or refused while
@@ -290,14 +322,16 @@ class UartTransport(Transport):
         batches cover every sweep before it)."""
         if tick not in self._queued:
             return
-        self._receive(lambda: self._covered >= tick,
-                      f"the spikes of sweeps {self._covered}..{tick - 1} (the device must "
-                      f"stand at sweep {tick} before its writes are sent)")
+        if self.ahead_bytes is None:
+            self._receive(lambda: self._covered >= tick,
+                          f"the spikes of sweeps {self._covered}..{tick - 1} (the device must "
+                          f"stand at sweep {tick} before its writes are sent)")
         width = self.cfg.I.width
         per_frame = (MAX_FRAME - MIN_FRAME - 2) // current_bytes(width)
         for first, raw in self._queued.pop(tick):
             for i in range(0, raw.size, per_frame):
-                self._send(write_message(0, tick, first + i, raw[i:i + per_frame], width))
+                self._send(write_message(0, tick, first + i, raw[i:i + per_frame], width),
+                           write_tick=tick)
                 self._counts["write_frames_sent"] += 1
                 self._counts["currents_sent"] += min(per_frame, raw.size - i)
             self._counts["writes_sent"] += 1

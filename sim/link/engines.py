@@ -327,7 +327,8 @@ class BoardTransport(UartTransport):
 
     def __init__(self, build_dir: Path | None = None, progress=None, waves=None,
                  clocks_per_bit: int = BOARD_CLOCKS_PER_BIT, corrupt=None, corrupt_host=None,
-                 timeout_s: float = 600.0, port=None, baud: int = 3_000_000):
+                 timeout_s: float = 600.0, port=None, baud: int = 3_000_000,
+                 ahead: bool = True):
         if waves:
             raise ValueError("engine 'board' writes no waveforms (those that do: amaranth, "
                              "icarus, verilator)")
@@ -337,17 +338,21 @@ class BoardTransport(UartTransport):
         self._faults = (corrupt, corrupt_host)
         self.progress = progress
         self.device_port = port
+        self.ahead = ahead
         self.serial = None
         super().__init__(port, baud=baud, timeout_s=timeout_s)
 
     def open(self, config) -> None:
         if self.device_port is not None:        # a programmed board: the core it was built for
             self.lcfg = None
+            # the receive FIFO of a board's link (LinkConfig's default, as the boards build it)
+            self.ahead_bytes = 512 if self.ahead else None
             self._t0 = time.perf_counter()
             super().open(config)
             return
         self.lcfg = board_link_config(config, self.clocks_per_bit)
         self.batch_sweeps = self.lcfg.batch_sweeps
+        self.ahead_bytes = self.lcfg.rx_fifo_depth if self.ahead else None
         self.serial = VerilatorSerial(self.lcfg, *self._faults)
         self._port_arg = self.serial
         self._t0 = time.perf_counter()
@@ -377,7 +382,15 @@ class BoardTransport(UartTransport):
                     "bytes_to_device": self.bytes_sent,
                     "bytes_from_device": self.bytes_received, **frames}
         line = s.totals or {}
+        core = self.lcfg.core
+        nominal = self._ticks * core.cycles_per_tick
         return {"cycles": s.cycles, "wall_s": wall,
+                # the device's cycles against its sweeps at the tick rate (1.0: it never
+                # waited for the host), and the line rate it had, relative to its clock
+                "cycles_per_sweep_rate": round(s.cycles / nominal, 4) if nominal else None,
+                "baud_equivalent": round(core.cycles_per_tick * core.update_hz
+                                         / self.lcfg.clocks_per_bit),
+                "ahead": self.ahead_bytes is not None,
                 "cycles_per_s": round(s.cycles / s.sim_s) if s.sim_s else 0,
                 "build_s": round(s.build_s, 3), "clocks_per_bit": self.lcfg.clocks_per_bit,
                 "bytes_to_device": line.get("bytes_to_device"),

@@ -55,13 +55,18 @@ def test_the_board_link_keeps_a_boards_idle_cycles_and_one_batch_a_millisecond()
                                                                           tick_source="")
 
 
-def test_board_engine_equals_the_twin_with_every_counter_checked(tmp_path):
+@pytest.mark.parametrize("ahead", [True, False], ids=["writes-ahead", "lockstep"])
+def test_board_engine_equals_the_twin_with_every_counter_checked(ahead):
+    """Both host modes: writes sent ahead (the decoder holds each until its sweep) and
+    lockstep (each sweep's writes sent once the device stands at it)."""
     x = trace(60)
     ref = reference(x)
-    tr = make_transport("board")
+    tr = make_transport("board", ahead=ahead)
     tr.open(CORE)
-    got = driver().stream(tr, x)
-    tr.close()
+    try:
+        got = driver().stream(tr, x)
+    finally:
+        tr.close()
     assert len(ref.spikes) > 30 and ref.writes_sent > 10
     assert np.array_equal(got.spikes.tick, ref.spikes.tick)
     assert np.array_equal(got.spikes.neuron, ref.spikes.neuron)
@@ -76,6 +81,9 @@ def test_board_engine_equals_the_twin_with_every_counter_checked(tmp_path):
     assert f["frames_to_device"] == c["frames_sent"] and f["framing_errors"] == 0
     assert f["bytes_to_device"] > 0 and f["bytes_from_device"] > 0
     assert f["cycles"] >= 60 * 4 * board_link_config(CORE).core.cycles_per_tick
+    assert f["ahead"] == ahead and f["cycles_per_sweep_rate"] >= 1.0
+    if ahead:     # the device hardly waits for the host: its writes are already queued
+        assert f["cycles_per_sweep_rate"] < 1.1
 
 
 class OnFrame:
