@@ -149,8 +149,8 @@ def scene_request(scene, target: dict) -> dict:
     kind = kind_for(scene["stimulus"]["kind"])
     if kind.name != "afferent":
         raise ConfigError(f"scene {scene.name!r} ({kind.name}) needs the {kind.block} block on "
-                          f"the board; board tops carry the Izhikevich afferents behind the "
-                          f"link (afferent scenes)")
+                          f"the board; cuneate build makes board tops of Izhikevich afferents "
+                          f"behind the link (afferent scenes)")
     from ..sim.scenes.afferent import board_request
     req = board_request(scene)
     from ..hdl.izhikevich.config import IzhikevichConfig

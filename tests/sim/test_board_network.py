@@ -121,6 +121,24 @@ def test_every_spike_frame_carries_exactly_its_own_sweeps_spikes():
 
 
 @pytest.mark.long
+def test_every_spike_train_of_the_ridge_scene_on_board_equals_fixed():
+    """The ridge-angle scene's network (18 trials, 34560 ticks), every train of both
+    populations: about 40 s on the board."""
+    from cuneate.sim.scenes.ridge import spec_of
+    from cuneate.sim.scenes.scene import example_path, load_scene
+    spec = spec_of(load_scene(example_path("ridge_angle")))
+    net = network_config(spec)
+    cur, _, _ = afferent_currents(spec)
+    pad = np.zeros((cur.shape[0], net.n_afferents))
+    pad[:, :4] = cur
+    ref = run_network("fixed", net, pad)
+    got = run_network("board", net, pad)
+    assert all(np.array_equal(x, y) for x, y in zip(ref.spikes_ms, got.spikes_ms))
+    assert len(ref.spikes_ms) == len(got.spikes_ms) == net.n_afferents + net.n_targets
+    assert all(len(x) > 0 for x in ref.cuneate_ms)
+
+
+@pytest.mark.long
 def test_ridge_scene_on_board_equals_fixed(tmp_path):
     """The whole ridge-angle scene (18 trials, 34560 ticks): about a minute on the board."""
     from cuneate.sim.scenes.ridge import same_counts
