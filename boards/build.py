@@ -158,8 +158,8 @@ def scene_request(scene, target: dict) -> dict:
     kind = kind_for(scene["stimulus"]["kind"])
     if kind.name != "afferent":
         raise ConfigError(f"scene {scene.name!r} ({kind.name}) needs the {kind.block} block on "
-                          f"the board; board tops carry the Izhikevich afferents behind the "
-                          f"link (afferent scenes)")
+                          f"the board; cuneate build makes board tops of Izhikevich afferents "
+                          f"behind the link (afferent scenes)")
     from ..sim.scenes.afferent import build_neurons, n_driven, scene_core
     neurons = build_neurons(scene, n_driven(scene)[0])
     core = scene_core(scene, neurons)

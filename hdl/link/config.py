@@ -14,11 +14,17 @@ LINK_IDLE_CYCLES = 16
 
 
 class LinkConfig:
-    """Link parameters checked against the core they serve."""
+    """Link parameters checked against the core they serve.
+
+    ``n_neurons`` (the core's neurons times ``n_cores``) are the neurons the host writes
+    currents to; ``spike_ids`` (default ``n_neurons``, at most 65536) the neuron ids spike
+    frames may carry, for blocks behind the link with neurons the host does not write (the
+    network's cuneate neurons follow its afferents). The core's formats (currents, sweep
+    numbers) are the link's."""
 
     def __init__(self, core: IzhikevichConfig, clocks_per_bit: int = 16, batch_sweeps: int = 16,
                  batch_capacity: int = 79, rx_fifo_depth: int = 512, tx_fifo_depth: int = 16,
-                 counter_width: int = 32, n_cores: int = 1):
+                 counter_width: int = 32, n_cores: int = 1, spike_ids: int | None = None):
         if core.tick_source != "external":
             raise ConfigError("the host link drives the core's ticks: the core needs "
                               "tick_source='external'")
@@ -27,6 +33,13 @@ class LinkConfig:
         if core.n_neurons * n_cores > 1 << 16:
             raise ConfigError(f"the link addresses at most 65536 neurons, "
                               f"not {core.n_neurons * n_cores}")
+        n_written = core.n_neurons * n_cores
+        if spike_ids is None:
+            spike_ids = n_written
+        if isinstance(spike_ids, bool) or not isinstance(spike_ids, int) or \
+                not n_written <= spike_ids <= 1 << 16:
+            raise ConfigError(f"spike_ids must be an integer in {n_written}..65536 (the "
+                              f"neurons written and up to 65536 spike ids), not {spike_ids!r}")
         if not 1 <= batch_sweeps <= 255:
             raise ConfigError(f"batch_sweeps must be 1..255, not {batch_sweeps}")
         max_spikes = (MAX_FRAME - MIN_FRAME - SPIKE_HEADER) // 3
@@ -46,6 +59,9 @@ class LinkConfig:
         #: when more than one) and the global neuron ids it addresses
         self.n_cores = int(n_cores)
         self.n_neurons = core.n_neurons * self.n_cores
+        #: the ids spikes carry (``n_neurons`` and above: neurons behind the link that the host
+        #: does not write, e.g. a network's cuneate population after its afferents)
+        self.n_spike_ids = int(spike_ids)
         self.clocks_per_bit = int(clocks_per_bit)
         self.batch_sweeps = int(batch_sweeps)
         self.batch_capacity = int(batch_capacity)
@@ -65,7 +81,7 @@ class LinkConfig:
                 "rx_fifo_depth": self.rx_fifo_depth, "tx_fifo_depth": self.tx_fifo_depth,
                 "current_bytes": self.current_bytes, "max_currents": self.max_currents,
                 "counter_width": self.counter_width, "n_cores": self.n_cores,
-                "n_neurons": self.n_neurons}
+                "n_neurons": self.n_neurons, "n_spike_ids": self.n_spike_ids}
 
 
 def link_config(core_kwargs: dict | None = None, **link_kwargs) -> LinkConfig:

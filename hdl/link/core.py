@@ -79,7 +79,8 @@ class HostLink(wiring.Component):
             "rx": In(1, init=1), "tx": Out(1, init=1),
             "i_wr_en": Out(1), "i_wr_addr": Out(range(N)), "i_wr_data": Out(cfg.I.width),
             "tick": Out(1), "core_busy": In(1),
-            "spike_valid": In(1), "spike_ready": Out(1), "spike_index": In(range(N)),
+            "spike_valid": In(1), "spike_ready": Out(1),
+            "spike_index": In(range(lcfg.n_spike_ids)),
             "spike_sweep": In(cfg.sweep_number_width), "sweep_done": In(1),
             "running": Out(1), "sweeps_started": Out(32),
         })
@@ -324,7 +325,7 @@ class HostLink(wiring.Component):
         half_sweeps = Array(Signal(8, name=f"half_sweeps{i}") for i in range(2))
         # one register stage on the spike stream (the core's FIFO is a block RAM with a slow
         # clock-to-out): the batch logic works on sv/si/ss
-        sv, si = Signal(), Signal(range(N))
+        sv, si = Signal(), Signal(range(lc.n_spike_ids))
         ss = Signal(cfg.sweep_number_width)
         offset = Signal(cfg.sweep_number_width)
         m.d.comb += offset.eq(ss - bt[:cfg.sweep_number_width])

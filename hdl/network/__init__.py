@@ -10,10 +10,10 @@ or kernel file.
 """
 
 from .config import POPULATIONS, SWEEP_EXTRA, ConfigError, NetworkConfig
-from .core import (COUNTER_BITS, AfferentCuneateNetwork, generate_network, network_verilog,
-                   synth_resources)
+from .core import (COUNTER_BITS, REPORT_SETTLE, AfferentCuneateNetwork, generate_network,
+                   network_verilog, synth_resources)
 from .twin import NetworkTwin
 
 __all__ = ["NetworkConfig", "NetworkTwin", "AfferentCuneateNetwork", "ConfigError",
            "network_verilog", "generate_network", "POPULATIONS", "SWEEP_EXTRA", "COUNTER_BITS",
-           "synth_resources"]
+           "REPORT_SETTLE", "synth_resources"]

@@ -29,6 +29,14 @@ both populations report the update of tick ``T`` as tick ``T``, i.e. at ``(T + 1
 Cuneate spikes go through a FIFO of ``cuneate_fifo_depth`` and have priority; the afferent spikes
 through the core's own FIFO (``2 n_afferents`` deep). A full FIFO drops and says so
 (``cuneate_overflow_count``, sticky ``afferent_overflow``).
+
+Tick report: ``tick_open`` rises with a tick taken and falls with ``tick_done`` (one cycle),
+once every spike of that tick has been handed to the output stream: the core's sweep and the
+detector's update are done, :data:`REPORT_SETTLE` cycles have passed for the FIFOs' outputs
+to show their last entries, and both FIFOs are empty. A consumer that takes no tick while
+``busy | tick_open`` (the host link: :class:`~cuneate.hdl.link.LinkedNetwork`) sees every tick's
+spikes before its ``tick_done`` and none of the next tick's; the FIFOs then hold one tick's
+spikes at most and cannot overflow.
 """
 
 from __future__ import annotations
@@ -46,9 +54,12 @@ from ..lib.tick import tick_strobe
 from .config import NetworkConfig
 
 __all__ = ["synth_resources", "AfferentCuneateNetwork", "network_verilog", "generate_network",
-           "COUNTER_BITS"]
+           "COUNTER_BITS", "REPORT_SETTLE"]
 
 COUNTER_BITS = 32
+#: cycles after the core's sweep and the detector's update are done before the FIFOs' outputs
+#: are trusted to show every spike written (a write reaches a buffered FIFO's output in two)
+REPORT_SETTLE = 4
 
 
 class AfferentCuneateNetwork(wiring.Component):
@@ -60,7 +71,8 @@ class AfferentCuneateNetwork(wiring.Component):
     ``afferent_spike_count``, ``cuneate_spike_count``, ``overrun_count``,
     ``cuneate_overflow_count`` and ``afferent_overflow`` (sticky: the core's FIFO dropped a
     spike), ``merged_count`` (events the detector merged: 0 by construction),
-    ``clamp_flags`` (core | detector, sticky), ``busy``.
+    ``clamp_flags`` (core | detector, sticky), ``busy``, ``tick_open`` and ``tick_done`` (the
+    tick report, see the module docstring).
     """
 
     def __init__(self, config: NetworkConfig):
@@ -74,7 +86,8 @@ class AfferentCuneateNetwork(wiring.Component):
                "cuneate_spike_count": Out(COUNTER_BITS), "overrun_count": Out(COUNTER_BITS),
                "cuneate_overflow_count": Out(COUNTER_BITS), "afferent_overflow": Out(1),
                "merged_count": Out(COUNTER_BITS),
-               "clamp_flags": Out(5), "busy": Out(1)}
+               "clamp_flags": Out(5), "busy": Out(1), "tick_open": Out(1),
+               "tick_done": Out(1)}
         if cfg.tick_source == "external":
             sig["tick"] = In(1)
         super().__init__(sig)
@@ -142,6 +155,17 @@ class AfferentCuneateNetwork(wiring.Component):
             fifo.r_en.eq(self.out_ready & cun),
             core.spike_ready.eq(self.out_ready & ~cun),
         ]
+
+        # ---- tick report: every spike of the tick taken handed to the stream
+        settle = Signal(range(REPORT_SETTLE + 1))
+        with m.If(go):
+            m.d.sync += [self.tick_open.eq(1), settle.eq(REPORT_SETTLE)]
+        with m.Elif(self.tick_open & ~inflight & ~det.busy):
+            with m.If(settle != 0):
+                m.d.sync += settle.eq(settle - 1)
+            with m.Elif(~self.out_valid):
+                m.d.comb += self.tick_done.eq(1)
+                m.d.sync += self.tick_open.eq(0)
         return m
 
 

@@ -83,6 +83,8 @@ class RidgeResult:
     wall_s: float = 0.0
     decoded: list = field(default_factory=list)   # per trial: the table's angle (None: unseen)
     tested: list = field(default_factory=list)    # per trial: counted in the accuracy
+    #: (trials, 4) spikes per afferent (SA top, FA top, SA bottom, FA bottom)
+    afferent_counts: np.ndarray | None = None
 
     def to_dict(self) -> dict:
         return {"engine": self.engine, "angles": self.angles, "accuracy": self.accuracy,
@@ -90,7 +92,8 @@ class RidgeResult:
                 "table": {str(list(k)): v for k, v in self.table.items()},
                 "patterns": [list(p) for p in self.patterns],
                 "trial_angle": self.trial_angle, "counts": self.counts.tolist(),
-                "wall_s": self.wall_s}
+                "afferent_counts": None if self.afferent_counts is None
+                else self.afferent_counts.tolist(), "wall_s": self.wall_s}
 
 
 def _lags_ms(spec: RidgeSpec, speed, angle_deg):
@@ -130,14 +133,18 @@ def ridge_estimate(spec: RidgeSpec, engines) -> dict:
     of every angle in one run, the afferents' currents and spikes per tick, and the afferent
     core's and the detector's updates (or cycles) at the engine registry's speeds."""
     from ...golden.budget import BASE_BYTES, array_bytes
-    from ..engines.registry import ENGINES, estimate_seconds
+    from ..engines.registry import ENGINES, block_engines, estimate_seconds
+
+    def block_of(e):
+        """The detector alone, or the on-chip network for the engines that run only that."""
+        return "coincidence" if e in block_engines("coincidence") else "network"
     trials = spec.trials_per_angle * len(spec.angles_deg)
     ticks = trials * spec.trial_ms * spec.update_hz / 1000.0
     m = len(spec.delays_ticks) if spec.delays_ticks is not None else len(spec.angles_deg)
     engines = list(engines)
     nbytes = BASE_BYTES + (3 + len(engines)) * array_bytes(ticks, 4 + m)
     seconds = estimate_seconds("izhikevich", "fixed", ticks * 8) * len(engines)
-    seconds += sum(estimate_seconds("coincidence", e, ticks * (m * 8 if ENGINES[e].hdl else m))
+    seconds += sum(estimate_seconds(block_of(e), e, ticks * (m * 8 if ENGINES[e].hdl else m))
                    for e in engines)
     return {"bytes": nbytes, "seconds": seconds,
             "what": f"{trials} trials of {spec.trial_ms:g} ms ({ticks:.3g} ticks) on "
@@ -241,7 +248,10 @@ def ridge_experiment(engine: str = "fixed", spec: RidgeSpec | None = None,
     ``on_chip`` runs afferents and detector as the on-chip network
     (:mod:`cuneate.hdl.network`, :func:`network_config`): the afferent currents are written by
     the host before each tick and the afferent spikes reach the detector over the chip's link.
+    Engines that run the network but not the detector alone (``board``: the network behind the
+    board's UART link) always run on chip.
     """
+    from ..engines.registry import block_engines
     spec = spec or RidgeSpec()
     cfg = detector_config(spec)
     cur, angles, per = afferent_currents(spec)
@@ -252,21 +262,31 @@ def ridge_experiment(engine: str = "fixed", spec: RidgeSpec | None = None,
         angles = [angles[i] for i in idx]
         cur = np.concatenate([cur[i * per:(i + 1) * per] for i in idx])
     n = cur.shape[0]
+    dt = cfg.dt_ms
+    on_chip = on_chip or engine not in block_engines("coincidence")
     if on_chip:
         ncfg = network_config(spec)
         pad = np.zeros((n, ncfg.n_afferents))
         pad[:, :4] = cur
         run = run_network(engine, ncfg, pad, build_dir=build_dir)
+        aff_ticks = [(np.asarray(sp) / dt).round().astype(np.int64)
+                     for sp in run.afferent_ms[:4]]
         run.spikes_ms = run.cuneate_ms
         engine = f"{engine} (on-chip network)"
     else:
-        ins = afferent_spikes(spec, cur, fixed=engine != "golden")
-        run = run_coincidence(engine, cfg, ins, n, build_dir=build_dir)
-    counts = np.zeros((len(angles), cfg.n_targets), dtype=np.int64)
-    dt = cfg.dt_ms
-    for t, sp in enumerate(run.spikes_ms):
-        k = (np.asarray(sp) / dt - 1).round().astype(np.int64) // per
-        np.add.at(counts[:, t], k[k < len(angles)], 1)
+        aff_ticks = afferent_spikes(spec, cur, fixed=engine != "golden")
+        run = run_coincidence(engine, cfg, aff_ticks, n, build_dir=build_dir)
+
+    def per_trial(ticks_of, width):
+        """Spikes per trial of each train (tick ``k + 1`` of update ``k``)."""
+        out = np.zeros((len(angles), width), dtype=np.int64)
+        for j, ks in enumerate(ticks_of):
+            k = (np.asarray(ks, dtype=np.int64) - 1) // per
+            np.add.at(out[:, j], k[k < len(angles)], 1)
+        return out
+    counts = per_trial([(np.asarray(sp) / dt).round().astype(np.int64)
+                        for sp in run.spikes_ms], cfg.n_targets)
+    aff_counts = per_trial(aff_ticks, 4)
     patterns = [tuple(int(j) for j in np.flatnonzero(c)) for c in counts]
     if table is None:
         # training: every other trial of each angle (stratified), tested on the rest
@@ -281,7 +301,7 @@ def ridge_experiment(engine: str = "fixed", spec: RidgeSpec | None = None,
         acc = float(np.mean([table.get(p) == a for p, a in zip(patterns, angles)]))
     decoded = [table.get(p) for p in patterns]
     return RidgeResult(engine, list(spec.angles_deg), angles, patterns, counts, table, acc,
-                       run.wall_s, decoded, [not t for t in train])
+                       run.wall_s, decoded, [not t for t in train], aff_counts)
 
 
 def ridge_comparison(spec: RidgeSpec | None = None, hdl_engines=("verilator",),

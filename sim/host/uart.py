@@ -113,18 +113,24 @@ class UartTransport(Transport):
         frames are queued; the host keeps at most ``ahead_bytes`` of frames the device may not
         yet have taken (its receive FIFO's depth, ``LinkConfig.rx_fifo_depth``), learning
         what it took from the spike batches.
+    spike_ids
+        The neuron ids the device's spikes may carry (``LinkConfig.n_spike_ids``; default the
+        core's ``n_neurons``, the neurons written): a network behind the link reports its
+        cuneate neurons after its afferents.
     """
 
     name = "uart"
 
     def __init__(self, port, baud: int = 3_000_000, batch_sweeps: int = 16,
-                 timeout_s: float = 5.0, ahead_bytes: int | None = None):
+                 timeout_s: float = 5.0, ahead_bytes: int | None = None,
+                 spike_ids: int | None = None):
         self._port_arg, self.baud, self.batch_sweeps = port, baud, batch_sweeps
         self.timeout_s = timeout_s
         if ahead_bytes is not None and ahead_bytes < MAX_FRAME + 2:
             raise ValueError(f"ahead_bytes must hold a whole frame ({MAX_FRAME + 2} bytes), "
                              f"not {ahead_bytes}")
         self.ahead_bytes = ahead_bytes
+        self.spike_ids = spike_ids
         self.port = None
         self.cfg = None
 
@@ -282,12 +288,12 @@ class UartTransport(Transport):
     def _use(self, msg):
         if msg.type == MSG_SPIKES:
             dropped, sweeps, spikes = parse_spikes(msg)
-            N = self.cfg.n_neurons
+            N = self.cfg.n_neurons if self.spike_ids is None else self.spike_ids
             for tick, n in spikes:
                 if n >= N or not msg.tick <= tick < msg.tick + sweeps:
                     raise FrameError(f"a spike of neuron {n} at sweep {tick} in the batch of "
-                                     f"sweeps {msg.tick}..{msg.tick + sweeps - 1}: the core "
-                                     f"has neurons 0..{N - 1}")
+                                     f"sweeps {msg.tick}..{msg.tick + sweeps - 1}: the device "
+                                     f"has neuron ids 0..{N - 1}")
             if msg.tick != self._covered:
                 raise TransportError(f"uart: spike batches lost: expected the batch of sweep "
                                      f"{self._covered}, got sweep {msg.tick}")

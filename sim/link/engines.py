@@ -36,7 +36,7 @@ from ..host.transport import SimulatedSerial
 from ..host.uart import UartTransport
 
 __all__ = ["AmaranthSerial", "VerilatorSerial", "BoardTransport", "board_link_config",
-           "BOARD_CLOCKS_PER_BIT"]
+           "board_network_config", "BOARD_CLOCKS_PER_BIT"]
 
 CLOCK_S = 1e-6
 
@@ -150,6 +150,17 @@ SERIAL_HARNESS = Path(__file__).with_name("serial_harness.cpp")
 BOARD_TOP = "board"
 
 
+def _board_batch_and_cycles(update_hz: float, busy_cycles: int,
+                            clocks_per_bit: int) -> tuple[int, int]:
+    """One spike batch a millisecond (sweeps a batch) and the fewest cycles a sweep for a block
+    busy ``busy_cycles`` a sweep: the idle cycles a board keeps between sweeps
+    (:data:`~cuneate.hdl.link.config.LINK_IDLE_CYCLES`) and the largest spike frame leaving
+    within a batch's sweeps (batches never pile up behind the transmitter)."""
+    batch = max(1, int(round(update_hz / 1000)))
+    frame_cycles = (MAX_FRAME + 2) * 10 * clocks_per_bit
+    return batch, max(-(-frame_cycles // batch), busy_cycles + LINK_IDLE_CYCLES)
+
+
 def board_link_config(core: IzhikevichConfig, clocks_per_bit: int = BOARD_CLOCKS_PER_BIT,
                       n_cores: int = 1) -> LinkConfig:
     """The link of the ``board`` engine for the core ``core`` (its arithmetic and sweep rate;
@@ -161,9 +172,7 @@ def board_link_config(core: IzhikevichConfig, clocks_per_bit: int = BOARD_CLOCKS
     leave within a batch's sweeps (batches never pile up behind the transmitter). With the
     link's external tick the clock changes nothing but the time: the engines' results depend
     on the update rate alone."""
-    batch = max(1, int(round(core.update_hz / 1000)))
-    frame_cycles = (MAX_FRAME + 2) * 10 * clocks_per_bit
-    min_cycles = max(-(-frame_cycles // batch), core.n_neurons + LINK_IDLE_CYCLES)
+    batch, min_cycles = _board_batch_and_cycles(core.update_hz, core.n_neurons, clocks_per_bit)
     kw = core.to_kwargs(tick_source="external")
     if core.clock_hz / core.update_hz < min_cycles:
         kw["clock_hz"] = core.update_hz * min_cycles
@@ -171,9 +180,34 @@ def board_link_config(core: IzhikevichConfig, clocks_per_bit: int = BOARD_CLOCKS
     return LinkConfig(ext, clocks_per_bit=clocks_per_bit, batch_sweeps=batch, n_cores=n_cores)
 
 
+def board_network_config(ncfg, clocks_per_bit: int = BOARD_CLOCKS_PER_BIT):
+    """The network and its link on the ``board`` engine
+    (:class:`~cuneate.hdl.link.LinkedNetwork`): ``(network config, link config)``.
+
+    As :func:`board_link_config`, for the afferent -> cuneate network ``ncfg``
+    (:class:`~cuneate.hdl.network.NetworkConfig`): external tick, one spike batch a
+    millisecond, the clock raised where needed to keep a board's idle cycles beyond a tick's
+    work (the network's ``cycles_needed``, the report's settling and the draining of one
+    spike per afferent and cuneate neuron) and to let the largest spike frame leave within a
+    batch. The link writes the afferents' currents (the network's afferent core gives the
+    formats) and carries the spike ids of both populations."""
+    from ...hdl.network import REPORT_SETTLE, NetworkConfig
+    busy = ncfg.cycles_needed + REPORT_SETTLE + ncfg.n_afferents + ncfg.n_targets
+    batch, min_cycles = _board_batch_and_cycles(ncfg.update_hz, busy, clocks_per_bit)
+    kw = ncfg.to_kwargs() | {"tick_source": "external"}
+    if ncfg.clock_hz / ncfg.update_hz < min_cycles:
+        kw["clock_hz"] = ncfg.update_hz * min_cycles
+    net = NetworkConfig(**kw)
+    lcfg = LinkConfig(net.core, clocks_per_bit=clocks_per_bit, batch_sweeps=batch,
+                      spike_ids=net.n_afferents + net.n_targets)
+    return net, lcfg
+
+
 class VerilatorSerial(SimulatedSerial):
-    """A serial port whose far end is the board top (:class:`~cuneate.hdl.link.LinkedCore`:
-    the link and the blocks behind it, the PLL and I/O buffers replaced by a clock and wires)
+    """A serial port whose far end is the board top (``top``, by default the
+    :class:`~cuneate.hdl.link.LinkedCore` of ``lcfg``; or a
+    :class:`~cuneate.hdl.link.LinkedNetwork`: the link and the blocks behind it, the PLL and
+    I/O buffers replaced by a clock and wires)
     compiled by Verilator with ``serial_harness.cpp``: the harness drives ``rx`` with the
     host's bytes and decodes ``tx``, 8N1 at the link's ``clocks_per_bit``, in its own process;
     the simulation advances only while the host waits for an answer (as
@@ -187,11 +221,14 @@ class VerilatorSerial(SimulatedSerial):
         Called on each chunk of bytes the device sends / the host writes (line faults).
     build_root
         Where compiled harnesses are cached (default: the ``verilator-fast`` cache).
+    top
+        The board top to compile (an elaboratable with the pins ``rx`` and ``tx``, served by
+        ``lcfg``); default ``LinkedCore(lcfg)``.
     """
 
     def __init__(self, lcfg: LinkConfig, corrupt=None, corrupt_host=None,
-                 build_root: Path | None = None):
-        from ...hdl.link import link_verilog
+                 build_root: Path | None = None, top=None):
+        from ...hdl.flow.verilog import verilog_text
         from ..engines.verilator_fast import compile_harness
         self.lcfg = lcfg
         self.corrupt, self.corrupt_host = corrupt, corrupt_host
@@ -203,7 +240,8 @@ class VerilatorSerial(SimulatedSerial):
         self.gap_cycles = 30 * cpb
         self.max_cycles = max(self.quiet_cycles, 1 << 20)
         t0 = time.perf_counter()
-        self.exe = compile_harness(link_verilog(lcfg, name=BOARD_TOP), BOARD_TOP,
+        top = LinkedCore(lcfg) if top is None else top
+        self.exe = compile_harness(verilog_text(top, BOARD_TOP), BOARD_TOP,
                                    SERIAL_HARNESS, {"CUNEATE_CLOCKS_PER_BIT": cpb},
                                    build_root, prefix="Vboard")
         self.build_s = time.perf_counter() - t0
@@ -299,9 +337,13 @@ class VerilatorSerial(SimulatedSerial):
 class BoardTransport(UartTransport):
     """The ``board`` engine: the real host stack (:class:`~cuneate.sim.host.uart.UartTransport`:
     COBS/CRC frames, sequence numbers, lockstep, every counter) over :class:`VerilatorSerial`,
-    the board top sized to the core the driver opens it with; or, given ``port``, over that
-    serial port to a programmed board (``cuneate stream``: the same driver path, the same
-    report).
+    the board top sized to what it is opened with: an Izhikevich core (the driver's; board top
+    :class:`~cuneate.hdl.link.LinkedCore`, :func:`board_link_config`) or an afferent -> cuneate
+    network (:class:`~cuneate.hdl.network.NetworkConfig`; board top
+    :class:`~cuneate.hdl.link.LinkedNetwork`, :func:`board_network_config`: currents are
+    written to the afferents, spike ids ``n_afferents + j`` are cuneate neuron ``j``); or,
+    given ``port``, over that serial port to a programmed board (``cuneate stream``: the same
+    driver path, the same report).
 
     Line faults (``corrupt``, ``corrupt_host``) reach the simulated line; :meth:`figures` gives
     what the run cost: simulated cycles, wall time, bytes and frames each way. The compiled
@@ -350,10 +392,18 @@ class BoardTransport(UartTransport):
             self._t0 = time.perf_counter()
             super().open(config)
             return
-        self.lcfg = board_link_config(config, self.clocks_per_bit)
+        from ...hdl.link import LinkedNetwork
+        from ...hdl.network import NetworkConfig
+        if isinstance(config, NetworkConfig):
+            self.network, self.lcfg = board_network_config(config, self.clocks_per_bit)
+            top = LinkedNetwork(self.network, self.lcfg)
+        else:
+            self.network, self.lcfg = None, board_link_config(config, self.clocks_per_bit)
+            top = LinkedCore(self.lcfg)
         self.batch_sweeps = self.lcfg.batch_sweeps
+        self.spike_ids = self.lcfg.n_spike_ids
         self.ahead_bytes = self.lcfg.rx_fifo_depth if self.ahead else None
-        self.serial = VerilatorSerial(self.lcfg, *self._faults)
+        self.serial = VerilatorSerial(self.lcfg, *self._faults, top=top)
         self._port_arg = self.serial
         self._t0 = time.perf_counter()
         super().open(self.lcfg.core)

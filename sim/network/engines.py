@@ -10,7 +10,13 @@ engines, one spike convention for both populations (update of tick ``T`` -> ``(T
     the Amaranth simulator on :class:`cuneate.hdl.network.AfferentCuneateNetwork`;
 ``icarus``, ``verilator``
     cocotb on its Verilog (bench :mod:`cuneate.sim.network.bench`, test ``engine``; Icarus runs
-    the yosys-lowered netlist).
+    the yosys-lowered netlist);
+``board``
+    the board top :class:`cuneate.hdl.link.LinkedNetwork` (the network behind the UART link)
+    compiled by Verilator behind a simulated serial line, driven by the host stack
+    (:class:`cuneate.sim.link.engines.BoardTransport`): the changed currents written in
+    lockstep, spikes of both populations back in SPIKES frames (cuneate neuron ``j`` as id
+    ``n_afferents + j``), every host and device counter checked.
 """
 
 from __future__ import annotations
@@ -25,7 +31,7 @@ from ..engines.amaranth import simulate
 from ..engines.registry import check_engine
 from ..engines.run import EngineRun, unwrap_ticks
 
-__all__ = ["NetworkRun", "run_network", "current_writes"]
+__all__ = ["NetworkRun", "run_network", "current_writes", "current_runs"]
 
 #: A network run is an :class:`~cuneate.sim.engines.run.EngineRun` with the populations
 #: ``afferent`` and ``cuneate``.
@@ -90,6 +96,8 @@ def run_network(engine: str, cfg, currents, build_dir: Path | None = None) -> Ne
                         "merged_count": tw.det.merged}
         elif engine == "amaranth":
             pa, pc, counters = _run_network_amaranth(cfg, writes, n)
+        elif engine == "board":
+            pa, pc, counters = _run_network_board(cfg, writes, n)
         else:
             pa, pc, counters = _run_network_cocotb(engine, cfg, writes, n, build_dir)
         aff = [np.array([(k + 1) * dt for k, i in sorted(pa) if i == j]) for j in range(N)]
@@ -133,6 +141,39 @@ def _run_network_amaranth(cfg, writes: dict, n_ticks: int):
 
     simulate(dut, tb, cfg.clock_hz)
     return _split_stream(cfg, stream, n_ticks) + (out,)
+
+
+def current_runs(writes: list[tuple[int, int]]) -> list[tuple[int, list[int]]]:
+    """One tick's writes ``[(afferent, raw), ...]`` as runs of consecutive afferents
+    ``[(first, [raw, ...]), ...]`` (one link write each)."""
+    runs: list[tuple[int, list[int]]] = []
+    for i, raw in sorted(writes):
+        if runs and runs[-1][0] + len(runs[-1][1]) == i:
+            runs[-1][1].append(raw)
+        else:
+            runs.append((i, [raw]))
+    return runs
+
+
+def _run_network_board(cfg, writes: dict, n_ticks: int):
+    from ..link.engines import BoardTransport
+    tr = BoardTransport()
+    tr.open(cfg)
+    try:
+        for k in sorted(writes):
+            for first, raw in current_runs(writes[k]):
+                tr.write_currents(k, first, raw)
+        tr.run(n_ticks)
+        got = tr.collect()
+        counters = tr.check()
+    finally:
+        tr.close()
+    counters |= {f"board_{k}": v for k, v in tr.figures().items()}
+    N = cfg.n_afferents
+    pairs = list(zip(got.tick.tolist(), got.neuron.tolist()))
+    pa = [(t, i) for t, i in pairs if i < N]
+    pc = [(t, i - N) for t, i in pairs if i >= N]
+    return pa, pc, counters
 
 
 def _split_stream(cfg, stream, n_ticks):

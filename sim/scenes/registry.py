@@ -40,7 +40,7 @@ KINDS: dict[str, SceneKind] = {k.name: k for k in (
               "FBG traces through the host front end into Izhikevich afferents; decoding"),
     SceneKind("skin", ("press",), "lif",
               "a taxel grid pressed with force pulses, one LIF neuron per taxel"),
-    SceneKind("ridge", ("ridges",), "coincidence",
+    SceneKind("ridge", ("ridges",), "network",
               "ridges sliding over two sensors: SA/FA afferents into coincidence detectors"),
 )}
 

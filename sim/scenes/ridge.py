@@ -16,8 +16,13 @@ gives one ``[upper, lower]`` pair per cuneate neuron. The stimulus keys: ``ridge
 active cuneate neurons through a lookup table built on every other trial of each angle.
 
 Only the afferent Izhikevich core (4 neurons) and the coincidence detector are built; the
-engines are the scene's (golden: float64 afferents and detector; the others: the core's twin
-for the afferents and the engine for the detector).
+engines are the scene's (golden: float64 afferents and detector; fixed and the simulators of
+the detector: the core's twin for the afferents and the engine for the detector; ``board``:
+the on-chip network, afferents and detector, behind the board's UART link, driven by the host
+stack over a simulated serial line). The scene's block is the network
+(:mod:`cuneate.sim.network`): every engine of the network runs it. The report compares each
+engine's cuneate patterns and per-trial spike counts of both populations with the first
+engine's.
 """
 
 from __future__ import annotations
@@ -31,7 +36,7 @@ from pathlib import Path
 import numpy as np
 
 __all__ = ["validate", "RidgeSceneRun", "run", "summary", "write_report", "format_run",
-           "spec_of", "estimate"]
+           "same_counts", "spec_of", "estimate"]
 
 
 def validate(V, raw: dict, sections: dict, pops: list, projs: list) -> None:
@@ -190,11 +195,11 @@ class RidgeSceneRun:
 def run(scene, engines=None, build_dir=None, progress=False, log=None):
     """Run a ridge scene on its engines (or ``engines``)."""
     from ..coincidence.experiments import detector_config, ridge_experiment
-    from ..engines.registry import ENGINES, check_engine
+    from ..engines.registry import ENGINES, block_engines, check_engine
     say = log or (lambda msg: None)
     names = list(engines or scene.engines)
     for e in names:
-        check_engine("coincidence", e)
+        check_engine("network", e)
     spec = spec_of(scene)
     cfg = detector_config(spec)
     results, timing = {}, {"engines_s": {}}
@@ -210,7 +215,9 @@ def run(scene, engines=None, build_dir=None, progress=False, log=None):
                       {"block": "coincidence_detector", "neurons": cfg.n_targets,
                        "sources": cfg.n_sources, "delays_ticks": cfg.delays.tolist(),
                        "delays_ms": (cfg.delays * cfg.dt_ms).tolist(), "dt_ms": cfg.dt_ms,
-                       "weights_mV_per_ms": cfg.weights_real.tolist()}]}
+                       "weights_mV_per_ms": cfg.weights_real.tolist()}],
+           # engines that run the afferents and the detector as one on-chip network
+           "on_chip_engines": [e for e in names if e not in block_engines("coincidence")]}
     return RidgeSceneRun(scene, results, ran, timing)
 
 
@@ -221,15 +228,30 @@ def summary(run: RidgeSceneRun) -> dict:
             "engines": {e: r.to_dict() for e, r in run.results.items()},
             "identical_patterns": {e: r.patterns == run.results[next(iter(run.results))]
                                    .patterns for e, r in run.results.items()},
+            "identical_counts": {e: same_counts(r, next(iter(run.results.values())))
+                                 for e, r in run.results.items()},
             "ran": run.ran, "timing": run.timing, "resolved_scene": run.scene.to_dict()}
+
+
+def same_counts(a, b) -> dict:
+    """Whether two engines' results have the same spikes per trial: ``{"cuneate": bool,
+    "afferent": bool}``."""
+    return {"cuneate": bool(np.array_equal(a.counts, b.counts)),
+            "afferent": bool(np.array_equal(a.afferent_counts, b.afferent_counts))}
 
 
 def format_run(run: RidgeSceneRun) -> str:
     """The lines ``cuneate run`` prints for a ridge scene."""
     from ..coincidence.experiments import format_ridge
     out = [f"{run.scene.name}: engines {', '.join(run.results)}"]
+    first_e, first = next(iter(run.results.items()))
     for e, r in run.results.items():
         out.append(format_ridge(r) + f"  ({run.timing['engines_s'][e]:.1f} s)")
+        if e != first_e:
+            same = same_counts(r, first)
+            out.append(f"  {e} vs {first_e}: cuneate spikes per trial "
+                       f"{'identical' if same['cuneate'] else 'DIFFER'}, afferent spikes per "
+                       f"trial {'identical' if same['afferent'] else 'DIFFER'}")
     return "\n".join(out)
 
 
@@ -263,7 +285,8 @@ def write_report(run: RidgeSceneRun, out: Path) -> Path:
                  f"{run.timing['engines_s'][e]:.2f}"] for e, r in run.results.items()]
     first = next(iter(run.results.values()))
     same = [[e, "yes" if r.patterns == first.patterns else "NO",
-             "yes" if np.array_equal(r.counts, first.counts) else "no"]
+             "yes" if np.array_equal(r.counts, first.counts) else "no",
+             "yes" if same_counts(r, first)["afferent"] else "no"]
             for e, r in list(run.results.items())[1:]]
     cn = run.ran["blocks"][1]
     body = f"""
@@ -272,7 +295,8 @@ sensor, {cn['neurons']} cuneate neurons that differ only in their conduction del
 <h2>Decoding (lookup table from every other trial of each angle)</h2>
 {html_table(acc_rows, ["engine", "accuracy %", "trials", "table", "run s"])}
 <h2>Agreement with {html.escape(next(iter(run.results)))}</h2>
-{html_table(same, ["engine", "same patterns", "same spike counts"]) if same else
+{html_table(same, ["engine", "same patterns", "same cuneate spike counts",
+                   "same afferent spike counts"]) if same else
  "<p>(one engine ran: nothing to compare)</p>"}
 <h2>What ran</h2>
 <ul><li>stimulus: ridges at {html.escape(', '.join(f'{a:+g}' for a in first.angles))} degrees</li>

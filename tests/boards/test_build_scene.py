@@ -28,7 +28,7 @@ def test_a_scene_whose_blocks_no_board_carries_is_refused(tmp_path, capsys):
     assert main(["build", "ulx3s", "ridge_angle", "--no-bitstream", "--out",
                  str(tmp_path)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "needs the coincidence block on the board" in err[0]
+    assert len(err) == 1 and "needs the network block on the board" in err[0]
 
 
 def test_a_scene_the_link_cannot_carry_in_real_time_is_refused_with_the_figure(tmp_path,

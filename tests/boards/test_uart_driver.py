@@ -145,7 +145,8 @@ def test_a_spike_for_a_neuron_the_core_lacks_is_refused():
     t = UartTransport(ModelSerial(lc, corrupt=device), timeout_s=5.0)
     t.open(lc.core)
     t.run(4)
-    with pytest.raises(TransportError, match="spike of neuron 9 .* the core has neurons 0..7"):
+    with pytest.raises(TransportError,
+                       match="spike of neuron 9 .* the device has neuron ids 0..7"):
         t.collect()
     assert t.counters()["rx_length_errors"] == 1
 

@@ -168,3 +168,47 @@ def test_several_spikes_in_one_tick_at_the_sweep_boundary(n_afferents):
     got_aff = sorted((t, i) for p, t, i in rec["stream"] if p == 0)
     got_cun = sorted((t, i) for p, t, i in rec["stream"] if p == 1)
     assert got_aff == sorted(aff) and got_cun == sorted(cun) and len(cun) > 0
+
+
+def test_tick_done_comes_once_every_spike_of_the_tick_is_handed_over():
+    """The tick report a host link closes its spike batches on: ticks taken only while neither
+    ``busy`` nor ``tick_open`` (as :class:`~cuneate.hdl.link.LinkedNetwork` does), a consumer
+    ready one cycle in twenty; at each ``tick_done`` every spike of the ticks taken, afferent and
+    cuneate, has been handed over, and none of a later tick. (Without the wait for empty FIFOs,
+    or without the settling cycles, spikes are still in a FIFO at ``tick_done``: it fails.)"""
+    cfg = _cfg()
+    currents = [20.0, 30.0, 15.0, 45.0, 60.0, 18.0]
+    n = 300
+    aff, cun = _twin(cfg, currents, n)[:2]
+    want = sorted([(k, 0, i) for k, i in aff] + [(k, 1, t) for k, t in cun])
+    dut = AfferentCuneateNetwork(cfg)
+    rng = random.Random(3)
+    rec = {"handed": [], "bad": [], "done": 0, "open_at_done": 0}
+
+    async def tb(ctx):
+        raw = cfg.core.I.to_raw(np.asarray(currents))
+        for i, r in enumerate(raw):
+            ctx.set(dut.i_wr_en, 1)
+            ctx.set(dut.i_wr_addr, i)
+            ctx.set(dut.i_wr_data, int(r))
+            await ctx.tick()
+        ctx.set(dut.i_wr_en, 0)
+        while rec["done"] < n:
+            taken = ctx.get(dut.tick_count)
+            ctx.set(dut.tick, int(taken < n and not ctx.get(dut.busy)
+                                  and not ctx.get(dut.tick_open)))
+            ready = rng.random() < 0.05
+            ctx.set(dut.out_ready, int(ready))
+            if ready and ctx.get(dut.out_valid):
+                rec["handed"].append((ctx.get(dut.out_tick), ctx.get(dut.out_population),
+                                      ctx.get(dut.out_index)))
+            if ctx.get(dut.tick_done):
+                rec["done"] += 1
+                rec["open_at_done"] += ctx.get(dut.tick_open)
+                if sorted(rec["handed"]) != [s for s in want if s[0] < taken]:
+                    rec["bad"].append(taken - 1)
+            await ctx.tick()
+
+    simulate(dut, tb)
+    assert rec["bad"] == [] and rec["done"] == n and rec["open_at_done"] == n
+    assert sorted(rec["handed"]) == want and len(cun) >= 3
