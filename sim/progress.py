@@ -125,7 +125,7 @@ class Step:
 
 
 def _tick_loop(stop: threading.Event) -> None:
-    while not stop.wait(1.0):
+    while not stop.wait(min(1.0, _state["heartbeat_s"] / 4)):
         with _lock:
             if not _active:
                 continue
