@@ -2,6 +2,7 @@
 datapath (hdl/lif/formal_core.py), and the faults it must catch."""
 
 import pytest
+from amaranth.hdl import Fragment
 
 from cuneate.hdl.lif import core as lif_core
 from cuneate.hdl.lif.formal_core import MUTANTS, LifCoreProof, lif_proof_config, prove_lif
@@ -61,7 +62,9 @@ def test_the_lif_core_with_synaptic_traces_equals_the_one_step_datapath(kwargs, 
     """The trace memory as a second state memory, each trace's product uninterpreted
     (seconds)."""
     cfg = lif_proof_config(**kwargs)
-    assert cfg.traces and LifCoreProof(cfg).state_memories == ("state_mem", "trace_mem")
+    harness = LifCoreProof(cfg)
+    assert cfg.traces and harness.state_memories == ("state_mem", "trace_mem")
+    Fragment.get(harness, None)                     # elaborates with the trace memory
     r = prove_lif(cfg, tmp_path, mode="prove", timeout_s=900)
     assert r.passed and r.mode == "prove" and r.depth == 7, r
 
