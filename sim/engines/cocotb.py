@@ -131,12 +131,19 @@ def run_cocotb(simulator: str, sources: list[Path], toplevel: str, test_module: 
                     last = done
         poller = threading.Thread(target=poll, daemon=True)
         poller.start()
+    results = build_dir.resolve() / "results.xml"
     try:
         results = runner.test(test_module=test_module, hdl_toplevel=toplevel,
                               hdl_toplevel_lang="verilog",
                               build_dir=sim_dir, test_dir=build_dir, extra_env=env,
                               testcase=testcase, waves=test_waves, plusargs=plusargs,
+                              results_xml=str(results),
                               log_file=build_dir / "test.log" if quiet else None)
+    except SystemExit:
+        # under pytest the runner exits on a failed test; its results say which (below)
+        if not results.exists():
+            raise SimulatorFailed(f"{simulator}: the simulation ended without results "
+                                  f"(build dir {build_dir})") from None
     finally:
         stop.set()
         if poller is not None:
