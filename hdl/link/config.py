@@ -17,14 +17,17 @@ class LinkConfig:
     """Link parameters checked against the core they serve.
 
     ``n_neurons`` (the core's neurons times ``n_cores``) are the neurons the host writes
-    currents to; ``spike_ids`` (default ``n_neurons``, at most 65536) the neuron ids spike
-    frames may carry, for blocks behind the link with neurons the host does not write (the
-    network's cuneate neurons follow its afferents). The core's formats (currents, sweep
-    numbers) are the link's."""
+    currents to; with a channel ``fanout`` (:class:`~cuneate.hdl.fanout.FanoutConfig`) the host
+    writes its ``n_channels`` samples instead (``n_written`` values of ``current_width`` bits).
+    ``spike_ids`` (default ``n_neurons``, at most 65536) are the neuron ids spike frames may
+    carry, for blocks behind the link with neurons the host does not write (the network's
+    cuneate neurons follow its afferents). The core's formats (currents, sweep numbers) are
+    the link's."""
 
     def __init__(self, core: IzhikevichConfig, clocks_per_bit: int = 16, batch_sweeps: int = 16,
                  batch_capacity: int = 79, rx_fifo_depth: int = 512, tx_fifo_depth: int = 16,
-                 counter_width: int = 32, n_cores: int = 1, spike_ids: int | None = None):
+                 counter_width: int = 32, n_cores: int = 1, spike_ids: int | None = None,
+                 fanout=None):
         if core.tick_source != "external":
             raise ConfigError("the host link drives the core's ticks: the core needs "
                               "tick_source='external'")
@@ -33,13 +36,18 @@ class LinkConfig:
         if core.n_neurons * n_cores > 1 << 16:
             raise ConfigError(f"the link addresses at most 65536 neurons, "
                               f"not {core.n_neurons * n_cores}")
-        n_written = core.n_neurons * n_cores
+        n_core = core.n_neurons * n_cores
+        if fanout is not None:
+            if fanout.n_neurons != n_core or fanout.I != core.I:
+                raise ConfigError(f"the fan-out feeds {fanout.n_neurons} afferents in "
+                                  f"{fanout.I}; the core behind the link has {n_core} in "
+                                  f"{core.I}")
         if spike_ids is None:
-            spike_ids = n_written
+            spike_ids = n_core
         if isinstance(spike_ids, bool) or not isinstance(spike_ids, int) or \
-                not n_written <= spike_ids <= 1 << 16:
-            raise ConfigError(f"spike_ids must be an integer in {n_written}..65536 (the "
-                              f"neurons written and up to 65536 spike ids), not {spike_ids!r}")
+                not n_core <= spike_ids <= 1 << 16:
+            raise ConfigError(f"spike_ids must be an integer in {n_core}..65536 (the "
+                              f"core's neurons and up to 65536 spike ids), not {spike_ids!r}")
         if not 1 <= batch_sweeps <= 255:
             raise ConfigError(f"batch_sweeps must be 1..255, not {batch_sweeps}")
         max_spikes = (MAX_FRAME - MIN_FRAME - SPIKE_HEADER) // 3
@@ -67,8 +75,13 @@ class LinkConfig:
         self.batch_capacity = int(batch_capacity)
         self.rx_fifo_depth = int(rx_fifo_depth)
         self.tx_fifo_depth = int(tx_fifo_depth)
-        self.current_width = core.I.width
-        self.current_bytes = current_bytes(core.I.width)
+        #: the channel fan-out between the link and the core (``None``: the host writes the
+        #: core's currents); with it the host writes channel samples in its sample format
+        self.fanout = fanout
+        #: the values the host writes (currents, or channel samples) and their width
+        self.n_written = fanout.n_channels if fanout is not None else self.n_neurons
+        self.current_width = fanout.S.width if fanout is not None else core.I.width
+        self.current_bytes = current_bytes(self.current_width)
         self.max_currents = (MAX_FRAME - MIN_FRAME - 2) // self.current_bytes
 
     @property
@@ -81,7 +94,9 @@ class LinkConfig:
                 "rx_fifo_depth": self.rx_fifo_depth, "tx_fifo_depth": self.tx_fifo_depth,
                 "current_bytes": self.current_bytes, "max_currents": self.max_currents,
                 "counter_width": self.counter_width, "n_cores": self.n_cores,
-                "n_neurons": self.n_neurons, "n_spike_ids": self.n_spike_ids}
+                "n_neurons": self.n_neurons, "n_spike_ids": self.n_spike_ids,
+                "n_written": self.n_written, "value_width": self.current_width,
+                "fanout": None if self.fanout is None else self.fanout.to_dict()}
 
 
 def link_config(core_kwargs: dict | None = None, **link_kwargs) -> LinkConfig:

@@ -74,10 +74,10 @@ class HostLink(wiring.Component):
     def __init__(self, lcfg: LinkConfig):
         self.lcfg = lcfg
         cfg = lcfg.core
-        N = lcfg.n_neurons
+        N = lcfg.n_written
         super().__init__({
             "rx": In(1, init=1), "tx": Out(1, init=1),
-            "i_wr_en": Out(1), "i_wr_addr": Out(range(N)), "i_wr_data": Out(cfg.I.width),
+            "i_wr_en": Out(1), "i_wr_addr": Out(range(N)), "i_wr_data": Out(lcfg.current_width),
             "tick": Out(1), "core_busy": In(1),
             "spike_valid": In(1), "spike_ready": Out(1),
             "spike_index": In(range(lcfg.n_spike_ids)),
@@ -87,7 +87,7 @@ class HostLink(wiring.Component):
 
     def elaborate(self, platform):
         lc, cfg = self.lcfg, self.lcfg.core
-        N, W, B, CAP = lc.n_neurons, lc.current_bytes, lc.batch_sweeps, lc.batch_capacity
+        N, W, B, CAP = lc.n_written, lc.current_bytes, lc.batch_sweeps, lc.batch_capacity
         m = Module()
 
         # --- counters ---------------------------------------------------------------------
@@ -153,7 +153,7 @@ class HostLink(wiring.Component):
         # values assembled from every byte after ``first`` (the CRC's bytes included, then
         # discounted): one more than the longest write holds
         max_vals = (MAX_FRAME - HEADER_BYTES - 2) // W + 1
-        m.submodules.vmem = vmem = Memory(shape=cfg.I.width, depth=max_vals, init=[])
+        m.submodules.vmem = vmem = Memory(shape=lc.current_width, depth=max_vals, init=[])
         vwr, vrd = vmem.write_port(), vmem.read_port()
         flen = Signal(range(MAX_FRAME + 2))
         remain = Signal(8)
@@ -189,7 +189,7 @@ class HostLink(wiring.Component):
                     m.d.sync += [phase.eq(0), nvals.eq(nvals + 1)]
                     with m.If(nvals < max_vals):
                         m.d.comb += [vwr.en.eq(1), vwr.addr.eq(nvals),
-                                     vwr.data.eq(new_acc[:cfg.I.width])]
+                                     vwr.data.eq(new_acc[:lc.current_width])]
                 with m.Else():
                     m.d.sync += phase.eq(phase + 1)
 

@@ -177,7 +177,7 @@ class DecoderProof(Elaboratable):
     def elaborate(self, platform):
         lc, m = self.lcfg, Module()
         m.domains.sync = self.cd
-        N, W, I = lc.n_neurons, lc.current_bytes, lc.core.I.width
+        N, W, I = lc.n_written, lc.current_bytes, lc.current_width
         max_vals = (MAX_FRAME - HEADER_BYTES - 2) // W + 1
         link, link_m = self._elaborate_link(platform)
         kt = Signal(range(max_vals), name="tracked_value")

@@ -29,6 +29,10 @@ class LinkModel:
         from ..izhikevich import IzhikevichArrayTwin
         self.lcfg = lcfg
         self.twin = IzhikevichArrayTwin(lcfg.core, lcfg.n_cores)
+        self.fanout = None
+        if lcfg.fanout is not None:             # writes are channel samples, fanned out
+            from ..fanout import FanoutTwin
+            self.fanout = FanoutTwin(lcfg.fanout)
         self.counters = {n: 0 for n in COUNTER_NAMES}
         self.S = 0
         self.free = False
@@ -107,7 +111,7 @@ class LinkModel:
                     for i in range(0, n, W)]
             w = self.lcfg.current_width
             vals = [((v & ((1 << w) - 1)) ^ (1 << (w - 1))) - (1 << (w - 1)) for v in vals]
-            if first + len(vals) > self.lcfg.n_neurons:
+            if first + len(vals) > self.lcfg.n_written:
                 c["range_errors"] += 1
                 return
             c["frames_ok"] += 1
@@ -118,6 +122,15 @@ class LinkModel:
                 self._sweep()
             if self.S > msg.tick:
                 c["late_writes"] += 1
+                return
+            if self.fanout is not None:
+                # the frame's samples, then one fan-out run writes every afferent's current
+                if not vals:
+                    return
+                for n, raw in enumerate(vals, start=first):
+                    self.fanout.write(n, raw)
+                for n, raw in enumerate(self.fanout.run()[0]):
+                    self.twin.set_current_raw(n, int(raw))
                 return
             for n, raw in enumerate(vals, start=first):
                 self.twin.set_current_raw(n, raw)

@@ -36,7 +36,7 @@ from ..host.transport import SimulatedSerial
 from ..host.uart import UartTransport
 
 __all__ = ["AmaranthSerial", "VerilatorSerial", "BoardTransport", "board_link_config",
-           "board_network_config", "BOARD_CLOCKS_PER_BIT"]
+           "board_network_config", "board_fanout_config", "BOARD_CLOCKS_PER_BIT"]
 
 CLOCK_S = 1e-6
 
@@ -203,6 +203,29 @@ def board_network_config(ncfg, clocks_per_bit: int = BOARD_CLOCKS_PER_BIT):
     return net, lcfg
 
 
+def board_fanout_config(core: IzhikevichConfig, fanout,
+                        clocks_per_bit: int = BOARD_CLOCKS_PER_BIT) -> LinkConfig:
+    """The link of the ``board`` engine for a core fed by the channel fan-out ``fanout``
+    (:class:`~cuneate.hdl.fanout.FanoutConfig`; board top
+    :class:`~cuneate.hdl.link.LinkedFanoutCore`): as :func:`board_link_config`, with a sweep's
+    cycles covering a fan-out run too (a sample's frame can land before any sweep)."""
+    busy = core.n_neurons + fanout.cycles_per_run + 2
+    batch, min_cycles = _board_batch_and_cycles(core.update_hz, busy, clocks_per_bit)
+    kw = core.to_kwargs(tick_source="external")
+    if core.clock_hz / core.update_hz < min_cycles:
+        kw["clock_hz"] = core.update_hz * min_cycles
+    ext = IzhikevichConfig.from_kwargs(kw)
+    return LinkConfig(ext, clocks_per_bit=clocks_per_bit, batch_sweeps=batch, fanout=fanout)
+
+
+class _Written:
+    """What the host writes over a fan-out link, as the transport sees a core: the channels
+    (``n_neurons``) in the sample format (``I``)."""
+
+    def __init__(self, lcfg: LinkConfig):
+        self.n_neurons, self.I = lcfg.n_written, lcfg.fanout.S
+
+
 class VerilatorSerial(SimulatedSerial):
     """A serial port whose far end is the board top (``top``, by default the
     :class:`~cuneate.hdl.link.LinkedCore` of ``lcfg``; or a
@@ -341,7 +364,10 @@ class BoardTransport(UartTransport):
     :class:`~cuneate.hdl.link.LinkedCore`, :func:`board_link_config`) or an afferent -> cuneate
     network (:class:`~cuneate.hdl.network.NetworkConfig`; board top
     :class:`~cuneate.hdl.link.LinkedNetwork`, :func:`board_network_config`: currents are
-    written to the afferents, spike ids ``n_afferents + j`` are cuneate neuron ``j``); or,
+    written to the afferents, spike ids ``n_afferents + j`` are cuneate neuron ``j``); or, given
+    ``fanout`` (:class:`~cuneate.hdl.fanout.FanoutConfig`), a core fed by the channel fan-out
+    (board top :class:`~cuneate.hdl.link.LinkedFanoutCore`, :func:`board_fanout_config`: the
+    host's writes are the channels' raw samples, ``write_currents(tick, first, samples)``); or,
     given ``port``, over that serial port to a programmed board (``cuneate stream``: the same
     driver path, the same report).
 
@@ -370,7 +396,7 @@ class BoardTransport(UartTransport):
     def __init__(self, build_dir: Path | None = None, progress=None, waves=None,
                  clocks_per_bit: int = BOARD_CLOCKS_PER_BIT, corrupt=None, corrupt_host=None,
                  timeout_s: float = 600.0, port=None, baud: int = 3_000_000,
-                 ahead: bool = True):
+                 ahead: bool = True, fanout=None):
         if waves:
             raise ValueError("engine 'board' writes no waveforms (those that do: amaranth, "
                              "icarus, verilator)")
@@ -381,6 +407,7 @@ class BoardTransport(UartTransport):
         self.progress = progress
         self.device_port = port
         self.ahead = ahead
+        self.fanout = fanout
         self.serial = None
         super().__init__(port, baud=baud, timeout_s=timeout_s)
 
@@ -390,13 +417,21 @@ class BoardTransport(UartTransport):
             # the receive FIFO of a board's link (LinkConfig's default, as the boards build it)
             self.ahead_bytes = 512 if self.ahead else None
             self._t0 = time.perf_counter()
-            super().open(config)
+            super().open(config if self.fanout is None else _Written(
+                board_fanout_config(config, self.fanout, self.clocks_per_bit)))
             return
         from ...hdl.link import LinkedNetwork
         from ...hdl.network import NetworkConfig
+        written = None
         if isinstance(config, NetworkConfig):
             self.network, self.lcfg = board_network_config(config, self.clocks_per_bit)
             top = LinkedNetwork(self.network, self.lcfg)
+        elif self.fanout is not None:
+            from ...hdl.link import LinkedFanoutCore
+            self.network = None
+            self.lcfg = board_fanout_config(config, self.fanout, self.clocks_per_bit)
+            top = LinkedFanoutCore(self.lcfg)
+            written = _Written(self.lcfg)
         else:
             self.network, self.lcfg = None, board_link_config(config, self.clocks_per_bit)
             top = LinkedCore(self.lcfg)
@@ -406,7 +441,7 @@ class BoardTransport(UartTransport):
         self.serial = VerilatorSerial(self.lcfg, *self._faults, top=top)
         self._port_arg = self.serial
         self._t0 = time.perf_counter()
-        super().open(self.lcfg.core)
+        super().open(written or self.lcfg.core)
 
     def run(self, n_ticks: int) -> None:
         super().run(n_ticks)
