@@ -7,16 +7,18 @@ sequence numbers) between a host and a core on the board.
 ``twin``      :class:`LinkModel`: the device's answers on the bit-exact Izhikevich twin
 ``core``      :class:`HostLink` and :class:`LinkedCore` (Amaranth) and their Verilog
 ``network``   :class:`LinkedNetwork`: the on-chip afferent -> cuneate network behind the link
+``lif``       :class:`LinkedLif`: a LIF core behind the link
 """
 
 from .codec import (COUNTER_NAMES, MAX_FRAME, MIN_FRAME, CobsError, FrameDecoder, FrameError,
                     Message, decode_frame, encode_frame)
 from .config import LinkConfig, link_config
 from .core import HostLink, LinkedCore, link_verilog
+from .lif import LinkedLif
 from .network import LinkedNetwork
 from .twin import LinkModel
 
 __all__ = ["LinkConfig", "link_config", "HostLink", "LinkedCore", "LinkedNetwork",
-           "link_verilog",
+           "LinkedLif", "link_verilog",
            "COUNTER_NAMES", "MAX_FRAME", "MIN_FRAME", "CobsError", "FrameError", "FrameDecoder",
            "LinkModel", "Message", "encode_frame", "decode_frame"]
