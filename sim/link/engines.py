@@ -36,7 +36,7 @@ from ..host.transport import SimulatedSerial
 from ..host.uart import UartTransport
 
 __all__ = ["AmaranthSerial", "VerilatorSerial", "BoardTransport", "board_link_config",
-           "board_network_config", "BOARD_CLOCKS_PER_BIT"]
+           "board_network_config", "board_lif_config", "BOARD_CLOCKS_PER_BIT"]
 
 CLOCK_S = 1e-6
 
@@ -203,11 +203,28 @@ def board_network_config(ncfg, clocks_per_bit: int = BOARD_CLOCKS_PER_BIT):
     return net, lcfg
 
 
+def board_lif_config(core, clocks_per_bit: int = BOARD_CLOCKS_PER_BIT) -> LinkConfig:
+    """The link of the ``board`` engine for the LIF core ``core``
+    (:class:`~cuneate.hdl.lif.LifConfig`; board top :class:`~cuneate.hdl.link.LinkedLif`).
+
+    As :func:`board_link_config`: the core's arithmetic and update rate, external tick, one
+    spike batch a millisecond, the clock raised where needed to keep a board's idle cycles
+    beyond a sweep of ``n_neurons`` and to let the largest spike frame leave within a batch.
+    The link's current format is the core's."""
+    from ...hdl.lif import LifConfig
+    batch, min_cycles = _board_batch_and_cycles(core.update_hz, core.n_neurons, clocks_per_bit)
+    kw = core.to_kwargs(tick_source="external")
+    if core.clock_hz / core.update_hz < min_cycles:
+        kw["clock_hz"] = core.update_hz * min_cycles
+    return LinkConfig(LifConfig.from_kwargs(kw), clocks_per_bit=clocks_per_bit,
+                      batch_sweeps=batch)
+
+
 class VerilatorSerial(SimulatedSerial):
     """A serial port whose far end is the board top (``top``, by default the
     :class:`~cuneate.hdl.link.LinkedCore` of ``lcfg``; or a
-    :class:`~cuneate.hdl.link.LinkedNetwork`: the link and the blocks behind it, the PLL and
-    I/O buffers replaced by a clock and wires)
+    :class:`~cuneate.hdl.link.LinkedNetwork` or :class:`~cuneate.hdl.link.LinkedLif`: the link
+    and the blocks behind it, the PLL and I/O buffers replaced by a clock and wires)
     compiled by Verilator with ``serial_harness.cpp``: the harness drives ``rx`` with the
     host's bytes and decodes ``tx``, 8N1 at the link's ``clocks_per_bit``, in its own process;
     the simulation advances only while the host waits for an answer (as
@@ -341,7 +358,9 @@ class BoardTransport(UartTransport):
     :class:`~cuneate.hdl.link.LinkedCore`, :func:`board_link_config`) or an afferent -> cuneate
     network (:class:`~cuneate.hdl.network.NetworkConfig`; board top
     :class:`~cuneate.hdl.link.LinkedNetwork`, :func:`board_network_config`: currents are
-    written to the afferents, spike ids ``n_afferents + j`` are cuneate neuron ``j``); or,
+    written to the afferents, spike ids ``n_afferents + j`` are cuneate neuron ``j``) or a LIF
+    core (:class:`~cuneate.hdl.lif.LifConfig`; board top :class:`~cuneate.hdl.link.LinkedLif`,
+    :func:`board_lif_config`); or,
     given ``port``, over that serial port to a programmed board (``cuneate stream``: the same
     driver path, the same report).
 
@@ -392,11 +411,15 @@ class BoardTransport(UartTransport):
             self._t0 = time.perf_counter()
             super().open(config)
             return
-        from ...hdl.link import LinkedNetwork
+        from ...hdl.lif import LifConfig
+        from ...hdl.link import LinkedLif, LinkedNetwork
         from ...hdl.network import NetworkConfig
         if isinstance(config, NetworkConfig):
             self.network, self.lcfg = board_network_config(config, self.clocks_per_bit)
             top = LinkedNetwork(self.network, self.lcfg)
+        elif isinstance(config, LifConfig):
+            self.network, self.lcfg = None, board_lif_config(config, self.clocks_per_bit)
+            top = LinkedLif(self.lcfg)
         else:
             self.network, self.lcfg = None, board_link_config(config, self.clocks_per_bit)
             top = LinkedCore(self.lcfg)
