@@ -8,6 +8,7 @@ sequence numbers) between a host and a core on the board.
 ``core``      :class:`HostLink` and :class:`LinkedCore` (Amaranth) and their Verilog
 ``network``   :class:`LinkedNetwork`: the on-chip afferent -> cuneate network behind the link
 ``fanout``    :class:`LinkedFanoutCore`: channel samples in, fanned out on chip to a core
+``lif``       :class:`LinkedLif`: a LIF core behind the link
 """
 
 from .codec import (COUNTER_NAMES, MAX_FRAME, MIN_FRAME, CobsError, FrameDecoder, FrameError,
@@ -15,10 +16,11 @@ from .codec import (COUNTER_NAMES, MAX_FRAME, MIN_FRAME, CobsError, FrameDecoder
 from .config import LinkConfig, link_config
 from .core import HostLink, LinkedCore, link_verilog
 from .fanout import LinkedFanoutCore
+from .lif import LinkedLif
 from .network import LinkedNetwork
 from .twin import LinkModel
 
 __all__ = ["LinkConfig", "link_config", "HostLink", "LinkedCore", "LinkedNetwork",
-           "LinkedFanoutCore", "link_verilog",
+           "LinkedFanoutCore", "LinkedLif", "link_verilog",
            "COUNTER_NAMES", "MAX_FRAME", "MIN_FRAME", "CobsError", "FrameError", "FrameDecoder",
            "LinkModel", "Message", "encode_frame", "decode_frame"]

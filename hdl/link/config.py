@@ -1,9 +1,12 @@
-"""Link parameters (:class:`LinkConfig`), checked against the core they serve: the frame
-sizes of :mod:`cuneate.hdl.link.codec` bound the batch capacity and the currents per write."""
+"""Link parameters (:class:`LinkConfig`), checked against the core they serve (an Izhikevich
+or a LIF core: the link takes its current and sweep-number formats, neuron count and sweep
+rate): the frame sizes of :mod:`cuneate.hdl.link.codec` bound the batch capacity and the
+currents per write."""
 
 from __future__ import annotations
 
 from ..izhikevich import ConfigError, IzhikevichConfig
+from ..lif import LifConfig
 from .codec import MAX_FRAME, MIN_FRAME, SPIKE_HEADER, current_bytes
 
 __all__ = ["LinkConfig", "link_config", "LINK_IDLE_CYCLES"]
@@ -22,17 +25,25 @@ class LinkConfig:
     ``spike_ids`` (default ``n_neurons``, at most 65536) are the neuron ids spike frames may
     carry, for blocks behind the link with neurons the host does not write (the network's
     cuneate neurons follow its afferents). The core's formats (currents, sweep numbers) are
-    the link's."""
+    the link's; the core is an :class:`~cuneate.hdl.izhikevich.IzhikevichConfig`
+    (:class:`~cuneate.hdl.link.LinkedCore`, :class:`~cuneate.hdl.link.LinkedNetwork`,
+    :class:`~cuneate.hdl.link.LinkedFanoutCore`) or a :class:`~cuneate.hdl.lif.LifConfig`
+    (:class:`~cuneate.hdl.link.LinkedLif`, one core)."""
 
-    def __init__(self, core: IzhikevichConfig, clocks_per_bit: int = 16, batch_sweeps: int = 16,
-                 batch_capacity: int = 79, rx_fifo_depth: int = 512, tx_fifo_depth: int = 16,
-                 counter_width: int = 32, n_cores: int = 1, spike_ids: int | None = None,
-                 fanout=None):
+    def __init__(self, core: IzhikevichConfig | LifConfig, clocks_per_bit: int = 16,
+                 batch_sweeps: int = 16, batch_capacity: int = 79, rx_fifo_depth: int = 512,
+                 tx_fifo_depth: int = 16, counter_width: int = 32, n_cores: int = 1,
+                 spike_ids: int | None = None, fanout=None):
+        if not isinstance(core, (IzhikevichConfig, LifConfig)):
+            raise ConfigError(f"the link serves an Izhikevich or a LIF core, not "
+                              f"{type(core).__name__}")
         if core.tick_source != "external":
             raise ConfigError("the host link drives the core's ticks: the core needs "
                               "tick_source='external'")
         if isinstance(n_cores, bool) or not isinstance(n_cores, int) or n_cores < 1:
             raise ConfigError(f"n_cores must be an integer >= 1, not {n_cores!r}")
+        if n_cores > 1 and isinstance(core, LifConfig):
+            raise ConfigError(f"a LIF core is linked alone (n_cores = 1), not {n_cores}")
         if core.n_neurons * n_cores > 1 << 16:
             raise ConfigError(f"the link addresses at most 65536 neurons, "
                               f"not {core.n_neurons * n_cores}")

@@ -46,7 +46,7 @@ from amaranth.lib.fifo import SyncFIFOBuffered
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
-from ..izhikevich import IzhikevichArray, IzhikevichCore
+from ..izhikevich import ConfigError, IzhikevichArray, IzhikevichConfig, IzhikevichCore
 from ..flow.verilog import verilog_text
 from ..lib.uart import UartRx, UartTx
 from .codec import (COUNTER_NAMES, CRC_BYTES, CRC_INIT, CRC_RESIDUE, MAX_FRAME, MIN_FRAME,
@@ -531,6 +531,11 @@ class LinkedCore(wiring.Component):
     for LEDs. The two parts are the attributes ``core`` and ``link``."""
 
     def __init__(self, lcfg: LinkConfig):
+        self._MustUse__silence = True           # until checked: a refused top is never used
+        if not isinstance(lcfg.core, IzhikevichConfig):
+            raise ConfigError(f"a linked core is an Izhikevich core (a LIF core's board top is "
+                              f"LinkedLif), not {type(lcfg.core).__name__}")
+        self._MustUse__silence = False
         self.lcfg = lcfg
         super().__init__({"rx": In(1, init=1), "tx": Out(1, init=1), "running": Out(1),
                           "overflow": Out(1)})

@@ -9,7 +9,7 @@ from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
 from ..fanout import ChannelFanout
-from ..izhikevich import IzhikevichCore
+from ..izhikevich import IzhikevichConfig, IzhikevichCore
 from ..lib.config import ConfigError
 from .config import LinkConfig
 from .core import HostLink
@@ -39,8 +39,8 @@ class LinkedFanoutCore(wiring.Component):
         if lcfg.fanout is None:
             raise ConfigError("a fan-out board top needs a link with a fan-out "
                               "(LinkConfig(fanout=...))")
-        if lcfg.n_cores != 1:
-            raise ConfigError("the fan-out feeds one core")
+        if lcfg.n_cores != 1 or not isinstance(lcfg.core, IzhikevichConfig):
+            raise ConfigError("the fan-out feeds one Izhikevich core")
         self._MustUse__silence = False
         self.lcfg = lcfg
         super().__init__({"rx": In(1, init=1), "tx": Out(1, init=1), "running": Out(1),

@@ -26,7 +26,10 @@ class LinkModel:
     """
 
     def __init__(self, lcfg):
-        from ..izhikevich import IzhikevichArrayTwin
+        from ..izhikevich import ConfigError, IzhikevichArrayTwin, IzhikevichConfig
+        if not isinstance(lcfg.core, IzhikevichConfig):
+            raise ConfigError(f"the link model runs the Izhikevich twin, not a "
+                              f"{type(lcfg.core).__name__} core")
         self.lcfg = lcfg
         self.twin = IzhikevichArrayTwin(lcfg.core, lcfg.n_cores)
         self.fanout = None

@@ -1,4 +1,4 @@
-"""Engines for the LIF core: one host program, five engines, one spike convention.
+"""Engines for the LIF core: one host program, six engines, one spike convention.
 
 A run is a :class:`LifProgram`: per sweep (tick) the host currents of every neuron (real
 values, written before that sweep's tick) and the input spike vector of that sweep. Every engine
@@ -14,6 +14,13 @@ reports spikes with the golden convention (update ``k`` -> ``(k + 1) dt``):
     The Amaranth simulator on :class:`cuneate.hdl.lif.LifCore`.
 ``icarus``, ``verilator``
     cocotb on the generated Verilog (bench :mod:`cuneate.sim.lif.bench`, test ``engine``).
+``board``
+    The board top :class:`cuneate.hdl.link.LinkedLif` (the core behind the UART link) compiled
+    by Verilator behind a simulated serial line, driven by the host stack
+    (:class:`cuneate.sim.link.engines.BoardTransport`): the currents that change written for
+    their sweep, the sweeps stepped, the spike frames read back and every counter checked.
+    The link carries spikes alone (no clamp counts, no input spikes); the run's counters hold
+    the line's figures (``board_*``: cycles, bytes and frames each way).
 
 The hardware engines run an external-tick core; per sweep the host waits for the previous sweep
 to finish issuing, writes the currents that changed, sends the input spikes and ticks, so the
@@ -34,7 +41,7 @@ from ..engines.amaranth import simulate, spikes_then_tick
 from ..engines.registry import block_engines, check_engine
 from ..engines.run import EngineRun, TickUnwrap
 
-__all__ = ["LIF_ENGINES", "LifProgram", "LifRun", "engine_config", "run_lif"]
+__all__ = ["LIF_ENGINES", "LifProgram", "LifRun", "engine_config", "run_lif", "current_runs"]
 
 #: The engines the LIF block runs on (the registry's list).
 LIF_ENGINES = block_engines("lif")
@@ -107,10 +114,11 @@ def run_lif(engine: str, cfg: LifConfig, program: LifProgram, n: int | None = No
         raise ValueError(f"a current lies outside the core's input format {cfg.I} "
                          f"[{cfg.I.min_value:g}, {cfg.I.max_value:g}]")
     t0 = time.perf_counter()
-    steps, counts, sticky = RUNNERS[engine](cfg, cur, program.inputs, build_dir)
+    out = RUNNERS[engine](cfg, cur, program.inputs, build_dir)
+    steps, counts, sticky = out[:3]
     spikes = [[(k + 1) * cfg.dt_ms for k in sorted(steps[i])] for i in range(n)]
     return EngineRun(engine, cfg.dt_ms, program.n_sweeps, spikes, counts, sticky,
-                     time.perf_counter() - t0)
+                     time.perf_counter() - t0, counters=out[3] if len(out) > 3 else {})
 
 
 def _run_fixed(cfg: LifConfig, cur: np.ndarray, inputs, build_dir=None):
@@ -130,6 +138,51 @@ def _rtl_runner(engine: str):
             _run_cocotb(engine, cfg, ops, build_dir)
         return rep["spike_sweeps"], rep["clamp_counts"], rep["clamp_sticky"]
     return run
+
+
+def current_runs(raw: np.ndarray) -> dict[int, list[tuple[int, np.ndarray]]]:
+    """The host's writes of a program's raw currents ``(n_sweeps, n)``: per sweep the runs of
+    consecutive neurons whose current changes there, ``{sweep: [(first, raw values), ...]}``
+    (every neuron at sweep 0, where the core's currents are 0)."""
+    out: dict[int, list[tuple[int, np.ndarray]]] = {}
+    prev = np.zeros(raw.shape[1], dtype=np.int64)
+    for k in range(raw.shape[0]):
+        idx = np.arange(raw.shape[1]) if k == 0 else np.flatnonzero(raw[k] != prev)
+        if idx.size:
+            cuts = np.flatnonzero(np.diff(idx) != 1) + 1
+            out[k] = [(int(r[0]), raw[k, r[0]:r[-1] + 1]) for r in np.split(idx, cuts)]
+        prev = raw[k]
+    return out
+
+
+def _run_board(cfg: LifConfig, cur: np.ndarray, inputs, build_dir=None):
+    """The board top (:class:`~cuneate.hdl.link.LinkedLif`) through its serial line; every
+    counter of the transport's contract checked. The link carries no clamp counts: none are
+    reported (empty), and no input spikes: a program with any is refused."""
+    from ..host.transport import check_counters
+    from ..link.engines import BoardTransport
+    if inputs is not None and np.any(inputs):
+        raise ValueError("the board engine's link carries no input spikes: a LIF program on "
+                         "it has host currents alone")
+    raw = np.asarray(cfg.I.to_raw(cur), dtype=np.int64)
+    writes = current_runs(raw)
+    tr = BoardTransport()
+    tr.open(cfg)
+    try:
+        for k, runs in writes.items():
+            for first, vals in runs:
+                tr.write_currents(k, first, vals)
+        tr.run(raw.shape[0])
+        got = tr.collect()
+        counters = tr.counters()
+        check_counters(tr, counters, sum(map(len, writes.values())), len(got))
+    finally:
+        tr.close()
+    counters |= {f"board_{k}": v for k, v in tr.figures().items()}
+    steps: list[list[int]] = [[] for _ in range(cfg.n_neurons)]
+    for k, i in zip(got.tick.tolist(), got.neuron.tolist()):
+        steps[i].append(k)
+    return steps, {}, {}, counters
 
 
 def _run_golden(cfg: LifConfig, cur: np.ndarray, inputs, build_dir=None):
@@ -237,6 +290,7 @@ def _run_cocotb(simulator: str, cfg: LifConfig, ops, build_dir: Path | None) -> 
 
 
 #: Engine name -> runner ``(cfg, currents, inputs, build_dir) -> (spike sweeps per neuron,
-#: clamp counts, sticky flags)``.
+#: clamp counts, sticky flags[, counters])``.
 RUNNERS = {"golden": _golden_runner, "fixed": _run_fixed, "amaranth": _rtl_runner("amaranth"),
-           "icarus": _rtl_runner("icarus"), "verilator": _rtl_runner("verilator")}
+           "icarus": _rtl_runner("icarus"), "verilator": _rtl_runner("verilator"),
+           "board": _run_board}

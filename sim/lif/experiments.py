@@ -48,6 +48,9 @@ class SkinResult:
     force: np.ndarray | None = None             # (n_steps,) on the pressed taxel
     clamp_counts: dict = field(default_factory=dict)
     wall_s: float = 0.0
+    #: what the engine counted besides the spikes (the ``board`` engine: its line's figures,
+    #: ``board_*``, and the host's and the device's counters)
+    counters: dict = field(default_factory=dict)
 
     @property
     def pressed_wins(self) -> bool:
@@ -61,7 +64,8 @@ class SkinResult:
                 "counts": self.counts.tolist(), "row_sums": self.row_sums,
                 "col_sums": self.col_sums,
                 "pulses": [p | {"counts": list(map(int, p["counts"]))} for p in self.pulses],
-                "clamp_counts": self.clamp_counts, "spikes_ms": self.spikes_ms}
+                "clamp_counts": self.clamp_counts, "counters": self.counters,
+                "spikes_ms": self.spikes_ms}
 
 
 def skin_protocol(widths_ms=(20.0, 40.0, 80.0), amplitudes=(1.0, 1.5, 2.0),
@@ -161,6 +165,7 @@ def skin_grid(engine: str = "fixed", rows: int = 3, cols: int = 3, pressed: int 
     res.force = force
     res.clamp_counts = dict(run.clamp_counts)
     res.wall_s = run.wall_s
+    res.counters = dict(run.counters)
     return res
 
 

@@ -36,7 +36,8 @@ from ..host.transport import SimulatedSerial
 from ..host.uart import UartTransport
 
 __all__ = ["AmaranthSerial", "VerilatorSerial", "BoardTransport", "board_link_config",
-           "board_network_config", "board_fanout_config", "BOARD_CLOCKS_PER_BIT"]
+           "board_network_config", "board_fanout_config", "board_lif_config",
+           "BOARD_CLOCKS_PER_BIT"]
 
 CLOCK_S = 1e-6
 
@@ -226,11 +227,28 @@ class _Written:
         self.n_neurons, self.I = lcfg.n_written, lcfg.fanout.S
 
 
+def board_lif_config(core, clocks_per_bit: int = BOARD_CLOCKS_PER_BIT) -> LinkConfig:
+    """The link of the ``board`` engine for the LIF core ``core``
+    (:class:`~cuneate.hdl.lif.LifConfig`; board top :class:`~cuneate.hdl.link.LinkedLif`).
+
+    As :func:`board_link_config`: the core's arithmetic and update rate, external tick, one
+    spike batch a millisecond, the clock raised where needed to keep a board's idle cycles
+    beyond a sweep of ``n_neurons`` and to let the largest spike frame leave within a batch.
+    The link's current format is the core's."""
+    from ...hdl.lif import LifConfig
+    batch, min_cycles = _board_batch_and_cycles(core.update_hz, core.n_neurons, clocks_per_bit)
+    kw = core.to_kwargs(tick_source="external")
+    if core.clock_hz / core.update_hz < min_cycles:
+        kw["clock_hz"] = core.update_hz * min_cycles
+    return LinkConfig(LifConfig.from_kwargs(kw), clocks_per_bit=clocks_per_bit,
+                      batch_sweeps=batch)
+
+
 class VerilatorSerial(SimulatedSerial):
     """A serial port whose far end is the board top (``top``, by default the
     :class:`~cuneate.hdl.link.LinkedCore` of ``lcfg``; or a
-    :class:`~cuneate.hdl.link.LinkedNetwork`: the link and the blocks behind it, the PLL and
-    I/O buffers replaced by a clock and wires)
+    :class:`~cuneate.hdl.link.LinkedNetwork` or :class:`~cuneate.hdl.link.LinkedLif`: the link
+    and the blocks behind it, the PLL and I/O buffers replaced by a clock and wires)
     compiled by Verilator with ``serial_harness.cpp``: the harness drives ``rx`` with the
     host's bytes and decodes ``tx``, 8N1 at the link's ``clocks_per_bit``, in its own process;
     the simulation advances only while the host waits for an answer (as
@@ -364,10 +382,12 @@ class BoardTransport(UartTransport):
     :class:`~cuneate.hdl.link.LinkedCore`, :func:`board_link_config`) or an afferent -> cuneate
     network (:class:`~cuneate.hdl.network.NetworkConfig`; board top
     :class:`~cuneate.hdl.link.LinkedNetwork`, :func:`board_network_config`: currents are
-    written to the afferents, spike ids ``n_afferents + j`` are cuneate neuron ``j``); or, given
-    ``fanout`` (:class:`~cuneate.hdl.fanout.FanoutConfig`), a core fed by the channel fan-out
-    (board top :class:`~cuneate.hdl.link.LinkedFanoutCore`, :func:`board_fanout_config`: the
-    host's writes are the channels' raw samples, ``write_currents(tick, first, samples)``); or,
+    written to the afferents, spike ids ``n_afferents + j`` are cuneate neuron ``j``), a LIF
+    core (:class:`~cuneate.hdl.lif.LifConfig`; board top :class:`~cuneate.hdl.link.LinkedLif`,
+    :func:`board_lif_config`); or, given ``fanout`` (:class:`~cuneate.hdl.fanout.FanoutConfig`),
+    a core fed by the channel fan-out (board top :class:`~cuneate.hdl.link.LinkedFanoutCore`,
+    :func:`board_fanout_config`: the host's writes are the channels' raw samples,
+    ``write_currents(tick, first, samples)``); or,
     given ``port``, over that serial port to a programmed board (``cuneate stream``: the same
     driver path, the same report).
 
@@ -420,7 +440,8 @@ class BoardTransport(UartTransport):
             super().open(config if self.fanout is None else _Written(
                 board_fanout_config(config, self.fanout, self.clocks_per_bit)))
             return
-        from ...hdl.link import LinkedNetwork
+        from ...hdl.lif import LifConfig
+        from ...hdl.link import LinkedLif, LinkedNetwork
         from ...hdl.network import NetworkConfig
         written = None
         if isinstance(config, NetworkConfig):
@@ -432,6 +453,9 @@ class BoardTransport(UartTransport):
             self.lcfg = board_fanout_config(config, self.fanout, self.clocks_per_bit)
             top = LinkedFanoutCore(self.lcfg)
             written = _Written(self.lcfg)
+        elif isinstance(config, LifConfig):
+            self.network, self.lcfg = None, board_lif_config(config, self.clocks_per_bit)
+            top = LinkedLif(self.lcfg)
         else:
             self.network, self.lcfg = None, board_link_config(config, self.clocks_per_bit)
             top = LinkedCore(self.lcfg)
