@@ -316,10 +316,7 @@ def write_report(run, out: Path) -> Path:
         stage_rows.append(["all engines (HDL simulators overlapped with the others)",
                            fmt(t["engines_wall_s"], 2)])
     stage_rows += [["decode", fmt(t["decode_s"], 2)]]
-    blocks = "; ".join(f"{b['block']} ({b['neurons']} neurons on a core of "
-                       f"{b['core_neurons']}, sets {', '.join(b['param_sets'])}, "
-                       f"current {b['current_format']}, dt {b['dt_ms']:g} ms)"
-                       for b in ran["blocks"])
+    blocks = "; ".join(_block_line(b) for b in ran["blocks"])
     dec = run.scene["decoder"]
     reports = "".join(
         f"<details><summary>{html.escape(e)}: scikit-learn classification report "
@@ -462,3 +459,33 @@ def format_run(run) -> str:
                    f"line load:")
         out += [f"    {line}" for line in format_budget(board["link_budget"]["measured"])]
     return "\n".join(out)
+
+
+def front_end_detail(scene, neurons) -> list[str]:
+    """The front end of an afferent scene's encodings, one line each, and its timing."""
+    fe, out = scene["frontend"], []
+    for e in dict.fromkeys(neurons.encoding):
+        if e.mode == "FA":
+            filt = (f"b = {fe['filter_b']}, a = {fe['filter_a']}" if fe["filter_b"] is not None
+                    else f"{fe['filter_kind']} band-pass {fe['filter_low_hz']:g}-"
+                         f"{fe['filter_high_hz']:g} Hz, order {fe['filter_order']}")
+            out.append(f"FA: {filt}; gain {e.gain:g} per {e.unit_pm:g} pm of shift; rectify "
+                       f"{e.rectify}; window {fe['window']}")
+        else:
+            out.append(f"SA: gain {e.gain:g} per {e.unit_pm:g} pm of shift above "
+                       f"{e.threshold_pm:g} pm")
+    hold = int(scene["hardware"]["update_hz"] // scene["sensor"]["sample_rate_hz"])
+    out.append(f"samples held {hold} ticks each, latency {fe['latency_ticks']} ticks")
+    return out
+
+
+def _block_line(b: dict) -> str:
+    """One block of a run, as the report lists it."""
+    if b["block"] == "channel_fanout":
+        return (f"channel_fanout ({b['n_channels']} channels: {b['channels_shift']} shift, "
+                f"{b['channels_band']} band-passed, to {b['n_neurons']} afferents; samples "
+                f"{b['sample_format']['format']} pm, table {b['table_bits']} bits, "
+                f"{b['cycles_per_run']} cycles a run)")
+    return (f"{b['block']} ({b['neurons']} neurons on a core of {b['core_neurons']}, sets "
+            f"{', '.join(b['param_sets'])}, current {b['current_format']}, dt "
+            f"{b['dt_ms']:g} ms)")

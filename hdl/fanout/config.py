@@ -151,6 +151,12 @@ class FanoutConfig:
         self.gain_frac = self.gains_[0].frac_bits
         self._thresholds(N)
         self.shift = self.S.frac_bits + self.gain_frac - self.I.frac_bits
+        p_width = self.S.width + 1 + self.gain_width
+        if self.shift >= p_width:
+            raise ConfigError(f"every current would round to 0: the product of a {self.S} "
+                              f"sample and the gains ({self.gain_width} bits, largest "
+                              f"{max(abs(float(x)) for x in g):g}) drops {self.shift} of its "
+                              f"{p_width} bits to reach {self.I}")
         self._ranges()
         self.chan_bits = max(1, (C - 1).bit_length())
         self.neuron_bits = max(1, (N - 1).bit_length())
@@ -200,7 +206,8 @@ class FanoutConfig:
         self.r_bounds = (r_lo, r_hi)
         self.p_bounds = (p_lo, p_hi)
         sh = self.shift
-        self.i_bounds = ((p_lo >> sh, (p_hi >> sh) + 1) if sh > 0
+        carry = 1 if self.rounding == "nearest" else 0      # the first dropped bit
+        self.i_bounds = ((p_lo >> sh, (p_hi >> sh) + carry) if sh > 0
                          else (p_lo << -sh, p_hi << -sh))
         self.can_clamp = not (self.I.min_raw <= self.i_bounds[0]
                               and self.i_bounds[1] <= self.I.max_raw)
@@ -250,20 +257,24 @@ class FanoutConfig:
         ``samples`` (float, ``(..., n_channels)``) where the clamp does not act: the gain's
         representation error times the rectified sample, plus the rounding of the product
         (half an LSB of the current to nearest, one LSB truncating, none when no bit is
-        dropped), widened by ``1e-9`` relative for the float64 evaluation of both sides
-        (the bound is reached: the gain error and the rounding can add up to it exactly)."""
+        dropped), widened by ``1e-9`` relative and a few float64 ulps of ``|g r|`` for the
+        float64 evaluation of both sides (the bound is reached: the gain error and the
+        rounding can add up to it exactly)."""
         x = np.asarray(samples, dtype=np.float64)[..., list(self.channels_)]
         modes = np.asarray(self.modes_)
         r = np.where(modes == 1, np.maximum(x, 0), np.where(modes == 2, np.abs(x), x))
         dg = np.abs(np.array([c.abs_error for c in self.gains_]))
         rnd = 0.0 if self.shift <= 0 else (0.5 if self.rounding == "nearest" else 1.0)
-        return (np.abs(r) * dg + rnd * self.I.lsb) * (1 + 1e-9)
+        g = np.abs(np.asarray(self.gain, dtype=np.float64))
+        return (np.abs(r) * dg + rnd * self.I.lsb) * (1 + 1e-9) + 4e-16 * g * np.abs(r)
 
     def sample_bound(self, samples) -> np.ndarray:
-        """:meth:`golden_bound` plus the sample's own quantization (half an LSB of the sample
-        times the gain): the bound against golden on the unquantized sample, away from a gate's
-        threshold (within half a sample LSB of it the gate may decide either way)."""
-        return self.golden_bound(samples) + 0.5 * self.S.lsb * np.abs(self.gain_values)
+        """:meth:`golden_bound` plus the sample's own quantization (half an LSB of the sample times
+        the gain, rectification and gate being 1-Lipschitz away from the threshold): the bound
+        against golden on the unquantized sample, away from a gate's threshold (within half a
+        sample LSB of it the gate may decide either way)."""
+        return self.golden_bound(samples) + 0.5 * self.S.lsb * np.abs(
+            np.asarray(self.gain, dtype=np.float64))
 
     def to_dict(self) -> dict:
         return {"block": "channel_fanout", "n_channels": self.n_channels,

@@ -53,6 +53,12 @@ class LinkConfig:
                 raise ConfigError(f"the fan-out feeds {fanout.n_neurons} afferents in "
                                   f"{fanout.I}; the core behind the link has {n_core} in "
                                   f"{core.I}")
+            need = n_core + fanout.n_channels + fanout.cycles_per_run + LINK_IDLE_CYCLES
+            if core.cycles_per_tick < need:
+                raise ConfigError(f"a sweep of {core.cycles_per_tick} cycles cannot hold a sweep "
+                                  f"of {n_core} neurons, the writes of {fanout.n_channels} "
+                                  f"channels and a fan-out run of {fanout.cycles_per_run} "
+                                  f"cycles ({need} with the link's idle cycles)")
         if spike_ids is None:
             spike_ids = n_core
         if isinstance(spike_ids, bool) or not isinstance(spike_ids, int) or \

@@ -535,6 +535,9 @@ class LinkedCore(wiring.Component):
         if not isinstance(lcfg.core, IzhikevichConfig):
             raise ConfigError(f"a linked core is an Izhikevich core (a LIF core's board top is "
                               f"LinkedLif), not {type(lcfg.core).__name__}")
+        if lcfg.fanout is not None:
+            raise ConfigError("a link with a channel fan-out writes channel samples: its board "
+                              "top is LinkedFanoutCore")
         self._MustUse__silence = False
         self.lcfg = lcfg
         super().__init__({"rx": In(1, init=1), "tx": Out(1, init=1), "running": Out(1),

@@ -23,15 +23,18 @@ class LinkedFanoutCore(wiring.Component):
     (``lcfg.n_written`` values in the fan-out's sample format, ``WRITE`` frames as for
     currents); when a frame's writes are done the fan-out runs its table over the channel
     memory and writes every afferent's current into the core, ``n_neurons + 5`` cycles during
-    which the link holds the next tick and the next frame's writes (its ``core_busy``), so the
-    currents are in effect from the frame's sweep exactly as written currents are. Spikes leave
+    which the link holds the next tick and the next frame's writes (its ``core_busy``; the tick
+    may fire in the cycle of the last current write, which lands before the core reads neuron
+    0), so the currents are in effect from the frame's sweep exactly as written currents are:
+    the tick's jitter grows by the run, ``n_neurons + 6`` cycles, and
+    :class:`~cuneate.hdl.link.LinkConfig` refuses a sweep too short to hold it. Spikes leave
     as from :class:`~cuneate.hdl.link.LinkedCore`.
 
     Pins ``rx`` and ``tx``; status outputs ``running``, ``overflow`` (the core's spike FIFO or
-    overrun, or a fan-out start refused while it ran: impossible while the link holds the
-    ticks) and ``clamped`` (a fan-out current clamp acted, sticky; the counts per kind are the
-    fan-out's ``clamp_low_count`` and ``clamp_high_count``). The parts are the attributes
-    ``fanout``, ``core`` and ``link``.
+    overrun, or a fan-out start or channel write refused while it ran: impossible while the link
+    holds the ticks and the writes) and ``clamped`` (a fan-out current clamp acted, sticky; the
+    counts per kind are the fan-out's ``clamp_low_count`` and ``clamp_high_count``). The parts
+    are the attributes ``fanout``, ``core`` and ``link``.
     """
 
     def __init__(self, lcfg: LinkConfig):
@@ -59,9 +62,15 @@ class LinkedFanoutCore(wiring.Component):
         was_writing = Signal()
         m.d.sync += was_writing.eq(link.i_wr_en)
         start = was_writing & ~link.i_wr_en
+        # a channel write the fan-out refused (impossible while core_busy holds the link's
+        # writes during a run; sticky on the overflow pin should the timing ever change)
+        refused = Signal()
+        with m.If(fan.ch_wr_valid & ~fan.ch_wr_ready):
+            m.d.sync += refused.eq(1)
         m.d.comb += [
             link.rx.eq(self.rx), self.tx.eq(link.tx), self.running.eq(link.running),
-            self.overflow.eq(core.spike_overflow | core.overrun | (fan.overrun_count != 0)),
+            self.overflow.eq(core.spike_overflow | core.overrun | (fan.overrun_count != 0)
+                             | refused),
             self.clamped.eq(fan.clamp_flags != 0),
             fan.ch_wr_valid.eq(link.i_wr_en), fan.ch_wr_addr.eq(link.i_wr_addr),
             fan.ch_wr_data.eq(link.i_wr_data), fan.start.eq(start),

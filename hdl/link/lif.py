@@ -42,6 +42,9 @@ class LinkedLif(wiring.Component):
         if not isinstance(cfg, LifConfig):
             raise ConfigError(f"a linked LIF core needs a link of a LIF core (LifConfig), not "
                               f"of {type(cfg).__name__}")
+        if lcfg.fanout is not None:
+            raise ConfigError("a link with a channel fan-out writes channel samples: its board "
+                              "top is LinkedFanoutCore")
         if cfg.n_inputs:
             raise ConfigError(f"the link carries no input spikes: a linked LIF core takes host "
                               f"currents alone (no weights), not {cfg.n_inputs} inputs")

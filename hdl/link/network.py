@@ -45,6 +45,9 @@ class LinkedNetwork(wiring.Component):
         if ncfg.tick_source != "external":
             raise ConfigError("the host link drives the network's ticks: the network needs "
                               "tick_source='external'")
+        if lcfg.fanout is not None:
+            raise ConfigError("a link with a channel fan-out writes channel samples: its board "
+                              "top is LinkedFanoutCore")
         if lcfg.core.to_kwargs() != ncfg.core.to_kwargs() or lcfg.n_cores != 1:
             raise ConfigError("the link of a network serves its afferent core (ncfg.core) "
                               "alone")

@@ -209,8 +209,9 @@ def board_fanout_config(core: IzhikevichConfig, fanout,
     """The link of the ``board`` engine for a core fed by the channel fan-out ``fanout``
     (:class:`~cuneate.hdl.fanout.FanoutConfig`; board top
     :class:`~cuneate.hdl.link.LinkedFanoutCore`): as :func:`board_link_config`, with a sweep's
-    cycles covering a fan-out run too (a sample's frame can land before any sweep)."""
-    busy = core.n_neurons + fanout.cycles_per_run + 2
+    cycles covering a frame's channel writes and a fan-out run too (a sample's frame can land
+    before any sweep; :class:`~cuneate.hdl.link.LinkConfig` refuses less)."""
+    busy = core.n_neurons + fanout.n_channels + fanout.cycles_per_run
     batch, min_cycles = _board_batch_and_cycles(core.update_hz, busy, clocks_per_bit)
     kw = core.to_kwargs(tick_source="external")
     if core.clock_hz / core.update_hz < min_cycles:
@@ -444,6 +445,9 @@ class BoardTransport(UartTransport):
         from ...hdl.link import LinkedLif, LinkedNetwork
         from ...hdl.network import NetworkConfig
         written = None
+        if self.fanout is not None and not isinstance(config, IzhikevichConfig):
+            raise ValueError(f"the channel fan-out feeds an Izhikevich core, not a "
+                             f"{type(config).__name__}")
         if isinstance(config, NetworkConfig):
             self.network, self.lcfg = board_network_config(config, self.clocks_per_bit)
             top = LinkedNetwork(self.network, self.lcfg)

@@ -33,6 +33,8 @@ from ...hdl.lib.fixed import QFormat
 from ..decode import decode_trials
 from ..engines.registry import ENGINES as ENGINE_TRAITS
 from ..engines.registry import block_engines
+from ..fanout.scene import check_fanout_engines, scene_fanout
+from ..report import front_end_detail
 from ..host.driver import AfferentEncoding, FbgDriver
 from .runner import agreement as train_agreement
 from .scene import Scene
@@ -345,10 +347,14 @@ def _run_transport(engine):
         if engine in FORMATS and ctx.get("waves"):
             kw["waves"] = ctx["waves"]
         kw.update(ctx.get("engine_options", {}).get(engine, {}))
-        tr = make_transport(engine, **kw)
+        fan = ctx.get("fanout")                 # channels streamed, fanned out on chip
+        tr, drv, raw = make_transport(engine, **kw), ctx["driver"], ctx["raw"]
+        if fan is not None:
+            from ..fanout.scene import fanout_transport
+            tr, drv, raw = fanout_transport(engine, fan, kw), fan.driver, fan.raw
         try:
             tr.open(ctx["config"])
-            res = ctx["driver"].stream(tr, None, ctx["n_ticks"], raw=ctx["raw"])
+            res = drv.stream(tr, None, ctx["n_ticks"], raw=raw)
         finally:
             tr.close()
         n = len(ctx["neurons"])
@@ -366,23 +372,6 @@ def _run_transport(engine):
 #: host driver. Only the scene's engines are looked up and called.
 ENGINES = {e: run_golden if e == "golden" else _run_transport(e)
            for e in block_engines("izhikevich")}
-
-
-def _front_end_detail(scene: Scene, neurons: Neurons) -> list[str]:
-    fe, out = scene["frontend"], []
-    for e in dict.fromkeys(neurons.encoding):
-        if e.mode == "FA":
-            filt = (f"b = {fe['filter_b']}, a = {fe['filter_a']}" if fe["filter_b"] is not None
-                    else f"{fe['filter_kind']} band-pass {fe['filter_low_hz']:g}-"
-                         f"{fe['filter_high_hz']:g} Hz, order {fe['filter_order']}")
-            out.append(f"FA: {filt}; gain {e.gain:g} per {e.unit_pm:g} pm of shift; rectify "
-                       f"{e.rectify}; window {fe['window']}")
-        else:
-            out.append(f"SA: gain {e.gain:g} per {e.unit_pm:g} pm of shift above "
-                       f"{e.threshold_pm:g} pm")
-    hold = int(scene["hardware"]["update_hz"] // scene["sensor"]["sample_rate_hz"])
-    out.append(f"samples held {hold} ticks each, latency {fe['latency_ticks']} ticks")
-    return out
 
 
 def waves_request(scene: Scene, waves=None):
@@ -430,6 +419,7 @@ def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None =
             log(msg)
     t0 = time.perf_counter()
     names = list(engines or scene.engines)
+    check_fanout_engines(scene, names)
     n_grasps = scene["scene"]["trials"] * len(scene.classes())
     with prog.step(f"synthesizing the stimulus ({n_grasps} trial(s))"):
         classes, trial_class, traces, infos, effect_counts = synthesize(scene)
@@ -445,6 +435,7 @@ def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None =
         cfg, blocks = _build_blocks(scene, neurons)
         drv, currents, gaps = front_end(scene, neurons, traces, infos, cfg)
         raw, sat = drv.quantize(currents)
+        fan = scene_fanout(scene, neurons, traces, infos, cfg, drv, names, blocks)
     sat["gaps_held"] = gaps
     n_ticks = currents.shape[0] * drv.hold_ticks
     # samples whose tick (j R + L) falls at or after the run's end are never applied: counted
@@ -457,7 +448,7 @@ def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None =
     timing["front_end_s"] = time.perf_counter() - t0
     ctx = {"config": cfg, "driver": drv, "neurons": neurons, "currents": currents, "raw": raw,
            "n_ticks": n_ticks, "build_dir": build_dir, "waves": waves_request(scene, waves),
-           "engine_options": engine_options or {}}
+           "engine_options": engine_options or {}, "fanout": fan}
     for e in names:
         if e not in ENGINES:
             raise ValueError(f"unknown engine {e!r}; known: {', '.join(ENGINES)}")
@@ -499,8 +490,10 @@ def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None =
     counters = {e: results[e][1] for e in names}
     if "board" in counters:
         from ..host.uart import run_budget
+        written = (fan.config.n_channels, fan.config.S.width) if fan else (cfg.n_neurons,
+                                                                           cfg.I.width)
         counters["board"]["link_budget"] = run_budget(
-            counters["board"], n_ticks / cfg.update_hz, cfg.n_neurons, cfg.I.width,
+            counters["board"], n_ticks / cfg.update_hz, *written,
             scene["sensor"]["sample_rate_hz"], cfg.update_hz, sum(map(len, spikes["board"])))
     eng_t = {e: results[e][2] for e in names}
     timing["engines_s"] = eng_t
@@ -541,7 +534,7 @@ def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None =
            ([] if scene["stimulus"]["kind"] == "recorded" else ["strain"]),
            "effect_counts": effect_counts, "blocks": blocks, "engines": list(spikes),
            "front_end": sorted({f"{e.mode}" for e in neurons.encoding}),
-           "front_end_detail": _front_end_detail(scene, neurons),
+           "front_end_detail": front_end_detail(scene, neurons),
            "stimulus": scene["stimulus"]["kind"]}
     files = {}
     wv = ctx["waves"]

@@ -55,6 +55,7 @@ def test_the_gate_passes_exactly_at_the_threshold_on_the_sample_grid():
     ({"threshold": [None, 2000.0, None]}, "afferent 1: threshold 2000 is outside"),
     ({"rectify": ["none", "square", "abs"]}, "afferent 1: unknown rectify 'square'"),
     ({"sample_hz": 1e7}, "a fan-out run of 3 afferents takes 8 cycles"),
+    ({"gain": [1e-7, 2e-7, 1e-7]}, "every current would round to 0: the product of a sQ11.5"),
     ({"channel": [0] * 200_000, "gain": [1.0] * 200_000, "sample_hz": 100.0},
      "the fan-out table of 200000 afferents needs 7600000 bits"),
 ])
@@ -84,7 +85,7 @@ def test_the_twin_stays_within_the_derived_bound_of_golden(data):
         threshold=data.draw(st.lists(st.one_of(st.none(), st.floats(-100, 100)), min_size=n,
                                      max_size=n)),
         rounding=data.draw(st.sampled_from(["nearest", "truncate"])),
-        current_format=QFormat(12, 6))
+        current_format=QFormat(12, 6), gain_width=24)   # gains 1 to 300 share an exponent
     twin = FanoutTwin(cfg)
     x = data.draw(st.lists(st.floats(-600, 600), min_size=n_ch, max_size=n_ch))
     raw = twin.write_samples(x)

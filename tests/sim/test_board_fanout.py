@@ -94,5 +94,14 @@ def test_a_fanout_link_refuses_a_core_it_does_not_feed():
     lcfg = board_fanout_config(CORE, FAN)
     assert lcfg.n_written == C and lcfg.current_width == FAN.S.width
     assert lcfg.core.cycles_per_tick >= N + FAN.cycles_per_run
+    # a sweep too short for a frame's writes and the fan-out's run
+    short = IzhikevichConfig(n_neurons=N, clock_hz=4e3 * (2 * N + C), update_hz=4e3,
+                             tick_source="external")
+    with pytest.raises(ConfigError, match=f"a sweep of {2 * N + C} cycles cannot hold"):
+        LinkConfig(short, fanout=FAN)
+    # the other board tops take currents: a fan-out link is refused, not misread
+    from cuneate.hdl.link import LinkedCore
+    with pytest.raises(ConfigError, match="its board top is LinkedFanoutCore"):
+        LinkedCore(lcfg)
     with pytest.raises(ConfigError, match="needs a link with a fan-out"):
         LinkedFanoutCore(board_fanout_config(CORE, FAN).__class__(lcfg.core))

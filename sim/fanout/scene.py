@@ -1,0 +1,176 @@
+"""An afferent scene's channels and its fan-out table (``hardware.fanout = true``): the host
+streams one sample per channel and sample period, the chip turns them into every afferent's
+current.
+
+A channel is a grating of a trial as one kind of afferent takes it: its Bragg shift in pm
+(``shift``, what SA afferents read) or that shift band-passed by the front end's filter
+(``band``, FA afferents; the filter runs on the host, one state per channel). Each afferent
+listens to one channel with the gain of its encoding per pm (``gain / unit_pm``), FA
+afferents with the front end's rectification, SA afferents gated at their threshold (pm).
+Outside a trial's loading window (``frontend.window = "loading"``) its channels carry 0, so
+every current is 0 as the host-side front end makes it.
+
+Engines: ``fixed`` runs the fan-out twin in front of the Izhikevich twin
+(:class:`FanoutTransport`), ``board`` the board top with the fan-out
+(:class:`~cuneate.hdl.link.LinkedFanoutCore`); ``golden`` integrates the float currents as
+without the fan-out, so the fixed engines' difference from golden includes the samples'
+quantization (the fan-out's bound: :meth:`~cuneate.hdl.fanout.FanoutConfig.sample_bound`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from types import SimpleNamespace
+
+import numpy as np
+
+from ...hdl.fanout import FanoutConfig, FanoutTwin
+from ..host.driver import FbgDriver
+from ..host.transport import Transport
+
+__all__ = ["ChannelPlan", "channel_plan", "scene_fanout", "check_fanout_engines",
+           "fanout_transport",
+           "FanoutTransport", "FANOUT_SCENE_ENGINES"]
+
+#: the scene engines that run the fan-out (golden needs none: it integrates the float currents)
+FANOUT_SCENE_ENGINES = ("golden", "fixed", "board")
+
+
+@dataclass
+class ChannelPlan:
+    """The channels a scene streams and the fan-out that feeds its afferents.
+
+    ``channels``: ``(trial, grating, kind)`` per channel; ``samples``: their values (pm) per
+    sample ``(n_samples, n_channels)``; ``raw``: the same in the fan-out's sample format;
+    ``config``: the :class:`~cuneate.hdl.fanout.FanoutConfig`; ``driver``: the host driver
+    that streams the raw samples (same sample rate and latency as the scene's)."""
+
+    channels: list
+    samples: np.ndarray
+    raw: np.ndarray
+    config: FanoutConfig
+    driver: FbgDriver
+
+    def describe(self) -> dict:
+        kinds = [k for _, _, k in self.channels]
+        return self.config.to_dict() | {
+            "channels_shift": kinds.count("shift"), "channels_band": kinds.count("band"),
+            "afferents_per_channel": round(self.config.n_neurons / len(self.channels), 2)}
+
+
+def _hold(x: np.ndarray) -> np.ndarray:
+    """Forward-fill the missing samples of each column (the driver's ``hold``)."""
+    x = x.copy()
+    for j in np.flatnonzero(np.isnan(x).any(axis=1)):
+        bad = np.isnan(x[j])
+        x[j, bad] = x[j - 1, bad] if j else 0.0
+    return x
+
+
+def channel_plan(scene, neurons, traces, infos, core, drv: FbgDriver) -> ChannelPlan:
+    """The scene's channels, their samples and the fan-out table for ``neurons`` (the
+    afferents of the scene, in core order) feeding ``core``; ``drv`` is the scene's host
+    driver (rates, latency). Refuses (``ConfigError``, one line) a table the fan-out cannot
+    hold."""
+    keys: dict = {}
+    channel, gain, rectify, threshold = [], [], [], []
+    for t, g, e in zip(neurons.trial, neurons.grating, neurons.encoding):
+        key = (t, g, "band" if e.mode == "FA" else "shift")
+        channel.append(keys.setdefault(key, len(keys)))
+        gain.append(e.gain / e.unit_pm)
+        rectify.append(e.rectify if e.mode == "FA" else "none")
+        threshold.append(e.threshold_pm if e.mode == "SA" else None)
+    chans = list(keys)
+    filt = next((e.filter for e in neurons.encoding if e.mode == "FA"), None)
+    shifts = _hold(np.stack([traces[t][:, g] for t, g, _ in chans], axis=1)) * 1000.0
+    samples = shifts.copy()
+    band = [i for i, (_, _, k) in enumerate(chans) if k == "band"]
+    if band:
+        samples[:, band] = filt.apply(shifts[:, band])
+    if scene["frontend"]["window"] == "loading":
+        t_ms = np.arange(samples.shape[0]) * 1000.0 / scene["sensor"]["sample_rate_hz"]
+        for i, (t, _, _) in enumerate(chans):
+            outside = (t_ms < scene["stimulus"]["contact_ms"]) | (t_ms > infos[t]["stop_ms"])
+            samples[outside, i] = 0.0
+    hw = scene["hardware"]
+    peak = float(np.max(np.abs(samples))) if samples.size else 0.0
+    cfg = FanoutConfig(n_channels=len(chans), channel=channel, gain=gain, rectify=rectify,
+                       threshold=threshold, sample_width=hw["fanout_sample_bits"],
+                       sample_max=max(peak, 1.0), current_format=core.I,
+                       rounding=core.rounding, clock_hz=hw["clock_hz"],
+                       sample_hz=scene["sensor"]["sample_rate_hz"])
+    view = SimpleNamespace(n_neurons=cfg.n_channels, update_hz=core.update_hz, I=cfg.S,
+                           current_range=None, rounding=core.rounding)
+    cdrv = FbgDriver(view, [None] * cfg.n_channels, drv.fs_hz, drv.latency_ticks)
+    return ChannelPlan(chans, samples, cfg.S.to_raw(samples), cfg, cdrv)
+
+
+def scene_fanout(scene, neurons, traces, infos, core, drv, engines, blocks) -> ChannelPlan | None:
+    """The scene's :class:`ChannelPlan` when it asks for the fan-out (``hardware.fanout``),
+    its description appended to ``blocks``; else ``None``. Refuses an engine that does not
+    run the fan-out."""
+    if not scene["hardware"]["fanout"]:
+        return None
+    check_fanout_engines(scene, engines)
+    plan = channel_plan(scene, neurons, traces, infos, core, drv)
+    blocks.append(plan.describe())
+    return plan
+
+
+def check_fanout_engines(scene, engines) -> None:
+    """Refuse (one line) an engine of ``engines`` that does not run the scene's fan-out."""
+    bad = [e for e in engines if e not in FANOUT_SCENE_ENGINES]
+    if scene["hardware"]["fanout"] and bad:
+        raise ValueError(f"hardware.fanout: engine {bad[0]!r} does not run the channel "
+                         f"fan-out (engines that do: {', '.join(FANOUT_SCENE_ENGINES)})")
+
+
+def fanout_transport(engine: str, plan: ChannelPlan, kw: dict) -> Transport:
+    """The transport of a fan-out engine: the fan-out twin before the fixed engine's twin, or
+    the board top with the fan-out."""
+    from ..izhikevich.engines import make_transport
+    if engine == "board":
+        return make_transport("board", fanout=plan.config, **kw)
+    return FanoutTransport(make_transport(engine, **kw), plan.config)
+
+
+class FanoutTransport(Transport):
+    """The fan-out twin in front of another transport (the ``fixed`` engine's twin): channel
+    writes set the twin's samples, and each write is followed by a fan-out run whose currents
+    go to ``inner`` for the same sweep, as :class:`~cuneate.hdl.link.LinkedFanoutCore` does
+    on chip. The fan-out's clamp counts join the counters (``fanout_current_low`` /
+    ``fanout_current_high``)."""
+
+    def __init__(self, inner: Transport, fanout: FanoutConfig):
+        self.inner, self.fanout = inner, fanout
+        self.name = inner.name
+
+    def open(self, config) -> None:
+        self.twin = FanoutTwin(self.fanout)
+        self.inner.open(config)
+
+    def write_currents(self, tick: int, first: int, raw) -> None:
+        raw = np.asarray(raw, dtype=np.int64)
+        self.twin.samples[first:first + raw.size] = raw
+        self.inner.write_currents(tick, 0, self.twin.run()[0])
+
+    def run(self, n_ticks: int) -> None:
+        self.inner.run(n_ticks)
+
+    def collect(self):
+        return self.inner.collect()
+
+    def counters(self) -> dict[str, int]:
+        return dict(self.inner.counters(), **{f"fanout_{k}": v
+                                              for k, v in self.twin.clamp_counts.items()})
+
+    def loss_detail(self, counters: dict) -> str:
+        return self.inner.loss_detail(counters)
+
+    def close(self) -> None:
+        self.inner.close()
+
+    def __getattr__(self, name):
+        if name == "inner":
+            raise AttributeError(name)
+        return getattr(self.inner, name)      # sim_s, figures of the inner transport
