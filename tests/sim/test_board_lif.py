@@ -151,6 +151,7 @@ def test_every_spike_frame_carries_exactly_its_own_sweeps_spikes(ahead):
     assert covered == n and got == want and len(want) > 30
 
 
+@pytest.mark.long
 def test_cli_runs_the_skin_example_on_board_with_the_fixed_engines_spikes(tmp_path, capsys):
     from cuneate.sim.cli import main
     out = tmp_path / "skin"

@@ -62,6 +62,7 @@ def test_the_channels_and_the_table_give_the_front_ends_currents():
     assert np.allclose(gold, currents, rtol=1e-9, atol=1e-9)
 
 
+@pytest.mark.long
 def test_fixed_and_board_run_the_fanout_spike_for_spike():
     run = afferent.run(_scene(duration_ms=150, engines='["fixed", "board"]'))
     a, b = run.spikes["fixed"], run.spikes["board"]

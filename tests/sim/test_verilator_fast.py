@@ -141,6 +141,7 @@ def test_dump_checker_catches_injected_faults_verilator(
     assert clean.stats.updates_checked == 60 * N
 
 
+@pytest.mark.long
 def test_verilator_fast_runs_an_array_equal_to_its_twin(tmp_path):
     """An array of three cores of twelve neurons (four parameter sets) compiled with the
     harness: every spike (sweep, global id) and every clamp count equal the array twin's, with

@@ -59,7 +59,9 @@ def test_amaranth_writes_a_windowed_vcd_and_gtkw(tmp_path):
 
 
 @pytest.mark.cocotb
-@pytest.mark.parametrize("simulator", SIMULATORS)
+@pytest.mark.parametrize("simulator", [
+    # Verilator's traced model is a build of its own (about 100 s): the long lane runs it
+    pytest.param(s, marks=pytest.mark.long if s == "verilator" else ()) for s in SIMULATORS])
 def test_hdl_simulators_write_their_dump(simulator, tmp_path, build_root):
     w = Waves(tmp_path, start=2, ticks=3)
     run_engine(simulator, {"n_neurons": 8}, [10.0] * 8, 2.0,
