@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from types import SimpleNamespace
 from typing import Sequence
 
 import numpy as np
@@ -233,10 +234,13 @@ class FanoutConfig:
             kw["current_format"] = QFormat(*kw["current_format"])
         return cls(**kw)
 
-    @property
-    def gain_values(self) -> np.ndarray:
-        """The gains as quantized (float64), per afferent."""
-        return np.array([c.quantized for c in self.gains_])
+    def written(self, core) -> SimpleNamespace:
+        """What the host writes to the fan-out in front of ``core``, as the host's driver and
+        transport see a core's currents: ``n_neurons`` values (the channels) in the format
+        ``I`` (the sample format), at the core's update rate and rounding, with no accepted
+        range of their own."""
+        return SimpleNamespace(n_neurons=self.n_channels, I=self.S, update_hz=core.update_hz,
+                               rounding=core.rounding, current_range=None)
 
     def table(self) -> list[int]:
         """The table's words, one per afferent, fields packed from the LSB in the order of

@@ -56,7 +56,7 @@ from .codec import (COUNTER_NAMES, CRC_BYTES, CRC_INIT, CRC_RESIDUE, MAX_FRAME, 
 from .config import LinkConfig
 from .datapath import crc32_update
 
-__all__ = ["HostLink", "LinkedCore", "link_verilog"]
+__all__ = ["HostLink", "LinkedCore", "link_verilog", "link_core_wiring", "linked_core_module"]
 
 
 def _pick(options, index):
@@ -548,20 +548,36 @@ class LinkedCore(wiring.Component):
         self.link = HostLink(lcfg)
 
     def elaborate(self, platform):
-        m = Module()
-        m.submodules.core = core = self.core
-        m.submodules.link = link = self.link
-        m.d.comb += [
-            link.rx.eq(self.rx), self.tx.eq(link.tx), self.running.eq(link.running),
-            self.overflow.eq(core.spike_overflow | core.overrun),
-            core.i_wr_en.eq(link.i_wr_en), core.i_wr_addr.eq(link.i_wr_addr),
-            core.i_wr_data.eq(link.i_wr_data), core.tick.eq(link.tick),
-            link.core_busy.eq(core.busy),
-            link.spike_valid.eq(core.spike_valid), core.spike_ready.eq(link.spike_ready),
-            link.spike_index.eq(core.spike_index), link.spike_sweep.eq(core.spike_sweep),
-            link.sweep_done.eq(core.sweep_done),
-        ]
-        return m
+        return linked_core_module(self, self.core, self.link)
+
+
+def link_core_wiring(top, core, link) -> list:
+    """The connections every board top of one time-multiplexed core behind a
+    :class:`HostLink` shares: the pins, the tick, the spike stream and ``sweep_done`` (the
+    core's ports of :mod:`cuneate.hdl.lib.bookkeeping`); the host write port, ``core_busy`` and
+    the status pins are the top's own."""
+    return [
+        link.rx.eq(top.rx), top.tx.eq(link.tx), top.running.eq(link.running),
+        core.tick.eq(link.tick),
+        link.spike_valid.eq(core.spike_valid), core.spike_ready.eq(link.spike_ready),
+        link.spike_index.eq(core.spike_index), link.spike_sweep.eq(core.spike_sweep),
+        link.sweep_done.eq(core.sweep_done),
+    ]
+
+
+def linked_core_module(top, core, link) -> Module:
+    """``core`` behind ``link`` as the board top ``top``: the link writes the core's currents,
+    waits on its ``busy``, and ``overflow`` is its spike FIFO or overrun flag
+    (:class:`LinkedCore`, :class:`~cuneate.hdl.link.LinkedLif`)."""
+    m = Module()
+    m.submodules.core = core
+    m.submodules.link = link
+    m.d.comb += link_core_wiring(top, core, link) + [
+        top.overflow.eq(core.spike_overflow | core.overrun),
+        core.i_wr_en.eq(link.i_wr_en), core.i_wr_addr.eq(link.i_wr_addr),
+        core.i_wr_data.eq(link.i_wr_data), link.core_busy.eq(core.busy),
+    ]
+    return m
 
 
 def link_verilog(lcfg: LinkConfig, name: str = "linked_core", lowered: bool = False) -> str:

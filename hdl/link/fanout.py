@@ -12,7 +12,7 @@ from ..fanout import ChannelFanout
 from ..izhikevich import IzhikevichConfig, IzhikevichCore
 from ..lib.config import ConfigError
 from .config import LinkConfig
-from .core import HostLink
+from .core import HostLink, link_core_wiring
 
 __all__ = ["LinkedFanoutCore"]
 
@@ -67,19 +67,15 @@ class LinkedFanoutCore(wiring.Component):
         refused = Signal()
         with m.If(fan.ch_wr_valid & ~fan.ch_wr_ready):
             m.d.sync += refused.eq(1)
-        m.d.comb += [
-            link.rx.eq(self.rx), self.tx.eq(link.tx), self.running.eq(link.running),
+        m.d.comb += link_core_wiring(self, core, link) + [
             self.overflow.eq(core.spike_overflow | core.overrun | (fan.overrun_count != 0)
                              | refused),
             self.clamped.eq(fan.clamp_flags != 0),
             fan.ch_wr_valid.eq(link.i_wr_en), fan.ch_wr_addr.eq(link.i_wr_addr),
             fan.ch_wr_data.eq(link.i_wr_data), fan.start.eq(start),
             core.i_wr_en.eq(fan.i_wr_en), core.i_wr_addr.eq(fan.i_wr_addr),
-            core.i_wr_data.eq(fan.i_wr_data), core.tick.eq(link.tick),
+            core.i_wr_data.eq(fan.i_wr_data),
             # no tick and no next write from a frame's first write to the fan-out's last
             link.core_busy.eq(core.busy | link.i_wr_en | start | fan.busy),
-            link.spike_valid.eq(core.spike_valid), core.spike_ready.eq(link.spike_ready),
-            link.spike_index.eq(core.spike_index), link.spike_sweep.eq(core.spike_sweep),
-            link.sweep_done.eq(core.sweep_done),
         ]
         return m

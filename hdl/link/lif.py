@@ -4,14 +4,13 @@ Izhikevich core)."""
 
 from __future__ import annotations
 
-from amaranth import Module
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
 from ..lib.config import ConfigError
 from ..lif import LifConfig, LifCore
 from .config import LinkConfig
-from .core import HostLink
+from .core import HostLink, linked_core_module
 
 __all__ = ["LinkedLif"]
 
@@ -60,17 +59,4 @@ class LinkedLif(wiring.Component):
         self.link = HostLink(lcfg)
 
     def elaborate(self, platform):
-        m = Module()
-        m.submodules.core = core = self.core
-        m.submodules.link = link = self.link
-        m.d.comb += [
-            link.rx.eq(self.rx), self.tx.eq(link.tx), self.running.eq(link.running),
-            self.overflow.eq(core.spike_overflow | core.overrun),
-            core.i_wr_en.eq(link.i_wr_en), core.i_wr_addr.eq(link.i_wr_addr),
-            core.i_wr_data.eq(link.i_wr_data), core.tick.eq(link.tick),
-            link.core_busy.eq(core.busy),
-            link.spike_valid.eq(core.spike_valid), core.spike_ready.eq(link.spike_ready),
-            link.spike_index.eq(core.spike_index), link.spike_sweep.eq(core.spike_sweep),
-            link.sweep_done.eq(core.sweep_done),
-        ]
-        return m
+        return linked_core_module(self, self.core, self.link)

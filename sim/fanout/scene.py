@@ -20,7 +20,6 @@ quantization (the fan-out's bound: :meth:`~cuneate.hdl.fanout.FanoutConfig.sampl
 from __future__ import annotations
 
 from dataclasses import dataclass
-from types import SimpleNamespace
 
 import numpy as np
 
@@ -58,31 +57,27 @@ class ChannelPlan:
             "afferents_per_channel": round(self.config.n_neurons / len(self.channels), 2)}
 
 
-def _hold(x: np.ndarray) -> np.ndarray:
-    """Forward-fill the missing samples of each column (the driver's ``hold``)."""
-    x = x.copy()
-    for j in np.flatnonzero(np.isnan(x).any(axis=1)):
-        bad = np.isnan(x[j])
-        x[j, bad] = x[j - 1, bad] if j else 0.0
-    return x
-
-
 def channel_plan(scene, neurons, traces, infos, core, drv: FbgDriver) -> ChannelPlan:
     """The scene's channels, their samples and the fan-out table for ``neurons`` (the
     afferents of the scene, in core order) feeding ``core``; ``drv`` is the scene's host
     driver (rates, latency). Refuses (``ConfigError``, one line) a table the fan-out cannot
     hold."""
     keys: dict = {}
+    first: dict = {}                    # channel -> the first afferent listening to it
     channel, gain, rectify, threshold = [], [], [], []
-    for t, g, e in zip(neurons.trial, neurons.grating, neurons.encoding):
+    for i, (t, g, e) in enumerate(zip(neurons.trial, neurons.grating, neurons.encoding)):
         key = (t, g, "band" if e.mode == "FA" else "shift")
         channel.append(keys.setdefault(key, len(keys)))
+        first.setdefault(key, i)
         gain.append(e.gain / e.unit_pm)
         rectify.append(e.rectify if e.mode == "FA" else "none")
         threshold.append(e.threshold_pm if e.mode == "SA" else None)
     chans = list(keys)
     filt = next((e.filter for e in neurons.encoding if e.mode == "FA"), None)
-    shifts = _hold(np.stack([traces[t][:, g] for t, g, _ in chans], axis=1)) * 1000.0
+    # the shifts as the host driver holds their gaps, a channel from its first afferent's
+    held, _ = drv.fill_gaps(np.stack([traces[t][:, g] for t, g in zip(neurons.trial,
+                                                                      neurons.grating)], axis=1))
+    shifts = held[:, [first[k] for k in chans]] * 1000.0
     samples = shifts.copy()
     band = [i for i, (_, _, k) in enumerate(chans) if k == "band"]
     if band:
@@ -99,9 +94,7 @@ def channel_plan(scene, neurons, traces, infos, core, drv: FbgDriver) -> Channel
                        sample_max=max(peak, 1.0), current_format=core.I,
                        rounding=core.rounding, clock_hz=hw["clock_hz"],
                        sample_hz=scene["sensor"]["sample_rate_hz"])
-    view = SimpleNamespace(n_neurons=cfg.n_channels, update_hz=core.update_hz, I=cfg.S,
-                           current_range=None, rounding=core.rounding)
-    cdrv = FbgDriver(view, [None] * cfg.n_channels, drv.fs_hz, drv.latency_ticks)
+    cdrv = FbgDriver(cfg.written(core), [None] * cfg.n_channels, drv.fs_hz, drv.latency_ticks)
     return ChannelPlan(chans, samples, cfg.S.to_raw(samples), cfg, cdrv)
 
 

@@ -220,14 +220,6 @@ def board_fanout_config(core: IzhikevichConfig, fanout,
     return LinkConfig(ext, clocks_per_bit=clocks_per_bit, batch_sweeps=batch, fanout=fanout)
 
 
-class _Written:
-    """What the host writes over a fan-out link, as the transport sees a core: the channels
-    (``n_neurons``) in the sample format (``I``)."""
-
-    def __init__(self, lcfg: LinkConfig):
-        self.n_neurons, self.I = lcfg.n_written, lcfg.fanout.S
-
-
 def board_lif_config(core, clocks_per_bit: int = BOARD_CLOCKS_PER_BIT) -> LinkConfig:
     """The link of the ``board`` engine for the LIF core ``core``
     (:class:`~cuneate.hdl.lif.LifConfig`; board top :class:`~cuneate.hdl.link.LinkedLif`).
@@ -438,8 +430,7 @@ class BoardTransport(UartTransport):
             # the receive FIFO of a board's link (LinkConfig's default, as the boards build it)
             self.ahead_bytes = 512 if self.ahead else None
             self._t0 = time.perf_counter()
-            super().open(config if self.fanout is None else _Written(
-                board_fanout_config(config, self.fanout, self.clocks_per_bit)))
+            super().open(config if self.fanout is None else self.fanout.written(config))
             return
         from ...hdl.lif import LifConfig
         from ...hdl.link import LinkedLif, LinkedNetwork
@@ -456,7 +447,7 @@ class BoardTransport(UartTransport):
             self.network = None
             self.lcfg = board_fanout_config(config, self.fanout, self.clocks_per_bit)
             top = LinkedFanoutCore(self.lcfg)
-            written = _Written(self.lcfg)
+            written = self.fanout.written(self.lcfg.core)
         elif isinstance(config, LifConfig):
             self.network, self.lcfg = None, board_lif_config(config, self.clocks_per_bit)
             top = LinkedLif(self.lcfg)
