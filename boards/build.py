@@ -19,6 +19,7 @@ from ..hdl.flow.tools import ToolError, yowasp_env
 from ..hdl.flow.verilog import verilog_text
 from ..hdl.lib.config import ConfigError
 from ..hdl.link import LinkedCore
+from .scene import scene_request
 from .sizing import size_core
 from .targets import TARGETS
 
@@ -84,43 +85,31 @@ def build_target(board: str, out: Path, n_neurons: int | None = None,
     target = TARGETS[board]
     depth = {} if pipeline_stages is None else {"pipeline_stages": pipeline_stages}
     request = scene_request(scene, target) if scene is not None else None
-    neuron_sets = None
-    if request is not None:
-        n_neurons, update_hz = request["neurons"], request["core"]["update_hz"]
-        depth.update({k: v for k, v in request["core"].items()
-                      if k not in ("update_hz", "neuron_sets")})
-        if len(request["core"]["param_sets"]) > 1:
-            neuron_sets = request["core"]["neuron_sets"]
-    sized = size_core(target, n_neurons=n_neurons, clock_hz=clock_hz, update_hz=update_hz,
-                      **depth)
-    if neuron_sets is not None:
-        # the cores of an array share one neuron-to-set table: one core, or one set
-        k = sized["link"].n_cores
-        if k > 1:
-            raise ConfigError(f"{board}: the scene needs {k} cores and mixes "
-                              f"{len(request['core']['param_sets'])} parameter sets; the cores "
-                              f"share one neuron-to-set table (one set, or "
-                              f"{sized['link'].core.n_neurons} neurons at most)")
-        sized = size_core(target, n_neurons=n_neurons, clock_hz=clock_hz,
-                          update_hz=update_hz, neuron_sets=neuron_sets, **depth)
+    if request is not None and request.kind != "core":
+        sized = _size_blocks(target, request, clock_hz, pipeline_stages)
+        make_top = sized["top"]
+    else:
+        sized = _size_cores(target, request, n_neurons, clock_hz, update_hz, depth)
+        make_top = (lambda: LinkedCore(sized["link"]))
     lcfg = sized["link"]
     name = name or f"cuneate_{board}"
     out = Path(out).resolve()
     out.mkdir(parents=True, exist_ok=True)
-    (out / f"{name}_core.v").write_text(verilog_text(LinkedCore(lcfg), f"{name}_core"))
+    (out / f"{name}_core.v").write_text(verilog_text(make_top(), f"{name}_core"))
     report = {"board": board, "device": target["device"], "name": name,
-              "neurons": lcfg.n_neurons, "requested_neurons": sized["requested_neurons"],
+              "neurons": request.neurons if request is not None else lcfg.n_neurons,
+              "requested_neurons": sized["requested_neurons"],
               "cores": lcfg.n_cores, "neurons_per_core": lcfg.core.n_neurons,
-              "pipeline_stages": lcfg.core.pipeline_stages,
+              "pipeline_stages": getattr(lcfg.core, "pipeline_stages", None),
               "core": lcfg.core.to_kwargs(), "link": lcfg.to_dict(),
               "clock_plan": sized["plan"], "estimate": sized["estimate"],
               "bitstream": None, "seed": seed}
     if request is not None:
-        report["scene"] = {k: v for k, v in request.items() if k not in ("core",)}
+        report["scene"] = request.describe()
     if target.get("bitstream") and bitstream:
         from .top import BoardTop
         platform = target["platform"]()
-        top = BoardTop(lcfg, sized["pll"], target.get("uart_tx_enable", False))
+        top = BoardTop(make_top(), sized["pll"], target.get("uart_tx_enable", False))
         opts = f"--report {name}.nextpnr.json --timing-allow-fail --seed {seed}"
         plan = platform.prepare(top, name=name, nextpnr_opts=opts,
                                 **target.get("prepare_opts", {}))
@@ -148,53 +137,89 @@ def build_target(board: str, out: Path, n_neurons: int | None = None,
     return report
 
 
-def scene_request(scene, target: dict) -> dict:
-    """What a board for ``scene`` holds and whether its link carries the scene in real time at
-    the board's baud (worst case: every current every sample, every neuron at 200 Hz);
-    :class:`ConfigError` names the first limit it exceeds. Only afferent scenes (Izhikevich
-    afferents behind the link) build today."""
-    from ..sim.host.uart import BUDGET_BAUDS, format_budget, link_budget
-    from ..sim.scenes.registry import kind_for
-    kind = kind_for(scene["stimulus"]["kind"])
-    if kind.name != "afferent":
-        raise ConfigError(f"scene {scene.name!r} ({kind.name}) needs the {kind.block} block on "
-                          f"the board; cuneate build makes board tops of Izhikevich afferents "
-                          f"behind the link (afferent scenes)")
-    from ..sim.scenes.afferent import build_neurons, n_driven, scene_core
-    neurons = build_neurons(scene, n_driven(scene)[0])
-    core = scene_core(scene, neurons)
-    req = {"neurons": len(neurons), "core": core, "sample_hz": scene["sensor"]["sample_rate_hz"],
-           "blocks": [{"block": "izhikevich_core", "neurons": len(neurons),
-                       "param_sets": list(core["param_sets"])}]}
-    from ..hdl.izhikevich.config import IzhikevichConfig
-    width = IzhikevichConfig(n_neurons=8, clock_hz=16 * req["core"]["update_hz"],
-                             update_hz=req["core"]["update_hz"],
-                             current_format=req["core"]["current_format"]).I.width
-    from ..hdl.link.codec import MAX_FRAME, MIN_FRAME, SPIKE_HEADER
-    baud = target["clock_plan"].baud
-    budget = link_budget(req["neurons"], width, req["sample_hz"], req["core"]["update_hz"],
-                         200.0 * req["neurons"], bauds=sorted({*BUDGET_BAUDS, baud}))
-    req["link_budget"] = budget
-    row = next(r for r in budget["rows"] if r["baud"] == baud)
-    cap = baud / 10
-    if budget["in_bytes_per_s"] > cap:
-        raise ConfigError(f"{target['name']}: the scene's currents take "
-                          f"{budget['in_bytes_per_s']:,.0f} B/s to the board (worst case: "
-                          f"{req['neurons']} currents every sample at {req['sample_hz']:g} Hz), "
-                          f"more than the {baud / 1e6:g} Mbaud link's {cap:,.0f} B/s (link limit)")
-    if not row["real_time"]:
-        raise ConfigError(f"{target['name']}: the scene's spikes take "
-                          f"{budget['out_bytes_per_s']:,.0f} B/s from the board (worst case: "
-                          f"{req['neurons']} neurons at 200 Hz), more than the "
-                          f"{baud / 1e6:g} Mbaud link's {cap:,.0f} B/s (link limit)")
-    frame_spikes = (MAX_FRAME - MIN_FRAME - SPIKE_HEADER) // 3
-    if budget["spikes_per_batch"] > frame_spikes:
-        raise ConfigError(f"{target['name']}: {budget['spikes_per_batch']:.0f} spikes a batch "
-                          f"of {budget['batch_sweeps']} sweeps (worst case: {req['neurons']} "
-                          f"neurons at 200 Hz) exceed the {frame_spikes} a spike frame holds "
-                          f"(link limit)")
-    req["link_budget_lines"] = format_budget(budget)
-    return req
+def _size_cores(target: dict, request, n_neurons, clock_hz, update_hz, depth: dict) -> dict:
+    """The Izhikevich core(s) behind the link (:class:`LinkedCore`): ``n_neurons``, or the
+    afferents of an afferent scene's ``request``."""
+    neuron_sets = None
+    if request is not None:
+        n_neurons, update_hz = request.neurons, request.core["update_hz"]
+        depth = depth | {k: v for k, v in request.core.items()
+                         if k not in ("update_hz", "neuron_sets")}
+        if len(request.core["param_sets"]) > 1:
+            neuron_sets = request.core["neuron_sets"]
+    sized = size_core(target, n_neurons=n_neurons, clock_hz=clock_hz, update_hz=update_hz,
+                      **depth)
+    if neuron_sets is not None:
+        # the cores of an array share one neuron-to-set table: one core, or one set
+        k = sized["link"].n_cores
+        if k > 1:
+            raise ConfigError(f"{target['name']}: the scene needs {k} cores and mixes "
+                              f"{len(request.core['param_sets'])} parameter sets; the cores "
+                              f"share one neuron-to-set table (one set, or "
+                              f"{sized['link'].core.n_neurons} neurons at most)")
+        sized = size_core(target, n_neurons=n_neurons, clock_hz=clock_hz,
+                          update_hz=update_hz, neuron_sets=neuron_sets, **depth)
+    return sized
+
+
+def _size_blocks(target: dict, request, clock_hz, pipeline_stages) -> dict:
+    """The scene's blocks behind the link (a fan-out core, a network, a LIF core: one of each)
+    at the first of the target's clock plans that holds them, fits the device and stays below
+    the measured fmax (as :func:`~cuneate.boards.sizing.size_core` chooses for cores)."""
+    from .sizing import FMAX_MARGIN, _count, _fits, _fmax_bound, clock_plans, estimate
+    from .top import ClockPlan
+    from ..hdl.izhikevich.config import PIPELINE_DEPTH
+    if pipeline_stages not in (None, PIPELINE_DEPTH) and request.kind != "fanout":
+        raise ConfigError(f"{target['name']}: --pipeline-stages sets the depth of an afferent "
+                          f"scene's Izhikevich cores, not of a {request.kind} board")
+    depth = pipeline_stages or 5
+    plans = clock_plans(target)
+    if clock_hz is not None:
+        plans = [(p, pll) for p, pll in plans if p.clock_hz == clock_hz]
+        if not plans:
+            given = ", ".join(f"{p.clock_hz / 1e6:g}" for p, _ in clock_plans(target))
+            raise ConfigError(f"{target['name']}: the PLL plans give {given} MHz, not "
+                              f"{clock_hz / 1e6:g} MHz")
+    fmax = _fmax_bound(target, depth)
+    why = []
+    for plan, pll in plans:
+        if fmax is not None and plan.clock_hz > FMAX_MARGIN * fmax and len(plans) > 1:
+            why.append(f"the {plan.clock_hz / 1e6:g} MHz plan is above {FMAX_MARGIN:g} x the "
+                       f"{fmax / 1e6:.4g} MHz fmax (fmax limit)")
+            continue
+        try:
+            plan = ClockPlan(plan.osc_hz, plan.clock_hz, request.update_hz, plan.baud)
+            lcfg, make_top = request.linked(plan, target, pipeline_stages=depth)
+        except ConfigError as exc:
+            why.append(f"at {plan.clock_hz / 1e6:g} MHz: {exc}")
+            continue
+        est = {}
+        if request.kind == "fanout":
+            f = lcfg.fanout
+            est = estimate(lcfg, target)
+            est["BRAM"] += _count([(f.n_neurons, f.entry_width), (f.n_channels, f.S.width)],
+                                  target)
+            over = _fits(est, target)
+            if over is not None:
+                why.append(f"at {plan.clock_hz / 1e6:g} MHz: {over}")
+                continue
+        return {"link": lcfg, "top": make_top, "pll": pll, "estimate": est,
+                "requested_neurons": request.neurons,
+                "plan": {"osc_hz": plan.osc_hz, "clock_hz": plan.clock_hz,
+                         "update_hz": plan.update_hz, "baud": plan.baud,
+                         "cycles_per_tick": plan.cycles_per_tick,
+                         "clocks_per_bit": plan.clocks_per_bit}}
+    raise ConfigError(f"{target['name']}: no clock plan holds the scene's "
+                      f"{', '.join(b['block'] for b in request.blocks)}: {'; '.join(why)}")
+
+
+def _block_line(b: dict) -> str:
+    if b["block"] == "channel_fanout":
+        return (f"channel_fanout ({b['n_channels']} channels to {b['n_neurons']} afferents, "
+                f"samples {b['sample_format']['format']}, table {b['table_bits']} bits)")
+    sets = f", sets {', '.join(b['param_sets'])}" if b.get("param_sets") else ""
+    role = f", {b['role']}" if b.get("role") else ""
+    return f"{b['block']} ({b['neurons']} neurons{sets}{role})"
 
 
 def format_report(r: dict) -> str:
@@ -204,18 +229,24 @@ def format_report(r: dict) -> str:
         lines.append(f"TIMING NOT MET: {pr['min_fmax_mhz']} MHz reached, "
                      f"{pr['requested_mhz']:g} MHz requested")
     cores = r.get("cores", 1)
+    depth = r.get("pipeline_stages")
     lines.append(f"{r['board']} ({r['device']}): {r.get('neurons', r['core']['n_neurons'])} "
                  f"neurons ({cores} core{'s' if cores > 1 else ''} of "
-                 f"{r['core']['n_neurons']}, pipeline depth "
-                 f"{r['core'].get('pipeline_stages', 5)}), {r['core']['clock_hz'] / 1e6:g} MHz, "
+                 f"{r['core']['n_neurons']}"
+                 + (f", pipeline depth {depth}" if depth else "")
+                 + f"), {r['core']['clock_hz'] / 1e6:g} MHz, "
                  f"{r['core']['update_hz'] / 1e3:g} kHz updates, UART "
                  f"{r['link']['baud'] / 1e6:g} Mbaud")
     sc = r.get("scene")
     if sc:
-        lines.append("scene blocks: " + "; ".join(
-            f"{b['block']} ({b['neurons']} neurons, sets {', '.join(b['param_sets'])})"
-            for b in sc["blocks"]))
-        lines.append("link bandwidth (worst case: every current every sample, 200 Hz a neuron):")
+        lines.append("scene blocks: " + "; ".join(_block_line(b) for b in sc["blocks"]))
+        if sc.get("trials_on_board", sc.get("trials")) != sc.get("trials"):
+            lines.append(f"the board holds {sc['trials_on_board']} of the scene's "
+                         f"{sc['trials']} trials at once (hardware.board_trials): the host "
+                         f"plays them one after another")
+        values = "channel" if sc.get("kind") == "fanout" else "current"
+        lines.append(f"link bandwidth (worst case: every {values} every sample, 200 Hz a "
+                     f"neuron):")
         lines += [f"  {x}" for x in sc["link_budget_lines"]]
     est = r.get("estimate") or {}
     if est:

@@ -1,4 +1,4 @@
-"""Board top: PLL clock, the Izhikevich core behind the UART host link, status LEDs.
+"""Board top: PLL clock, the blocks behind the UART host link, status LEDs.
 
 A target (one file per board in this package) supplies the platform, its oscillator and a
 :class:`ClockPlan`: the PLL output frequency, chosen so that both the cycles per sweep
@@ -45,10 +45,16 @@ class ClockPlan:
 
 
 class BoardTop(Elaboratable):
-    """``pll(m, platform) -> (clk, locked)`` builds the board's PLL; the rest is common."""
+    """``pll(m, platform) -> (clk, locked)`` builds the board's PLL; the rest is common.
 
-    def __init__(self, lcfg: LinkConfig, pll, uart_tx_enable: bool = False):
-        self.lcfg = lcfg
+    ``linked`` is the link configuration of the Izhikevich core(s) behind the link
+    (:class:`~cuneate.hdl.link.LinkedCore`) or a board top's linked blocks (an elaboratable with
+    the pins ``rx``, ``tx``, ``running`` and ``overflow``: :class:`~cuneate.hdl.link.LinkedLif`,
+    :class:`~cuneate.hdl.link.LinkedNetwork`, :class:`~cuneate.hdl.link.LinkedFanoutCore`,
+    whose ``clamped`` lights a third LED)."""
+
+    def __init__(self, linked, pll, uart_tx_enable: bool = False):
+        self.linked = LinkedCore(linked) if isinstance(linked, LinkConfig) else linked
         self.pll = pll
         self.uart_tx_enable = uart_tx_enable
 
@@ -57,7 +63,7 @@ class BoardTop(Elaboratable):
         clk, locked = self.pll(m, platform)
         m.domains.sync = ClockDomain("sync")
         m.d.comb += [ClockSignal("sync").eq(clk), ResetSignal("sync").eq(~locked)]
-        m.submodules.linked = linked = LinkedCore(self.lcfg)
+        m.submodules.linked = linked = self.linked
         res = platform.lookup("uart", 0)
         uart = platform.request("uart", 0, dir={sub.name: "-" for sub in res.ios})
         m.submodules.uart_rx = rx = io.Buffer("i", uart.rx)
@@ -67,7 +73,9 @@ class BoardTop(Elaboratable):
             m.submodules.uart_en = en = io.Buffer("o", platform.request("uart_tx_enable", 0,
                                                                          dir="-"))
             m.d.comb += en.o.eq(1)
-        for i, sig in enumerate((linked.running, linked.overflow)):
+        leds = [linked.running, linked.overflow] + \
+            ([linked.clamped] if hasattr(linked, "clamped") else [])
+        for i, sig in enumerate(leds):
             m.submodules[f"led{i}"] = led = io.Buffer("o", platform.request("led", i, dir="-"))
             m.d.comb += led.o.eq(sig)
         return m

@@ -82,6 +82,11 @@ def cmd_stream(args) -> int:
     if scene.kind != "afferent":
         raise CliError(f"{COMMAND}: {scene.source} is a {scene.kind} scene; a board streams "
                        f"afferent scenes (FBG traces into Izhikevich afferents)")
+    on_board, trials = scene["hardware"]["board_trials"], afferent.n_driven(scene)[0]
+    if on_board is not None and on_board < trials:
+        raise CliError(f"{COMMAND}: {scene.source}: its board holds {on_board} of its {trials} "
+                       f"trials (hardware.board_trials); a stream plays every trial at once "
+                       f"(build and stream without board_trials)")
     try:
         cfg = afferent.core_config(scene)
     except ValueError as exc:

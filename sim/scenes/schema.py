@@ -134,7 +134,9 @@ SCHEMA: dict = {
                  "current_frac_bits": F(int, 8, lo=0, hi=30),
                  "rounding": F(str, "nearest", choices=("nearest", "truncate")),
                  "fanout": F(bool, False),
-                 "fanout_sample_bits": F(int, 16, lo=4, hi=32)},
+                 "fanout_sample_bits": F(int, 16, lo=4, hi=32),
+                 # trials a board built for the scene holds at once (None: every trial)
+                 "board_trials": F(int, None, lo=1, hi=1_000_000)},
     "decoder": {"kind": F(str, "tree", choices=("tree", "knn", "winner", "pattern", "none")),
                 "target": F(str, "material"),
                 "features": F(str, "isi", choices=("isi", "trial")),

@@ -4,8 +4,14 @@ carry in real time, are refused in one line naming the limit."""
 
 import json
 
+import pytest
+
 from cuneate.sim.cli import main
-from cuneate.sim.scenes.scene import DEFAULT_SCENE_TOML
+from cuneate.sim.scenes.scene import DEFAULT_SCENE_TOML, example_path
+
+
+def example_text(name: str) -> str:
+    return example_path(name).read_text()
 
 
 def test_a_board_sized_to_a_scene_reports_its_blocks_and_link_budget(tmp_path, capsys):
@@ -24,11 +30,111 @@ def test_a_board_sized_to_a_scene_reports_its_blocks_and_link_budget(tmp_path, c
     assert "scene blocks: izhikevich_core (48 neurons" in txt and "3 Mbaud: to the device" in txt
 
 
-def test_a_scene_whose_blocks_no_board_carries_is_refused(tmp_path, capsys):
+def test_the_ridge_scene_at_16_khz_is_refused_by_the_link_budget(tmp_path, capsys):
+    """The ridge scene's afferent currents change every 62.5 us sweep: a step and a write
+    frame a sweep are more than 3 Mbaud carries."""
     assert main(["build", "ulx3s", "ridge_angle", "--no-bitstream", "--out",
                  str(tmp_path)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "needs the network block on the board" in err[0]
+    assert len(err) == 1, err
+    assert "the scene's currents take 800,000 B/s to the board" in err[0]
+    assert "5 currents every sample at 16000 Hz" in err[0] and "(link limit)" in err[0]
+
+
+def test_a_ridge_scene_builds_the_network_behind_the_link(tmp_path, capsys):
+    """At 4 kHz sweeps the ridge's currents fit the line: the board holds the on-chip
+    afferent -> cuneate network (5 afferents, 3 coincidence detectors) behind the link."""
+    src = tmp_path / "ridge4k.toml"
+    src.write_text(example_text("ridge_angle") + "\n[hardware]\nupdate_hz = 4000\n")
+    assert main(["build", "ulx3s", str(src), "--no-bitstream", "--json", "--out",
+                 str(tmp_path / "b")]) == 0
+    r = json.loads(capsys.readouterr().out)
+    sc = r["scene"]
+    assert sc["kind"] == "network" and r["neurons"] == 8
+    assert [b["block"] for b in sc["blocks"]] == ["izhikevich_core", "coincidence_detector"]
+    assert [b["neurons"] for b in sc["blocks"]] == [5, 3]
+    # the link carries the spike ids of both populations; the sweep is the board's
+    assert r["link"]["n_spike_ids"] == 8 and r["link"]["n_written"] == 5
+    assert r["clock_plan"]["cycles_per_tick"] == 60e6 / 4000
+    rows = {row["baud"]: row for row in sc["link_budget"]["rows"]}
+    assert rows[3_000_000]["real_time"] and rows[3_000_000]["in_load"] == pytest.approx(2 / 3)
+    v = (tmp_path / "b" / "cuneate_ulx3s_core.v").read_text()
+    assert "module cuneate_ulx3s_core" in v and "module \\cuneate_ulx3s_core.network.det" in v
+
+
+def test_the_skin_scene_builds_the_lif_core_behind_the_link(tmp_path, capsys):
+    assert main(["build", "ulx3s", "skin_3x3", "--no-bitstream", "--json", "--out",
+                 str(tmp_path)]) == 0
+    r = json.loads(capsys.readouterr().out)
+    assert r["scene"]["kind"] == "lif" and r["neurons"] == 9
+    assert [b["block"] for b in r["scene"]["blocks"]] == ["lif_core"]
+    assert r["core"]["n_neurons"] == 9 and r["core"]["update_hz"] == 1000
+    assert r["clock_plan"]["cycles_per_tick"] == 60_000 and r["pipeline_stages"] is None
+    txt = (tmp_path / "cuneate_ulx3s.report.txt").read_text()
+    assert "scene blocks: lif_core (9 neurons, sets excitatory)" in txt
+    assert "pipeline depth" not in txt.splitlines()[0]
+    # a pipeline depth is an Izhikevich core's
+    assert main(["build", "ulx3s", "skin_3x3", "--no-bitstream", "--pipeline-stages", "8",
+                 "--out", str(tmp_path / "d")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "not of a lif board" in err[0]
+
+
+def test_the_whole_hand_builds_one_hand_of_channels_fanned_out_on_chip(tmp_path, capsys):
+    """``board_trials = 1``: the board holds one grasp's hand, 24 gratings as 48 channels
+    (shift and band) fanned out to 192 afferents; the budget counts channels, not currents."""
+    assert main(["build", "ulx3s", "whole_hand", "--no-bitstream", "--json", "--out",
+                 str(tmp_path)]) == 0
+    r = json.loads(capsys.readouterr().out)
+    sc = r["scene"]
+    assert sc["kind"] == "fanout" and (sc["trials_on_board"], sc["trials"]) == (1, 12)
+    fan, core = sc["blocks"]
+    assert fan["block"] == "channel_fanout" and core["block"] == "izhikevich_core"
+    assert (fan["n_channels"], fan["n_neurons"], core["neurons"]) == (48, 192, 192)
+    assert r["link"]["n_written"] == 48 and r["link"]["fanout"]["clock_hz"] == 60e6
+    assert r["link"]["value_width"] == 16 and r["neurons"] == r["core"]["n_neurons"] == 192
+    # 48 samples of 2 bytes a millisecond in frames, against 192 currents
+    b = sc["link_budget"]
+    assert b["words_per_sample"] == 48 and b["in_bytes_per_s"] == 131_000
+    rows = {row["baud"]: row for row in b["rows"]}
+    assert rows[3_000_000]["real_time"] and not rows[115_200]["real_time"]
+    # the table is counted in the block RAMs (one core's memories, the link's, the table's)
+    assert r["estimate"]["BRAM"] > 8
+    txt = (tmp_path / "cuneate_ulx3s.report.txt").read_text()
+    assert "channel_fanout (48 channels to 192 afferents" in txt
+    assert "holds 1 of the scene's 12 trials at once" in txt
+    assert "every channel every sample" in txt
+
+
+def test_the_whole_hand_without_board_trials_is_refused_by_the_link(tmp_path, capsys):
+    src = tmp_path / "hands.toml"
+    src.write_text(example_text("whole_hand").replace("board_trials = 1", ""))
+    assert main(["build", "ulx3s", str(src), "--no-bitstream", "--out",
+                 str(tmp_path / "b")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1, err
+    assert "the scene's channels take 1,251,000 B/s to the board" in err[0]
+    assert "576 channels every sample at 1000 Hz" in err[0]
+
+
+@pytest.mark.parametrize("edit, reason", [
+    (("board_trials = 1", "board_trials = 13"), "some of an afferent scene's trials (1 .. 12)"),
+    (("board_trials = 1", "board_trials = 0"), "hardware.board_trials"),
+])
+def test_board_trials_out_of_range_is_refused(tmp_path, capsys, edit, reason):
+    src = tmp_path / "bad.toml"
+    src.write_text(example_text("whole_hand").replace(*edit))
+    assert main(["build", "ulx3s", str(src), "--no-bitstream", "--out",
+                 str(tmp_path / "b")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and reason in err[0] and "bad.toml" in err[0], err
+
+
+def test_a_stream_refuses_a_scene_whose_board_holds_some_of_its_trials(tmp_path, capsys):
+    assert main(["stream", "ulx3s", "--port", "loop://", "whole_hand", "--out",
+                 str(tmp_path)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "holds 1 of its 12 trials (hardware.board_trials)" in err[0], err
 
 
 def test_a_scene_the_link_cannot_carry_in_real_time_is_refused_with_the_figure(tmp_path,
@@ -57,3 +163,18 @@ def test_a_scene_whose_spikes_overflow_a_batch_frame_is_refused(tmp_path, capsys
     assert len(err) == 1, err
     assert "80 spikes a batch of 16 sweeps" in err[0] and "exceed the 79 a spike frame holds" \
         in err[0]
+
+
+@pytest.mark.long
+def test_the_whole_hand_bitstream_meets_timing(tmp_path, capsys):
+    """One hand of the whole-hand scene (48 channels fanned out to 192 afferents) placed and
+    routed for the ULX3S at 60 MHz (about 75 s): timing met, the block RAMs within the
+    sizing's estimate, the core's four multipliers and the fan-out's one."""
+    assert main(["build", "ulx3s", "whole_hand", "--json", "--out", str(tmp_path)]) == 0
+    r = json.loads(capsys.readouterr().out)
+    pr = r["place_route"]
+    assert r["bitstream"] and (tmp_path / "cuneate_ulx3s.bit").stat().st_size > 100_000
+    assert pr["timing_met"] and pr["min_fmax_mhz"] >= 60, pr
+    assert pr["resources"]["BRAM"]["used"] <= r["estimate"]["BRAM"]
+    assert pr["resources"]["DSP"]["used"] == 5
+    print("\n" + (tmp_path / "cuneate_ulx3s.report.txt").read_text())

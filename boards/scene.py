@@ -1,0 +1,211 @@
+"""What a board built for a scene holds (``cuneate build BOARD SCENE``): the scene's blocks
+behind the host link, sized to it, and the link's budget for streaming it in real time.
+
+By scene kind:
+
+``afferent``
+    the Izhikevich afferents behind the link (:class:`~cuneate.hdl.link.LinkedCore`, an array of
+    cores when one does not hold them); with the channel fan-out (``hardware.fanout``) one core
+    fed by the fan-out (:class:`~cuneate.hdl.link.LinkedFanoutCore`): the host streams the
+    channels, the table on chip makes the afferents' currents. ``hardware.board_trials`` (for
+    instance 1 for the whole hand: one hand's gratings) builds the board for that many of the
+    scene's trials: the engines lay every trial side by side on one core, the board takes the
+    trials one after another;
+``ridge``
+    the afferent -> cuneate network (:class:`~cuneate.hdl.link.LinkedNetwork`);
+``skin``
+    the LIF core (:class:`~cuneate.hdl.link.LinkedLif`).
+
+The budget is the worst case: every value the host writes changes every sample (a ridge
+scene's currents every sweep), every neuron fires at 200 Hz. A scene the board's link cannot
+carry, or whose spikes overflow a batch's frame, is refused in one line naming the figure.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from ..hdl.lib.config import ConfigError
+
+__all__ = ["BoardRequest", "scene_request", "WORST_RATE_HZ"]
+
+#: the firing rate of every neuron in the budget's worst case
+WORST_RATE_HZ = 200.0
+
+
+@dataclass
+class BoardRequest:
+    """A scene's board: ``kind`` (``core``, ``fanout``, ``network``, ``lif``), the neurons the
+    board holds, the blocks (one description each), the link's budget, and for ``core`` the core
+    keywords the sizing takes (:func:`~cuneate.boards.sizing.size_core`); for the other kinds
+    ``linked(plan, target, pipeline_stages)`` returns ``(link config, board top factory)`` at a
+    clock plan. ``update_hz``: the blocks' sweep rate."""
+
+    kind: str
+    neurons: int
+    sample_hz: float
+    update_hz: float
+    blocks: list
+    core: dict | None = None
+    linked: object = None
+    trials: dict = field(default_factory=dict)
+    link_budget: dict = field(default_factory=dict)
+    link_budget_lines: list = field(default_factory=list)
+
+    def describe(self) -> dict:
+        """The report's ``scene`` section."""
+        return {"kind": self.kind, "neurons": self.neurons, "sample_hz": self.sample_hz,
+                "update_hz": self.update_hz,
+                "blocks": self.blocks, "link_budget": self.link_budget,
+                "link_budget_lines": self.link_budget_lines} | self.trials
+
+
+def _check_budget(req: BoardRequest, target: dict, values: str, written: int,
+                  width: int, update_hz: float, spike_neurons: int) -> None:
+    from ..hdl.link.codec import MAX_FRAME, MIN_FRAME, SPIKE_HEADER
+    from ..sim.host.uart import BUDGET_BAUDS, format_budget, link_budget
+    baud = target["clock_plan"].baud
+    budget = link_budget(written, width, req.sample_hz, update_hz,
+                         WORST_RATE_HZ * spike_neurons, bauds=sorted({*BUDGET_BAUDS, baud}))
+    req.link_budget = budget
+    row = next(r for r in budget["rows"] if r["baud"] == baud)
+    cap = baud / 10
+    if budget["in_bytes_per_s"] > cap:
+        raise ConfigError(f"{target['name']}: the scene's {values} take "
+                          f"{budget['in_bytes_per_s']:,.0f} B/s to the board (worst case: "
+                          f"{written} {values} every sample at {req.sample_hz:g} Hz), "
+                          f"more than the {baud / 1e6:g} Mbaud link's {cap:,.0f} B/s (link limit)")
+    if not row["real_time"]:
+        raise ConfigError(f"{target['name']}: the scene's spikes take "
+                          f"{budget['out_bytes_per_s']:,.0f} B/s from the board (worst case: "
+                          f"{spike_neurons} neurons at {WORST_RATE_HZ:g} Hz), more than the "
+                          f"{baud / 1e6:g} Mbaud link's {cap:,.0f} B/s (link limit)")
+    frame_spikes = (MAX_FRAME - MIN_FRAME - SPIKE_HEADER) // 3
+    if budget["spikes_per_batch"] > frame_spikes:
+        raise ConfigError(f"{target['name']}: {budget['spikes_per_batch']:.0f} spikes a batch "
+                          f"of {budget['batch_sweeps']} sweeps (worst case: {spike_neurons} "
+                          f"neurons at {WORST_RATE_HZ:g} Hz) exceed the {frame_spikes} a spike "
+                          f"frame holds (link limit)")
+    req.link_budget_lines = format_budget(budget)
+
+
+def scene_request(scene, target: dict) -> BoardRequest:
+    """The :class:`BoardRequest` of ``scene`` on ``target``; :class:`ConfigError` names the
+    first limit it exceeds (the link's budget here; the device's when the build sizes it)."""
+    from ..sim.scenes.registry import kind_for
+    kind = kind_for(scene["stimulus"]["kind"]).name
+    return {"afferent": _afferent, "ridge": _ridge, "skin": _skin}[kind](scene, target)
+
+
+def _link(target: dict, core, plan, **kw):
+    from .sizing import _link_config
+    from ..hdl.link import LinkConfig
+    base = _link_config(target, core, plan)
+    return LinkConfig(core, clocks_per_bit=base.clocks_per_bit, batch_sweeps=base.batch_sweeps,
+                      **target.get("link_defaults", {}), **kw)
+
+
+def _afferent(scene, target: dict) -> BoardRequest:
+    from ..sim.scenes.afferent import build_neurons, n_driven, scene_core
+    n_all = n_driven(scene)[0]
+    hw = scene["hardware"]
+    k = hw["board_trials"] or n_all
+    neurons = build_neurons(scene, k)
+    core = scene_core(scene, neurons)
+    fs = scene["sensor"]["sample_rate_hz"]
+    trials = {"trials_on_board": k, "trials": n_all}
+    block = {"block": "izhikevich_core", "neurons": len(neurons),
+             "param_sets": list(core["param_sets"])}
+    if not hw["fanout"]:
+        req = BoardRequest("core", len(neurons), fs, core["update_hz"], [block], core=core,
+                           trials=trials)
+        from ..hdl.izhikevich.config import IzhikevichConfig
+        width = IzhikevichConfig(n_neurons=8, clock_hz=16 * core["update_hz"],
+                                 update_hz=core["update_hz"],
+                                 current_format=core["current_format"]).I.width
+        _check_budget(req, target, "currents", len(neurons), width, core["update_hz"],
+                      len(neurons))
+        return req
+    fan = _scene_fanout(scene, k)
+    req = BoardRequest("fanout", len(neurons), fs, core["update_hz"], [fan.to_dict(), block],
+                       core=core, trials=trials)
+    _check_budget(req, target, "channels", fan.n_channels, fan.S.width, core["update_hz"],
+                  len(neurons))
+
+    def linked(plan, target, pipeline_stages=5):
+        from .sizing import _core_config
+        from ..hdl.fanout import FanoutConfig
+        from ..hdl.link import LinkedFanoutCore
+        kw = {k: v for k, v in core.items() if k != "update_hz"}
+        kw["pipeline_stages"] = pipeline_stages
+        cfg = _core_config(target, kw, len(neurons), plan.clock_hz, plan.update_hz)
+        f = FanoutConfig.from_kwargs(fan.to_kwargs() | {"clock_hz": plan.clock_hz})
+        lcfg = _link(target, cfg, plan, fanout=f)
+        return lcfg, lambda: LinkedFanoutCore(lcfg)
+    req.linked = linked
+    return req
+
+
+def _scene_fanout(scene, k: int):
+    """The fan-out of the first ``k`` trials of ``scene``: its table as the engines build it
+    for every trial (the sample format holds every trial's largest sample), cut to the
+    channels and afferents of those trials (the first in the engines' order)."""
+    from ..hdl.fanout import FanoutConfig
+    from ..sim.fanout.scene import channel_plan
+    from ..sim.scenes.afferent import _build_blocks, build_neurons, front_end, synthesize
+    _, _, traces, infos, _ = synthesize(scene)
+    neurons = build_neurons(scene, len(traces))
+    cfg, _ = _build_blocks(scene, neurons)
+    drv, _, _ = front_end(scene, neurons, traces, infos, cfg)
+    full = channel_plan(scene, neurons, traces, infos, cfg, drv).config
+    n = sum(1 for t in neurons.trial if t < k)
+    kw = full.to_kwargs()
+    for key in ("channel", "gain", "rectify", "threshold"):
+        kw[key] = kw[key][:n]
+    kw["n_channels"] = max(kw["channel"]) + 1
+    return FanoutConfig.from_kwargs(kw)
+
+
+def _ridge(scene, target: dict) -> BoardRequest:
+    from ..hdl.network import NetworkConfig
+    from ..sim.coincidence.experiments import network_config
+    from ..sim.scenes.ridge import spec_of
+    net = network_config(spec_of(scene))
+    n_spikes = net.n_afferents + net.n_targets
+    req = BoardRequest("network", n_spikes, net.update_hz, net.update_hz, [
+        {"block": "izhikevich_core", "neurons": net.n_afferents, "role": "SA and FA afferents"},
+        {"block": "coincidence_detector", "neurons": net.n_targets,
+         "sources": net.det.n_sources}])
+    # the ridge's currents may change every sweep: one write a sweep
+    _check_budget(req, target, "currents", net.n_afferents, net.core.I.width, net.update_hz,
+                  n_spikes)
+
+    def linked(plan, target, pipeline_stages=None):
+        from ..hdl.link import LinkedNetwork
+        cfg = NetworkConfig(**(net.to_kwargs() | {"clock_hz": plan.clock_hz}))
+        lcfg = _link(target, cfg.core, plan, spike_ids=n_spikes)
+        return lcfg, lambda: LinkedNetwork(cfg, lcfg)
+    req.linked = linked
+    return req
+
+
+def _skin(scene, target: dict) -> BoardRequest:
+    from ..hdl.lif import LifConfig
+    from ..sim.lif.engines import engine_config
+    from ..sim.scenes.skin import _core
+    rows, cols = scene["sensor"]["grid"]
+    hw = scene["hardware"]
+    base = engine_config({"update_hz": hw["update_hz"]} | _core(scene), rows * cols)
+    n = rows * cols
+    req = BoardRequest("lif", n, scene["sensor"]["sample_rate_hz"], hw["update_hz"], [
+        {"block": "lif_core", "neurons": n, "core_neurons": base.n_neurons,
+         "param_sets": [scene.populations[0]["preset"]]}])
+    _check_budget(req, target, "currents", n, base.I.width, hw["update_hz"], n)
+
+    def linked(plan, target, pipeline_stages=None):
+        from ..hdl.link import LinkedLif
+        cfg = LifConfig.from_kwargs(base.to_kwargs() | {"clock_hz": plan.clock_hz})
+        lcfg = _link(target, cfg, plan)
+        return lcfg, lambda: LinkedLif(lcfg)
+    req.linked = linked
+    return req
