@@ -240,7 +240,8 @@ def build_neurons(scene: Scene, n_trials: int) -> Neurons:
         elif p["encoding"] == "SA":
             encs[p["name"]] = AfferentEncoding(
                 "SA", p["gain"] if p["gain"] is not None else fe["sa_gain"], fe["sa_unit_pm"],
-                None, "none", fe["sa_threshold_pm"], fs)
+                None, "none", fe["sa_threshold_pm"] if p["threshold_pm"] is None
+                else p["threshold_pm"], fs)
     for t in range(n_trials):
         for p in scene.populations:
             for g in p["gratings"]:

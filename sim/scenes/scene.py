@@ -303,6 +303,9 @@ def parse_scene(text: str, source: str = "<scene>", base_dir: Path | None = None
             V.err(f"population[{i}].model", "LIF populations run on a taxel skin in this build "
                                             "(sensor.kind = \"taxels\", stimulus.kind = "
                                             "\"press\")")
+        if p["threshold_pm"] is not None and (p["encoding"] != "SA" or kind.name != "afferent"):
+            V.err(f"population[{i}].threshold_pm", "a threshold gates the SA afferents of an "
+                                                   "afferent scene (encoding = \"SA\")")
         if not taxels and p["encoding"] == "force":
             V.err(f"population[{i}].encoding", "force encoding needs sensor.kind = \"taxels\"")
     names = [p["name"] for p in pops]

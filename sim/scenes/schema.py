@@ -156,7 +156,9 @@ POPULATION = {"name": F(str, required=True), "model": F(str, "izhikevich", choic
               "encoding": F(str, None, choices=("FA", "SA", "force", "spikes")),
               "gratings": F(list, None, items=int),
               "inputs": F(list, [], items=str),
-              "gain": F(NUM, None)}
+              "gain": F(NUM, None),
+              # an SA population's own threshold (default frontend.sa_threshold_pm)
+              "threshold_pm": F(NUM, None, lo=0, hi=1e9)}
 PROJECTION = {"source": F(str, required=True), "target": F(str, required=True),
               "delays_ms": F(list, [0.0], items=NUM), "weight": F(NUM, 1.0),
               "psp": F(str, "biexp", choices=("biexp", "exp", "delta"))}

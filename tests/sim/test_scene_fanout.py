@@ -101,6 +101,12 @@ def test_the_whole_hand_streams_channels_not_afferents():
     plan, nn, _ = _plan(scene)
     fc = plan.config
     assert (fc.n_channels, fc.n_neurons) == (12 * 48, 12 * 192) == (576, 2304)
+    # each SA population gated at its own threshold (pm), the FA afferents ungated
+    gates: dict = {}
+    for pop, th in zip(nn.population, fc.to_kwargs()["threshold"]):
+        gates.setdefault(pop, set()).add(th)
+    assert gates == {"sa_low": {0.25}, "sa_mid": {0.5}, "sa_high": {1.0}, "sa_top": {2.0},
+                     "fa_low": {None}, "fa_mid": {None}, "fa_high": {None}, "fa_top": {None}}
     # one hand (a trial: 48 channels, 192 afferents) at the scene's rates: its channels of 16
     # bits fit a 3 Mbaud line, every afferent's 18-bit current does not
     ch = link_budget(192, fc.S.width, 1000.0, 16000.0, 0.0, words_per_sample=48)

@@ -82,6 +82,10 @@ def _err(text_add, replace=None):
      "frontend.filter_a: unstable filter: pole z = 1.06"),
     ("", ("filter_low_hz = 1", "filter_low_hz = 1\nfilter_b = [1.0]"),
      "frontend.filter_a: filter coefficients need both"),
+    ("", ('encoding = "FA"', 'encoding = "FA"\nthreshold_pm = 1'),
+     "population[0].threshold_pm: a threshold gates the SA afferents of an afferent scene"),
+    ("", ("update_hz = 16000", "update_hz = 16000\nboard_trials = 41"),
+     "hardware.board_trials: a board holds some of an afferent scene's trials (1 .. 40)"),
 ])
 def test_scene_errors(add, replace, expect):
     assert expect in _err(add, replace)
