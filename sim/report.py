@@ -67,24 +67,39 @@ def figure_names(run) -> list[tuple[str, str]]:
     return names
 
 
+#: curves a trace or current panel draws at most
+MAX_LINES = 12
+
+
 def _fig_traces(run, out: Path, plt):
     firsts = _first_trials(run)
     fs = run.scene["sensor"]["sample_rate_hz"]
     fig, ax = plt.subplots(1, 2, figsize=(11, 3.6))
+    # at most MAX_LINES curves a panel (a hand of gratings would bury the legend): the first
+    # gratings and afferents spread over the populations of each class's first trial, the
+    # title says how many
+    per = max(1, MAX_LINES // max(len(firsts), 1))
+    n_g = run.traces[firsts[0]].shape[1] if firsts else 0
     for t in firsts:
         x = run.traces[t]
         tm = np.arange(x.shape[0]) * 1000.0 / fs
-        for g in range(x.shape[1]):
+        for g in range(min(per, x.shape[1])):
             ax[0].plot(tm, x[:, g] * 1e3, lw=1, label=f"{run.trial_class[t]} g{g}")
-    ax[0].set(xlabel="time (ms)", ylabel="Δλ (pm)", title="Bragg shift, first trial per class")
+    shown = "" if n_g <= per else f" ({per} of {n_g} gratings)"
+    ax[0].set(xlabel="time (ms)", ylabel="Δλ (pm)",
+              title=f"Bragg shift, first trial per class{shown}")
     ax[0].legend(fontsize=7)
-    cols = [i for i, t in enumerate(run.neurons.trial) if t in firsts]
+    cols = {t: [i for i, u in enumerate(run.neurons.trial) if u == t] for t in firsts}
+    n_a = len(cols[firsts[0]]) if firsts else 0
     tm = np.arange(run.currents.shape[0]) * 1000.0 / fs
-    for i in cols:
-        ax[1].plot(tm, run.currents[:, i], lw=1,
-                   label=f"{run.trial_class[run.neurons.trial[i]]} "
-                         f"{run.neurons.population[i]} g{run.neurons.grating[i]}")
-    ax[1].set(xlabel="time (ms)", ylabel="current (mV/ms)", title="front-end currents")
+    for t in firsts:
+        picks = np.unique(np.linspace(0, len(cols[t]) - 1, min(per, len(cols[t]))).astype(int))
+        for i in (cols[t][k] for k in picks):
+            ax[1].plot(tm, run.currents[:, i], lw=1,
+                       label=f"{run.trial_class[t]} {run.neurons.population[i]} "
+                             f"g{run.neurons.grating[i]}")
+    shown = "" if n_a <= per else f" ({per} of {n_a} afferents)"
+    ax[1].set(xlabel="time (ms)", ylabel="current (mV/ms)", title=f"front-end currents{shown}")
     ax[1].legend(fontsize=7)
     fig.tight_layout()
     # two files so that each figure can be linked on its own
