@@ -166,7 +166,7 @@ def _size_blocks(target: dict, request, clock_hz, pipeline_stages) -> dict:
     """The scene's blocks behind the link (a fan-out core, a network, a LIF core: one of each)
     at the first of the target's clock plans that holds them, fits the device and stays below
     the measured fmax (as :func:`~cuneate.boards.sizing.size_core` chooses for cores)."""
-    from .sizing import FMAX_MARGIN, _count, _fits, _fmax_bound, clock_plans, estimate
+    from .sizing import FMAX_MARGIN, count_blocks, device_overrun, fmax_bound, clock_plans, estimate
     from .top import ClockPlan
     from ..hdl.izhikevich.config import PIPELINE_DEPTH
     if pipeline_stages not in (None, PIPELINE_DEPTH) and request.kind != "fanout":
@@ -180,7 +180,7 @@ def _size_blocks(target: dict, request, clock_hz, pipeline_stages) -> dict:
             given = ", ".join(f"{p.clock_hz / 1e6:g}" for p, _ in clock_plans(target))
             raise ConfigError(f"{target['name']}: the PLL plans give {given} MHz, not "
                               f"{clock_hz / 1e6:g} MHz")
-    fmax = _fmax_bound(target, depth)
+    fmax = fmax_bound(target, depth)
     why = []
     for plan, pll in plans:
         if fmax is not None and plan.clock_hz > FMAX_MARGIN * fmax and len(plans) > 1:
@@ -197,9 +197,9 @@ def _size_blocks(target: dict, request, clock_hz, pipeline_stages) -> dict:
         if request.kind == "fanout":
             f = lcfg.fanout
             est = estimate(lcfg, target)
-            est["BRAM"] += _count([(f.n_neurons, f.entry_width), (f.n_channels, f.S.width)],
+            est["BRAM"] += count_blocks([(f.n_neurons, f.entry_width), (f.n_channels, f.S.width)],
                                   target)
-            over = _fits(est, target)
+            over = device_overrun(est, target)
             if over is not None:
                 why.append(f"at {plan.clock_hz / 1e6:g} MHz: {over}")
                 continue

@@ -98,9 +98,9 @@ def scene_request(scene, target: dict) -> BoardRequest:
 
 
 def _link(target: dict, core, plan, **kw):
-    from .sizing import _link_config
+    from .sizing import target_link
     from ..hdl.link import LinkConfig
-    base = _link_config(target, core, plan)
+    base = target_link(target, core, plan)
     return LinkConfig(core, clocks_per_bit=base.clocks_per_bit, batch_sweeps=base.batch_sweeps,
                       **target.get("link_defaults", {}), **kw)
 
@@ -133,12 +133,12 @@ def _afferent(scene, target: dict) -> BoardRequest:
                   len(neurons))
 
     def linked(plan, target, pipeline_stages=5):
-        from .sizing import _core_config
+        from .sizing import target_core
         from ..hdl.fanout import FanoutConfig
         from ..hdl.link import LinkedFanoutCore
         kw = {k: v for k, v in core.items() if k != "update_hz"}
         kw["pipeline_stages"] = pipeline_stages
-        cfg = _core_config(target, kw, len(neurons), plan.clock_hz, plan.update_hz)
+        cfg = target_core(target, kw, len(neurons), plan.clock_hz, plan.update_hz)
         f = FanoutConfig.from_kwargs(fan.to_kwargs() | {"clock_hz": plan.clock_hz})
         lcfg = _link(target, cfg, plan, fanout=f)
         return lcfg, lambda: LinkedFanoutCore(lcfg)
@@ -152,10 +152,10 @@ def _scene_fanout(scene, k: int):
     channels and afferents of those trials (the first in the engines' order)."""
     from ..hdl.fanout import FanoutConfig
     from ..sim.fanout.scene import channel_plan
-    from ..sim.scenes.afferent import _build_blocks, build_neurons, front_end, synthesize
+    from ..sim.scenes.afferent import build_neurons, core_config, front_end, synthesize
     _, _, traces, infos, _ = synthesize(scene)
     neurons = build_neurons(scene, len(traces))
-    cfg, _ = _build_blocks(scene, neurons)
+    cfg = core_config(scene)
     drv, _, _ = front_end(scene, neurons, traces, infos, cfg)
     full = channel_plan(scene, neurons, traces, infos, cfg, drv).config
     n = sum(1 for t in neurons.trial if t < k)
@@ -192,10 +192,10 @@ def _ridge(scene, target: dict) -> BoardRequest:
 def _skin(scene, target: dict) -> BoardRequest:
     from ..hdl.lif import LifConfig
     from ..sim.lif.engines import engine_config
-    from ..sim.scenes.skin import _core
+    from ..sim.scenes.skin import core_keywords
     rows, cols = scene["sensor"]["grid"]
     hw = scene["hardware"]
-    base = engine_config({"update_hz": hw["update_hz"]} | _core(scene), rows * cols)
+    base = engine_config({"update_hz": hw["update_hz"]} | core_keywords(scene), rows * cols)
     n = rows * cols
     req = BoardRequest("lif", n, scene["sensor"]["sample_rate_hz"], hw["update_hz"], [
         {"block": "lif_core", "neurons": n, "core_neurons": base.n_neurons,

@@ -22,7 +22,8 @@ from ..hdl.link.config import LINK_IDLE_CYCLES, LinkConfig
 from ..hdl.link.codec import HEADER_BYTES, MAX_FRAME
 from .top import ClockPlan
 
-__all__ = ["size_core", "estimate", "limits", "clock_plans", "MAX_LINK_NEURONS"]
+__all__ = ["size_core", "estimate", "limits", "clock_plans", "MAX_LINK_NEURONS", "count_blocks",
+           "device_overrun", "fmax_bound", "target_core", "target_link", "FMAX_MARGIN"]
 
 MULTIPLIERS = 4
 #: the share of a core's measured (out of context) fmax the sizing clocks a board build at
@@ -57,7 +58,9 @@ def _link_memories(lcfg: LinkConfig) -> list:
             ((MAX_FRAME - HEADER_BYTES - 2) // lcfg.current_bytes + 1, cfg.I.width)]
 
 
-def _count(mems, target: dict) -> int:
+def count_blocks(mems, target: dict) -> int:
+    """Block RAMs for the ``(depth, width)`` memories ``mems`` (those above the target's LUT
+    RAM size; each at its best block shape)."""
     return sum(_blocks(d, w, target) for d, w in mems if d * w > target.get("lutram_bits", 0))
 
 
@@ -68,7 +71,8 @@ def _dsp_per_core(cfg: IzhikevichConfig, target: dict) -> int:
 
 def _estimate(cfg: IzhikevichConfig, lcfg: LinkConfig, n: int, cores: int,
               target: dict) -> dict:
-    bram = cores * _count(_core_memories(cfg, n), target) + _count(_link_memories(lcfg), target)
+    bram = cores * count_blocks(_core_memories(cfg, n), target) + \
+        count_blocks(_link_memories(lcfg), target)
     dsp = cores * _dsp_per_core(cfg, target)
     out = {"BRAM": bram, "DSP": dsp, "cores": cores}
     logic = target.get("logic_per_core")
@@ -83,7 +87,7 @@ def estimate(lcfg: LinkConfig, target: dict) -> dict:
     return _estimate(lcfg.core, lcfg, lcfg.core.n_neurons, lcfg.n_cores, target)
 
 
-def _fits(est: dict, target: dict) -> str | None:
+def device_overrun(est: dict, target: dict) -> str | None:
     """The first device limit ``est`` exceeds, as a phrase, or None."""
     res = target["resources"]
     for kind, what, limit in (("BRAM", "block RAMs", "RAM limit"),
@@ -95,7 +99,7 @@ def _fits(est: dict, target: dict) -> str | None:
     return None
 
 
-def _fmax_bound(target: dict, depth: int) -> float | None:
+def fmax_bound(target: dict, depth: int) -> float | None:
     """The fmax (Hz) the target's measurements give a build with cores of pipeline ``depth``:
     the core's (out of context) or the link's (in a board build), whichever is lower."""
     table = target.get("fmax_mhz") or {}
@@ -110,7 +114,7 @@ def _choose(target: dict, N: int, plans: list, cfg: IzhikevichConfig, depth: int
     fewest cores that fit, then the plan with the fewest cores (the lower clock on a tie);
     raises :class:`ConfigError` naming the limit when none fits."""
     best, why = None, []
-    fmax = _fmax_bound(target, depth)
+    fmax = fmax_bound(target, depth)
     for plan, pll in plans:
         if fmax is not None and plan.clock_hz > FMAX_MARGIN * fmax and len(plans) > 1:
             why.append(f"the {plan.clock_hz / 1e6:g} MHz plan is above {FMAX_MARGIN:g} x "
@@ -122,11 +126,11 @@ def _choose(target: dict, N: int, plans: list, cfg: IzhikevichConfig, depth: int
             continue
         k_min = math.ceil(N / per_core)
         k_max = max(k_min, target["resources"]["DSP"] // _dsp_per_core(cfg, target))
-        link = _link_config(target, cfg, plan)      # its buffers do not depend on N
+        link = target_link(target, cfg, plan)      # its buffers do not depend on N
         for k in range(k_min, k_max + 1):
             n = math.ceil(N / k)
             est = _estimate(cfg, link, n, k, target)
-            over = _fits(est, target)
+            over = device_overrun(est, target)
             if over is None:
                 if best is None or k < best[2]:
                     best = (plan, pll, k, n, est)
@@ -154,7 +158,7 @@ def limits(target: dict, pipeline_stages: int = 5) -> dict:
     dsp_core = _dsp_per_core(cfg, target)
     fastest = max(p.clock_hz for p, _ in plans)
     upd = plans[0][0].update_hz
-    fmax = _fmax_bound(target, pipeline_stages)
+    fmax = fmax_bound(target, pipeline_stages)
     logic = target.get("logic_per_core")
     cores_by_logic = (res["LUT"] - target.get("logic_link", 0)) // logic if logic else None
     lo, hi = 1, MAX_LINK_NEURONS
@@ -177,7 +181,7 @@ def limits(target: dict, pipeline_stages: int = 5) -> dict:
     return out
 
 
-def _core_config(target: dict, core_kwargs: dict, n: int, clock_hz: float,
+def target_core(target: dict, core_kwargs: dict, n: int, clock_hz: float,
                  update_hz: float) -> IzhikevichConfig:
     """A core of ``n`` neurons for ``target`` (its ``core_defaults``, then ``core_kwargs``;
     external tick: the link drives it)."""
@@ -191,10 +195,10 @@ def _core_config(target: dict, core_kwargs: dict, n: int, clock_hz: float,
 def _width_config(target: dict, **core_kwargs) -> IzhikevichConfig:
     """A small configuration with the target's formats (widths do not depend on N)."""
     core_kwargs.pop("neuron_sets", None)
-    return _core_config(target, core_kwargs, 16, 16 * 16e3, 16e3)
+    return target_core(target, core_kwargs, 16, 16 * 16e3, 16e3)
 
 
-def _link_config(target: dict, core: IzhikevichConfig, plan: ClockPlan,
+def target_link(target: dict, core: IzhikevichConfig, plan: ClockPlan,
                  n_cores: int = 1) -> LinkConfig:
     """The link for ``n_cores`` cores of ``core`` at ``plan`` (one spike batch a millisecond)."""
     return LinkConfig(core, clocks_per_bit=plan.clocks_per_bit,
@@ -230,8 +234,8 @@ def size_core(target: dict, n_neurons: int | None = None, clock_hz: float | None
     N = n_neurons or target["default_neurons"]
     depth = core_kwargs.get("pipeline_stages", 5)
     plan, pll, k, n, est = size_plan(target, N, plans=plans, **core_kwargs)
-    core = _core_config(target, core_kwargs, n, plan.clock_hz, plan.update_hz)
-    lcfg = _link_config(target, core, plan, n_cores=k)
+    core = target_core(target, core_kwargs, n, plan.clock_hz, plan.update_hz)
+    lcfg = target_link(target, core, plan, n_cores=k)
     return {"link": lcfg, "estimate": estimate(lcfg, target), "pll": pll,
             "requested_neurons": N, "pipeline_stages": depth,
             "plan": {"osc_hz": plan.osc_hz, "clock_hz": plan.clock_hz,

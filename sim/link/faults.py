@@ -35,12 +35,13 @@ from dataclasses import dataclass
 
 from ...hdl.link.codec import (COUNTER_NAMES, CRC_BYTES, MAX_PAYLOAD, MSG_CONTROL, MSG_COUNTERS,
                               MSG_SPIKES, MSG_WRITE, OP_CLEAR_COUNTERS, OP_READ_COUNTERS,
-                              OP_START, OP_STEP, Message, cobs_encode, control_message,
-                              encode_frame, write_message)
+                              OP_START, OP_STEP, Message, cobs_decode, cobs_encode,
+                              control_message, encode_frame, write_message)
 
 __all__ = ["KINDS", "flip", "single_bit_flips", "single_byte_drops", "corrupt", "is_noop",
            "chunks", "with_crc_byte", "zero_free", "edge_messages", "wire_of", "Planned",
-           "fault_plan", "plan_outcome"]
+           "fault_plan", "plan_outcome", "frame_type", "OnFrame", "OnChunk",
+           "Recorder"]
 
 KINDS = ("bit", "bits2", "bits3", "code_bits2", "byte", "drop", "drops", "insert", "inserts")
 
@@ -197,6 +198,53 @@ def edge_messages(sizes=None, seed: int = 0) -> list[tuple[str, Message]]:
 def wire_of(msg: Message) -> bytes:
     """The intact wire of ``msg`` (COBS and delimiter)."""
     return cobs_encode(msg.raw()) + b"\x00"
+
+
+def frame_type(wire: bytes) -> int:
+    """The message type of an intact wire."""
+    return cobs_decode(bytes(wire).rstrip(b"\x00"))[1]
+
+
+class OnFrame:
+    """A line fault on the ``nth`` (from 0) frame of type ``typ`` the host writes (a transport
+    writes one frame a call): ``damage(wire) -> wire``; ``hit`` once it acted."""
+
+    def __init__(self, typ: int, damage, nth: int = 0):
+        self.typ, self.damage, self.nth, self.seen, self.hit = typ, damage, nth, 0, False
+
+    def __call__(self, data: bytes) -> bytes:
+        if frame_type(data) == self.typ:
+            self.seen += 1
+            if self.seen == self.nth + 1:
+                self.hit = True
+                return self.damage(data)
+        return data
+
+
+class OnChunk:
+    """A line fault on the ``nth`` (from 0) non-empty chunk of bytes a device sends."""
+
+    def __init__(self, damage, nth: int):
+        self.damage, self.nth, self.seen, self.hit = damage, nth, 0, False
+
+    def __call__(self, data: bytes) -> bytes:
+        if data:
+            self.seen += 1
+            if self.seen == self.nth + 1:
+                self.hit = True
+                return self.damage(data)
+        return data
+
+
+class Recorder:
+    """No fault: passes a direction's bytes on unchanged and keeps a copy (``data``)."""
+
+    def __init__(self):
+        self.data = bytearray()
+
+    def __call__(self, data: bytes) -> bytes:
+        self.data += data
+        return data
 
 
 # ----------------------------------------------------------------------------------------------

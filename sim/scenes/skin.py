@@ -167,7 +167,9 @@ class SkinSceneRun:
         return list(self.results)
 
 
-def _core(scene) -> dict:
+def core_keywords(scene) -> dict:
+    """The LIF core keywords of the scene (current format, rounding, its population's preset):
+    what the engines and a board for the scene share."""
     from ...hdl.lib.fixed import QFormat
     hw, p = scene["hardware"], scene.populations[0]
     return {"current_format": QFormat(hw["current_int_bits"], hw["current_frac_bits"]),
@@ -187,7 +189,7 @@ def run(scene, engines: list[str] | None = None, build_dir: Path | None = None,
     names = list(engines or scene.engines)
     for e in names:
         check_engine("lif", e)
-    core = _core(scene)
+    core = core_keywords(scene)
     cfg = engine_config({"update_hz": hw["update_hz"]} | core, rows * cols)
     block = {"block": "lif_core", "neurons": rows * cols, "core_neurons": cfg.n_neurons,
              "param_sets": [scene.populations[0]["preset"]], "current_format": str(cfg.I),

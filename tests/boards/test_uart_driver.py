@@ -10,61 +10,29 @@ import random
 import numpy as np
 import pytest
 
-from cuneate.sim.link.faults import KINDS, corrupt, flip
+from cuneate.sim.link.faults import KINDS, OnFrame, corrupt, flip
 from cuneate.sim.host.uart import ModelSerial, UartTransport
 from cuneate.hdl.link import link_config
-from cuneate.hdl.link.codec import (MSG_CONTROL, MSG_SPIKES, MSG_WRITE, OP_STEP, Message,
-                                    cobs_decode, encode_frame)
-from cuneate.sim.host.driver import AfferentEncoding, FbgDriver
-from cuneate.sim.host.transport import COUNTERS, TransportError
-from cuneate.sim.izhikevich.engines import TwinTransport
+from cuneate.hdl.link.codec import MSG_CONTROL, MSG_SPIKES, MSG_WRITE, OP_STEP, Message, \
+    encode_frame
+from cuneate.sim.host.transport import TransportError
 from cuneate.sim.link.engines import AmaranthSerial
+from host_stream import assert_contract, held_levels as trace, sa_driver, twin_reference
 
 # a small, fast core: 8 neurons, 16 cycles per sweep at 4 kHz (samples at 1 kHz held 4 ticks)
 CORE = dict(n_neurons=8, clock_hz=4e3 * 16, update_hz=4e3, spike_fifo_depth=16)
-SA = AfferentEncoding("SA", gain=40.0, unit_pm=1000.0)
 
 
 def lcfg():
     return link_config(CORE, clocks_per_bit=4, batch_sweeps=16)
 
 
-def trace(n_samples: int, seed: int = 1) -> np.ndarray:
-    """Shifts (nm) of three gratings: held levels that change now and then (the driver writes
-    only the changes), strong enough to make the neurons spike."""
-    rng = np.random.default_rng(seed)
-    levels = rng.uniform(0.0, 1.8, (max(1, n_samples // 3), 3))
-    return np.repeat(levels, 3, axis=0)[:n_samples]
-
-
 def driver(lc):
-    return FbgDriver(lc.core, [SA] * 3, first=2)
+    return sa_driver(lc.core, 2)
 
 
 def reference(lc, x):
-    tw = TwinTransport()
-    tw.open(lc.core)
-    return driver(lc).stream(tw, x)
-
-
-def frame_type(wire: bytes) -> int:
-    return cobs_decode(bytes(wire).rstrip(b"\x00"))[1]
-
-
-class OnFrame:
-    """A line fault on the ``nth`` host frame of type ``typ`` (the transport writes one frame
-    per call): ``damage(wire) -> wire``."""
-
-    def __init__(self, typ: int, damage, nth: int = 0):
-        self.typ, self.damage, self.nth, self.seen, self.hit = typ, damage, nth, 0, False
-
-    def __call__(self, data: bytes) -> bytes:
-        if frame_type(data) == self.typ:
-            self.seen += 1
-            if self.seen == self.nth + 1:
-                self.hit = True
-                return self.damage(data)
-        return data
+    return twin_reference(lc.core, 2, x)
 
 
 def stream(port, lc, x):
@@ -77,16 +45,7 @@ def test_stream_over_the_model_link_equals_the_twin_with_every_counter_checked()
     lc = lcfg()
     x = trace(60)
     ref = reference(lc, x)
-    got = stream(ModelSerial(lc), lc, x)
-    assert len(ref.spikes) > 30 and ref.writes_sent > 10
-    assert np.array_equal(got.spikes.tick, ref.spikes.tick)
-    assert np.array_equal(got.spikes.neuron, ref.spikes.neuron)
-    c = got.counters
-    assert {k: c[k] for k in COUNTERS} == {
-        "writes": ref.writes_sent, "spikes": len(ref.spikes), "spikes_counted": len(ref.spikes),
-        "frames_lost": 0, "overflow": 0, "overrun": 0, "late_writes": 0}
-    # the device accepted every frame sent after it cleared its counters
-    assert c["device_frames_ok"] == c["frames_sent"] - 2 and c["device_seq_gaps"] == 0
+    assert_contract(stream(ModelSerial(lc), lc, x), ref)
 
 
 @pytest.mark.parametrize("kind", KINDS)

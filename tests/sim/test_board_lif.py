@@ -16,6 +16,7 @@ from cuneate.hdl.link.codec import MAX_FRAME, MSG_SPIKES, FrameDecoder, parse_sp
 from cuneate.sim.host.transport import COUNTERS
 from cuneate.sim.lif.engines import LifProgram, current_runs, engine_config, run_lif
 from cuneate.sim.link.engines import BoardTransport, board_lif_config
+from cuneate.sim.link.faults import Recorder
 
 # nine neurons at 1 kHz as the skin runs them, in two parameter sets (the brief's excitatory
 # and inhibitory cells: refractory periods of 2 and 1 ticks)
@@ -106,17 +107,6 @@ def test_board_lif_equals_fixed_with_every_counter_checked():
         "overflow": 0, "overrun": 0, "late_writes": 0}
     assert c["board_framing_errors"] == 0 and c["board_frames_from_device"] >= cur.shape[0]
     assert c["board_cycles"] >= cur.shape[0] * board_lif_config(CORE).core.cycles_per_tick
-
-
-class Recorder:
-    """Passes the device's bytes on unchanged and keeps a copy."""
-
-    def __init__(self):
-        self.data = bytearray()
-
-    def __call__(self, data: bytes) -> bytes:
-        self.data += data
-        return data
 
 
 @pytest.mark.parametrize("ahead", [True, False], ids=["writes-ahead", "lockstep"])

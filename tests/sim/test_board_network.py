@@ -14,6 +14,7 @@ from cuneate.hdl.network import REPORT_SETTLE
 from cuneate.sim.coincidence.experiments import RidgeSpec, afferent_currents, network_config
 from cuneate.sim.host.transport import COUNTERS
 from cuneate.sim.link.engines import BoardTransport, board_network_config
+from cuneate.sim.link.faults import Recorder
 from cuneate.sim.network.engines import current_runs, current_writes, run_network
 
 SPEC = RidgeSpec(trials_per_angle=1)
@@ -69,17 +70,6 @@ def test_board_network_equals_fixed_for_both_populations():
         "spikes": n_spikes, "spikes_counted": n_spikes, "frames_lost": 0, "overflow": 0,
         "overrun": 0, "late_writes": 0}
     assert c["board_framing_errors"] == 0
-
-
-class Recorder:
-    """Passes the device's bytes on unchanged and keeps a copy."""
-
-    def __init__(self):
-        self.data = bytearray()
-
-    def __call__(self, data: bytes) -> bytes:
-        self.data += data
-        return data
 
 
 def test_every_spike_frame_carries_exactly_its_own_sweeps_spikes():

@@ -9,80 +9,37 @@ run are refused in one line."""
 import json
 import time
 
-import numpy as np
 import pytest
 
 from cuneate.hdl.izhikevich import IzhikevichConfig
 from cuneate.sim.cli import main
-from cuneate.sim.host.driver import AfferentEncoding, FbgDriver
-from cuneate.sim.host.transport import COUNTERS, TransportError
+from cuneate.sim.host.transport import TransportError
 from cuneate.sim.host.uart import UartTransport
-from cuneate.sim.izhikevich.engines import TwinTransport
 from cuneate.sim.link.pty import PtyBoard, PtyBoardError
 from cuneate.sim.scenes.afferent import core_config
-from cuneate.sim.scenes.scene import load_scene
+from cuneate.sim.scenes.scene import DEFAULT_SCENE_TOML, load_scene
+from host_stream import assert_contract, held_levels as trace, sa_driver, twin_reference
 
 # a small, fast core: 8 neurons, 16 cycles per sweep at 4 kHz (samples at 1 kHz held 4 ticks)
 CORE = IzhikevichConfig(n_neurons=8, clock_hz=4e3 * 16, update_hz=4e3, spike_fifo_depth=16)
-SA = AfferentEncoding("SA", gain=40.0, unit_pm=1000.0)
 
-# two grasps (one per material) of 200 ms, two gratings each: 4 FA neurons, 3200 sweeps
-TINY_SCENE = """\
-[scene]
-name = "two short grasps"
-duration_ms = 200
-trials = 1
-seed = 1
-
-[sensor]
-kind = "fbg"
-channels = 2
-sample_rate_hz = 1000
-effects = ["strain"]
-
-[stimulus]
-kind = "grasp"
-materials = ["dragon_skin", "aluminium"]
-velocity_mm_per_s = 1.5
-stop_nm = 0.01
-
-[frontend]
-filter_low_hz = 1
-filter_high_hz = 16
-gain_S = 180
-delta_lambda_unit_pm = 10
-window = "loading"
-
-[[population]]
-name = "fa"
-model = "izhikevich"
-preset = "RS"
-encoding = "FA"
-
-[hardware]
-clock_hz = 40e6
-update_hz = 16000
-
-[decoder]
-kind = "none"
-"""
-
-
-def trace(n_samples: int, seed: int = 1) -> np.ndarray:
-    """Shifts (nm) of three gratings: held levels that change now and then."""
-    rng = np.random.default_rng(seed)
-    levels = rng.uniform(0.0, 1.8, (max(1, n_samples // 3), 3))
-    return np.repeat(levels, 3, axis=0)[:n_samples]
+# the default scene cut to two grasps (one per material) of 200 ms, two gratings each: 4 FA
+# neurons, 3200 sweeps
+TINY_SCENE = (DEFAULT_SCENE_TOML.replace('name = "four-material grasp"',
+                                         'name = "two short grasps"')
+              .replace("duration_ms = 700", "duration_ms = 200")
+              .replace("trials = 10", "trials = 1")
+              .replace('["dragon_skin", "vytaflex", "abs", "aluminium"]',
+                       '["dragon_skin", "aluminium"]')
+              .replace('kind = "tree"', 'kind = "none"'))
 
 
 def driver():
-    return FbgDriver(CORE, [SA] * 3, first=2)
+    return sa_driver(CORE, 2)
 
 
 def reference(x):
-    tw = TwinTransport()
-    tw.open(CORE)
-    return driver().stream(tw, x)
+    return twin_reference(CORE, 2, x)
 
 
 def test_pyserial_through_the_pty_board_equals_the_twin_with_every_counter_checked():
@@ -97,14 +54,7 @@ def test_pyserial_through_the_pty_board_equals_the_twin_with_every_counter_check
     finally:
         board.close()
     assert not board.serving
-    assert len(ref.spikes) > 30 and ref.writes_sent > 10
-    assert np.array_equal(got.spikes.tick, ref.spikes.tick)
-    assert np.array_equal(got.spikes.neuron, ref.spikes.neuron)
-    c = got.counters
-    assert {k: c[k] for k in COUNTERS} == {
-        "writes": ref.writes_sent, "spikes": len(ref.spikes), "spikes_counted": len(ref.spikes),
-        "frames_lost": 0, "overflow": 0, "overrun": 0, "late_writes": 0}
-    assert c["device_frames_ok"] == c["frames_sent"] - 2 and c["device_seq_gaps"] == 0
+    c = assert_contract(got, ref)
     assert c["frames_received"] > 10
     assert all(c[k] == 0 for k in c if k.startswith("rx_"))
     # every byte crossed the pty, both ways, and the simulated line carried exactly those
