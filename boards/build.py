@@ -23,7 +23,7 @@ from .scene import scene_request
 from .sizing import size_core
 from .targets import TARGETS
 
-__all__ = ["build_target", "BuildError", "yowasp_env"]
+__all__ = ["build_target", "size_blocks", "BuildError", "yowasp_env"]
 
 
 class BuildError(ToolError):
@@ -86,7 +86,7 @@ def build_target(board: str, out: Path, n_neurons: int | None = None,
     depth = {} if pipeline_stages is None else {"pipeline_stages": pipeline_stages}
     request = scene_request(scene, target) if scene is not None else None
     if request is not None and request.kind != "core":
-        sized = _size_blocks(target, request, clock_hz, pipeline_stages)
+        sized = size_blocks(target, request, clock_hz, pipeline_stages)
         make_top = sized["top"]
     else:
         sized = _size_cores(target, request, n_neurons, clock_hz, update_hz, depth)
@@ -162,7 +162,7 @@ def _size_cores(target: dict, request, n_neurons, clock_hz, update_hz, depth: di
     return sized
 
 
-def _size_blocks(target: dict, request, clock_hz, pipeline_stages) -> dict:
+def size_blocks(target: dict, request, clock_hz, pipeline_stages) -> dict:
     """The scene's blocks behind the link (a fan-out core, a network, a LIF core: one of each)
     at the first of the target's clock plans that holds them, fits the device and stays below
     the measured fmax (as :func:`~cuneate.boards.sizing.size_core` chooses for cores)."""

@@ -61,13 +61,17 @@ class BoardRequest:
 
 
 def _check_budget(req: BoardRequest, target: dict, values: str, written: int,
-                  width: int, update_hz: float, spike_neurons: int) -> None:
+                  width: int, update_hz: float, spike_neurons: int,
+                  real_time: bool = True) -> None:
     from ..hdl.link.codec import MAX_FRAME, MIN_FRAME, SPIKE_HEADER
     from ..sim.host.uart import BUDGET_BAUDS, format_budget, link_budget
     baud = target["clock_plan"].baud
     budget = link_budget(written, width, req.sample_hz, update_hz,
                          WORST_RATE_HZ * spike_neurons, bauds=sorted({*BUDGET_BAUDS, baud}))
     req.link_budget = budget
+    req.link_budget_lines = format_budget(budget)
+    if not real_time:
+        return
     row = next(r for r in budget["rows"] if r["baud"] == baud)
     cap = baud / 10
     if budget["in_bytes_per_s"] > cap:
@@ -86,15 +90,17 @@ def _check_budget(req: BoardRequest, target: dict, values: str, written: int,
                           f"of {budget['batch_sweeps']} sweeps (worst case: {spike_neurons} "
                           f"neurons at {WORST_RATE_HZ:g} Hz) exceed the {frame_spikes} a spike "
                           f"frame holds (link limit)")
-    req.link_budget_lines = format_budget(budget)
 
 
-def scene_request(scene, target: dict) -> BoardRequest:
+def scene_request(scene, target: dict, real_time: bool = True) -> BoardRequest:
     """The :class:`BoardRequest` of ``scene`` on ``target``; :class:`ConfigError` names the
-    first limit it exceeds (the link's budget here; the device's when the build sizes it)."""
+    first limit it exceeds (the link's budget here, unless ``real_time`` is false: a lockstep
+    host such as ``cuneate stream`` waits for the line; the device's when the build sizes
+    it)."""
     from ..sim.scenes.registry import kind_for
     kind = kind_for(scene["stimulus"]["kind"]).name
-    return {"afferent": _afferent, "ridge": _ridge, "skin": _skin}[kind](scene, target)
+    return {"afferent": _afferent, "ridge": _ridge, "skin": _skin}[kind](scene, target,
+                                                                         real_time)
 
 
 def _link(target: dict, core, plan, **kw):
@@ -105,7 +111,7 @@ def _link(target: dict, core, plan, **kw):
                       **target.get("link_defaults", {}), **kw)
 
 
-def _afferent(scene, target: dict) -> BoardRequest:
+def _afferent(scene, target: dict, real_time: bool = True) -> BoardRequest:
     from ..sim.scenes.afferent import build_neurons, n_driven, scene_core
     n_all = n_driven(scene)[0]
     hw = scene["hardware"]
@@ -124,22 +130,25 @@ def _afferent(scene, target: dict) -> BoardRequest:
                                  update_hz=core["update_hz"],
                                  current_format=core["current_format"]).I.width
         _check_budget(req, target, "currents", len(neurons), width, core["update_hz"],
-                      len(neurons))
+                      len(neurons), real_time)
         return req
     fan = _scene_fanout(scene, k)
     req = BoardRequest("fanout", len(neurons), fs, core["update_hz"], [fan.to_dict(), block],
                        core=core, trials=trials)
     _check_budget(req, target, "channels", fan.n_channels, fan.S.width, core["update_hz"],
-                  len(neurons))
+                  len(neurons), real_time)
 
     def linked(plan, target, pipeline_stages=5):
         from .sizing import target_core
         from ..hdl.fanout import FanoutConfig
         from ..hdl.link import LinkedFanoutCore
+        from ..sim.izhikevich.engines import MIN_NEURONS
+        n = max(len(neurons), MIN_NEURONS)      # a core's fewest neurons, as the engines pad
         kw = {k: v for k, v in core.items() if k != "update_hz"}
+        kw["neuron_sets"] = list(core["neuron_sets"]) + [0] * (n - len(neurons))
         kw["pipeline_stages"] = pipeline_stages
-        cfg = target_core(target, kw, len(neurons), plan.clock_hz, plan.update_hz)
-        f = FanoutConfig.from_kwargs(fan.to_kwargs() | {"clock_hz": plan.clock_hz})
+        cfg = target_core(target, kw, n, plan.clock_hz, plan.update_hz)
+        f = FanoutConfig.from_kwargs(fan.to_kwargs() | {"clock_hz": plan.clock_hz}).padded(n)
         lcfg = _link(target, cfg, plan, fanout=f)
         return lcfg, lambda: LinkedFanoutCore(lcfg)
     req.linked = linked
@@ -151,13 +160,10 @@ def _scene_fanout(scene, k: int):
     for every trial (the sample format holds every trial's largest sample), cut to the
     channels and afferents of those trials (the first in the engines' order)."""
     from ..hdl.fanout import FanoutConfig
-    from ..sim.fanout.scene import channel_plan
-    from ..sim.scenes.afferent import build_neurons, core_config, front_end, synthesize
-    _, _, traces, infos, _ = synthesize(scene)
-    neurons = build_neurons(scene, len(traces))
-    cfg = core_config(scene)
-    drv, _, _ = front_end(scene, neurons, traces, infos, cfg)
-    full = channel_plan(scene, neurons, traces, infos, cfg, drv).config
+    from ..sim.fanout.scene import scene_channel_plan
+    from ..sim.scenes.afferent import build_neurons, n_driven
+    full = scene_channel_plan(scene).config
+    neurons = build_neurons(scene, n_driven(scene)[0])
     n = sum(1 for t in neurons.trial if t < k)
     kw = full.to_kwargs()
     for key in ("channel", "gain", "rectify", "threshold"):
@@ -166,7 +172,7 @@ def _scene_fanout(scene, k: int):
     return FanoutConfig.from_kwargs(kw)
 
 
-def _ridge(scene, target: dict) -> BoardRequest:
+def _ridge(scene, target: dict, real_time: bool = True) -> BoardRequest:
     from ..hdl.network import NetworkConfig
     from ..sim.coincidence.experiments import network_config
     from ..sim.scenes.ridge import spec_of
@@ -178,7 +184,7 @@ def _ridge(scene, target: dict) -> BoardRequest:
          "sources": net.det.n_sources}])
     # the ridge's currents may change every sweep: one write a sweep
     _check_budget(req, target, "currents", net.n_afferents, net.core.I.width, net.update_hz,
-                  n_spikes)
+                  n_spikes, real_time)
 
     def linked(plan, target, pipeline_stages=None):
         from ..hdl.link import LinkedNetwork
@@ -189,7 +195,7 @@ def _ridge(scene, target: dict) -> BoardRequest:
     return req
 
 
-def _skin(scene, target: dict) -> BoardRequest:
+def _skin(scene, target: dict, real_time: bool = True) -> BoardRequest:
     from ..hdl.lif import LifConfig
     from ..sim.lif.engines import engine_config
     from ..sim.scenes.skin import core_keywords
@@ -200,7 +206,7 @@ def _skin(scene, target: dict) -> BoardRequest:
     req = BoardRequest("lif", n, scene["sensor"]["sample_rate_hz"], hw["update_hz"], [
         {"block": "lif_core", "neurons": n, "core_neurons": base.n_neurons,
          "param_sets": [scene.populations[0]["preset"]]}])
-    _check_budget(req, target, "currents", n, base.I.width, hw["update_hz"], n)
+    _check_budget(req, target, "currents", n, base.I.width, hw["update_hz"], n, real_time)
 
     def linked(plan, target, pipeline_stages=None):
         from ..hdl.link import LinkedLif

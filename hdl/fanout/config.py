@@ -234,6 +234,23 @@ class FanoutConfig:
             kw["current_format"] = QFormat(*kw["current_format"])
         return cls(**kw)
 
+    def padded(self, n_neurons: int) -> "FanoutConfig":
+        """The same fan-out feeding ``n_neurons`` afferents: the ones past its own listen to
+        channel 0 with gain 0 and no gate (current 0), as a core's idle neurons get (a core
+        holds at least its fewest neurons)."""
+        extra = int(n_neurons) - self.n_neurons
+        if extra < 0:
+            raise ConfigError(f"a fan-out of {self.n_neurons} afferents cannot be padded to "
+                              f"{n_neurons}")
+        if extra == 0:
+            return self
+        kw = self.to_kwargs()
+        kw["channel"] += [0] * extra
+        kw["gain"] += [0.0] * extra
+        kw["rectify"] += ["none"] * extra
+        kw["threshold"] += [None] * extra
+        return FanoutConfig.from_kwargs(kw)
+
     def written(self, core) -> SimpleNamespace:
         """What the host writes to the fan-out in front of ``core``, as the host's driver and
         transport see a core's currents: ``n_neurons`` values (the channels) in the format

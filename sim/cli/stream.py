@@ -10,9 +10,11 @@ agreement with the bit-exact twin (``board vs fixed``). A board that is not prog
 scene's core (its neurons, parameter sets and current format) disagrees with the twin.
 
 ``SCENE`` is resolved as ``cuneate run`` resolves it (a file, a shipped example, the default
-scene). Refused in one line (exit 2): an unknown board, a scene that is not an afferent scene
-or does not fit the board (its sizing: cycles per sweep, block RAM, multipliers, the link's
-65 536 neuron ids), no ``--port`` or a port that cannot be opened, and any loss on the link.
+scene); a fan-out scene (``hardware.fanout``) streams its channels. Refused in one line (exit
+2): an unknown board, a scene that is not an afferent scene or does not fit the board (its
+sizing: cycles per sweep, block RAM, multipliers, the link's 65 536 neuron ids; a fan-out
+scene's as ``cuneate build`` sizes it), a scene whose board holds only some of its trials, no
+``--port`` or a port that cannot be opened, and any loss on the link.
 Exit 1 when the board's spike trains differ from the twin's.
 """
 
@@ -37,11 +39,17 @@ def _board(name: str) -> dict:
 
 
 def _check_fits(target: dict, scene, cfg) -> dict:
-    """The board's sizing of the scene's core (:func:`cuneate.boards.sizing.size_core`), or a
-    one-line refusal naming the limit the scene exceeds."""
+    """The board's sizing of the scene's core (:func:`cuneate.boards.sizing.size_core`), or
+    of its fan-out core (as ``cuneate build`` sizes it), or a one-line refusal naming the limit
+    the scene exceeds."""
     from ...boards.sizing import size_core
     from ...hdl.lib.config import ConfigError
     try:
+        if scene["hardware"]["fanout"]:
+            from ...boards.build import size_blocks
+            from ...boards.scene import scene_request
+            return size_blocks(target, scene_request(scene, target, real_time=False), None,
+                               cfg.pipeline_stages)
         return size_core(target, n_neurons=cfg.n_neurons, update_hz=cfg.update_hz,
                          pipeline_stages=cfg.pipeline_stages)
     except ConfigError as exc:

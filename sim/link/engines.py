@@ -210,7 +210,10 @@ def board_fanout_config(core: IzhikevichConfig, fanout,
     (:class:`~cuneate.hdl.fanout.FanoutConfig`; board top
     :class:`~cuneate.hdl.link.LinkedFanoutCore`): as :func:`board_link_config`, with a sweep's
     cycles covering a frame's channel writes and a fan-out run too (a sample's frame can land
-    before any sweep; :class:`~cuneate.hdl.link.LinkConfig` refuses less)."""
+    before any sweep; :class:`~cuneate.hdl.link.LinkConfig` refuses less). A core padded to
+    its fewest neurons gets a fan-out padded with idle afferents
+    (:meth:`~cuneate.hdl.fanout.FanoutConfig.padded`)."""
+    fanout = fanout.padded(core.n_neurons)
     busy = core.n_neurons + fanout.n_channels + fanout.cycles_per_run
     batch, min_cycles = _board_batch_and_cycles(core.update_hz, busy, clocks_per_bit)
     kw = core.to_kwargs(tick_source="external")

@@ -32,7 +32,7 @@ import tty
 from ...hdl.link import LinkConfig
 from .engines import BOARD_CLOCKS_PER_BIT, VerilatorSerial, board_link_config
 
-__all__ = ["PtyBoard", "PtyBoardError", "main"]
+__all__ = ["PtyBoard", "PtyBoardError", "scene_link", "main"]
 
 
 class PtyBoardError(RuntimeError):
@@ -47,7 +47,8 @@ class PtyBoard:
     config
         The core (an :class:`~cuneate.hdl.izhikevich.IzhikevichConfig`: the link is sized to
         it as the ``board`` engine sizes it, :func:`~cuneate.sim.link.engines
-        .board_link_config`) or the link itself (a :class:`~cuneate.hdl.link.LinkConfig`).
+        .board_link_config`) or the link itself (a :class:`~cuneate.hdl.link.LinkConfig`; with
+        a fan-out, the board top is :class:`~cuneate.hdl.link.LinkedFanoutCore`).
     clocks_per_bit
         Clocks per UART bit on the simulated line (for a core configuration).
     build_root
@@ -78,7 +79,11 @@ class PtyBoard:
         self.lcfg = config if isinstance(config, LinkConfig) else \
             board_link_config(config, clocks_per_bit)
         self.poll_s, self.reply_s = poll_s, reply_s
-        self.serial = VerilatorSerial(self.lcfg, build_root=build_root)
+        top = None
+        if self.lcfg.fanout is not None:        # channels in, the fan-out on chip
+            from ...hdl.link import LinkedFanoutCore
+            top = LinkedFanoutCore(self.lcfg)
+        self.serial = VerilatorSerial(self.lcfg, build_root=build_root, top=top)
         self.bytes_to_device = 0
         self.bytes_to_host = 0
         self.error: BaseException | None = None
@@ -204,6 +209,19 @@ class PtyBoard:
         return False
 
 
+def scene_link(scene, clocks_per_bit: int = BOARD_CLOCKS_PER_BIT) -> LinkConfig:
+    """The link of the board an afferent scene streams to, as the ``board`` engine sizes it:
+    its core behind the link, or with ``hardware.fanout`` the core fed by the scene's channel
+    fan-out (:func:`~cuneate.sim.link.engines.board_fanout_config`)."""
+    from ..scenes.afferent import core_config
+    cfg = core_config(scene)
+    if not scene["hardware"]["fanout"]:
+        return board_link_config(cfg, clocks_per_bit)
+    from ..fanout.scene import scene_channel_plan
+    from .engines import board_fanout_config
+    return board_fanout_config(cfg, scene_channel_plan(scene).config, clocks_per_bit)
+
+
 def main(argv=None) -> int:
     """Serve the board for a scene's core (a scene file or shipped example name; the default
     scene without one) on a pty until interrupted."""
@@ -211,7 +229,6 @@ def main(argv=None) -> int:
     import signal
     import time
     from pathlib import Path
-    from ..scenes.afferent import core_config
     from ..scenes.scene import default_scene, example_path, load_scene
     p = argparse.ArgumentParser(prog="python -m cuneate.sim.link.pty",
                                 description="serve a simulated board on a pseudo-terminal")
@@ -228,7 +245,7 @@ def main(argv=None) -> int:
         p.error(f"scene {args.scene!r}: no such file or shipped example")
     if scene.kind != "afferent":
         p.error(f"{scene.source} is a {scene.kind} scene; a board streams afferent scenes")
-    board = PtyBoard(core_config(scene))
+    board = PtyBoard(scene_link(scene))
     print(f"serving {scene.name!r} ({board.lcfg.n_neurons} neurons) on {board.path}; "
           f"Ctrl-C ends", flush=True)
 

@@ -15,8 +15,7 @@ from cuneate.hdl.izhikevich import IzhikevichConfig
 from cuneate.sim.cli import main
 from cuneate.sim.host.transport import TransportError
 from cuneate.sim.host.uart import UartTransport
-from cuneate.sim.link.pty import PtyBoard, PtyBoardError
-from cuneate.sim.scenes.afferent import core_config
+from cuneate.sim.link.pty import PtyBoard, PtyBoardError, scene_link
 from cuneate.sim.scenes.scene import DEFAULT_SCENE_TOML, load_scene
 from host_stream import assert_contract, held_levels as trace, sa_driver, twin_reference
 
@@ -86,11 +85,22 @@ def test_a_dead_harness_fails_the_host_at_once_and_is_reported_by_the_board():
     assert not board.serving
 
 
-def test_cuneate_stream_through_the_pty_board_agrees_with_the_fixed_engine(tmp_path, capsys):
+@pytest.mark.parametrize("fanout", [False, True], ids=["currents", "channels"])
+def test_cuneate_stream_through_the_pty_board_agrees_with_the_fixed_engine(tmp_path, capsys,
+                                                                          fanout):
+    """The scene's currents to its core, or (``hardware.fanout``) its channels to the board
+    top with the fan-out (``LinkedFanoutCore``)."""
     path = tmp_path / "tiny.toml"
-    path.write_text(TINY_SCENE)
+    path.write_text(TINY_SCENE.replace("[hardware]", "[hardware]\nfanout = true").replace(
+        '"golden", "fixed", "verilator"', '"golden", "fixed"') if fanout else TINY_SCENE)
     out = tmp_path / "out"
-    board = PtyBoard(core_config(load_scene(path)))
+    link = scene_link(load_scene(path))
+    # 4 channels to 4 afferents, or 4 currents to a core of 8 (its fewest neurons)
+    assert (link.fanout is not None) == fanout and link.n_written == (4 if fanout else 8)
+    if fanout:      # the core's idle neurons get idle afferents: gain 0 on channel 0
+        assert link.fanout.n_neurons == link.core.n_neurons == 8
+        assert list(link.fanout.gain[4:]) == [0.0] * 4
+    board = PtyBoard(link)
     try:
         # the port named between the board and the scene, as the usage line gives them
         rc = main(["-q", "stream", "ulx3s", "--port", board.path, str(path), "--out", str(out)])
