@@ -178,3 +178,23 @@ def test_the_whole_hand_bitstream_meets_timing(tmp_path, capsys):
     assert pr["resources"]["BRAM"]["used"] <= r["estimate"]["BRAM"]
     assert pr["resources"]["DSP"]["used"] == 5
     print("\n" + (tmp_path / "cuneate_ulx3s.report.txt").read_text())
+
+
+@pytest.mark.parametrize("scene, leds", [("skin_3x3", 2), ("ridge4k", 2), ("whole_hand", 3)])
+def test_a_scenes_board_top_elaborates_for_the_ulx3s(tmp_path, scene, leds):
+    """The board top of each kind in the ULX3S platform (amaranth's build files, no tools):
+    the PLL, the UART, a LED for running and overflow, and for the fan-out its clamp."""
+    from cuneate.boards.build import size_blocks
+    from cuneate.boards.scene import scene_request
+    from cuneate.boards.targets import TARGETS
+    from cuneate.boards.top import BoardTop
+    from cuneate.sim.scenes.scene import load_scene, parse_scene
+    t = TARGETS["ulx3s"]
+    sc = parse_scene(example_text("ridge_angle") + "\n[hardware]\nupdate_hz = 4000\n",
+                     "ridge4k.toml") if scene == "ridge4k" else load_scene(example_path(scene))
+    sized = size_blocks(t, scene_request(sc, t), None, None)
+    plan = t["platform"]().prepare(BoardTop(sized["top"](), sized["pll"], True), name="top")
+    il, lpf = (plan.files[f"top.{x}"] for x in ("il", "lpf"))
+    il, lpf = (f.decode() if isinstance(f, bytes) else f for f in (il, lpf))
+    assert "EHXPLLL" in il and "uart_0__rx" in lpf and "uart_0__tx" in lpf
+    assert [f"led_{i}__io" in lpf for i in range(4)] == [i < leds for i in range(4)]
