@@ -69,7 +69,8 @@ def _yosys_estimate(out: Path, top: str, target: dict) -> dict:
 def build_target(board: str, out: Path, n_neurons: int | None = None,
                  clock_hz: float | None = None, update_hz: float | None = None,
                  bitstream: bool = True, seed: int = 1, name: str | None = None,
-                 pipeline_stages: int | None = None, scene=None) -> dict:
+                 pipeline_stages: int | None = None, scene=None,
+                 baud: float | None = None) -> dict:
     """Size the core for ``board``, write its Verilog (``<name>.v`` of the linked core, the
     board top's ``<name>.debug.v``), build the bitstream when the board supports it and
     ``bitstream`` is true, and write ``<name>.report.json`` / ``.txt``. Returns the report.
@@ -84,12 +85,12 @@ def build_target(board: str, out: Path, n_neurons: int | None = None,
         raise ConfigError(f"unknown board {board!r}; known: {', '.join(TARGETS)}")
     target = TARGETS[board]
     depth = {} if pipeline_stages is None else {"pipeline_stages": pipeline_stages}
-    request = scene_request(scene, target) if scene is not None else None
+    request = scene_request(scene, target, baud=baud) if scene is not None else None
     if request is not None and request.kind != "core":
-        sized = size_blocks(target, request, clock_hz, pipeline_stages)
+        sized = size_blocks(target, request, clock_hz, pipeline_stages, baud)
         make_top = sized["top"]
     else:
-        sized = _size_cores(target, request, n_neurons, clock_hz, update_hz, depth)
+        sized = _size_cores(target, request, n_neurons, clock_hz, update_hz, depth, baud)
         make_top = (lambda: LinkedCore(sized["link"]))
     lcfg = sized["link"]
     name = name or f"cuneate_{board}"
@@ -137,7 +138,8 @@ def build_target(board: str, out: Path, n_neurons: int | None = None,
     return report
 
 
-def _size_cores(target: dict, request, n_neurons, clock_hz, update_hz, depth: dict) -> dict:
+def _size_cores(target: dict, request, n_neurons, clock_hz, update_hz, depth: dict,
+                baud=None) -> dict:
     """The Izhikevich core(s) behind the link (:class:`LinkedCore`): ``n_neurons``, or the
     afferents of an afferent scene's ``request``."""
     neuron_sets = None
@@ -148,7 +150,7 @@ def _size_cores(target: dict, request, n_neurons, clock_hz, update_hz, depth: di
         if len(request.core["param_sets"]) > 1:
             neuron_sets = request.core["neuron_sets"]
     sized = size_core(target, n_neurons=n_neurons, clock_hz=clock_hz, update_hz=update_hz,
-                      **depth)
+                      baud=baud, **depth)
     if neuron_sets is not None:
         # the cores of an array share one neuron-to-set table: one core, or one set
         k = sized["link"].n_cores
@@ -158,28 +160,22 @@ def _size_cores(target: dict, request, n_neurons, clock_hz, update_hz, depth: di
                               f"share one neuron-to-set table (one set, or "
                               f"{sized['link'].core.n_neurons} neurons at most)")
         sized = size_core(target, n_neurons=n_neurons, clock_hz=clock_hz,
-                          update_hz=update_hz, neuron_sets=neuron_sets, **depth)
+                          update_hz=update_hz, baud=baud, neuron_sets=neuron_sets, **depth)
     return sized
 
 
-def size_blocks(target: dict, request, clock_hz, pipeline_stages) -> dict:
+def size_blocks(target: dict, request, clock_hz, pipeline_stages, baud=None) -> dict:
     """The scene's blocks behind the link (a fan-out core, a network, a LIF core: one of each)
     at the first of the target's clock plans that holds them, fits the device and stays below
     the measured fmax (as :func:`~cuneate.boards.sizing.size_core` chooses for cores)."""
-    from .sizing import FMAX_MARGIN, count_blocks, device_overrun, fmax_bound, clock_plans, estimate
-    from .top import ClockPlan
+    from .sizing import FMAX_MARGIN, chosen_plans, count_blocks, device_overrun, estimate, \
+        fmax_bound
     from ..hdl.izhikevich.config import PIPELINE_DEPTH
     if pipeline_stages not in (None, PIPELINE_DEPTH) and request.kind != "fanout":
         raise ConfigError(f"{target['name']}: --pipeline-stages sets the depth of an afferent "
                           f"scene's Izhikevich cores, not of a {request.kind} board")
     depth = pipeline_stages or 5
-    plans = clock_plans(target)
-    if clock_hz is not None:
-        plans = [(p, pll) for p, pll in plans if p.clock_hz == clock_hz]
-        if not plans:
-            given = ", ".join(f"{p.clock_hz / 1e6:g}" for p, _ in clock_plans(target))
-            raise ConfigError(f"{target['name']}: the PLL plans give {given} MHz, not "
-                              f"{clock_hz / 1e6:g} MHz")
+    plans = chosen_plans(target, clock_hz, request.update_hz, baud)
     fmax = fmax_bound(target, depth)
     why = []
     for plan, pll in plans:
@@ -188,7 +184,6 @@ def size_blocks(target: dict, request, clock_hz, pipeline_stages) -> dict:
                        f"{fmax / 1e6:.4g} MHz fmax (fmax limit)")
             continue
         try:
-            plan = ClockPlan(plan.osc_hz, plan.clock_hz, request.update_hz, plan.baud)
             lcfg, make_top = request.linked(plan, target, pipeline_stages=depth)
         except ConfigError as exc:
             why.append(f"at {plan.clock_hz / 1e6:g} MHz: {exc}")
@@ -206,7 +201,7 @@ def size_blocks(target: dict, request, clock_hz, pipeline_stages) -> dict:
         return {"link": lcfg, "top": make_top, "pll": pll, "estimate": est,
                 "requested_neurons": request.neurons,
                 "plan": {"osc_hz": plan.osc_hz, "clock_hz": plan.clock_hz,
-                         "update_hz": plan.update_hz, "baud": plan.baud,
+                         "update_hz": plan.update_hz, "baud": plan.line_baud,
                          "cycles_per_tick": plan.cycles_per_tick,
                          "clocks_per_bit": plan.clocks_per_bit}}
     raise ConfigError(f"{target['name']}: no clock plan holds the scene's "
@@ -236,7 +231,9 @@ def format_report(r: dict) -> str:
                  + (f", pipeline depth {depth}" if depth else "")
                  + f"), {r['core']['clock_hz'] / 1e6:g} MHz, "
                  f"{r['core']['update_hz'] / 1e3:g} kHz updates, UART "
-                 f"{r['link']['baud'] / 1e6:g} Mbaud")
+                 + (f"{r['link']['baud'] / 1e6:g} Mbaud" if r['link']['baud'] >= 1e6
+                    else f"{r['link']['baud']:.0f} baud ({r['link']['clocks_per_bit']} clocks "
+                         f"a bit)"))
     sc = r.get("scene")
     if sc:
         lines.append("scene blocks: " + "; ".join(_block_line(b) for b in sc["blocks"]))

@@ -62,28 +62,29 @@ class BoardRequest:
 
 def _check_budget(req: BoardRequest, target: dict, values: str, written: int,
                   width: int, update_hz: float, spike_neurons: int,
-                  real_time: bool = True) -> None:
+                  real_time: bool = True, baud: float | None = None) -> None:
     from ..hdl.link.codec import MAX_FRAME, MIN_FRAME, SPIKE_HEADER
     from ..sim.host.uart import BUDGET_BAUDS, format_budget, link_budget
-    baud = target["clock_plan"].baud
+    baud = baud or target["clock_plan"].baud
     budget = link_budget(written, width, req.sample_hz, update_hz,
                          WORST_RATE_HZ * spike_neurons, bauds=sorted({*BUDGET_BAUDS, baud}))
     req.link_budget = budget
     req.link_budget_lines = format_budget(budget)
     if not real_time:
         return
+    line = f"{baud / 1e6:g} Mbaud" if baud >= 1e6 else f"{baud:g} baud"
     row = next(r for r in budget["rows"] if r["baud"] == baud)
     cap = baud / 10
     if budget["in_bytes_per_s"] > cap:
         raise ConfigError(f"{target['name']}: the scene's {values} take "
                           f"{budget['in_bytes_per_s']:,.0f} B/s to the board (worst case: "
                           f"{written} {values} every sample at {req.sample_hz:g} Hz), "
-                          f"more than the {baud / 1e6:g} Mbaud link's {cap:,.0f} B/s (link limit)")
+                          f"more than the {line} link's {cap:,.0f} B/s (link limit)")
     if not row["real_time"]:
         raise ConfigError(f"{target['name']}: the scene's spikes take "
                           f"{budget['out_bytes_per_s']:,.0f} B/s from the board (worst case: "
                           f"{spike_neurons} neurons at {WORST_RATE_HZ:g} Hz), more than the "
-                          f"{baud / 1e6:g} Mbaud link's {cap:,.0f} B/s (link limit)")
+                          f"{line} link's {cap:,.0f} B/s (link limit)")
     frame_spikes = (MAX_FRAME - MIN_FRAME - SPIKE_HEADER) // 3
     if budget["spikes_per_batch"] > frame_spikes:
         raise ConfigError(f"{target['name']}: {budget['spikes_per_batch']:.0f} spikes a batch "
@@ -92,15 +93,16 @@ def _check_budget(req: BoardRequest, target: dict, values: str, written: int,
                           f"frame holds (link limit)")
 
 
-def scene_request(scene, target: dict, real_time: bool = True) -> BoardRequest:
+def scene_request(scene, target: dict, real_time: bool = True,
+                  baud: float | None = None) -> BoardRequest:
     """The :class:`BoardRequest` of ``scene`` on ``target``; :class:`ConfigError` names the
-    first limit it exceeds (the link's budget here, unless ``real_time`` is false: a lockstep
-    host such as ``cuneate stream`` waits for the line; the device's when the build sizes
-    it)."""
+    first limit it exceeds (the link's budget at ``baud``, default the target's, unless
+    ``real_time`` is false: a lockstep host such as ``cuneate stream`` waits for the line; the
+    device's when the build sizes it)."""
     from ..sim.scenes.registry import kind_for
     kind = kind_for(scene["stimulus"]["kind"]).name
     return {"afferent": _afferent, "ridge": _ridge, "skin": _skin}[kind](scene, target,
-                                                                         real_time)
+                                                                         real_time, baud)
 
 
 def _link(target: dict, core, plan, **kw):
@@ -111,7 +113,8 @@ def _link(target: dict, core, plan, **kw):
                       **target.get("link_defaults", {}), **kw)
 
 
-def _afferent(scene, target: dict, real_time: bool = True) -> BoardRequest:
+def _afferent(scene, target: dict, real_time: bool = True,
+              baud: float | None = None) -> BoardRequest:
     from ..sim.scenes.afferent import build_neurons, n_driven, scene_core
     n_all = n_driven(scene)[0]
     hw = scene["hardware"]
@@ -130,13 +133,13 @@ def _afferent(scene, target: dict, real_time: bool = True) -> BoardRequest:
                                  update_hz=core["update_hz"],
                                  current_format=core["current_format"]).I.width
         _check_budget(req, target, "currents", len(neurons), width, core["update_hz"],
-                      len(neurons), real_time)
+                      len(neurons), real_time, baud)
         return req
     fan = _scene_fanout(scene, k)
     req = BoardRequest("fanout", len(neurons), fs, core["update_hz"], [fan.to_dict(), block],
                        core=core, trials=trials)
     _check_budget(req, target, "channels", fan.n_channels, fan.S.width, core["update_hz"],
-                  len(neurons), real_time)
+                  len(neurons), real_time, baud)
 
     def linked(plan, target, pipeline_stages=5):
         from .sizing import target_core
@@ -172,7 +175,8 @@ def _scene_fanout(scene, k: int):
     return FanoutConfig.from_kwargs(kw)
 
 
-def _ridge(scene, target: dict, real_time: bool = True) -> BoardRequest:
+def _ridge(scene, target: dict, real_time: bool = True,
+           baud: float | None = None) -> BoardRequest:
     from ..hdl.network import NetworkConfig
     from ..sim.coincidence.experiments import network_config
     from ..sim.scenes.ridge import spec_of
@@ -184,7 +188,7 @@ def _ridge(scene, target: dict, real_time: bool = True) -> BoardRequest:
          "sources": net.det.n_sources}])
     # the ridge's currents may change every sweep: one write a sweep
     _check_budget(req, target, "currents", net.n_afferents, net.core.I.width, net.update_hz,
-                  n_spikes, real_time)
+                  n_spikes, real_time, baud)
 
     def linked(plan, target, pipeline_stages=None):
         from ..hdl.link import LinkedNetwork
@@ -195,7 +199,8 @@ def _ridge(scene, target: dict, real_time: bool = True) -> BoardRequest:
     return req
 
 
-def _skin(scene, target: dict, real_time: bool = True) -> BoardRequest:
+def _skin(scene, target: dict, real_time: bool = True,
+          baud: float | None = None) -> BoardRequest:
     from ..hdl.lif import LifConfig
     from ..sim.lif.engines import engine_config
     from ..sim.scenes.skin import core_keywords
@@ -206,7 +211,7 @@ def _skin(scene, target: dict, real_time: bool = True) -> BoardRequest:
     req = BoardRequest("lif", n, scene["sensor"]["sample_rate_hz"], hw["update_hz"], [
         {"block": "lif_core", "neurons": n, "core_neurons": base.n_neurons,
          "param_sets": [scene.populations[0]["preset"]]}])
-    _check_budget(req, target, "currents", n, base.I.width, hw["update_hz"], n, real_time)
+    _check_budget(req, target, "currents", n, base.I.width, hw["update_hz"], n, real_time, baud)
 
     def linked(plan, target, pipeline_stages=None):
         from ..hdl.link import LinkedLif

@@ -22,7 +22,8 @@ from ..hdl.link.config import LINK_IDLE_CYCLES, LinkConfig
 from ..hdl.link.codec import HEADER_BYTES, MAX_FRAME
 from .top import ClockPlan
 
-__all__ = ["size_core", "estimate", "limits", "clock_plans", "MAX_LINK_NEURONS", "count_blocks",
+__all__ = ["size_core", "estimate", "limits", "clock_plans", "chosen_plans", "MAX_LINK_NEURONS",
+           "count_blocks",
            "device_overrun", "fmax_bound", "target_core", "target_link", "FMAX_MARGIN"]
 
 MULTIPLIERS = 4
@@ -216,11 +217,12 @@ def size_plan(target: dict, N: int, pipeline_stages: int = 5, plans=None, **core
     return _choose(target, N, plans or clock_plans(target), cfg, pipeline_stages)
 
 
-def size_core(target: dict, n_neurons: int | None = None, clock_hz: float | None = None,
-              update_hz: float | None = None, **core_kwargs) -> dict:
-    """The link configuration for ``target`` (defaults from the target): its clock plan (the
-    requested ``clock_hz`` or the one :func:`size_plan` chooses), cores and resource estimate;
-    :class:`ConfigError` names the first limit exceeded."""
+def chosen_plans(target: dict, clock_hz: float | None = None, update_hz: float | None = None,
+                 baud: float | None = None) -> list:
+    """The target's clock plans (:func:`clock_plans`) at the requested clock (one of them),
+    update rate and line rate (default: the target's); :class:`ConfigError` names a clock the
+    PLL plans do not give, or a line rate no plan's clock divides within
+    :data:`~cuneate.boards.top.MAX_BAUD_ERROR`."""
     plans = clock_plans(target)
     if clock_hz is not None:
         chosen = [(p, pll) for p, pll in plans if p.clock_hz == clock_hz]
@@ -229,8 +231,27 @@ def size_core(target: dict, n_neurons: int | None = None, clock_hz: float | None
                               f"{', '.join(f'{p.clock_hz / 1e6:g}' for p, _ in plans)}"
                               f" MHz, not {clock_hz / 1e6:g} MHz")
         plans = chosen
-    if update_hz is not None and update_hz != plans[0][0].update_hz:
-        plans = [(ClockPlan(p.osc_hz, p.clock_hz, update_hz, p.baud), pll) for p, pll in plans]
+    if update_hz is None and baud is None:
+        return plans
+    out, why = [], []
+    for p, pll in plans:
+        try:
+            out.append((ClockPlan(p.osc_hz, p.clock_hz, update_hz or p.update_hz,
+                                  baud or p.baud), pll))
+        except ConfigError as exc:
+            why.append(str(exc))
+    if not out:
+        raise ConfigError(f"{target['name']}: {'; '.join(why)}")
+    return out
+
+
+def size_core(target: dict, n_neurons: int | None = None, clock_hz: float | None = None,
+              update_hz: float | None = None, baud: float | None = None,
+              **core_kwargs) -> dict:
+    """The link configuration for ``target`` (defaults from the target): its clock plan (the
+    requested ``clock_hz`` or the one :func:`size_plan` chooses; the line at ``baud``), cores
+    and resource estimate; :class:`ConfigError` names the first limit exceeded."""
+    plans = chosen_plans(target, clock_hz, update_hz, baud)
     N = n_neurons or target["default_neurons"]
     depth = core_kwargs.get("pipeline_stages", 5)
     plan, pll, k, n, est = size_plan(target, N, plans=plans, **core_kwargs)
@@ -239,6 +260,6 @@ def size_core(target: dict, n_neurons: int | None = None, clock_hz: float | None
     return {"link": lcfg, "estimate": estimate(lcfg, target), "pll": pll,
             "requested_neurons": N, "pipeline_stages": depth,
             "plan": {"osc_hz": plan.osc_hz, "clock_hz": plan.clock_hz,
-                     "update_hz": plan.update_hz, "baud": plan.baud,
+                     "update_hz": plan.update_hz, "baud": plan.line_baud,
                      "cycles_per_tick": plan.cycles_per_tick,
                      "clocks_per_bit": plan.clocks_per_bit}}

@@ -1,8 +1,9 @@
 """Board top: PLL clock, the blocks behind the UART host link, status LEDs.
 
 A target (one file per board in this package) supplies the platform, its oscillator and a
-:class:`ClockPlan`: the PLL output frequency, chosen so that both the cycles per sweep
-(``clock_hz / update_hz``) and the UART divider (``clock_hz / baud``) are integers. The top
+:class:`ClockPlan`: the PLL output frequency, chosen so that the cycles per sweep
+(``clock_hz / update_hz``) are an integer and the UART divider (``clock_hz / baud``, rounded)
+within :data:`MAX_BAUD_ERROR` of the rate asked for (the boards' default rates are exact). The top
 holds the core in reset until the PLL locks.
 """
 
@@ -16,7 +17,13 @@ from amaranth import ClockDomain, ClockSignal, Elaboratable, Module, ResetSignal
 from ..hdl.izhikevich.config import ConfigError
 from ..hdl.link import LinkConfig, LinkedCore
 
-__all__ = ["xilinx_estimate_target", "ClockPlan", "BoardTop"]
+__all__ = ["xilinx_estimate_target", "ClockPlan", "BoardTop", "MAX_BAUD_ERROR"]
+
+
+#: the largest relative error of a board's line rate against the rate asked for (the UART
+#: samples mid-bit: the two ends' errors together must stay well inside half a bit over a
+#: 10-bit character; the FT231X adds its own)
+MAX_BAUD_ERROR = 0.01
 
 
 @dataclass(frozen=True)
@@ -29,11 +36,25 @@ class ClockPlan:
     baud: float
 
     def __post_init__(self):
-        for what, ratio in (("cycles per sweep", self.clock_hz / self.update_hz),
-                            ("clocks per UART bit", self.clock_hz / self.baud)):
-            if abs(ratio - round(ratio)) > 1e-9:
-                raise ConfigError(f"{self.clock_hz / 1e6:g} MHz gives {ratio:g} {what}: "
-                                  f"not an integer")
+        ratio = self.clock_hz / self.update_hz
+        if abs(ratio - round(ratio)) > 1e-9:
+            raise ConfigError(f"{self.clock_hz / 1e6:g} MHz gives {ratio:g} cycles per sweep: "
+                              f"not an integer")
+        if self.baud_error > MAX_BAUD_ERROR:
+            raise ConfigError(f"{self.clock_hz / 1e6:g} MHz gives {self.clock_hz / self.baud:g} "
+                              f"clocks per bit at {self.baud:g} baud: {self.clocks_per_bit} "
+                              f"clocks are {100 * self.baud_error:.2f} % off, more than a UART's "
+                              f"{100 * MAX_BAUD_ERROR:g} % (baud limit)")
+
+    @property
+    def baud_error(self) -> float:
+        """The relative error of the line rate the whole clocks per bit give."""
+        return abs(self.line_baud - self.baud) / self.baud
+
+    @property
+    def line_baud(self) -> float:
+        """The line rate the board runs: the clock over the whole clocks per bit."""
+        return self.clock_hz / max(self.clocks_per_bit, 1)
 
     @property
     def cycles_per_tick(self) -> int:

@@ -75,7 +75,8 @@ def cmd_build(args) -> int:
         report = build_target(args.board, out, n_neurons=args.neurons,
                               clock_hz=args.clock_hz, update_hz=args.update_hz,
                               bitstream=not args.no_bitstream, seed=args.seed,
-                              pipeline_stages=args.pipeline_stages, scene=scene)
+                              pipeline_stages=args.pipeline_stages, scene=scene,
+                              baud=args.baud)
     except ConfigError as exc:
         raise CliError(f"cuneate build: {exc}") from None
     except BuildError as exc:
@@ -138,6 +139,9 @@ def register(groups: CommandGroups) -> None:
     c.add_argument("--clock-hz", type=float, default=None,
                    help="core clock (must be one of the board's PLL plans)")
     c.add_argument("--update-hz", type=float, default=None)
+    c.add_argument("--baud", type=positive_int, default=None,
+                   help="UART line rate (default the board's: 3000000 on the ULX3S); the clock "
+                        "must divide it within 1 %% (115200 on the ULX3S: 521 clocks a bit)")
     c.add_argument("--out", required=True)
     c.add_argument("--seed", type=positive_int, default=1, help="nextpnr placement seed")
     from ..izhikevich.cli import add_pipeline_option

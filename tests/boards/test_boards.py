@@ -13,11 +13,14 @@ from cuneate.hdl.izhikevich.config import ConfigError
 from cuneate.sim.cli import main
 
 
-def test_clock_plans_have_integer_ratios():
+def test_clock_plans_have_whole_sweeps_and_line_rates_within_a_uarts_tolerance():
     p = TARGETS["ulx3s"]["clock_plan"]
-    assert (p.cycles_per_tick, p.clocks_per_bit) == (3750, 20)
-    with pytest.raises(ConfigError, match="clocks per UART bit"):
+    assert (p.cycles_per_tick, p.clocks_per_bit, p.baud_error) == (3750, 20, 0.0)
+    with pytest.raises(ConfigError, match=r"16.6667 clocks per bit at 3e\+06 baud: 17 clocks "
+                                          r"are 1.96 % off.*\(baud limit\)"):
         ClockPlan(25e6, 50e6, 16e3, 3e6)
+    with pytest.raises(ConfigError, match="gives 3333.33 cycles per sweep: not an integer"):
+        ClockPlan(25e6, 50e6, 15e3, 2.5e6)
 
 
 @pytest.mark.parametrize("board,kw,match", [
@@ -172,3 +175,25 @@ def test_program_refuses_clearly(capsys, tmp_path):
     err = capsys.readouterr().err
     # without openFPGALoader, or with it and no board attached: one line saying so
     assert err.count("\n") == 1 and ("not installed" in err or "no ulx3s board" in err)
+
+
+def test_a_build_at_115200_baud_divides_the_clock_within_the_uart_tolerance(tmp_path, capsys):
+    """The ULX3S at 115200 baud beside its 3 Mbaud: 521 clocks a bit at 60 MHz (115 163 baud,
+    0.03 % off); a rate no plan's clock divides within 1 % is refused before any synthesis."""
+    assert main(["build", "ulx3s", "--baud", "115200", "--no-bitstream", "--json", "--out",
+                 str(tmp_path)]) == 0
+    r = json.loads(capsys.readouterr().out)
+    assert r["link"]["clocks_per_bit"] == 521 and r["clock_plan"]["clocks_per_bit"] == 521
+    assert r["link"]["baud"] == r["clock_plan"]["baud"] == pytest.approx(60e6 / 521)
+    txt = (tmp_path / "cuneate_ulx3s.report.txt").read_text()
+    assert "UART 115163 baud (521 clocks a bit)" in txt.splitlines()[0]
+    assert main(["build", "ulx3s", "--baud", "5714286", "--no-bitstream", "--out",
+                 str(tmp_path / "x")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "60 MHz gives 10.5 clocks per bit" in err[0]
+    assert "5.00 % off, more than a UART's 1 % (baud limit)" in err[0]
+    # the budget of a scene is taken at the build's rate
+    assert main(["build", "ulx3s", "skin_3x3", "--baud", "115200", "--no-bitstream", "--out",
+                 str(tmp_path / "s")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "more than the 115200 baud link's 11,520 B/s (link limit)" in err[0]
