@@ -11,6 +11,7 @@ whether timing met the requested clock.
 from __future__ import annotations
 
 import json
+import math
 import time
 from pathlib import Path
 
@@ -166,8 +167,11 @@ def _size_cores(target: dict, request, n_neurons, clock_hz, update_hz, depth: di
 
 def size_blocks(target: dict, request, clock_hz, pipeline_stages, baud=None) -> dict:
     """The scene's blocks behind the link (a fan-out core, a network, a LIF core: one of each)
-    at the first of the target's clock plans that holds them, fits the device and stays below
-    the measured fmax (as :func:`~cuneate.boards.sizing.size_core` chooses for cores)."""
+    at the first of the target's clock plans whose sweep holds them and whose clock stays
+    below the measured fmax (as :func:`~cuneate.boards.sizing.size_core` chooses for cores),
+    on the line at ``baud``. A fan-out core's block RAMs and multipliers (the core's, the
+    link's, the table's and the fan-out's product) are estimated and checked against the
+    device; a network's or a LIF core's resources come from place and route."""
     from .sizing import FMAX_MARGIN, chosen_plans, count_blocks, device_overrun, estimate, \
         fmax_bound
     from ..hdl.izhikevich.config import PIPELINE_DEPTH
@@ -194,6 +198,8 @@ def size_blocks(target: dict, request, clock_hz, pipeline_stages, baud=None) -> 
             est = estimate(lcfg, target)
             est["BRAM"] += count_blocks([(f.n_neurons, f.entry_width), (f.n_channels, f.S.width)],
                                   target)
+            est["DSP"] += math.ceil(f.gain_width / target["dsp_width"]) * \
+                math.ceil(f.S.width / target["dsp_width"])
             over = device_overrun(est, target)
             if over is not None:
                 why.append(f"at {plan.clock_hz / 1e6:g} MHz: {over}")
@@ -239,8 +245,8 @@ def format_report(r: dict) -> str:
         lines.append("scene blocks: " + "; ".join(_block_line(b) for b in sc["blocks"]))
         if sc.get("trials_on_board", sc.get("trials")) != sc.get("trials"):
             lines.append(f"the board holds {sc['trials_on_board']} of the scene's "
-                         f"{sc['trials']} trials at once (hardware.board_trials): the host "
-                         f"plays them one after another")
+                         f"{sc['trials']} trials (hardware.board_trials); no host streams "
+                         f"such a board yet (cuneate stream refuses the scene)")
         values = "channel" if sc.get("kind") == "fanout" else "current"
         lines.append(f"link bandwidth (worst case: every {values} every sample, 200 Hz a "
                      f"neuron):")

@@ -9,8 +9,9 @@ By scene kind:
     fed by the fan-out (:class:`~cuneate.hdl.link.LinkedFanoutCore`): the host streams the
     channels, the table on chip makes the afferents' currents. ``hardware.board_trials`` (for
     instance 1 for the whole hand: one hand's gratings) builds the board for that many of the
-    scene's trials: the engines lay every trial side by side on one core, the board takes the
-    trials one after another;
+    scene's trials (the engines lay every trial side by side on one core; a physical hand
+    presents one grasp at a time). No host streams such a board yet: ``cuneate stream``
+    refuses the scene;
 ``ridge``
     the afferent -> cuneate network (:class:`~cuneate.hdl.link.LinkedNetwork`);
 ``skin``
@@ -105,6 +106,15 @@ def scene_request(scene, target: dict, real_time: bool = True,
                                                                          real_time, baud)
 
 
+def _sweep_holds(plan, busy: int, what: str) -> None:
+    """Refuse a sweep too short for ``busy`` cycles of a block's work and the link's idle
+    cycles."""
+    from ..hdl.link.config import LINK_IDLE_CYCLES
+    if plan.cycles_per_tick < busy + LINK_IDLE_CYCLES:
+        raise ConfigError(f"a sweep of {plan.cycles_per_tick} cycles cannot hold {what}'s "
+                          f"{busy} cycles of work and the link's {LINK_IDLE_CYCLES} idle ones")
+
+
 def _link(target: dict, core, plan, **kw):
     from .sizing import target_link
     from ..hdl.link import LinkConfig
@@ -192,7 +202,11 @@ def _ridge(scene, target: dict, real_time: bool = True,
 
     def linked(plan, target, pipeline_stages=None):
         from ..hdl.link import LinkedNetwork
+        from ..hdl.network import REPORT_SETTLE
         cfg = NetworkConfig(**(net.to_kwargs() | {"clock_hz": plan.clock_hz}))
+        # a tick's work, the report's settling and one spike of every neuron drained (as the
+        # board engine sizes it: board_network_config), and the link's idle cycles
+        _sweep_holds(plan, cfg.cycles_needed + REPORT_SETTLE + n_spikes, "the network")
         lcfg = _link(target, cfg.core, plan, spike_ids=n_spikes)
         return lcfg, lambda: LinkedNetwork(cfg, lcfg)
     req.linked = linked
@@ -215,6 +229,7 @@ def _skin(scene, target: dict, real_time: bool = True,
 
     def linked(plan, target, pipeline_stages=None):
         from ..hdl.link import LinkedLif
+        _sweep_holds(plan, base.n_neurons, "the LIF core")
         cfg = LifConfig.from_kwargs(base.to_kwargs() | {"clock_hz": plan.clock_hz})
         lcfg = _link(target, cfg, plan)
         return lcfg, lambda: LinkedLif(lcfg)

@@ -24,6 +24,8 @@ __all__ = ["xilinx_estimate_target", "ClockPlan", "BoardTop", "MAX_BAUD_ERROR"]
 #: samples mid-bit: the two ends' errors together must stay well inside half a bit over a
 #: 10-bit character; the FT231X adds its own)
 MAX_BAUD_ERROR = 0.01
+#: the fewest clocks a UART bit may take (:class:`~cuneate.hdl.lib.uart.UartRx` samples mid-bit)
+MIN_CLOCKS_PER_BIT = 4
 
 
 @dataclass(frozen=True)
@@ -40,6 +42,10 @@ class ClockPlan:
         if abs(ratio - round(ratio)) > 1e-9:
             raise ConfigError(f"{self.clock_hz / 1e6:g} MHz gives {ratio:g} cycles per sweep: "
                               f"not an integer")
+        if self.clocks_per_bit < MIN_CLOCKS_PER_BIT:
+            raise ConfigError(f"{self.clock_hz / 1e6:g} MHz gives {self.clock_hz / self.baud:g} "
+                              f"clocks per bit at {self.baud:g} baud: the UART needs at least "
+                              f"{MIN_CLOCKS_PER_BIT} (baud limit)")
         if self.baud_error > MAX_BAUD_ERROR:
             raise ConfigError(f"{self.clock_hz / 1e6:g} MHz gives {self.clock_hz / self.baud:g} "
                               f"clocks per bit at {self.baud:g} baud: {self.clocks_per_bit} "

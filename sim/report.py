@@ -72,7 +72,7 @@ MAX_LINES = 12
 
 
 def _fig_traces(run, out: Path, plt):
-    firsts = _first_trials(run)
+    firsts = _first_trials(run)[:MAX_LINES]
     fs = run.scene["sensor"]["sample_rate_hz"]
     fig, ax = plt.subplots(1, 2, figsize=(11, 3.6))
     # at most MAX_LINES curves a panel (a hand of gratings would bury the legend): the first

@@ -236,8 +236,9 @@ class FanoutConfig:
 
     def padded(self, n_neurons: int) -> "FanoutConfig":
         """The same fan-out feeding ``n_neurons`` afferents: the ones past its own listen to
-        channel 0 with gain 0 and no gate (current 0), as a core's idle neurons get (a core
-        holds at least its fewest neurons)."""
+        channel 0 with gain 0, no gate and positive rectification (current 0; the
+        rectification keeps the proven current range the fan-out's own), as a core's idle
+        neurons get (a core holds at least its fewest neurons)."""
         extra = int(n_neurons) - self.n_neurons
         if extra < 0:
             raise ConfigError(f"a fan-out of {self.n_neurons} afferents cannot be padded to "
@@ -247,7 +248,7 @@ class FanoutConfig:
         kw = self.to_kwargs()
         kw["channel"] += [0] * extra
         kw["gain"] += [0.0] * extra
-        kw["rectify"] += ["none"] * extra
+        kw["rectify"] += ["positive"] * extra
         kw["threshold"] += [None] * extra
         return FanoutConfig.from_kwargs(kw)
 

@@ -38,20 +38,20 @@ def _board(name: str) -> dict:
     return TARGETS[name]
 
 
-def _check_fits(target: dict, scene, cfg) -> dict:
+def _check_fits(target: dict, scene, cfg, baud: int | None) -> dict:
     """The board's sizing of the scene's core (:func:`cuneate.boards.sizing.size_core`), or
-    of its fan-out core (as ``cuneate build`` sizes it), or a one-line refusal naming the limit
-    the scene exceeds."""
+    of its fan-out core (as ``cuneate build`` sizes it), at the line rate ``baud`` (``None``:
+    the board's), or a one-line refusal naming the limit the scene exceeds."""
     from ...boards.sizing import size_core
     from ...hdl.lib.config import ConfigError
     try:
         if scene["hardware"]["fanout"]:
             from ...boards.build import size_blocks
             from ...boards.scene import scene_request
-            return size_blocks(target, scene_request(scene, target, real_time=False), None,
-                               cfg.pipeline_stages)
+            return size_blocks(target, scene_request(scene, target, real_time=False, baud=baud),
+                               None, cfg.pipeline_stages, baud)
         return size_core(target, n_neurons=cfg.n_neurons, update_hz=cfg.update_hz,
-                         pipeline_stages=cfg.pipeline_stages)
+                         pipeline_stages=cfg.pipeline_stages, baud=baud)
     except ConfigError as exc:
         raise CliError(f"{COMMAND}: {scene.source}: its core of {cfg.n_neurons} neurons at "
                        f"{cfg.update_hz:g} Hz does not fit the board: {exc}") from None
@@ -99,12 +99,13 @@ def cmd_stream(args) -> int:
         cfg = afferent.core_config(scene)
     except ValueError as exc:
         raise CliError(f"{COMMAND}: {scene.source}: {exc}") from None
-    _check_fits(target, scene, cfg)
+    _check_fits(target, scene, cfg, args.baud)
     board_baud = int(target["clock_plan"].baud)
     baud = args.baud or board_baud
     if baud != board_baud:
-        print(f"{COMMAND}: warning: {args.board} bitstreams run the line at {board_baud} baud, "
-              f"not {baud}", file=sys.stderr)
+        print(f"{COMMAND}: note: the line at {baud} baud, not the {args.board}'s default "
+              f"{board_baud}: the board must be built for it (cuneate build {args.board} "
+              f"--baud {baud})", file=sys.stderr)
     out = output_dir(args.out)
     check_budget(scene, ["fixed"])          # the board runs at the line's pace
     try:
@@ -149,7 +150,8 @@ def register(groups: CommandGroups) -> None:
     p.add_argument("--port", default=None,
                    help="the board's serial port: a device (/dev/ttyUSB0) or a pyserial URL")
     p.add_argument("--baud", type=positive_int, default=None,
-                   help="line rate (default: the board's, 3000000 on the ulx3s)")
+                   help="line rate (default: the board's, 3000000 on the ulx3s; a board built "
+                        "with cuneate build --baud B runs B)")
     p.add_argument("--timeout-s", type=positive_float, default=5.0,
                    help="how long the host waits for the board before naming what it lost")
     p.add_argument("--out", default="out/stream",

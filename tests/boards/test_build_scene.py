@@ -98,11 +98,12 @@ def test_the_whole_hand_builds_one_hand_of_channels_fanned_out_on_chip(tmp_path,
     assert b["words_per_sample"] == 48 and b["in_bytes_per_s"] == 131_000
     rows = {row["baud"]: row for row in b["rows"]}
     assert rows[3_000_000]["real_time"] and not rows[115_200]["real_time"]
-    # the table is counted in the block RAMs (one core's memories, the link's, the table's)
-    assert r["estimate"]["BRAM"] > 8
+    # the table is counted in the block RAMs (one core's memories, the link's, the table's),
+    # the fan-out's 18 x 16-bit product in the multipliers beside the core's four
+    assert r["estimate"]["BRAM"] > 8 and r["estimate"]["DSP"] == 5
     txt = (tmp_path / "cuneate_ulx3s.report.txt").read_text()
     assert "channel_fanout (48 channels to 192 afferents" in txt
-    assert "holds 1 of the scene's 12 trials at once" in txt
+    assert "holds 1 of the scene's 12 trials (hardware.board_trials)" in txt
     assert "every channel every sample" in txt
 
 
@@ -176,7 +177,7 @@ def test_the_whole_hand_bitstream_meets_timing(tmp_path, capsys):
     assert r["bitstream"] and (tmp_path / "cuneate_ulx3s.bit").stat().st_size > 100_000
     assert pr["timing_met"] and pr["min_fmax_mhz"] >= 60, pr
     assert pr["resources"]["BRAM"]["used"] <= r["estimate"]["BRAM"]
-    assert pr["resources"]["DSP"]["used"] == 5
+    assert pr["resources"]["DSP"]["used"] == r["estimate"]["DSP"] == 5
     print("\n" + (tmp_path / "cuneate_ulx3s.report.txt").read_text())
 
 
@@ -198,3 +199,25 @@ def test_a_scenes_board_top_elaborates_for_the_ulx3s(tmp_path, scene, leds):
     il, lpf = (f.decode() if isinstance(f, bytes) else f for f in (il, lpf))
     assert "EHXPLLL" in il and "uart_0__rx" in lpf and "uart_0__tx" in lpf
     assert [f"led_{i}__io" in lpf for i in range(4)] == [i < leds for i in range(4)]
+
+
+def test_a_sweep_too_short_for_the_blocks_is_refused():
+    """4032 taxels (a 64 x 63 skin) at 16 kHz (the scene's 80 MHz clock holds them): without
+    the real-time budget (a lockstep host waits for the line) their LIF core still needs 4032
+    cycles a sweep, more than a 60 MHz sweep's 3750 (the 90 MHz plan is above the measured
+    fmax): refused before any synthesis, naming the figures."""
+    from cuneate.boards.build import size_blocks
+    from cuneate.boards.scene import scene_request
+    from cuneate.boards.targets import TARGETS
+    from cuneate.hdl.lib.config import ConfigError
+    from cuneate.sim.scenes.scene import parse_scene
+    sc = parse_scene(example_text("skin_3x3").replace("grid = [3, 3]", "grid = [64, 63]")
+                     .replace("update_hz = 1000", "update_hz = 16000\nclock_hz = 80e6"),
+                     "big_skin.toml")
+    t = TARGETS["ulx3s"]
+    with pytest.raises(ConfigError) as err:
+        size_blocks(t, scene_request(sc, t, real_time=False), None, None)
+    msg = str(err.value)
+    assert "\n" not in msg and "no clock plan holds the scene's lif_core" in msg
+    assert "a sweep of 3750 cycles cannot hold the LIF core's 4032 cycles of work and the " \
+           "link's 16 idle ones" in msg and "(fmax limit)" in msg
