@@ -173,7 +173,7 @@ def _scene_fanout(scene, k: int):
     for every trial (the sample format holds every trial's largest sample), cut to the
     channels and afferents of those trials (the first in the engines' order)."""
     from ..hdl.fanout import FanoutConfig
-    from ..sim.fanout.scene import scene_channel_plan
+    from ..sim.scenes.afferent import scene_channel_plan
     from ..sim.scenes.afferent import build_neurons, n_driven
     full = scene_channel_plan(scene).config
     neurons = build_neurons(scene, n_driven(scene)[0])

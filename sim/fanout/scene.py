@@ -27,8 +27,7 @@ from ...hdl.fanout import FanoutConfig, FanoutTwin
 from ..host.driver import FbgDriver
 from ..host.transport import Transport
 
-__all__ = ["ChannelPlan", "channel_plan", "scene_channel_plan", "scene_fanout",
-           "check_fanout_engines",
+__all__ = ["ChannelPlan", "channel_plan", "scene_fanout", "check_fanout_engines",
            "fanout_transport",
            "FanoutTransport", "FANOUT_SCENE_ENGINES"]
 
@@ -97,18 +96,6 @@ def channel_plan(scene, neurons, traces, infos, core, drv: FbgDriver) -> Channel
                        sample_hz=scene["sensor"]["sample_rate_hz"])
     cdrv = FbgDriver(cfg.written(core), [None] * cfg.n_channels, drv.fs_hz, drv.latency_ticks)
     return ChannelPlan(chans, samples, cfg.S.to_raw(samples), cfg, cdrv)
-
-
-def scene_channel_plan(scene) -> ChannelPlan:
-    """The :class:`ChannelPlan` of a fan-out scene as a run builds it (every trial; its
-    stimulus synthesized and its front end run), without running an engine: what a board for
-    the scene holds (``cuneate build``, ``python -m cuneate.sim.link.pty``)."""
-    from ..scenes.afferent import build_neurons, core_config, front_end, synthesize
-    _, _, traces, infos, _ = synthesize(scene)
-    neurons = build_neurons(scene, len(traces))
-    cfg = core_config(scene)
-    drv, _, _ = front_end(scene, neurons, traces, infos, cfg)
-    return channel_plan(scene, neurons, traces, infos, cfg, drv)
 
 
 def scene_fanout(scene, neurons, traces, infos, core, drv, engines, blocks) -> ChannelPlan | None:

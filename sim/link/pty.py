@@ -213,12 +213,11 @@ def scene_link(scene, clocks_per_bit: int = BOARD_CLOCKS_PER_BIT) -> LinkConfig:
     """The link of the board an afferent scene streams to, as the ``board`` engine sizes it:
     its core behind the link, or with ``hardware.fanout`` the core fed by the scene's channel
     fan-out (:func:`~cuneate.sim.link.engines.board_fanout_config`)."""
-    from ..scenes.afferent import core_config
+    from ..scenes.afferent import core_config, scene_channel_plan
+    from .engines import board_fanout_config
     cfg = core_config(scene)
     if not scene["hardware"]["fanout"]:
         return board_link_config(cfg, clocks_per_bit)
-    from ..fanout.scene import scene_channel_plan
-    from .engines import board_fanout_config
     return board_fanout_config(cfg, scene_channel_plan(scene).config, clocks_per_bit)
 
 

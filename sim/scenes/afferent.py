@@ -1,14 +1,12 @@
-"""Afferent scenes: synthesize (or load) FBG traces, drive Izhikevich afferents through the host
-front end, decode, compare engines (the scene kind of the grasp, slide, pulses and recorded
-stimuli).
+"""Afferent scenes (grasp, slide, pulses and recorded stimuli): synthesize (or load) FBG traces,
+drive Izhikevich afferents through the host front end, decode, compare engines.
 
 Only what the scene calls for is computed:
 
 * effects: :func:`cuneate.golden.tactile.apply_effects` calls only the listed effects;
-* blocks: :data:`BLOCKS` maps a population model to the function that builds its hardware
-  configuration; only the models the scene's populations use are built, each sized to its
-  neurons (all trials of a scene are separate neurons of one core, so one build and one run
-  serve every trial);
+* blocks: :data:`BLOCKS` maps a population model to the builder of its hardware configuration;
+  only the models the scene uses are built, each sized to its neurons (a scene's trials are
+  separate neurons of one core: one build and one run serve every trial);
 * engines: :data:`ENGINES` maps an engine name to its runner; only the scene's engines run.
 
 :func:`run` returns a :class:`SceneRun` whose ``ran`` lists exactly the effects, blocks and
@@ -27,13 +25,12 @@ import numpy as np
 from ...golden import izhikevich as golden
 from ...golden.fbg import IIRFilter, design_bandpass
 from ...golden.tactile import (MATERIALS, GraspSpec, Material, Pad, PulseSpec, SlideSpec,
-                              apply_effects, sensor_effects, synthesize_grasp,
-                              synthesize_pulse, synthesize_slide)
+                              apply_effects, sensor_effects, synthesize_grasp, synthesize_pulse,
+                              synthesize_slide)
 from ...hdl.lib.fixed import QFormat
 from ..decode import decode_trials
-from ..engines.registry import ENGINES as ENGINE_TRAITS
-from ..engines.registry import block_engines
-from ..fanout.scene import check_fanout_engines, scene_fanout
+from ..engines.registry import ENGINES as ENGINE_TRAITS, block_engines
+from ..fanout.scene import channel_plan, check_fanout_engines, scene_fanout
 from ..report import front_end_detail
 from ..host.driver import AfferentEncoding, FbgDriver
 from .runner import agreement as train_agreement
@@ -41,7 +38,7 @@ from .scene import Scene
 
 __all__ = ["SceneRun", "run", "BLOCKS", "ENGINES", "synthesize", "build_neurons",
            "front_end", "summary", "write_report", "format_run", "write_spike_files",
-           "waves_request", "estimate", "n_driven", "core_config"]
+           "waves_request", "estimate", "n_driven", "core_config", "scene_channel_plan"]
 
 
 @dataclass
@@ -400,6 +397,15 @@ def core_config(scene: Scene):
     """The core configuration a run of ``scene`` streams to (what a board must hold to run
     it: :class:`~cuneate.sim.link.pty.PtyBoard` serves one), without running anything."""
     return _build_blocks(scene, build_neurons(scene, n_driven(scene)[0]))[0]
+
+
+def scene_channel_plan(scene: Scene):
+    """The :class:`~cuneate.sim.fanout.scene.ChannelPlan` of a fan-out scene as a run builds
+    it (every trial), without running an engine: what a board for the scene holds."""
+    _, _, traces, infos, _ = synthesize(scene)
+    neurons, cfg = build_neurons(scene, len(traces)), core_config(scene)
+    drv = front_end(scene, neurons, traces, infos, cfg)[0]
+    return channel_plan(scene, neurons, traces, infos, cfg, drv)
 
 
 def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None = None,
