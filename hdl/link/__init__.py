@@ -7,7 +7,8 @@ sequence numbers) between a host and a core on the board.
 ``twin``      :class:`LinkModel`: the device's answers on the bit-exact Izhikevich twin
 ``core``      :class:`HostLink` and :class:`LinkedCore` (Amaranth) and their Verilog
 ``network``   :class:`LinkedNetwork`: the on-chip afferent -> cuneate network behind the link
-``fanout``    :class:`LinkedFanoutCore`: channel samples in, fanned out on chip to a core
+``fanout``    :class:`LinkedFanoutCore`, :class:`LinkedFanoutNetwork`: channel samples in, fanned
+              out on chip to a core or to the network's afferents
 ``lif``       :class:`LinkedLif`: a LIF core behind the link
 """
 
@@ -15,12 +16,12 @@ from .codec import (COUNTER_NAMES, MAX_FRAME, MIN_FRAME, CobsError, FrameDecoder
                     Message, decode_frame, encode_frame)
 from .config import LinkConfig, link_config
 from .core import HostLink, LinkedCore, link_verilog
-from .fanout import LinkedFanoutCore
+from .fanout import LinkedFanoutCore, LinkedFanoutNetwork
 from .lif import LinkedLif
 from .network import LinkedNetwork
 from .twin import LinkModel
 
 __all__ = ["LinkConfig", "link_config", "HostLink", "LinkedCore", "LinkedNetwork",
-           "LinkedFanoutCore", "LinkedLif", "link_verilog",
+           "LinkedFanoutCore", "LinkedFanoutNetwork", "LinkedLif", "link_verilog",
            "COUNTER_NAMES", "MAX_FRAME", "MIN_FRAME", "CobsError", "FrameError", "FrameDecoder",
            "LinkModel", "Message", "encode_frame", "decode_frame"]

@@ -36,8 +36,8 @@ from ..host.transport import SimulatedSerial
 from ..host.uart import UartTransport
 
 __all__ = ["AmaranthSerial", "VerilatorSerial", "BoardTransport", "board_link_config",
-           "board_network_config", "board_fanout_config", "board_lif_config",
-           "BOARD_CLOCKS_PER_BIT"]
+           "board_network_config", "board_fanout_config", "board_fanout_network_config",
+           "board_lif_config", "BOARD_CLOCKS_PER_BIT"]
 
 CLOCK_S = 1e-6
 
@@ -181,6 +181,21 @@ def board_link_config(core: IzhikevichConfig, clocks_per_bit: int = BOARD_CLOCKS
     return LinkConfig(ext, clocks_per_bit=clocks_per_bit, batch_sweeps=batch, n_cores=n_cores)
 
 
+def _board_network(ncfg, clocks_per_bit: int, extra_cycles: int = 0):
+    """The network of ``ncfg`` on the ``board`` engine and its batch: external tick, the clock
+    raised where needed so a sweep holds the network's tick work (its ``cycles_needed``, the
+    report's settling and the draining of one spike per afferent and cuneate neuron),
+    ``extra_cycles`` of a block in front of it and the link's idle cycles, and lets the
+    largest spike frame leave within a batch (:func:`_board_batch_and_cycles`)."""
+    from ...hdl.network import REPORT_SETTLE, NetworkConfig
+    busy = ncfg.cycles_needed + REPORT_SETTLE + ncfg.n_afferents + ncfg.n_targets + extra_cycles
+    batch, min_cycles = _board_batch_and_cycles(ncfg.update_hz, busy, clocks_per_bit)
+    kw = ncfg.to_kwargs() | {"tick_source": "external"}
+    if ncfg.clock_hz / ncfg.update_hz < min_cycles:
+        kw["clock_hz"] = ncfg.update_hz * min_cycles
+    return NetworkConfig(**kw), batch
+
+
 def board_network_config(ncfg, clocks_per_bit: int = BOARD_CLOCKS_PER_BIT):
     """The network and its link on the ``board`` engine
     (:class:`~cuneate.hdl.link.LinkedNetwork`): ``(network config, link config)``.
@@ -192,15 +207,29 @@ def board_network_config(ncfg, clocks_per_bit: int = BOARD_CLOCKS_PER_BIT):
     spike per afferent and cuneate neuron) and to let the largest spike frame leave within a
     batch. The link writes the afferents' currents (the network's afferent core gives the
     formats) and carries the spike ids of both populations."""
-    from ...hdl.network import REPORT_SETTLE, NetworkConfig
-    busy = ncfg.cycles_needed + REPORT_SETTLE + ncfg.n_afferents + ncfg.n_targets
-    batch, min_cycles = _board_batch_and_cycles(ncfg.update_hz, busy, clocks_per_bit)
-    kw = ncfg.to_kwargs() | {"tick_source": "external"}
-    if ncfg.clock_hz / ncfg.update_hz < min_cycles:
-        kw["clock_hz"] = ncfg.update_hz * min_cycles
-    net = NetworkConfig(**kw)
+    net, batch = _board_network(ncfg, clocks_per_bit)
     lcfg = LinkConfig(net.core, clocks_per_bit=clocks_per_bit, batch_sweeps=batch,
                       spike_ids=net.n_afferents + net.n_targets)
+    return net, lcfg
+
+
+def board_fanout_network_config(ncfg, fanout, clocks_per_bit: int = BOARD_CLOCKS_PER_BIT):
+    """The network fed by the channel fan-out ``fanout``
+    (:class:`~cuneate.hdl.fanout.FanoutConfig`) and its link on the ``board`` engine (board top
+    :class:`~cuneate.hdl.link.LinkedFanoutNetwork`): ``(network config, link config)``.
+
+    As :func:`board_network_config`, with a tick's cycles covering a frame's channel writes
+    and a fan-out run too, before the network's tick work and the link's idle cycles (a
+    sample's frame lands between two ticks: :class:`~cuneate.hdl.link.LinkConfig` refuses a
+    sweep too short for the writes and the run). The host writes the channels' raw samples
+    (``n_written`` = the fan-out's channels, in its sample format); spike ids cover both
+    populations. A fan-out of fewer afferents than the network's is padded with idle ones
+    (:meth:`~cuneate.hdl.fanout.FanoutConfig.padded`)."""
+    fanout = fanout.padded(ncfg.n_afferents)
+    net, batch = _board_network(ncfg, clocks_per_bit,
+                                fanout.n_channels + fanout.cycles_per_run)
+    lcfg = LinkConfig(net.core, clocks_per_bit=clocks_per_bit, batch_sweeps=batch,
+                      spike_ids=net.n_afferents + net.n_targets, fanout=fanout)
     return net, lcfg
 
 
@@ -243,8 +272,10 @@ def board_lif_config(core, clocks_per_bit: int = BOARD_CLOCKS_PER_BIT) -> LinkCo
 class VerilatorSerial(SimulatedSerial):
     """A serial port whose far end is the board top (``top``, by default the
     :class:`~cuneate.hdl.link.LinkedCore` of ``lcfg``; or a
-    :class:`~cuneate.hdl.link.LinkedNetwork` or :class:`~cuneate.hdl.link.LinkedLif`: the link
-    and the blocks behind it, the PLL and I/O buffers replaced by a clock and wires)
+    :class:`~cuneate.hdl.link.LinkedNetwork`, :class:`~cuneate.hdl.link.LinkedLif`,
+    :class:`~cuneate.hdl.link.LinkedFanoutCore` or :class:`~cuneate.hdl.link
+    .LinkedFanoutNetwork`: the link and the blocks behind it, the PLL and I/O buffers replaced
+    by a clock and wires)
     compiled by Verilator with ``serial_harness.cpp``: the harness drives ``rx`` with the
     host's bytes and decodes ``tx``, 8N1 at the link's ``clocks_per_bit``, in its own process;
     the simulation advances only while the host waits for an answer (as
@@ -382,8 +413,10 @@ class BoardTransport(UartTransport):
     core (:class:`~cuneate.hdl.lif.LifConfig`; board top :class:`~cuneate.hdl.link.LinkedLif`,
     :func:`board_lif_config`); or, given ``fanout`` (:class:`~cuneate.hdl.fanout.FanoutConfig`),
     a core fed by the channel fan-out (board top :class:`~cuneate.hdl.link.LinkedFanoutCore`,
-    :func:`board_fanout_config`: the host's writes are the channels' raw samples,
-    ``write_currents(tick, first, samples)``); or,
+    :func:`board_fanout_config`) or a network whose afferents it feeds (board top
+    :class:`~cuneate.hdl.link.LinkedFanoutNetwork`, :func:`board_fanout_network_config`:
+    spike ids ``n_afferents + j`` are cuneate neuron ``j``), the host's writes being the
+    channels' raw samples, ``write_currents(tick, first, samples)``; or,
     given ``port``, over that serial port to a programmed board (``cuneate stream``: the same
     driver path, the same report).
 
@@ -439,10 +472,17 @@ class BoardTransport(UartTransport):
         from ...hdl.link import LinkedLif, LinkedNetwork
         from ...hdl.network import NetworkConfig
         written = None
-        if self.fanout is not None and not isinstance(config, IzhikevichConfig):
-            raise ValueError(f"the channel fan-out feeds an Izhikevich core, not a "
-                             f"{type(config).__name__}")
-        if isinstance(config, NetworkConfig):
+        if self.fanout is not None and not isinstance(config, (IzhikevichConfig,
+                                                               NetworkConfig)):
+            raise ValueError(f"the channel fan-out feeds an Izhikevich core or the afferents "
+                             f"of a network, not a {type(config).__name__}")
+        if isinstance(config, NetworkConfig) and self.fanout is not None:
+            from ...hdl.link import LinkedFanoutNetwork
+            self.network, self.lcfg = board_fanout_network_config(config, self.fanout,
+                                                                  self.clocks_per_bit)
+            top = LinkedFanoutNetwork(self.network, self.lcfg)
+            written = self.lcfg.fanout.written(self.lcfg.core)
+        elif isinstance(config, NetworkConfig):
             self.network, self.lcfg = board_network_config(config, self.clocks_per_bit)
             top = LinkedNetwork(self.network, self.lcfg)
         elif self.fanout is not None:

@@ -48,7 +48,11 @@ class PtyBoard:
         The core (an :class:`~cuneate.hdl.izhikevich.IzhikevichConfig`: the link is sized to
         it as the ``board`` engine sizes it, :func:`~cuneate.sim.link.engines
         .board_link_config`) or the link itself (a :class:`~cuneate.hdl.link.LinkConfig`; with
-        a fan-out, the board top is :class:`~cuneate.hdl.link.LinkedFanoutCore`).
+        a fan-out, the board top is :class:`~cuneate.hdl.link.LinkedFanoutCore`), or a network
+        and its link, the pair :func:`~cuneate.sim.link.engines.board_network_config` or
+        :func:`~cuneate.sim.link.engines.board_fanout_network_config` gives (board top
+        :class:`~cuneate.hdl.link.LinkedNetwork`, or with a fan-out
+        :class:`~cuneate.hdl.link.LinkedFanoutNetwork`).
     clocks_per_bit
         Clocks per UART bit on the simulated line (for a core configuration).
     build_root
@@ -76,11 +80,18 @@ class PtyBoard:
 
     def __init__(self, config, clocks_per_bit: int = BOARD_CLOCKS_PER_BIT, build_root=None,
                  poll_s: float = 0.05, reply_s: float = 0.002):
+        network = None
+        if isinstance(config, tuple):           # a network and its link
+            network, config = config
         self.lcfg = config if isinstance(config, LinkConfig) else \
             board_link_config(config, clocks_per_bit)
         self.poll_s, self.reply_s = poll_s, reply_s
         top = None
-        if self.lcfg.fanout is not None:        # channels in, the fan-out on chip
+        if network is not None:
+            from ...hdl.link import LinkedFanoutNetwork, LinkedNetwork
+            top = (LinkedNetwork if self.lcfg.fanout is None else LinkedFanoutNetwork)(
+                network, self.lcfg)
+        elif self.lcfg.fanout is not None:      # channels in, the fan-out on chip
             from ...hdl.link import LinkedFanoutCore
             top = LinkedFanoutCore(self.lcfg)
         self.serial = VerilatorSerial(self.lcfg, build_root=build_root, top=top)
