@@ -46,7 +46,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 __all__ = ["Decoded", "Protocol", "isi_samples", "trial_features", "decode_trials",
-           "NO_DECISION"]
+           "NO_DECISION", "decoded_neurons"]
 
 #: The predicted label of a grasp with no sample to decide on.
 NO_DECISION = "(no spikes)"
@@ -258,3 +258,17 @@ def decode_trials(spikes_ms, neuron_trial, neuron_grating, trial_class, classes,
                      "p_value": float((1 + np.count_nonzero(null >= head.balanced_accuracy))
                                       / (null.size + 1))}
     return out
+
+
+def decoded_neurons(population: str, spikes_ms, neurons, layer: dict, engine: str):
+    """``(trains, trial, index)``: the spike trains a scene's decoder reads (``decoder
+    .population``) and each one's trial and index within it: every afferent (``""``), one
+    afferent population's (``neurons``: the scene's afferent table), or the cuneate layer's
+    (``layer``: its population, ``trial``, ``index`` and ``spikes`` by engine)."""
+    if not population:
+        return spikes_ms, neurons.trial, neurons.grating
+    if layer and population == layer["population"]:
+        return layer["spikes"][engine], layer["trial"], layer["index"]
+    keep = [i for i, p in enumerate(neurons.population) if p == population]
+    return ([spikes_ms[i] for i in keep], [neurons.trial[i] for i in keep],
+            [neurons.grating[i] for i in keep])

@@ -192,10 +192,23 @@ def summary_dict(run) -> dict:
         "counters": run.counters,
         "spike_counts": {e: int(sum(len(s) for s in sp)) for e, sp in run.spikes.items()},
         "spike_files": files.get("spikes", {}), "waves": files.get("waves"),
+        "decoded_population": run.scene["decoder"]["population"] or "every afferent",
+        "layer": _layer_summary(getattr(run, "layer", {})),
         "resolved_scene": run.scene.to_dict(),
         "provenance": provenance(seeds={"scene.seed": run.scene["scene"]["seed"],
                                         "decoder cross-validation": run.scene["scene"]["seed"]}),
     }
+
+
+def _layer_summary(layer: dict) -> dict | None:
+    """The cuneate layer of a run for ``run.json``: its neurons and spikes by engine (the
+    trains are in the spike files)."""
+    if not layer:
+        return None
+    return {"population": layer["population"], "neurons": len(layer["trial"]),
+            "spike_counts": {e: int(sum(len(s) for s in sp))
+                             for e, sp in layer["spikes"].items()},
+            "counters": layer["counters"]}
 
 
 #: Control characters no HTML page may hold (all but tab, line feed and carriage return).
@@ -349,7 +362,7 @@ its own training set); <b>balanced accuracy</b> = mean per-class recall, chance 
 The last row is the <b>published protocol</b> (ISIs of one grasp in training and test folds),
 kept for comparison; its plain accuracy favours the classes with most ISIs (largest class
 given beside it). Decoder: {html.escape(dec['kind'])} on {html.escape(dec['features'])}
-features.</p>
+features of {html.escape(summ['decoded_population'])}.</p>
 {html_table(decoding_rows(run.decoded), DECODING_HEAD)}
 <p>{html.escape("; ".join(
     f"{k}: headline differs by {100 * v['difference']:.1f} points, tolerance "
@@ -423,7 +436,8 @@ def format_run(run) -> str:
     first = next((d for d in run.decoded.values() if d.rows), None)
     if first is not None:
         h = first.headline
-        out.append(f"  decoding: balanced accuracy of the per-grasp decision ({first.decision} "
+        out.append(f"  decoding {scene['decoder']['population'] or 'every afferent'}: "
+                   f"balanced accuracy of the per-grasp decision ({first.decision} "
                    f"vote), {h.cv} (chance {100 * h.chance_balanced:.0f} %); published "
                    f"protocol (per ISI, shuffled k-fold) beside it")
     for e, t in run.timing["engines_s"].items():
@@ -460,6 +474,12 @@ def format_run(run) -> str:
     if n_sat:
         out.append(f"  warning: {n_sat} of {s['values']} currents saturated to {s['format']} "
                    f"(range {s['min_mV_per_ms']:.1f} .. {s['max_mV_per_ms']:.1f} mV/ms)")
+    lay = _layer_summary(getattr(run, "layer", {}))
+    if lay:
+        out.append(f"  cuneate layer {lay['population']}: {lay['neurons']} neurons; spikes "
+                   + ", ".join(f"{e} {n}" for e, n in lay["spike_counts"].items())
+                   + (f"; decoded: {scene['decoder']['population']}"
+                      if scene["decoder"]["population"] else ""))
     for k, v in run.agreement.items():
         out.append(f"  {k}: {v['identical_trains']}/{v['neurons']} identical trains, mean "
                    f"|spike count diff| {v['mean_abs_count_diff']:.2f}")
@@ -501,6 +521,12 @@ def _block_line(b: dict) -> str:
                 f"{b['channels_band']} band-passed, to {b['n_neurons']} afferents; samples "
                 f"{b['sample_format']['format']} pm, table {b['table_bits']} bits, "
                 f"{b['cycles_per_run']} cycles a run)")
+    if b["block"] == "coincidence_detector" and "per_trial" in b:
+        return (f"cuneate layer {b['population']} ({b['neurons']} cuneate neurons, "
+                f"{b['per_trial']} a trial with fields of {len(b['fields'][0])}.."
+                f"{len(b['fields'][-1])} gratings, {b['synapses']} synapses, fan-in "
+                f"{'/'.join(map(str, b['fan_in']))}, delays {b['delays_ms']} ms, J w "
+                f"{b['weights_mV_per_ms']} mV/ms in {b['weight_format']})")
     return (f"{b['block']} ({b['neurons']} neurons on a core of {b['core_neurons']}, sets "
             f"{', '.join(b['param_sets'])}, current {b['current_format']}, dt "
             f"{b['dt_ms']:g} ms)")

@@ -11,12 +11,15 @@ import numpy as np
 from ..coincidence.config import CoincidenceConfig
 from ..izhikevich.config import PIPELINE_DEPTH, IzhikevichConfig
 from ..lib.config import ConfigError
+from ..lib.fixed import QFormat
 
-__all__ = ["NetworkConfig", "ConfigError", "POPULATIONS", "SWEEP_EXTRA"]
+__all__ = ["NetworkConfig", "ConfigError", "POPULATIONS", "SWEEP_EXTRA", "AFFERENT_OPTIONS"]
 
 POPULATIONS = ("afferent", "cuneate")
 #: cycles from ``go`` to a sweep's ``sweep_done`` beyond one per afferent (pipeline and flags)
 SWEEP_EXTRA = PIPELINE_DEPTH + 3
+#: keywords of the afferent core a network takes beside its own settings
+AFFERENT_OPTIONS = ("current_format", "rounding")
 
 
 @dataclass
@@ -38,6 +41,9 @@ class NetworkConfig:
         One clock and one tick for both blocks.
     cuneate_fifo_depth
         Depth of the cuneate spike FIFO on the output stream.
+    afferent_options
+        More keywords of the afferent core (:data:`AFFERENT_OPTIONS`: its current format, as
+        ``[int_bits, frac_bits]``, and rounding), as a scene's core has them.
     """
 
     n_afferents: int = 8
@@ -49,6 +55,7 @@ class NetworkConfig:
     update_hz: float = 16e3
     tick_source: str = "internal"
     cuneate_fifo_depth: int = 16
+    afferent_options: dict = field(default_factory=dict)
 
     def __post_init__(self):
         if self.tick_source not in ("internal", "external"):
@@ -73,11 +80,18 @@ class NetworkConfig:
                               f"the core's {N} afferents (source s is afferent first_source + "
                               f"s)")
         sets = [0] * N if self.afferent_sets is None else list(self.afferent_sets)
+        opts = dict(self.afferent_options)
+        bad = sorted(set(opts) - set(AFFERENT_OPTIONS))
+        if bad:
+            raise ConfigError(f"afferent_options: {bad[0]!r} is not an afferent core option "
+                              f"(those are: {', '.join(AFFERENT_OPTIONS)})")
+        if isinstance(opts.get("current_format"), (list, tuple)):
+            opts["current_format"] = QFormat(*opts["current_format"])
         try:
             self.core = IzhikevichConfig(
                 n_neurons=N, clock_hz=self.clock_hz, update_hz=self.update_hz,
                 param_sets=tuple(self.afferent_param_sets), neuron_sets=sets,
-                tick_source="external", spike_fifo_depth=max(16, 2 * N))
+                tick_source="external", spike_fifo_depth=max(16, 2 * N), **opts)
         except ConfigError as exc:
             raise ConfigError(f"network afferent core refused: {exc}") from None
         if not isinstance(self.cuneate_fifo_depth, (int, np.integer)) or \
@@ -113,7 +127,10 @@ class NetworkConfig:
                                         for p in self.afferent_param_sets],
                 "afferent_sets": list(self.core.neuron_sets), "clock_hz": self.clock_hz,
                 "update_hz": self.update_hz, "tick_source": self.tick_source,
-                "cuneate_fifo_depth": int(self.cuneate_fifo_depth)}
+                "cuneate_fifo_depth": int(self.cuneate_fifo_depth),
+                "afferent_options": {"current_format": [self.core.I.int_bits,
+                                                        self.core.I.frac_bits],
+                                     "rounding": self.core.rounding}}
 
     def latency(self) -> dict:
         return {

@@ -24,17 +24,16 @@ import numpy as np
 
 from ...golden import izhikevich as golden
 from ...golden.fbg import IIRFilter, design_bandpass
-from ...golden.tactile import (MATERIALS, GraspSpec, Material, Pad, PulseSpec, SlideSpec,
-                              apply_effects, sensor_effects, synthesize_grasp, synthesize_pulse,
-                              synthesize_slide)
 from ...hdl.lib.fixed import QFormat
-from ..decode import decode_trials
+from ..decode import decode_trials, decoded_neurons
 from ..engines.registry import ENGINES as ENGINE_TRAITS, block_engines
 from ..fanout.scene import channel_plan, check_fanout_engines, scene_fanout
 from ..report import front_end_detail
 from ..host.driver import AfferentEncoding, FbgDriver
+from ..network.scene import check_layer_engines, layer_estimate, run_layer, scene_layer
 from .runner import agreement as train_agreement
 from .scene import Scene
+from .stimulus import synthesize
 
 __all__ = ["SceneRun", "run", "BLOCKS", "ENGINES", "synthesize", "build_neurons",
            "front_end", "summary", "write_report", "format_run", "write_spike_files",
@@ -78,6 +77,8 @@ class SceneRun:
     timing: dict
     decode_agreement: dict = field(default_factory=dict)
     files: dict = field(default_factory=dict)   # "spikes": engine -> file, "waves": window
+    # the cuneate layer: population, trial and index per neuron, spikes and counters by engine
+    layer: dict = field(default_factory=dict)
     kind: str = "afferent"
 
 
@@ -127,90 +128,11 @@ def estimate(scene: Scene, engines: list[str], n_samples: int | None = None) -> 
             nbytes += 48 * per_sample             # the write schedule as Python integers
         per_tick = n_core + PIPELINE_DEPTH + 8 if ENGINE_TRAITS[e].hdl else n_core
         seconds += estimate_seconds("izhikevich", e, n_ticks * per_tick)
+    layer = layer_estimate(scene, trials, n_core, n_ticks, engines)
+    nbytes, seconds = nbytes + layer[0], seconds + layer[1]
     return {"bytes": nbytes, "seconds": seconds, "ticks": n_ticks, "neurons": n,
             "what": f"{trials} trial(s) x {n // max(trials, 1)} neuron(s), {n_ticks:.3g} ticks "
                     f"on {', '.join(engines)}"}
-
-
-# --------------------------------------------------------------------------- stimulus
-def _material(m) -> Material:
-    if isinstance(m, str):
-        return MATERIALS[m]
-    return Material(m["name"], m["young_MPa"] * 1e6, m["poisson"], m["diameter_mm"] * 1e-3,
-                    m["height_mm"] * 1e-3)
-
-
-def synthesize(scene: Scene):
-    """Traces for every trial: ``(classes, trial_class, traces, info, effect_counts)``."""
-    st, sen, sc = scene["stimulus"], scene["sensor"], scene["scene"]
-    rng = np.random.default_rng(sc["seed"])
-    fs = sen["sample_rate_hz"]
-    classes = scene.classes()
-    trial_class, traces, infos = [], [], []
-    effect_params = {e: sen[e] for e in sen["effects"] if e != "strain"}
-    counts_all: dict = {}
-    if st["kind"] == "recorded":
-        from ..host.traces import TraceError, load_trace
-        tr = load_trace(st["file"], time_key=st["time_key"], data_key=st["data_key"],
-                        struct=st["struct"] or None, time_unit=st["time_unit"],
-                        shift_unit=st["shift_unit"], expect_fs_hz=fs,
-                        channels=sen["channels"])
-        x = tr.d_lambda_nm
-        big = np.abs(x) >= sen["lambda_B_nm"]
-        if big.any():
-            r, c = (int(v) for v in np.argwhere(big)[0])
-            raise TraceError(f"{st['file']}: row {r}, grating {c}: a shift of {x[r, c]:.3g} nm is "
-                             f"not a Bragg shift of a {sen['lambda_B_nm']:g} nm grating (check "
-                             f"stimulus.shift_unit)")
-        # the sensor effects the scene lists act on the recorded shifts too
-        x, counts = sensor_effects(x, sen["effects"], effect_params, rng, fs,
-                                   sen["lambda_B_nm"])
-        return classes, [classes[0]], [x], [tr.info], counts
-    for c, cls in enumerate(classes):
-        for t in range(sc["trials"]):
-            if st["kind"] == "grasp":
-                spec = GraspSpec(
-                    velocity_m_per_s=st["velocity_mm_per_s"] * 1e-3,
-                    pad=Pad(st["pad_young_MPa"] * 1e6, st["pad_area_mm2"] * 1e-6,
-                            st["pad_thickness_mm"] * 1e-3, st["contact_length_mm"] * 1e-3),
-                    coupling_microstrain_per_N=tuple(st["coupling_microstrain_per_N"]),
-                    stop_nm=st["stop_nm"], contact_ms=st["contact_ms"],
-                    duration_ms=sc["duration_ms"], fs_hz=fs,
-                    spread_velocity=st["spread_velocity"], spread_pad=st["spread_pad"],
-                    spread_young=st["spread_young"], spread_coupling=st["spread_coupling"])
-                strain, info = synthesize_grasp(_material(st["materials"][c]), spec, rng,
-                                                sen["lambda_B_nm"])
-            elif st["kind"] == "pulses":
-                spec = PulseSpec(start_ms=st["pulse_start_ms"], width_ms=st["pulse_width_ms"],
-                                 edge_ms=st["pulse_edge_ms"],
-                                 coupling_microstrain_per_N=tuple(
-                                     st["coupling_microstrain_per_N"]),
-                                 duration_ms=sc["duration_ms"], fs_hz=fs,
-                                 spread_force=st["spread_force"])
-                strain, info = synthesize_pulse(spec, rng, st["pulse_amplitudes_N"][c])
-            else:
-                spec = SlideSpec(speed_m_per_s=st["speed_mm_per_s"] * 1e-3,
-                                 depth_microstrain=st["depth_microstrain"],
-                                 normal_force_N=st["normal_force_N"], ramp_ms=st["ramp_ms"],
-                                 coupling_microstrain_per_N=st["slide_coupling_microstrain_per_N"],
-                                 spacing_m=st["spacing_mm"] * 1e-3, n_gratings=sen["channels"],
-                                 duration_ms=sc["duration_ms"], fs_hz=fs,
-                                 spread_speed=st["spread_speed"],
-                                 spread_force=st["spread_force"])
-                strain, info = synthesize_slide(spec, rng, st["periods_mm"][c] * 1e-3)
-            tr = apply_effects(strain, sen["effects"], effect_params, rng, fs,
-                               sen["lambda_B_nm"])
-            for e, cnt in tr.effect_counts.items():
-                agg = counts_all.setdefault(e, {})
-                for k, v in cnt.items():
-                    if isinstance(v, (int, np.integer)) and not isinstance(v, bool):
-                        agg[k] = agg.get(k, 0) + int(v)
-                    elif isinstance(v, float):
-                        agg[k] = max(agg.get(k, v), v)
-            trial_class.append(cls)
-            traces.append(tr.d_lambda_nm)
-            infos.append(info)
-    return classes, trial_class, traces, infos, counts_all
 
 
 # --------------------------------------------------------------------------- neurons, blocks
@@ -240,7 +162,7 @@ def build_neurons(scene: Scene, n_trials: int) -> Neurons:
                 None, "none", fe["sa_threshold_pm"] if p["threshold_pm"] is None
                 else p["threshold_pm"], fs)
     for t in range(n_trials):
-        for p in scene.populations:
+        for p in (p for p in scene.populations if p["model"] == "izhikevich"):
             for g in p["gratings"]:
                 nn.trial.append(t)
                 nn.population.append(p["name"])
@@ -350,12 +272,16 @@ def _run_transport(engine):
         if fan is not None:
             from ..fanout.scene import fanout_transport
             tr, drv, raw = fanout_transport(engine, fan, kw), fan.driver, fan.raw
+        layer = ctx.get("layer") if engine == "board" else None   # the network on chip
         try:
-            tr.open(ctx["config"])
+            tr.open(ctx["config"] if layer is None else layer.network)
             res = drv.stream(tr, None, ctx["n_ticks"], raw=raw)
         finally:
             tr.close()
         n = len(ctx["neurons"])
+        if layer is not None:
+            N, dt = layer.network.n_afferents, ctx["config"].dt_ms
+            ctx["layer_spikes"][engine] = res.spikes.times_ms(dt, layer.n_targets, first=N)
         cnt = dict(res.counters)
         if getattr(tr, "sim_s", None) is not None:  # batch engines: the simulation alone
             cnt["simulate_ms"] = int(round(tr.sim_s * 1000))
@@ -387,7 +313,7 @@ def _build_blocks(scene: Scene, neurons: Neurons):
     """The core configuration of the scene's neurons and the description of every block
     built (one per population model)."""
     blocks, cfg = [], None
-    for m in sorted({p["model"] for p in scene.populations}):
+    for m in sorted({p["model"] for p in scene.populations} & set(BLOCKS)):
         cfg, desc = BLOCKS[m](scene, neurons)
         blocks.append(desc)
     return cfg, blocks
@@ -427,6 +353,7 @@ def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None =
     t0 = time.perf_counter()
     names = list(engines or scene.engines)
     check_fanout_engines(scene, names)
+    check_layer_engines(scene, names)
     n_grasps = scene["scene"]["trials"] * len(scene.classes())
     with prog.step(f"synthesizing the stimulus ({n_grasps} trial(s))"):
         classes, trial_class, traces, infos, effect_counts = synthesize(scene)
@@ -443,6 +370,9 @@ def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None =
         drv, currents, gaps = front_end(scene, neurons, traces, infos, cfg)
         raw, sat = drv.quantize(currents)
         fan = scene_fanout(scene, neurons, traces, infos, cfg, drv, names, blocks)
+        layer = scene_layer(scene, neurons, cfg)
+        if layer is not None:
+            blocks.append(layer.describe())
     sat["gaps_held"] = gaps
     n_ticks = currents.shape[0] * drv.hold_ticks
     # samples whose tick (j R + L) falls at or after the run's end are never applied: counted
@@ -455,7 +385,8 @@ def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None =
     timing["front_end_s"] = time.perf_counter() - t0
     ctx = {"config": cfg, "driver": drv, "neurons": neurons, "currents": currents, "raw": raw,
            "n_ticks": n_ticks, "build_dir": build_dir, "waves": waves_request(scene, waves),
-           "engine_options": engine_options or {}, "fanout": fan}
+           "engine_options": engine_options or {}, "fanout": fan, "layer": layer,
+           "layer_spikes": {}}
     for e in names:
         if e not in ENGINES:
             raise ValueError(f"unknown engine {e!r}; known: {', '.join(ENGINES)}")
@@ -504,15 +435,28 @@ def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None =
             scene["sensor"]["sample_rate_hz"], cfg.update_hz, sum(map(len, spikes["board"])))
     eng_t = {e: results[e][2] for e in names}
     timing["engines_s"] = eng_t
+    lay = {}
+    if layer is not None:
+        t0 = time.perf_counter()
+        lay = {"population": layer.population, "trial": layer.trial, "index": layer.index,
+               "spikes": dict(ctx["layer_spikes"]), "counters": {}}
+        for e in names:
+            if e not in lay["spikes"]:
+                with prog.step(f"cuneate layer on {e} ({layer.n_targets} neurons)"):
+                    lay["spikes"][e], lay["counters"][e] = run_layer(e, layer, spikes[e],
+                                                                     n_ticks)
+        timing["layer_s"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     dec = scene["decoder"]
     decoded = {}
     if dec["kind"] != "none":
         for e, sp in spikes.items():
-            with prog.step(f"decoding {e} ({dec['kind']} on {dec['features']} features, "
-                           f"grasp-grouped and published protocols)"):
+            d_sp, d_trial, d_index = decoded_neurons(dec["population"], sp, neurons, lay, e)
+            with prog.step(f"decoding {e} ({dec['kind']} on {dec['features']} features of "
+                           f"{dec['population'] or 'every afferent'}, grasp-grouped and "
+                           f"published protocols)"):
                 decoded[e] = decode_trials(
-                    sp, neurons.trial, neurons.grating, trial_class, classes, dec["kind"],
+                    d_sp, d_trial, d_index, trial_class, classes, dec["kind"],
                     dec["features"], dec["cv_folds"], dec["max_depth"], dec["neighbours"],
                     scene["scene"]["seed"], dec["window_ms"], dec["decision"],
                     dec["permutations"])
@@ -527,6 +471,9 @@ def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None =
         if e == other:
             continue
         agreement[f"{e} vs {other}"] = train_agreement(spikes[e], spikes[other], cfg.dt_ms)
+        if lay:
+            agreement[f"{lay['population']}: {e} vs {other}"] = train_agreement(
+                lay["spikes"][e], lay["spikes"][other], cfg.dt_ms)
     dec_agree = {}
     if "golden" in decoded:
         tol = dec["tolerance"]
@@ -555,7 +502,7 @@ def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None =
                                      "icarus or verilator do)"}
     return SceneRun(scene, classes, trial_class, traces, infos, neurons, currents, sat, cfg,
                     cfg.dt_ms, n_ticks, spikes, counters, decoded, agreement, ran, timing,
-                    dec_agree, files=files)
+                    dec_agree, files=files, layer=lay)
 
 
 # --------------------------------------------------------------------------- results
@@ -567,14 +514,21 @@ def summary(run: SceneRun) -> dict:
 
 def write_spike_files(run: SceneRun, out: Path) -> dict:
     """Write ``spikes_<engine>.npz`` per engine into ``out`` (:mod:`cuneate.sim.spikes`:
-    neuron table population, trial, grating, class); returns ``{engine: file name}``."""
+    neuron table population, trial, grating, class; the cuneate layer's neurons after the
+    afferents, grating -1); returns ``{engine: file name}``."""
     from ..spikes import write_spikes
-    nn = run.neurons
+    nn, lay = run.neurons, run.layer
+    pop, trial, grating = list(nn.population), list(nn.trial), list(nn.grating)
+    if lay:
+        pop += [lay["population"]] * len(lay["trial"])
+        trial += lay["trial"]
+        grating += [-1] * len(lay["trial"])
     files = {}
     for e, trains in run.spikes.items():
         name = f"spikes_{e}.npz"
-        write_spikes(Path(out) / name, trains, e, run.n_ticks * run.dt_ms, nn.population,
-                     nn.trial, nn.grating, [run.trial_class[t] for t in nn.trial], run.dt_ms)
+        write_spikes(Path(out) / name, list(trains) + list(lay["spikes"][e] if lay else []), e,
+                     run.n_ticks * run.dt_ms, pop, trial, grating,
+                     [run.trial_class[t] for t in trial], run.dt_ms)
         files[e] = name
     return files
 

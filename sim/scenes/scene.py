@@ -298,7 +298,7 @@ def parse_scene(text: str, source: str = "<scene>", base_dir: Path | None = None
         kind_module(kind).validate(V, raw, sections, pops, projs)
     for i, p in enumerate(pops):
         if p["encoding"] is None:
-            p["encoding"] = "FA"
+            p["encoding"] = "spikes" if p["model"] == "cuneate" else "FA"
         if not taxels and p["model"] == "lif":
             V.err(f"population[{i}].model", "LIF populations run on a taxel skin in this build "
                                             "(sensor.kind = \"taxels\", stimulus.kind = "
@@ -341,12 +341,20 @@ def parse_scene(text: str, source: str = "<scene>", base_dir: Path | None = None
         projs = _projections(V, raw, names)
     # only what this build can simulate
     for i, p in enumerate(pops):
-        if p["model"] == "cuneate" and not ridges:
-            V.err(f"population[{i}].model", "cuneate populations run in ridge scenes in this "
-                                            "build (stimulus.kind = \"ridges\")")
-    if projs and not ridges:
-        V.err("projection[0]", "projections (coincidence delays) run in ridge scenes in this "
-                               "build (stimulus.kind = \"ridges\")")
+        if p["model"] == "cuneate" and kind.name not in ("ridge", "afferent"):
+            V.err(f"population[{i}].model", "cuneate populations run in ridge scenes and as "
+                                            "the cuneate layer of afferent scenes")
+    if kind.name == "afferent":
+        from ..network.scene import validate_layer
+        validate_layer(V, sections, pops, projs)
+    elif projs and not ridges:
+        V.err("projection[0]", "projections (coincidence delays) run in ridge scenes and into "
+                               "the cuneate layer of afferent scenes")
+    if dec["population"] and (kind.name != "afferent" or dec["population"] not in names):
+        V.err("decoder.population", f"{dec['population']!r}: an afferent scene decodes one of "
+                                    f"its populations ({', '.join(names)}), or every afferent "
+                                    f"(\"\")" if kind.name == "afferent" else
+              "only afferent scenes decode a chosen population")
     scene = Scene(source, sections, pops, projs, base_dir, kind.name)
     n_trials = 1 if st["kind"] == "recorded" else sections["scene"]["trials"] * len(
         scene.classes())

@@ -145,7 +145,10 @@ SCHEMA: dict = {
                 "window_ms": F(list, None, items=NUM),
                 "decision": F(str, "soft", choices=("soft", "majority")),
                 "permutations": F(int, 0, lo=0, hi=10_000),
-                "tolerance": F(NUM, 0.10, lo=0, hi=1)},
+                "tolerance": F(NUM, 0.10, lo=0, hi=1),
+                # the population decoded ("": every afferent; or an afferent population, or
+                # the cuneate layer)
+                "population": F(str, "")},
     "run": {"engines": F(list, ["golden", "fixed", "verilator"], items=str),
             "waves": F(str, ""),
             "waves_start_tick": F(int, 0, lo=0),

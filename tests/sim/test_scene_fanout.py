@@ -119,9 +119,11 @@ def test_the_whole_hand_streams_channels_not_afferents():
 
 def whole_hand_slice():
     """The whole hand's board slice: one grasp per material and the six fingertip gratings
-    (0-5) of every population, 192 afferents from 48 channels (the full scene's bursts pass
-    the link's 79 spikes a batch: see docs/boards.md)."""
+    (0-5) of every population, 192 afferents from 48 channels, and three cuneate neurons a
+    hand over them (the full scene's bursts pass the link's 79 spikes a batch: see
+    docs/boards.md)."""
     text = example_path("whole_hand.toml").read_text().replace("trials = 3", "trials = 1")
+    text = text.replace("size = 6", "size = 3\ngratings = [0, 1, 2, 3, 4, 5]")
     for enc in ('encoding = "SA"', 'encoding = "FA"'):
         text = text.replace(enc, enc + "\ngratings = [0, 1, 2, 3, 4, 5]")
     return parse_scene(text.replace('engines = ["golden", "fixed"]',
@@ -134,6 +136,10 @@ def test_the_whole_hand_slice_on_board_equals_fixed():
     a, b = run.spikes["fixed"], run.spikes["board"]
     assert len(a) == 192 and sum(map(len, a)) > 1000
     assert all(np.array_equal(x, y) for x, y in zip(a, b))
+    # the cuneate layer ran on chip behind the fan-out: its trains equal the fixed twin's
+    la, lb = run.layer["spikes"]["fixed"], run.layer["spikes"]["board"]
+    assert len(la) == 12 and sum(map(len, la)) > 20
+    assert all(np.array_equal(x, y) for x, y in zip(la, lb))
     fan = next(blk for blk in run.ran["blocks"] if blk["block"] == "channel_fanout")
     assert (fan["n_channels"], fan["n_neurons"]) == (48, 192)
     c = run.counters["board"]

@@ -60,7 +60,8 @@ def _err(text_add, replace=None):
                                                      "multiple"),
     ("[[population]]\nname = \"cn\"\nmodel = \"cuneate\"\nencoding = \"spikes\"\nsize = 3\n"
      "inputs = [\"fa\"]\n", None,
-     "population[1].model: cuneate populations run in ridge scenes in this build"),
+     "population[1].size: out of range: at most one cuneate neuron a grating of its fields "
+     "(2), got 3"),
     ("[[population]]\nname = \"l\"\nmodel = \"lif\"\n", None,
      "population[1].model: LIF populations run on a taxel skin in this build"),
     ("[[population]]\nname = \"l\"\nmodel = \"hodgkin\"\n", None,
@@ -70,7 +71,8 @@ def _err(text_add, replace=None):
     ("[[projection]]\nsource = \"fa\"\ntarget = \"fa\"\ndelays_ms = [-1.0]\n", None,
      "projection[0].delays_ms: out of range"),
     ("[[projection]]\nsource = \"fa\"\ntarget = \"fa\"\ndelays_ms = [0.0, 2.0]\n", None,
-     "projection[0]: projections (coincidence delays) run in ridge scenes in this build"),
+     "projection[0]: projections drive a cuneate population (model = \"cuneate\"); the scene "
+     "has none"),
     ("", ('preset = "RS"', 'preset = "XX"'), "population[0].preset:"),
     ("[weather]\nsun = 1\n", None, "s.toml: weather: unknown section"),
     ("", ("[[population]]", "[population]"), "population: wrong type: write [[population]]"),

@@ -1,0 +1,274 @@
+"""An afferent scene's cuneate layer: coincidence-detecting cuneate neurons on the afferents of
+every trial, the on-chip network's second population.
+
+An afferent scene may name one population with ``model = "cuneate"`` (driven by spikes): its
+``size`` cuneate neurons a trial have receptive fields that tile the population's ``gratings``
+(default: every grating) in consecutive groups (:func:`numpy.array_split`), and listen to the
+afferents of its ``inputs`` (Izhikevich populations of the scene). One ``[[projection]]`` from
+each input to it gives the PSP amplitude ``weight`` (``J w``, mV/ms, bi-exponential PSPs) and
+the conduction delays ``delays_ms``: one for every cuneate neuron, or one per cuneate neuron
+(whole ticks). Cuneate neuron ``j`` of trial ``t`` listens to the afferents of trial ``t`` of
+the input populations whose grating lies in its field, so each trial (a hand, on a board) has
+its own layer.
+
+The layer is the detector of the on-chip afferent -> cuneate network
+(:class:`~cuneate.hdl.network.NetworkConfig`): every afferent of the scene's core is a source,
+targets run trial-major, and a weight of 0 disconnects a pair (a target outside a source's
+trial or field). Engines (:data:`LAYER_ENGINES`):
+
+``golden``
+    the float64 cuneate model (:func:`cuneate.golden.coincidence.simulate_cuneate`) on the
+    golden engine's afferent spikes, trial by trial;
+``fixed``
+    the detector's twin (:class:`~cuneate.hdl.coincidence.CoincidenceTwin`) on the fixed
+    engine's afferent spikes, each stamped as the network stamps it (the update of sweep ``k``
+    at detector tick ``k + 1``): bit for bit :class:`~cuneate.hdl.network.NetworkTwin`;
+``board``
+    the network on chip behind the link (with the channel fan-out in front when the scene
+    streams channels): both populations' spikes come back over the line.
+
+The network of the engines runs every trial at once: its clock is raised to hold a tick's
+work (the results depend on the tick rate alone); a board built for the scene holds
+``hardware.board_trials`` of them (:mod:`cuneate.boards.scene`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ...hdl.coincidence.config import CYCLES_PER_TARGET_EXTRA
+from ...hdl.network import NetworkConfig
+from ...hdl.network.config import SWEEP_EXTRA
+
+__all__ = ["CuneateLayer", "LAYER_ENGINES", "validate_layer", "scene_layer", "layer_network",
+           "run_layer", "check_layer_engines", "layer_estimate"]
+
+#: the engines that run an afferent scene's cuneate layer
+LAYER_ENGINES = ("golden", "fixed", "board")
+
+
+def validate_layer(V, sections: dict, pops: list, projs: list) -> None:
+    """Check and complete an afferent scene's cuneate layer in place (its population and its
+    projections); ``V.err`` raises the scene error."""
+    cn = [(i, p) for i, p in enumerate(pops) if p["model"] == "cuneate"]
+    if not cn:
+        if projs:
+            V.err("projection[0]", "projections drive a cuneate population (model = "
+                                   "\"cuneate\"); the scene has none")
+        return
+    if len(cn) > 1:
+        V.err(f"population[{cn[1][0]}].model", "an afferent scene has at most one cuneate "
+                                               "population (its layer)")
+    (ci, c), = cn
+    key = f"population[{ci}]"
+    if c["encoding"] not in (None, "spikes"):
+        V.err(f"{key}.encoding", "a cuneate population is driven by spikes (encoding = "
+                                 "\"spikes\")")
+    c["encoding"], c["preset"] = "spikes", c["preset"] or "RS"
+    from ...golden.izhikevich import to_params
+    try:
+        to_params(c["preset"])
+    except ValueError as exc:
+        V.err(f"{key}.preset", str(exc))
+    afferents = [p["name"] for p in pops if p["model"] == "izhikevich"]
+    if not c["inputs"]:
+        V.err(f"{key}.inputs", "name the afferent populations the cuneate layer listens to")
+    for j, s in enumerate(c["inputs"]):
+        if s not in afferents or c["inputs"].index(s) != j:
+            V.err(f"{key}.inputs[{j}]", f"{s!r}: the inputs are distinct afferent (Izhikevich) "
+                                        f"populations of the scene ({', '.join(afferents)})")
+    channels = sections["sensor"]["channels"]
+    g = c["gratings"] if c["gratings"] is not None else list(range(channels))
+    for j, x in enumerate(g):
+        if not 0 <= x < channels or g.index(x) != j:
+            V.err(f"{key}.gratings[{j}]", f"grating {x}: the fields tile distinct gratings of "
+                                          f"the sensor's {channels}")
+    c["gratings"] = g
+    if c["size"] is not None and not 1 <= c["size"] <= len(g):
+        V.err(f"{key}.size", f"out of range: at most one cuneate neuron a grating of its "
+                             f"fields ({len(g)}), got {c['size']}")
+    dt = 1000.0 / sections["hardware"]["update_hz"]
+    seen = {}
+    for i, q in enumerate(projs):
+        if q["target"] != c["name"] or q["source"] not in c["inputs"] or q["source"] in seen:
+            V.err(f"projection[{i}]", f"one projection from each input of {c['name']!r} "
+                                      f"({', '.join(c['inputs'])}) to it")
+        if q["psp"] != "biexp":
+            V.err(f"projection[{i}].psp", "the coincidence detector's PSP is \"biexp\"")
+        if q["weight"] <= 0:
+            V.err(f"projection[{i}].weight", "out of range: J w must be > 0 mV/ms")
+        d = q["delays_ms"]
+        if len(d) not in (1, c["size"]):
+            V.err(f"projection[{i}].delays_ms", f"one delay for every cuneate neuron or one "
+                                                f"per cuneate neuron ({c['size']}), got {len(d)}")
+        for x in d:
+            if abs(x / dt - round(x / dt)) > 1e-9:
+                V.err(f"projection[{i}].delays_ms", f"{x:g} ms is not a whole number of ticks "
+                                                    f"(dt = {dt:g} ms)")
+        seen[q["source"]] = i
+    missing = [s for s in c["inputs"] if s not in seen]
+    if missing:
+        V.err("projection", f"the cuneate layer needs a projection from {missing[0]!r} to "
+                            f"{c['name']!r} (its weight and delays)")
+
+
+@dataclass
+class CuneateLayer:
+    """The cuneate layer of an afferent scene over the core's afferents.
+
+    ``population``: its name; ``per_trial``: cuneate neurons a trial; ``fields``: the
+    gratings of each one's receptive field; ``trial`` and ``index``: per target (trial-major)
+    its trial and its neuron within the trial; ``delays`` (ticks) and ``weights`` (mV/ms):
+    ``(n_targets, n_sources)`` over the core's neurons; ``preset``: the targets' Izhikevich
+    set; ``network``: the network of the engines (every trial at once)."""
+
+    population: str
+    per_trial: int
+    fields: list
+    trial: list
+    index: list
+    delays: np.ndarray
+    weights: np.ndarray
+    preset: str
+    network: NetworkConfig
+
+    @property
+    def n_targets(self) -> int:
+        return len(self.trial)
+
+    def describe(self) -> dict:
+        """The layer as a block of the run (``ran["blocks"]``)."""
+        det = self.network.det
+        conn = self.weights > 0
+        return {"block": "coincidence_detector", "population": self.population,
+                "neurons": self.n_targets, "per_trial": self.per_trial,
+                "fields": self.fields, "sources": int(self.weights.shape[1]),
+                "synapses": int(conn.sum()),
+                "fan_in": sorted({int(x) for x in conn.sum(axis=1)}),
+                "delays_ms": sorted({float(x) for x in self.delays[conn] * det.dt_ms}),
+                "weights_mV_per_ms": sorted({float(x) for x in self.weights[conn]}),
+                "weight_format": str(det.W), "max_delay_ticks": int(det.max_delay_ticks),
+                "role": "cuneate layer"}
+
+
+def layer_network(core, delays, weights, preset: str, **network) -> NetworkConfig:
+    """The network of ``core``'s afferents (an :class:`~cuneate.hdl.izhikevich.IzhikevichConfig`:
+    its parameter sets, formats and rounding) and a detector with ``delays`` (ticks) and
+    ``weights`` (mV/ms), ``(n_targets, n_afferents)``, targets of Izhikevich set ``preset``.
+    The clock holds a tick's work unless ``network`` gives one (more
+    :class:`~cuneate.hdl.network.NetworkConfig` keywords)."""
+    d, w = np.asarray(delays, dtype=np.int64), np.asarray(weights, dtype=np.float64)
+    M, N = w.shape
+    det = {"n_sources": N, "n_targets": M, "delays_ticks": d.tolist(),
+           "weights": w.tolist(), "max_delay_ticks": int(d.max(initial=0)) + 1,
+           "param_sets": (preset,)}
+    work = max(N + SWEEP_EXTRA, M * (N + CYCLES_PER_TARGET_EXTRA) + 2) + 2
+    kw = {"clock_hz": core.update_hz * work, "cuneate_fifo_depth": max(16, M)} | network
+    return NetworkConfig(
+        n_afferents=N, detector=det, afferent_param_sets=tuple(core.to_kwargs()["param_sets"]),
+        afferent_sets=list(core.neuron_sets), update_hz=core.update_hz,
+        tick_source="external",
+        afferent_options={"current_format": [core.I.int_bits, core.I.frac_bits],
+                          "rounding": core.rounding}, **kw)
+
+
+def scene_layer(scene, neurons, core) -> CuneateLayer | None:
+    """The cuneate layer of ``scene`` over ``neurons`` (its afferents in core order) on
+    ``core`` (the scene's core: the sources are its neurons, idle ones included), or ``None``
+    when the scene names none."""
+    cn = next((p for p in scene.populations if p["model"] == "cuneate"), None)
+    if cn is None:
+        return None
+    M = cn["size"]
+    fields = [[int(g) for g in f] for f in np.array_split(np.asarray(cn["gratings"]), M)]
+    field_of = {g: j for j, f in enumerate(fields) for g in f}
+    proj = {q["source"]: q for q in scene.projections}
+    T = (max(neurons.trial) + 1) if len(neurons) else 0
+    dt = core.dt_ms
+    delays = np.zeros((M * T, core.n_neurons), dtype=np.int64)
+    weights = np.zeros((M * T, core.n_neurons))
+    for i, (t, pop, g) in enumerate(zip(neurons.trial, neurons.population, neurons.grating)):
+        q = proj.get(pop)
+        if q is None or g not in field_of:
+            continue
+        j = field_of[g]
+        d = q["delays_ms"][j if len(q["delays_ms"]) > 1 else 0]
+        delays[t * M + j, i] = int(round(d / dt))
+        weights[t * M + j, i] = q["weight"]
+    net = layer_network(core, delays, weights, cn["preset"])
+    return CuneateLayer(cn["name"], M, fields, [t for t in range(T) for _ in range(M)],
+                        [j for _ in range(T) for j in range(M)], delays, weights, cn["preset"],
+                        net)
+
+
+def layer_estimate(scene, trials: int, n_sources: int, n_ticks: float,
+                   engines) -> tuple[float, float]:
+    """Memory (bytes) and time (s) of ``scene``'s cuneate layer over ``trials`` trials of a core
+    of ``n_sources`` neurons for ``n_ticks`` ticks on ``engines``: its dense delay and weight
+    matrices (as arrays and as the detector's lists, about 150 bytes a pair), the twin's and the
+    board's target-source pairs every tick, the golden model's synapses every tick."""
+    cn = next((p for p in scene.populations if p["model"] == "cuneate"), None)
+    if cn is None:
+        return 0.0, 0.0
+    from ..engines.registry import estimate_seconds
+    pairs = float(cn["size"]) * trials * n_sources
+    synapses = float(trials) * sum(p["size"] for p in scene.populations
+                                   if p["name"] in cn["inputs"])
+    seconds = 2e-6 * pairs
+    for e in engines:
+        if e == "golden":
+            seconds += synapses * n_ticks / 2e7
+        elif e == "fixed":
+            seconds += pairs * n_ticks / 1e8
+        elif e == "board":                          # the detector's cycles, on the board's clock
+            seconds += estimate_seconds("izhikevich", e, pairs * n_ticks)
+    return 150.0 * pairs, seconds
+
+
+def check_layer_engines(scene, engines) -> None:
+    """Refuse (one line) an engine of ``engines`` that does not run the scene's cuneate layer."""
+    bad = [e for e in engines if e not in LAYER_ENGINES]
+    if bad and any(p["model"] == "cuneate" for p in scene.populations):
+        raise ValueError(f"population model \"cuneate\": engine {bad[0]!r} does not run the "
+                         f"cuneate layer (engines that do: {', '.join(LAYER_ENGINES)})")
+
+
+def run_layer(engine: str, layer: CuneateLayer, afferent_ms: list, n_ticks: int):
+    """The layer's spike trains (ms, one array per target) and counters on ``engine``
+    (``golden`` or ``fixed``) from that engine's afferent trains ``afferent_ms`` (ms, golden
+    convention: the update of tick ``k`` at ``(k + 1) dt``)."""
+    det = layer.network.det
+    dt = det.dt_ms
+    N = layer.weights.shape[1]
+    aff = [np.asarray(s, dtype=np.float64) for s in afferent_ms]
+    aff += [np.zeros(0)] * (N - len(aff))
+    if engine == "golden":
+        from ...golden import coincidence as gcun
+        from ...golden import izhikevich as giz
+        # each target's drive from its own synapses (direct summation), then every target
+        # integrated at once: simulate_cuneate's scheme, without the disconnected pairs
+        grid = np.arange(n_ticks) * dt
+        drive = np.zeros((n_ticks, layer.n_targets))
+        for k in range(layer.n_targets):
+            src = np.flatnonzero(layer.weights[k])
+            if src.size:
+                drive[:, k] = gcun.psp_drive([aff[s] for s in src], layer.delays[k, src] * dt,
+                                             grid, J=1.0, weights=layer.weights[k, src],
+                                             tau_rise_ms=det.tau_rise_ms,
+                                             tau_decay_ms=det.tau_decay_ms)[:, 0]
+        r = giz.simulate([det.param_sets[s] for s in det.target_sets_], drive, n_steps=n_ticks,
+                         n_neurons=layer.n_targets, dt_ms=dt, scheme="euler")
+        out = [np.asarray(s, dtype=np.float64) for s in r.spikes_ms]
+        return out, {"spikes": int(sum(len(s) for s in out))}
+    if engine != "fixed":
+        raise ValueError(f"the cuneate layer runs on golden and fixed here, on board on chip; "
+                         f"not on {engine!r}")
+    from ...hdl.coincidence import CoincidenceTwin
+    tw = CoincidenceTwin(det)
+    # the update of sweep k (spike at (k + 1) dt) is stamped with detector tick k + 1
+    out = tw.run([np.rint(s / dt).astype(np.int64) for s in aff], n_ticks)
+    counters = {"spikes": int(sum(len(s) for s in out)), "events": tw.events,
+                "merged": tw.merged} | {f"clamp_{k}": v for k, v in tw.clamp_counts.items()}
+    return out, counters
