@@ -200,6 +200,8 @@ def size_blocks(target: dict, request, clock_hz, pipeline_stages, baud=None) -> 
                                   target)
             est["DSP"] += math.ceil(f.gain_width / target["dsp_width"]) * \
                 math.ceil(f.S.width / target["dsp_width"])
+            for k, v in request.extra.items():      # a cuneate layer's detector
+                est[k] += v
             over = device_overrun(est, target)
             if over is not None:
                 why.append(f"at {plan.clock_hz / 1e6:g} MHz: {over}")

@@ -11,7 +11,10 @@ By scene kind:
     instance 1 for the whole hand: one hand's gratings) builds the board for that many of the
     scene's trials (the engines lay every trial side by side on one core; a physical hand
     presents one grasp at a time). No host streams such a board yet: ``cuneate stream``
-    refuses the scene;
+    refuses the scene. A scene with a cuneate layer (:mod:`cuneate.sim.network.scene`) gets
+    the afferent -> cuneate network instead of the bare core, its detector holding the
+    layer of the trials on board (:class:`~cuneate.hdl.link.LinkedFanoutNetwork` behind the
+    fan-out, :class:`~cuneate.hdl.link.LinkedNetwork` without it);
 ``ridge``
     the afferent -> cuneate network (:class:`~cuneate.hdl.link.LinkedNetwork`);
 ``skin``
@@ -50,6 +53,8 @@ class BoardRequest:
     core: dict | None = None
     linked: object = None
     trials: dict = field(default_factory=dict)
+    #: resources of blocks beside the cores the sizing estimates (a cuneate layer's detector)
+    extra: dict = field(default_factory=dict)
     link_budget: dict = field(default_factory=dict)
     link_budget_lines: list = field(default_factory=list)
 
@@ -135,6 +140,8 @@ def _afferent(scene, target: dict, real_time: bool = True,
     trials = {"trials_on_board": k, "trials": n_all}
     block = {"block": "izhikevich_core", "neurons": len(neurons),
              "param_sets": list(core["param_sets"])}
+    if any(p["model"] == "cuneate" for p in scene.populations):
+        return _layered(scene, target, neurons, core, trials, block, real_time, baud)
     if not hw["fanout"]:
         req = BoardRequest("core", len(neurons), fs, core["update_hz"], [block], core=core,
                            trials=trials)
@@ -164,6 +171,65 @@ def _afferent(scene, target: dict, real_time: bool = True,
         f = FanoutConfig.from_kwargs(fan.to_kwargs() | {"clock_hz": plan.clock_hz}).padded(n)
         lcfg = _link(target, cfg, plan, fanout=f)
         return lcfg, lambda: LinkedFanoutCore(lcfg)
+    req.linked = linked
+    return req
+
+
+def _layered(scene, target: dict, neurons, core: dict, trials: dict, block: dict,
+             real_time: bool, baud) -> BoardRequest:
+    """The board of an afferent scene with a cuneate layer: the network of the trials on board
+    (their afferents on one core, their cuneate neurons on the detector), behind the channel
+    fan-out when the scene streams channels."""
+    from ..sim.izhikevich.engines import MIN_NEURONS, engine_core
+    from ..sim.network.scene import layer_network, scene_layer
+    k, fs = trials["trials_on_board"], scene["sensor"]["sample_rate_hz"]
+    base = engine_core(core, len(neurons))          # the engines' core: the layer's sources
+    layer = scene_layer(scene, neurons, base)
+    n_spikes = base.n_neurons + layer.n_targets
+    fan = _scene_fanout(scene, k) if scene["hardware"]["fanout"] else None
+    blocks = ([fan.to_dict()] if fan else []) + [block, layer.describe()]
+    det = layer.network.det
+    from .sizing import count_blocks
+    widths = sum(x.width for x in (det.iz.V, det.iz.U, det.traces[0].T, det.traces[1].T))
+    w = target["dsp_width"]
+    # the detector's multipliers (its neurons' four, the two trace decays: the unsigned
+    # constant a bit wider as a signed operand), each ceil(a / w) x ceil(b / w) blocks at
+    # most, and its memories
+    ops = [*det.to_dict()["izhikevich"]["multiplier_operands"].values(),
+           *([t.K.width + 1, t.Y.width] for t in det.traces)]
+    extra = {"DSP": sum(-(-a // w) * -(-b // w) for a, b in ops), "BRAM": count_blocks(
+        [(det.n_targets * det.n_sources, det.history_addr_bits + det.W.width),
+         (det.max_delay_ticks, det.n_sources), (det.n_targets, widths)], target)}
+    req = BoardRequest("fanout" if fan else "network", len(neurons) + layer.n_targets, fs,
+                       core["update_hz"], blocks, trials=trials, extra=extra)
+    if fan is not None:
+        _check_budget(req, target, "channels", fan.n_channels, fan.S.width, core["update_hz"],
+                      n_spikes, real_time, baud)
+    else:
+        _check_budget(req, target, "currents", base.n_neurons, base.I.width, core["update_hz"],
+                      n_spikes, real_time, baud)
+
+    def linked(plan, target, pipeline_stages=None):
+        from ..hdl.fanout import FanoutConfig
+        from ..hdl.izhikevich.config import PIPELINE_DEPTH
+        from ..hdl.link import LinkedFanoutNetwork, LinkedNetwork
+        from ..hdl.network import REPORT_SETTLE
+        if pipeline_stages not in (None, PIPELINE_DEPTH):
+            raise ConfigError(f"the network's afferent core has {PIPELINE_DEPTH} stages "
+                              f"(--pipeline-stages sets a bare core's)")
+        net = layer_network(base, layer.delays, layer.weights, layer.preset,
+                            clock_hz=plan.clock_hz,
+                            cuneate_fifo_depth=max(16, layer.n_targets))
+        busy = net.cycles_needed + REPORT_SETTLE + n_spikes
+        if fan is None:
+            _sweep_holds(plan, busy, "the network")
+            lcfg = _link(target, net.core, plan, spike_ids=n_spikes)
+            return lcfg, lambda: LinkedNetwork(net, lcfg)
+        f = FanoutConfig.from_kwargs(fan.to_kwargs() | {"clock_hz": plan.clock_hz}).padded(
+            max(len(neurons), MIN_NEURONS))
+        _sweep_holds(plan, busy + f.n_channels + f.cycles_per_run, "the fan-out and the network")
+        lcfg = _link(target, net.core, plan, spike_ids=n_spikes, fanout=f)
+        return lcfg, lambda: LinkedFanoutNetwork(net, lcfg)
     req.linked = linked
     return req
 

@@ -40,12 +40,14 @@ def _board(name: str) -> dict:
 
 def _check_fits(target: dict, scene, cfg, baud: int | None) -> dict:
     """The board's sizing of the scene's core (:func:`cuneate.boards.sizing.size_core`), or
-    of its fan-out core (as ``cuneate build`` sizes it), at the line rate ``baud`` (``None``:
-    the board's), or a one-line refusal naming the limit the scene exceeds."""
+    of its fan-out core or its network (a cuneate layer) as ``cuneate build`` sizes them, at
+    the line rate ``baud`` (``None``: the board's), or a one-line refusal naming the limit the
+    scene exceeds."""
     from ...boards.sizing import size_core
     from ...hdl.lib.config import ConfigError
     try:
-        if scene["hardware"]["fanout"]:
+        if scene["hardware"]["fanout"] or any(p["model"] == "cuneate"
+                                              for p in scene.populations):
             from ...boards.build import size_blocks
             from ...boards.scene import scene_request
             return size_blocks(target, scene_request(scene, target, real_time=False, baud=baud),
@@ -125,7 +127,8 @@ def cmd_stream(args) -> int:
         port.close()
     page = afferent.write_report(run, out)
     agree = run.agreement["board vs fixed"]
-    same = agree["identical_trains"] == agree["neurons"]
+    same = all(a["identical_trains"] == a["neurons"] for k, a in run.agreement.items()
+               if k.endswith("board vs fixed"))          # the afferents and a cuneate layer
     if args.json:
         print(json.dumps(afferent.summary(run), default=float))
     else:

@@ -466,6 +466,10 @@ class BoardTransport(UartTransport):
             # the receive FIFO of a board's link (LinkConfig's default, as the boards build it)
             self.ahead_bytes = 512 if self.ahead else None
             self._t0 = time.perf_counter()
+            from ...hdl.network import NetworkConfig
+            if isinstance(config, NetworkConfig):   # both populations' ids; the afferents'
+                self.spike_ids = config.n_afferents + config.n_targets   # core is written
+                config = config.core
             super().open(config if self.fanout is None else self.fanout.written(config))
             return
         from ...hdl.lif import LifConfig

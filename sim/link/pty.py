@@ -220,16 +220,24 @@ class PtyBoard:
         return False
 
 
-def scene_link(scene, clocks_per_bit: int = BOARD_CLOCKS_PER_BIT) -> LinkConfig:
-    """The link of the board an afferent scene streams to, as the ``board`` engine sizes it:
-    its core behind the link, or with ``hardware.fanout`` the core fed by the scene's channel
-    fan-out (:func:`~cuneate.sim.link.engines.board_fanout_config`)."""
-    from ..scenes.afferent import core_config, scene_channel_plan
-    from .engines import board_fanout_config
+def scene_link(scene, clocks_per_bit: int = BOARD_CLOCKS_PER_BIT):
+    """The board an afferent scene streams to, as the ``board`` engine sizes it (what
+    :class:`PtyBoard` serves): its core's link, or with ``hardware.fanout`` the link of the
+    core fed by the scene's channel fan-out (:func:`~cuneate.sim.link.engines
+    .board_fanout_config`); with a cuneate layer the ``(network, link)`` pair of the
+    afferent -> cuneate network (behind the fan-out when the scene streams channels)."""
+    from ..network.scene import scene_layer
+    from ..scenes.afferent import build_neurons, core_config, n_driven, scene_channel_plan
+    from .engines import board_fanout_config, board_fanout_network_config, board_network_config
     cfg = core_config(scene)
-    if not scene["hardware"]["fanout"]:
+    fan = scene_channel_plan(scene).config if scene["hardware"]["fanout"] else None
+    layer = scene_layer(scene, build_neurons(scene, n_driven(scene)[0]), cfg)
+    if layer is not None:
+        return board_network_config(layer.network, clocks_per_bit) if fan is None else \
+            board_fanout_network_config(layer.network, fan, clocks_per_bit)
+    if fan is None:
         return board_link_config(cfg, clocks_per_bit)
-    return board_fanout_config(cfg, scene_channel_plan(scene).config, clocks_per_bit)
+    return board_fanout_config(cfg, fan, clocks_per_bit)
 
 
 def main(argv=None) -> int:

@@ -148,3 +148,45 @@ def test_stream_refuses_a_scene_the_board_cannot_hold(tmp_path, capsys):
     err = capsys.readouterr().err
     assert err.count("\n") == 1, err
     assert "its core of 800 neurons at 16000 Hz does not fit the board: icebreaker:" in err
+
+
+LAYER_TOML = """
+[[population]]
+name = "cn"
+model = "cuneate"
+size = 1
+inputs = ["fa"]
+
+[[projection]]
+source = "fa"
+target = "cn"
+weight = 12.0
+
+[hardware]"""
+
+
+@pytest.mark.long
+def test_cuneate_stream_of_a_scene_with_a_cuneate_layer_agrees_for_both_populations(tmp_path,
+                                                                                    capsys):
+    """A cuneate layer on the board (``LinkedNetwork``: currents in, afferent and cuneate
+    spikes out in one id space) streamed through the pty: both populations equal fixed."""
+    path = tmp_path / "layer.toml"
+    path.write_text(TINY_SCENE.replace("\n[hardware]", LAYER_TOML, 1))
+    net, link = scene_link(load_scene(path))
+    # two trials of two afferents on a core of 8, a cuneate neuron a trial after them
+    assert (net.n_afferents, net.n_targets, link.n_spike_ids) == (8, 2, 10)
+    out = tmp_path / "out"
+    board = PtyBoard((net, link))
+    try:
+        rc = main(["-q", "stream", "ulx3s", "--port", board.path, str(path), "--out",
+                   str(out)])
+    finally:
+        board.close()
+    printed = capsys.readouterr()
+    assert rc == 0, printed
+    run = json.loads((out / "run.json").read_text())
+    aff, cn = run["agreement"]["board vs fixed"], run["agreement"]["cn: board vs fixed"]
+    assert aff["identical_trains"] == aff["neurons"] == 4 and aff["spikes_a"] > 10
+    assert cn["identical_trains"] == cn["neurons"] == 2 and cn["spikes_a"] > 0
+    c = run["counters"]["board"]
+    assert c["frames_lost"] == 0 and c["spikes"] == aff["spikes_a"] + cn["spikes_a"]
