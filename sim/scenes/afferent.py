@@ -432,7 +432,8 @@ def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None =
                                                                            cfg.I.width)
         counters["board"]["link_budget"] = run_budget(
             counters["board"], n_ticks / cfg.update_hz, *written,
-            scene["sensor"]["sample_rate_hz"], cfg.update_hz, sum(map(len, spikes["board"])))
+            scene["sensor"]["sample_rate_hz"], cfg.update_hz,
+            sum(map(len, spikes["board"])) + sum(map(len, ctx["layer_spikes"].get("board", []))))
     eng_t = {e: results[e][2] for e in names}
     timing["engines_s"] = eng_t
     lay = {}
