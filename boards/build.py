@@ -247,8 +247,8 @@ def format_report(r: dict) -> str:
         lines.append("scene blocks: " + "; ".join(_block_line(b) for b in sc["blocks"]))
         if sc.get("trials_on_board", sc.get("trials")) != sc.get("trials"):
             lines.append(f"the board holds {sc['trials_on_board']} of the scene's "
-                         f"{sc['trials']} trials (hardware.board_trials); no host streams "
-                         f"such a board yet (cuneate stream refuses the scene)")
+                         f"{sc['trials']} trials (hardware.board_trials); cuneate stream "
+                         f"plays them in turn, {sc['trials_on_board']} at a time")
         values = "channel" if sc.get("kind") == "fanout" else "current"
         lines.append(f"link bandwidth (worst case: every {values} every sample, 200 Hz a "
                      f"neuron):")

@@ -10,8 +10,8 @@ By scene kind:
     channels, the table on chip makes the afferents' currents. ``hardware.board_trials`` (for
     instance 1 for the whole hand: one hand's gratings) builds the board for that many of the
     scene's trials (the engines lay every trial side by side on one core; a physical hand
-    presents one grasp at a time). No host streams such a board yet: ``cuneate stream``
-    refuses the scene. A scene with a cuneate layer (:mod:`cuneate.sim.network.scene`) gets
+    presents one grasp at a time); ``cuneate stream`` plays the trials in turn on it
+    (:mod:`cuneate.sim.scenes.in_turn`). A scene with a cuneate layer (:mod:`cuneate.sim.network.scene`) gets
     the afferent -> cuneate network instead of the bare core, its detector holding the
     layer of the trials on board (:class:`~cuneate.hdl.link.LinkedFanoutNetwork` behind the
     fan-out, :class:`~cuneate.hdl.link.LinkedNetwork` without it);
@@ -238,17 +238,11 @@ def _scene_fanout(scene, k: int):
     """The fan-out of the first ``k`` trials of ``scene``: its table as the engines build it
     for every trial (the sample format holds every trial's largest sample), cut to the
     channels and afferents of those trials (the first in the engines' order)."""
-    from ..hdl.fanout import FanoutConfig
     from ..sim.scenes.afferent import scene_channel_plan
     from ..sim.scenes.afferent import build_neurons, n_driven
     full = scene_channel_plan(scene).config
     neurons = build_neurons(scene, n_driven(scene)[0])
-    n = sum(1 for t in neurons.trial if t < k)
-    kw = full.to_kwargs()
-    for key in ("channel", "gain", "rectify", "threshold"):
-        kw[key] = kw[key][:n]
-    kw["n_channels"] = max(kw["channel"]) + 1
-    return FanoutConfig.from_kwargs(kw)
+    return full.first(sum(1 for t in neurons.trial if t < k))
 
 
 def _ridge(scene, target: dict, real_time: bool = True,

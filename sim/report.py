@@ -455,6 +455,11 @@ def format_run(run) -> str:
                f"{100 * pub.balanced_accuracy:.1f} %)") if pub else ""
         out.append(f"  {e:10s} balanced accuracy {100 * d.accuracy:5.1f} %  recall % "
                    f"{rec}{pub}  ({t:.1f} s)")
+    turn = run.ran.get("in_turn")
+    if turn:
+        out.append(f"  trials in turn: {turn['trials_at_a_time']} at a time on the board's core, "
+                   f"{turn['groups']} groups of {turn['ticks_a_group']} ticks, each from the "
+                   f"state the last left")
     for k, v in run.decode_agreement.items():
         out.append(f"  balanced accuracy {k}: differs by {100 * v['difference']:.1f} points "
                    f"(tolerance {100 * v['tolerance']:.1f}): "

@@ -252,6 +252,19 @@ class FanoutConfig:
         kw["threshold"] += [None] * extra
         return FanoutConfig.from_kwargs(kw)
 
+    def first(self, n_neurons: int) -> "FanoutConfig":
+        """The table of the first ``n_neurons`` afferents and the channels up to the last one
+        they listen to (a board holding some trials of a scene: its afferents and channels
+        come first), in the same sample format."""
+        if not 1 <= n_neurons <= self.n_neurons:
+            raise ConfigError(f"the first {n_neurons} of a fan-out of {self.n_neurons} "
+                              f"afferents")
+        kw = self.to_kwargs()
+        for key in ("channel", "gain", "rectify", "threshold"):
+            kw[key] = kw[key][:n_neurons]
+        kw["n_channels"] = max(kw["channel"]) + 1
+        return FanoutConfig.from_kwargs(kw)
+
     def written(self, core) -> SimpleNamespace:
         """What the host writes to the fan-out in front of ``core``, as the host's driver and
         transport see a core's currents: ``n_neurons`` values (the channels) in the format

@@ -93,12 +93,10 @@ def cmd_stream(args) -> int:
         raise CliError(f"{COMMAND}: {scene.source} is a {scene.kind} scene; a board streams "
                        f"afferent scenes (FBG traces into Izhikevich afferents)")
     on_board, trials = scene["hardware"]["board_trials"], afferent.n_driven(scene)[0]
-    if on_board is not None and on_board < trials:
-        raise CliError(f"{COMMAND}: {scene.source}: its board holds {on_board} of its {trials} "
-                       f"trials (hardware.board_trials); a stream plays every trial at once "
-                       f"(build and stream without board_trials)")
+    # a board holding some of the trials plays them in turn, as many at a time as it holds
+    in_turn = on_board if on_board is not None and on_board < trials else None
     try:
-        cfg = afferent.core_config(scene)
+        cfg = afferent.core_config(scene, in_turn)
     except ValueError as exc:
         raise CliError(f"{COMMAND}: {scene.source}: {exc}") from None
     _check_fits(target, scene, cfg, args.baud)
@@ -118,7 +116,7 @@ def cmd_stream(args) -> int:
     options = {"board": {"port": port, "baud": baud, "timeout_s": args.timeout_s}}
     try:
         run = afferent.run(scene, ["fixed", "board"], build_dir=out / "build",
-                           engine_options=options)
+                           engine_options=options, in_turn=in_turn)
     except (TraceError, GapError, TransportError) as exc:
         raise CliError(f"{COMMAND}: {exc}") from None
     except ValueError as exc:

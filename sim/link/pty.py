@@ -222,16 +222,20 @@ class PtyBoard:
 
 def scene_link(scene, clocks_per_bit: int = BOARD_CLOCKS_PER_BIT):
     """The board an afferent scene streams to, as the ``board`` engine sizes it (what
-    :class:`PtyBoard` serves): its core's link, or with ``hardware.fanout`` the link of the
+    :class:`PtyBoard` serves), holding the scene's trials or ``hardware.board_trials`` of them
+    as ``cuneate build`` does: its core's link, or with ``hardware.fanout`` the link of the
     core fed by the scene's channel fan-out (:func:`~cuneate.sim.link.engines
     .board_fanout_config`); with a cuneate layer the ``(network, link)`` pair of the
     afferent -> cuneate network (behind the fan-out when the scene streams channels)."""
     from ..network.scene import scene_layer
     from ..scenes.afferent import build_neurons, core_config, n_driven, scene_channel_plan
     from .engines import board_fanout_config, board_fanout_network_config, board_network_config
-    cfg = core_config(scene)
-    fan = scene_channel_plan(scene).config if scene["hardware"]["fanout"] else None
-    layer = scene_layer(scene, build_neurons(scene, n_driven(scene)[0]), cfg)
+    k = scene["hardware"]["board_trials"] or n_driven(scene)[0]
+    neurons = build_neurons(scene, k)
+    cfg = core_config(scene, k)
+    fan = scene_channel_plan(scene).config.first(len(neurons)) if scene["hardware"]["fanout"] \
+        else None
+    layer = scene_layer(scene, neurons, cfg)
     if layer is not None:
         return board_network_config(layer.network, clocks_per_bit) if fan is None else \
             board_fanout_network_config(layer.network, fan, clocks_per_bit)

@@ -319,10 +319,11 @@ def _build_blocks(scene: Scene, neurons: Neurons):
     return cfg, blocks
 
 
-def core_config(scene: Scene):
+def core_config(scene: Scene, trials: int | None = None):
     """The core configuration a run of ``scene`` streams to (what a board must hold to run
-    it: :class:`~cuneate.sim.link.pty.PtyBoard` serves one), without running anything."""
-    return _build_blocks(scene, build_neurons(scene, n_driven(scene)[0]))[0]
+    it: :class:`~cuneate.sim.link.pty.PtyBoard` serves one; ``trials``: of its first trials
+    only), without running anything."""
+    return _build_blocks(scene, build_neurons(scene, trials or n_driven(scene)[0]))[0]
 
 
 def scene_channel_plan(scene: Scene):
@@ -336,13 +337,14 @@ def scene_channel_plan(scene: Scene):
 
 def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None = None,
         progress: bool = False, log=None, waves=None,
-        engine_options: dict | None = None) -> SceneRun:
+        engine_options: dict | None = None, in_turn: int | None = None) -> SceneRun:
     """Run an afferent ``scene`` on its engines (or ``engines``); each stage reports through
     :mod:`cuneate.sim.progress` (and ``log``, if given, gets one line per stage). ``waves``
     (a :class:`~cuneate.sim.engines.waves.Waves` window, or the scene's ``run.waves``): the
     RTL engines (amaranth, icarus, verilator) dump it. ``engine_options``: more keywords for
     an engine's transport, by engine (``{"board": {"port": "/dev/ttyUSB0"}}``: the board
-    engine on a programmed board, ``cuneate stream``)."""
+    engine on a programmed board, ``cuneate stream``). ``in_turn``: play the trials that many
+    at a time on a core of that many, group after group (:mod:`.in_turn`)."""
     from .. import progress as prog
     timing: dict = {}
 
@@ -387,6 +389,12 @@ def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None =
            "n_ticks": n_ticks, "build_dir": build_dir, "waves": waves_request(scene, waves),
            "engine_options": engine_options or {}, "fanout": fan, "layer": layer,
            "layer_spikes": {}}
+    turn = None
+    if in_turn:                                 # k trials at a time on the board's core
+        from .in_turn import in_turn as turn_context
+        nk = build_neurons(scene, in_turn)
+        turn, ctx = turn_context(scene, ctx, len(traces), nk, _build_blocks(scene, nk)[0])
+        say(f"trials in turn: {turn.k} at a time, {turn.n_groups} groups")
     for e in names:
         if e not in ENGINES:
             raise ValueError(f"unknown engine {e!r}; known: {', '.join(ENGINES)}")
@@ -394,7 +402,7 @@ def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None =
 
     def one(e):
         t0 = time.perf_counter()
-        with prog.step(f"engine {e}", total=n_ticks, unit="tick") as st:
+        with prog.step(f"engine {e}", total=ctx["n_ticks"], unit="tick") as st:
             sp, cnt = ENGINES[e](dict(ctx, progress=st.set, step=st))
         results[e] = (sp, cnt, time.perf_counter() - t0)
         say(f"engine {e}: {sum(len(x) for x in sp)} spikes ({results[e][2]:.1f} s)")
@@ -424,14 +432,15 @@ def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None =
             finally:
                 pool.shutdown()
     timing["engines_wall_s"] = time.perf_counter() - t_all
-    spikes = {e: results[e][0] for e in names}
+    ran_sp = {e: results[e][0] for e in names}        # the engines' own neurons
+    spikes = {e: turn.unfold(s) for e, s in ran_sp.items()} if turn else ran_sp
     counters = {e: results[e][1] for e in names}
     if "board" in counters:
         from ..host.uart import run_budget
-        written = (fan.config.n_channels, fan.config.S.width) if fan else (cfg.n_neurons,
-                                                                           cfg.I.width)
+        f, c = ctx["fanout"], ctx["config"]
+        written = (f.config.n_channels, f.config.S.width) if f else (c.n_neurons, c.I.width)
         counters["board"]["link_budget"] = run_budget(
-            counters["board"], n_ticks / cfg.update_hz, *written,
+            counters["board"], ctx["n_ticks"] / cfg.update_hz, *written,
             scene["sensor"]["sample_rate_hz"], cfg.update_hz,
             sum(map(len, spikes["board"])) + sum(map(len, ctx["layer_spikes"].get("board", []))))
     eng_t = {e: results[e][2] for e in names}
@@ -444,8 +453,10 @@ def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None =
         for e in names:
             if e not in lay["spikes"]:
                 with prog.step(f"cuneate layer on {e} ({layer.n_targets} neurons)"):
-                    lay["spikes"][e], lay["counters"][e] = run_layer(e, layer, spikes[e],
-                                                                     n_ticks)
+                    lay["spikes"][e], lay["counters"][e] = run_layer(
+                        e, ctx["layer"], ran_sp[e], ctx["n_ticks"])
+        if turn:
+            lay["spikes"] = {e: turn.unfold(s, layer.per_trial) for e, s in lay["spikes"].items()}
         timing["layer_s"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     dec = scene["decoder"]
@@ -490,7 +501,7 @@ def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None =
            "effect_counts": effect_counts, "blocks": blocks, "engines": list(spikes),
            "front_end": sorted({f"{e.mode}" for e in neurons.encoding}),
            "front_end_detail": front_end_detail(scene, neurons),
-           "stimulus": scene["stimulus"]["kind"]}
+           "stimulus": scene["stimulus"]["kind"]} | ({"in_turn": turn.describe()} if turn else {})
     files = {}
     wv = ctx["waves"]
     if wv:

@@ -138,13 +138,6 @@ def test_board_trials_out_of_range_is_refused(tmp_path, capsys, edit, reason):
     assert len(err) == 1 and reason in err[0] and "bad.toml" in err[0], err
 
 
-def test_a_stream_refuses_a_scene_whose_board_holds_some_of_its_trials(tmp_path, capsys):
-    assert main(["stream", "ulx3s", "--port", "loop://", "whole_hand", "--out",
-                 str(tmp_path)]) == 2
-    err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "holds 1 of its 12 trials (hardware.board_trials)" in err[0], err
-
-
 def test_a_scene_the_link_cannot_carry_in_real_time_is_refused_with_the_figure(tmp_path,
                                                                               capsys):
     fast = tmp_path / "fast.toml"

@@ -14,37 +14,10 @@ from cuneate.hdl.izhikevich import IzhikevichConfig
 from cuneate.sim import cli
 from cuneate.sim.network.engines import run_network
 from cuneate.sim.network.scene import CuneateLayer, layer_network, run_layer
-from cuneate.sim.scenes import afferent, example_path, parse_scene
+from cuneate.sim.scenes import afferent, parse_scene
 from cuneate.sim.scenes.schema import SceneError
 from cuneate.sim.spikes import load_spikes
-
-SLIDE = example_path("slide_texture.toml").read_text()
-LAYER = """
-[[population]]
-name = "cn"
-model = "cuneate"
-size = 2
-inputs = ["sa", "fa"]
-
-[[projection]]
-source = "sa"
-target = "cn"
-weight = 10.0
-
-[[projection]]
-source = "fa"
-target = "cn"
-weight = 10.0
-delays_ms = [1, 2]
-
-"""
-
-
-def layered_text(layer=LAYER, duration_ms=200, trials=2, engines='["golden", "fixed"]'):
-    return (SLIDE.replace("[hardware]", layer + "[hardware]")
-            .replace("duration_ms = 500", f"duration_ms = {duration_ms}")
-            .replace("trials = 8", f"trials = {trials}")
-            .replace('engines = ["golden", "fixed"]', f"engines = {engines}"))
+from layered_scene import LAYER, layered_text
 
 
 def test_the_layer_runs_on_golden_and_fixed_is_decoded_and_reported(tmp_path):

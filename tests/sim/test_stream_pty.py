@@ -165,16 +165,13 @@ weight = 12.0
 [hardware]"""
 
 
-@pytest.mark.long
-def test_cuneate_stream_of_a_scene_with_a_cuneate_layer_agrees_for_both_populations(tmp_path,
-                                                                                    capsys):
-    """A cuneate layer on the board (``LinkedNetwork``: currents in, afferent and cuneate
-    spikes out in one id space) streamed through the pty: both populations equal fixed."""
-    path = tmp_path / "layer.toml"
-    path.write_text(TINY_SCENE.replace("\n[hardware]", LAYER_TOML, 1))
+def stream_layered(tmp_path, capsys, text: str):
+    """Stream the scene ``text`` (a cuneate layer on board) to the pty board its link gives;
+    ``(network, link, printed output, run.json)``, after checking both populations equal
+    fixed and every spike arrived."""
+    path = tmp_path / "scene.toml"
+    path.write_text(text)
     net, link = scene_link(load_scene(path))
-    # two trials of two afferents on a core of 8, a cuneate neuron a trial after them
-    assert (net.n_afferents, net.n_targets, link.n_spike_ids) == (8, 2, 10)
     out = tmp_path / "out"
     board = PtyBoard((net, link))
     try:
@@ -190,3 +187,32 @@ def test_cuneate_stream_of_a_scene_with_a_cuneate_layer_agrees_for_both_populati
     assert cn["identical_trains"] == cn["neurons"] == 2 and cn["spikes_a"] > 0
     c = run["counters"]["board"]
     assert c["frames_lost"] == 0 and c["spikes"] == aff["spikes_a"] + cn["spikes_a"]
+    return net, link, printed.out, run
+
+
+@pytest.mark.long
+def test_cuneate_stream_of_a_scene_with_a_cuneate_layer_agrees_for_both_populations(tmp_path,
+                                                                                    capsys):
+    """A cuneate layer on the board (``LinkedNetwork``: currents in, afferent and cuneate
+    spikes out in one id space) streamed through the pty: both populations equal fixed."""
+    net, link, _, _ = stream_layered(tmp_path, capsys,
+                                     TINY_SCENE.replace("\n[hardware]", LAYER_TOML, 1))
+    # two trials of two afferents on a core of 8, a cuneate neuron a trial after them
+    assert (net.n_afferents, net.n_targets, link.n_spike_ids) == (8, 2, 10)
+
+
+@pytest.mark.long
+def test_cuneate_stream_plays_the_trials_of_a_one_hand_board_in_turn(tmp_path, capsys):
+    """A board built for one of the scene's two grasps (``board_trials = 1``; channels fanned
+    out on chip, a cuneate layer: ``LinkedFanoutNetwork``) streamed in turn through the pty:
+    the board's core holds one grasp, the host plays the grasps one after another, and both
+    populations equal the fixed engine played the same way."""
+    net, link, printed, run = stream_layered(
+        tmp_path, capsys, TINY_SCENE.replace("\n[hardware]", LAYER_TOML, 1)
+        .replace("[hardware]", "[hardware]\nfanout = true\nboard_trials = 1")
+        .replace('"golden", "fixed", "verilator"', '"golden", "fixed"'))
+    # one grasp's two FA afferents from its two band-passed channels on a core of 8, and its
+    # cuneate neuron
+    assert (net.n_afferents, net.n_targets, link.n_written) == (8, 1, 2)
+    assert "trials in turn: 1 at a time on the board's core, 2 groups" in printed
+    assert run["ran"]["in_turn"]["groups"] == 2
