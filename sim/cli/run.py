@@ -97,13 +97,20 @@ def cmd_run(args) -> int:
     if waves is not None and scene.kind != "afferent":
         raise CliError(f"cuneate run: --waves: waveforms are written for afferent scenes (the "
                        f"Izhikevich core); {scene.source} is a {scene.kind} scene")
+    in_turn = None
+    if args.in_turn:
+        k = scene["hardware"]["board_trials"] if scene.kind == "afferent" else None
+        if k is None:
+            raise CliError(f"cuneate run: --in-turn: {scene.source} names no "
+                           f"hardware.board_trials (the trials a board holds at a time)")
+        in_turn = k
     from ..host.driver import GapError
     from ..host.traces import TraceError
     from ..host.transport import TransportError
     from ..scenes.runner import run_scene
     start_progress(args)
     try:
-        run = run_scene(scene, engines, build_dir=out / "build", waves=waves)
+        run = run_scene(scene, engines, build_dir=out / "build", waves=waves, in_turn=in_turn)
     except (TraceError, GapError, TransportError) as exc:
         raise CliError(f"cuneate run: {exc}") from None
     except ValueError as exc:
@@ -131,6 +138,9 @@ def register(groups: CommandGroups) -> None:
     p.add_argument("--list-examples", action="store_true",
                    help="list the shipped scenes with their descriptions (default marked)")
     p.add_argument("--json", action="store_true", help="print the run summary as JSON")
+    p.add_argument("--in-turn", action="store_true",
+                   help="play the trials as a board built for the scene does: "
+                        "hardware.board_trials at a time, group after group")
     add_waves_options(p)
     add_quiet_option(p)
     p.add_argument("-v", "--verbose", action="store_true",

@@ -21,12 +21,13 @@ def kind_of(run_or_scene) -> str:
 
 
 def run_scene(scene, engines: list[str] | None = None, build_dir: Path | None = None,
-              progress: bool = False, log=None, waves=None):
+              progress: bool = False, log=None, waves=None, in_turn: int | None = None):
     """Run ``scene`` on its engines (or ``engines``) with its kind's module; returns that
     kind's run (``run.kind`` names the kind; ``run.ran`` lists exactly what was computed).
     ``progress``: show what each stage does (:mod:`cuneate.sim.progress`, on stderr) when no
     command has chosen how yet. ``waves``: a :class:`~cuneate.sim.engines.waves.Waves` window
-    (afferent scenes; the others refuse it).
+    (afferent scenes; the others refuse it). ``in_turn``: an afferent scene's trials that many
+    at a time, group after group (:mod:`cuneate.sim.scenes.in_turn`).
 
     The kind's estimate of the run's memory and time is checked first
     (:func:`check_budget`): a run that would exhaust the machine's memory or exceed the time
@@ -36,11 +37,14 @@ def run_scene(scene, engines: list[str] | None = None, build_dir: Path | None = 
         prog.configure("auto")
     check_budget(scene, list(engines or scene.engines))
     mod = kind_module(scene.kind)
+    if scene.kind == "afferent":
+        return mod.run(scene, engines, build_dir, progress, log, waves=waves, in_turn=in_turn)
     if waves is not None or scene["run"]["waves"]:
-        if scene.kind != "afferent":
-            raise ValueError(f"waveforms are written for afferent scenes (the Izhikevich "
-                             f"core); a {scene.kind} scene has none")
-        return mod.run(scene, engines, build_dir, progress, log, waves=waves)
+        raise ValueError(f"waveforms are written for afferent scenes (the Izhikevich core); a "
+                         f"{scene.kind} scene has none")
+    if in_turn is not None:
+        raise ValueError(f"trials in turn are an afferent scene's; a {scene.kind} scene has "
+                         f"none")
     return mod.run(scene, engines, build_dir, progress, log)
 
 

@@ -2,6 +2,8 @@
 plays them group after group; the first group starts from the reset state as the side-by-side
 run does, and every spike of a group's window returns to its own trial."""
 
+import json
+
 import numpy as np
 
 from cuneate.sim.scenes import afferent, parse_scene
@@ -40,3 +42,23 @@ def test_in_turn_the_first_group_equals_the_side_by_side_run_and_state_carries_o
         assert all(np.array_equal(x, y) for x, y in zip(la[:4], lb[:4]))
     assert turn.agreement["golden vs fixed"]["neurons"] == 6 * per
     assert "trials in turn: 2 at a time" in afferent.format_run(turn)
+
+
+def test_cuneate_run_in_turn_plays_the_scene_as_its_board_does(tmp_path, capsys):
+    from cuneate.sim import cli
+    p = tmp_path / "turn.toml"
+    p.write_text(layered_text(duration_ms=100, trials=1).replace(
+        "[hardware]", "[hardware]\nboard_trials = 2"))
+    assert cli.main(["run", str(p), "--in-turn", "--json", "-q", "--out",
+                     str(tmp_path / "o")]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["ran"]["in_turn"] == {"trials_at_a_time": 2, "groups": 2,
+                                         "ticks_a_group": 1600, "ticks": 3200}
+    assert summary["agreement"]["golden vs fixed"]["neurons"] == 3 * 2 * 2
+    # a scene that names no board_trials has no board to play in turn
+    q = tmp_path / "side.toml"
+    q.write_text(layered_text(duration_ms=100, trials=1))
+    assert cli.main(["run", str(q), "--in-turn", "-q", "--out", str(tmp_path / "o2")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"cuneate run: --in-turn: {q} names no hardware.board_trials (the trials a "
+                   f"board holds at a time)"]
