@@ -193,15 +193,16 @@ def size_blocks(target: dict, request, clock_hz, pipeline_stages, baud=None) -> 
             why.append(f"at {plan.clock_hz / 1e6:g} MHz: {exc}")
             continue
         est = {}
-        if request.kind == "fanout":
-            f = lcfg.fanout
+        if request.kind == "fanout" or request.extra:
             est = estimate(lcfg, target)
-            est["BRAM"] += count_blocks([(f.n_neurons, f.entry_width), (f.n_channels, f.S.width)],
-                                  target)
-            est["DSP"] += math.ceil(f.gain_width / target["dsp_width"]) * \
-                math.ceil(f.S.width / target["dsp_width"])
+            f = lcfg.fanout
+            if f is not None:
+                est["BRAM"] += count_blocks([(f.n_neurons, f.entry_width),
+                                             (f.n_channels, f.S.width)], target)
+                est["DSP"] += math.ceil(f.gain_width / target["dsp_width"]) * \
+                    math.ceil(f.S.width / target["dsp_width"])
             for k, v in request.extra.items():      # a cuneate layer's detector
-                est[k] += v
+                est[k] = est.get(k, 0) + v
             over = device_overrun(est, target)
             if over is not None:
                 why.append(f"at {plan.clock_hz / 1e6:g} MHz: {over}")

@@ -10,12 +10,14 @@ agreement with the bit-exact twin (``board vs fixed``). A board that is not prog
 scene's core (its neurons, parameter sets and current format) disagrees with the twin.
 
 ``SCENE`` is resolved as ``cuneate run`` resolves it (a file, a shipped example, the default
-scene); a fan-out scene (``hardware.fanout``) streams its channels. Refused in one line (exit
-2): an unknown board, a scene that is not an afferent scene or does not fit the board (its
-sizing: cycles per sweep, block RAM, multipliers, the link's 65 536 neuron ids; a fan-out
-scene's as ``cuneate build`` sizes it), a scene whose board holds only some of its trials, no
-``--port`` or a port that cannot be opened, and any loss on the link.
-Exit 1 when the board's spike trains differ from the twin's.
+scene); a fan-out scene (``hardware.fanout``) streams its channels; a scene with a cuneate
+layer gets both populations back; a scene whose board holds only some of its trials
+(``hardware.board_trials``) is played in turn (:mod:`cuneate.sim.scenes.in_turn`). Refused in
+one line (exit 2): an unknown board, a scene that is not an afferent scene or does not fit the
+board (its sizing: cycles per sweep, block RAM, multipliers, the link's 65 536 neuron ids; a
+fan-out or layered scene's as ``cuneate build`` sizes it), no ``--port`` or a port that cannot
+be opened, and any loss on the link. Exit 1 when the board's spike trains (afferent or
+cuneate) differ from the twin's.
 """
 
 from __future__ import annotations
@@ -124,9 +126,9 @@ def cmd_stream(args) -> int:
     finally:
         port.close()
     page = afferent.write_report(run, out)
-    agree = run.agreement["board vs fixed"]
-    same = all(a["identical_trains"] == a["neurons"] for k, a in run.agreement.items()
-               if k.endswith("board vs fixed"))          # the afferents and a cuneate layer
+    differ = [k for k, a in run.agreement.items()      # the afferents and a cuneate layer
+              if k.endswith("board vs fixed") and a["identical_trains"] != a["neurons"]]
+    same = not differ
     if args.json:
         print(json.dumps(afferent.summary(run), default=float))
     else:
@@ -134,9 +136,10 @@ def cmd_stream(args) -> int:
         print("\n".join(_board_lines(args, run, baud)))
         print(f"report: {page}")
     if not same:
+        a = run.agreement[differ[0]]
         print(f"{COMMAND}: the board's spike trains differ from the bit-exact twin's "
-              f"({agree['identical_trains']}/{agree['neurons']} identical): is it programmed "
-              f"with this scene's core?", file=sys.stderr)
+              f"({differ[0]}: {a['identical_trains']}/{a['neurons']} identical): is it "
+              f"programmed with this scene's blocks?", file=sys.stderr)
         return 1
     return 0
 

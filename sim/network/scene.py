@@ -43,7 +43,7 @@ from ...hdl.network import NetworkConfig
 from ...hdl.network.config import SWEEP_EXTRA
 
 __all__ = ["CuneateLayer", "LAYER_ENGINES", "validate_layer", "scene_layer", "layer_network",
-           "run_layer", "check_layer_engines", "layer_estimate"]
+           "layer_config", "run_layer", "check_layer_engines", "layer_estimate"]
 
 #: the engines that run an afferent scene's cuneate layer
 LAYER_ENGINES = ("golden", "fixed", "board")
@@ -112,6 +112,32 @@ def validate_layer(V, sections: dict, pops: list, projs: list) -> None:
     if missing:
         V.err("projection", f"the cuneate layer needs a projection from {missing[0]!r} to "
                             f"{c['name']!r} (its weight and delays)")
+    for i, e in enumerate(sections["run"]["engines"]):
+        if e not in LAYER_ENGINES:
+            V.err(f"run.engines[{i}]", f"engine {e!r} does not run the cuneate layer (engines "
+                                       f"that do: {', '.join(LAYER_ENGINES)})")
+    # one trial's detector, as every trial's: each neuron listens to some afferent, and the
+    # detector holds its weights, delays and tick (as it is refused on chip)
+    by_name = {p["name"]: p for p in pops}
+    fields = np.array_split(np.asarray(g), c["size"])
+    src = [(q, x) for q in projs for x in by_name[q["source"]]["gratings"]]
+    delays = np.zeros((c["size"], max(1, len(src))), dtype=np.int64)
+    weights = np.zeros((c["size"], max(1, len(src))))
+    for j, f in enumerate(fields):
+        for s, (q, x) in enumerate(src):
+            if x in f:
+                d = q["delays_ms"][j if len(q["delays_ms"]) > 1 else 0]
+                delays[j, s], weights[j, s] = int(round(d / dt)), q["weight"]
+        if not weights[j].any():
+            V.err(f"population[{ci}].gratings", f"cuneate neuron {j}'s field (gratings "
+                                                f"{', '.join(map(str, f))}) holds none of its "
+                                                f"inputs' afferents")
+    from ...hdl.lib.config import ConfigError
+    try:
+        layer_config(delays, weights, c["preset"], sections["hardware"]["update_hz"],
+                     sections["hardware"]["rounding"])
+    except ConfigError as exc:
+        V.err(f"population[{ci}]", f"the cuneate layer's detector is refused: {exc}")
 
 
 @dataclass
@@ -153,6 +179,21 @@ class CuneateLayer:
                 "role": "cuneate layer"}
 
 
+def layer_config(delays, weights, preset: str, update_hz: float, rounding: str = "nearest"):
+    """The :class:`~cuneate.hdl.coincidence.CoincidenceConfig` of a layer with ``delays``
+    (ticks) and ``weights`` (mV/ms), ``(n_targets, n_sources)``, targets of Izhikevich set
+    ``preset``, at ``update_hz`` and a clock that holds a tick's work: its refusals are the
+    layer's (validation builds one trial's)."""
+    from ...hdl.coincidence import CoincidenceConfig
+    d, w = np.asarray(delays, dtype=np.int64), np.asarray(weights, dtype=np.float64)
+    M, N = w.shape
+    det = {"n_sources": N, "n_targets": M, "delays_ticks": d.tolist(), "weights": w.tolist(),
+           "max_delay_ticks": int(d.max(initial=0)) + 1, "param_sets": (preset,),
+           "rounding": rounding}
+    return CoincidenceConfig(**det, update_hz=update_hz,
+                             clock_hz=update_hz * (M * (N + CYCLES_PER_TARGET_EXTRA) + 2))
+
+
 def layer_network(core, delays, weights, preset: str, **network) -> NetworkConfig:
     """The network of ``core``'s afferents (an :class:`~cuneate.hdl.izhikevich.IzhikevichConfig`:
     its parameter sets, formats and rounding) and a detector with ``delays`` (ticks) and
@@ -163,7 +204,7 @@ def layer_network(core, delays, weights, preset: str, **network) -> NetworkConfi
     M, N = w.shape
     det = {"n_sources": N, "n_targets": M, "delays_ticks": d.tolist(),
            "weights": w.tolist(), "max_delay_ticks": int(d.max(initial=0)) + 1,
-           "param_sets": (preset,)}
+           "param_sets": (preset,), "rounding": core.rounding}
     work = max(N + SWEEP_EXTRA, M * (N + CYCLES_PER_TARGET_EXTRA) + 2) + 2
     kw = {"clock_hz": core.update_hz * work, "cuneate_fifo_depth": max(16, M)} | network
     return NetworkConfig(

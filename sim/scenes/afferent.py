@@ -372,9 +372,8 @@ def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None =
         drv, currents, gaps = front_end(scene, neurons, traces, infos, cfg)
         raw, sat = drv.quantize(currents)
         fan = scene_fanout(scene, neurons, traces, infos, cfg, drv, names, blocks)
-        layer = scene_layer(scene, neurons, cfg)
-        if layer is not None:
-            blocks.append(layer.describe())
+        # in turn, the board's layer (its trials') is the one built and run
+        layer = None if in_turn else scene_layer(scene, neurons, cfg)
     sat["gaps_held"] = gaps
     n_ticks = currents.shape[0] * drv.hold_ticks
     # samples whose tick (j R + L) falls at or after the run's end are never applied: counted
@@ -394,7 +393,10 @@ def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None =
         from .in_turn import in_turn as turn_context
         nk = build_neurons(scene, in_turn)
         turn, ctx = turn_context(scene, ctx, len(traces), nk, _build_blocks(scene, nk)[0])
+        layer = ctx["layer"]
         say(f"trials in turn: {turn.k} at a time, {turn.n_groups} groups")
+    if layer is not None:
+        blocks.append(layer.describe())
     for e in names:
         if e not in ENGINES:
             raise ValueError(f"unknown engine {e!r}; known: {', '.join(ENGINES)}")
@@ -442,14 +444,16 @@ def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None =
         counters["board"]["link_budget"] = run_budget(
             counters["board"], ctx["n_ticks"] / cfg.update_hz, *written,
             scene["sensor"]["sample_rate_hz"], cfg.update_hz,
-            sum(map(len, spikes["board"])) + sum(map(len, ctx["layer_spikes"].get("board", []))))
+            sum(map(len, ran_sp["board"])) + sum(map(len, ctx["layer_spikes"].get("board", []))))
     eng_t = {e: results[e][2] for e in names}
     timing["engines_s"] = eng_t
     lay = {}
     if layer is not None:
         t0 = time.perf_counter()
-        lay = {"population": layer.population, "trial": layer.trial, "index": layer.index,
-               "spikes": dict(ctx["layer_spikes"]), "counters": {}}
+        M = layer.per_trial
+        lay = {"population": layer.population, "spikes": dict(ctx["layer_spikes"]),
+               "trial": [t for t in range(len(traces)) for _ in range(M)],
+               "index": list(range(M)) * len(traces), "counters": {}}
         for e in names:
             if e not in lay["spikes"]:
                 with prog.step(f"cuneate layer on {e} ({layer.n_targets} neurons)"):

@@ -83,13 +83,17 @@ def in_turn(scene, ctx: dict, n_trials: int, nk, cfg):
     k = len(nk) // per
     if not 1 <= k <= n_trials:
         raise ValueError(f"{k} trials at a time: the scene has {n_trials}")
-    turn = InTurn(k, n_trials, ctx["n_ticks"], ctx["config"].dt_ms, per)
     drv = ctx["driver"]
+    if drv.latency_ticks:
+        raise ValueError(f"frontend.latency_ticks = {drv.latency_ticks}: in turn, a group's "
+                         f"last samples would drive the next group's trials (play the trials "
+                         f"in turn without latency)")
+    turn = InTurn(k, n_trials, ctx["n_ticks"], ctx["config"].dt_ms, per)
     out = dict(ctx, neurons=nk, config=cfg, currents=turn.fold(ctx["currents"], per),
                raw=turn.fold(ctx["raw"], per), n_ticks=turn.n_groups * turn.n_ticks,
                driver=FbgDriver(cfg, nk.encoding, drv.fs_hz, drv.latency_ticks,
                                 on_gap=drv.on_gap),
-               layer=scene_layer(scene, nk, cfg) if ctx["layer"] is not None else None)
+               layer=scene_layer(scene, nk, cfg))
     fan = ctx["fanout"]
     if fan is not None:
         fk = fan.config.first(len(nk))

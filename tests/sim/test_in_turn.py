@@ -5,6 +5,7 @@ run does, and every spike of a group's window returns to its own trial."""
 import json
 
 import numpy as np
+import pytest
 
 from cuneate.sim.scenes import afferent, parse_scene
 from cuneate.sim.scenes.in_turn import InTurn
@@ -62,3 +63,12 @@ def test_cuneate_run_in_turn_plays_the_scene_as_its_board_does(tmp_path, capsys)
     err = capsys.readouterr().err.strip().splitlines()
     assert err == [f"cuneate run: --in-turn: {q} names no hardware.board_trials (the trials a "
                    f"board holds at a time)"]
+
+
+def test_in_turn_with_a_front_end_latency_is_refused():
+    """A latency would carry a group's last samples into the next group's trials."""
+    text = layered_text(duration_ms=100, trials=1).replace("[frontend]",
+                                                           "[frontend]\nlatency_ticks = 3")
+    with pytest.raises(ValueError, match=r"^frontend.latency_ticks = 3: in turn, a group's last "
+                                         r"samples would drive the next group's trials"):
+        afferent.run(parse_scene(text, "late.toml"), ["fixed"], in_turn=1)

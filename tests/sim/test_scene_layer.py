@@ -107,6 +107,26 @@ def test_a_wrong_layer_is_refused_in_one_line(edit, key, reason):
     assert "\n" not in msg and msg.startswith(f"bad.toml: {key}: ") and reason in msg, msg
 
 
+@pytest.mark.parametrize("edit, key, reason", [
+    ((('encoding = "SA"', 'encoding = "SA"\ngratings = [0]'),
+      ('encoding = "FA"', 'encoding = "FA"\ngratings = [0]')), "population[2].gratings",
+     "cuneate neuron 1's field (gratings 1) holds none of its inputs' afferents"),
+    ((("weight = 10.0\ndelays", "weight = 1e6\ndelays"),), "population[2]",
+     "the cuneate layer's detector is refused: "),
+    ((('engines = ["golden", "fixed"]', 'engines = ["golden", "fixed", "verilator"]'),),
+     "run.engines[2]", "engine 'verilator' does not run the cuneate layer"),
+])
+def test_a_layer_its_detector_or_its_engines_cannot_hold_is_refused_at_parse(edit, key,
+                                                                             reason):
+    text = layered_text()
+    for e in edit:
+        text = text.replace(*e)
+    with pytest.raises(SceneError) as exc:
+        parse_scene(text, "bad.toml")
+    msg = str(exc.value)
+    assert "\n" not in msg and msg.startswith(f"bad.toml: {key}: ") and reason in msg, msg
+
+
 def test_a_missing_projection_and_an_unknown_decoded_population_are_refused():
     no_fa = LAYER[:LAYER.index('[[projection]]\nsource = "fa"')]
     with pytest.raises(SceneError, match=r"^bad.toml: projection: the cuneate layer needs a "
