@@ -198,10 +198,11 @@ def test_refusals(argv, expect, tmp_path, capsys):
 
 @pytest.mark.long
 def test_sweep_with_synthesis_and_update_rates(tmp_path):
-    """A real instance of the long kind: update rates (powers of two and not) x widths, with
-    yosys synth_ecp5 and nextpnr-ecp5 (fmax) of each fixed core sized for 40 MHz."""
+    """A real instance of the long kind: update rates (powers of two and not) at 18-bit
+    operands, with yosys synth_ecp5 and nextpnr-ecp5 (fmax) of each fixed core sized for
+    40 MHz (a second width's three place-and-route runs left the long lane for its time)."""
     spec = SweepSpec(duration_ms=1000.0, synth=True, fmax=True)
-    pts = grid(update_hz=(8e3, 16e3, 20e3), operand_width=(18, 20), schemes=("euler", "rk4"))
+    pts = grid(update_hz=(8e3, 16e3, 20e3), operand_width=(18,), schemes=("euler", "rk4"))
     rows = {r["label"]: r for r in run_sweep(pts, spec, tmp_path, workers=2)}
     a, b = rows["fixed 16 kHz w18 v.18 u.20 nearest"], rows["fixed 8 kHz w18 v.18 u.20 nearest"]
     assert a["neurons_per_core"] == 2500 and b["neurons_per_core"] == 5000
@@ -210,7 +211,7 @@ def test_sweep_with_synthesis_and_update_rates(tmp_path):
     assert all(r["status"] == "ok" for r in rows.values())
     # every fixed core placed and routed on the LFE5U-85F meets its 40 MHz clock
     fixed = [r for r in rows.values() if r["engine"] == "fixed"]
-    assert len(fixed) == 6 and all(r["fmax_mhz"] >= 40.0 for r in fixed)
+    assert len(fixed) == 3 and all(r["fmax_mhz"] >= 40.0 for r in fixed)
 
 
 def test_hardcases_summary_prints_the_records(tmp_path, capsys):
