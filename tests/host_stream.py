@@ -1,6 +1,6 @@
 """Shared by the host-link tests: a trace of held levels, the host driver of three SA gratings,
-the bit-exact twin's stream of it (the reference) and the transport contract a stream over a
-link must meet against that reference."""
+the bit-exact twin's stream of it (the reference), the transport contract a stream over a
+link must meet against that reference, and a run of raw samples through a transport."""
 
 import numpy as np
 
@@ -29,6 +29,21 @@ def twin_reference(core, first: int, x):
     tw = TwinTransport()
     tw.open(core)
     return sa_driver(core, first).stream(tw, x)
+
+
+def stream_samples(tr, config, raw, every: int):
+    """Open ``tr`` on ``config``, write row ``k`` of ``raw`` (from value 0) before sweep
+    ``k every``, run every row's sweeps and close; ``(spikes, checked counters, figures)``."""
+    tr.open(config)
+    try:
+        for k, row in enumerate(raw):
+            tr.write_currents(k * every, 0, row)
+        tr.run(len(raw) * every)
+        got = tr.collect()
+        counters = tr.check()
+    finally:
+        tr.close()
+    return got, counters, tr.figures()
 
 
 def assert_contract(got, ref) -> dict:

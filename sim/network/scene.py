@@ -119,15 +119,17 @@ def validate_layer(V, sections: dict, pops: list, projs: list) -> None:
     # one trial's detector, as every trial's: each neuron listens to some afferent, and the
     # detector holds its weights, delays and tick (as it is refused on chip)
     by_name = {p["name"]: p for p in pops}
-    fields = np.array_split(np.asarray(g), c["size"])
-    src = [(q, x) for q in projs for x in by_name[q["source"]]["gratings"]]
+    fields = _fields(g, c["size"])
+    src = [(q["source"], x) for q in projs for x in by_name[q["source"]]["gratings"]]
     delays = np.zeros((c["size"], max(1, len(src))), dtype=np.int64)
     weights = np.zeros((c["size"], max(1, len(src))))
+    proj = {q["source"]: q for q in projs}
+    for s, (pop, x) in enumerate(src):
+        syn = _synapse(fields, proj, pop, x, dt)
+        if syn is not None:
+            j, d, w = syn
+            delays[j, s], weights[j, s] = d, w
     for j, f in enumerate(fields):
-        for s, (q, x) in enumerate(src):
-            if x in f:
-                d = q["delays_ms"][j if len(q["delays_ms"]) > 1 else 0]
-                delays[j, s], weights[j, s] = int(round(d / dt)), q["weight"]
         if not weights[j].any():
             V.err(f"population[{ci}].gratings", f"cuneate neuron {j}'s field (gratings "
                                                 f"{', '.join(map(str, f))}) holds none of its "
@@ -215,6 +217,22 @@ def layer_network(core, delays, weights, preset: str, **network) -> NetworkConfi
                           "rounding": core.rounding}, **kw)
 
 
+def _fields(gratings, size: int) -> list[list[int]]:
+    """The receptive fields of ``size`` cuneate neurons tiling ``gratings`` in order."""
+    return [[int(x) for x in f] for f in np.array_split(np.asarray(gratings), size)]
+
+
+def _synapse(fields: list, proj: dict, pop: str, grating: int, dt: float):
+    """``(cuneate neuron, delay in ticks, J w)`` of the synapse an afferent of ``pop`` on
+    ``grating`` makes (``proj``: the layer's projections by source), or ``None``."""
+    q = proj.get(pop)
+    j = next((j for j, f in enumerate(fields) if grating in f), None)
+    if q is None or j is None:
+        return None
+    d = q["delays_ms"][j if len(q["delays_ms"]) > 1 else 0]
+    return j, int(round(d / dt)), q["weight"]
+
+
 def scene_layer(scene, neurons, core) -> CuneateLayer | None:
     """The cuneate layer of ``scene`` over ``neurons`` (its afferents in core order) on
     ``core`` (the scene's core: the sources are its neurons, idle ones included), or ``None``
@@ -223,21 +241,16 @@ def scene_layer(scene, neurons, core) -> CuneateLayer | None:
     if cn is None:
         return None
     M = cn["size"]
-    fields = [[int(g) for g in f] for f in np.array_split(np.asarray(cn["gratings"]), M)]
-    field_of = {g: j for j, f in enumerate(fields) for g in f}
+    fields = _fields(cn["gratings"], M)
     proj = {q["source"]: q for q in scene.projections}
     T = (max(neurons.trial) + 1) if len(neurons) else 0
-    dt = core.dt_ms
     delays = np.zeros((M * T, core.n_neurons), dtype=np.int64)
     weights = np.zeros((M * T, core.n_neurons))
     for i, (t, pop, g) in enumerate(zip(neurons.trial, neurons.population, neurons.grating)):
-        q = proj.get(pop)
-        if q is None or g not in field_of:
-            continue
-        j = field_of[g]
-        d = q["delays_ms"][j if len(q["delays_ms"]) > 1 else 0]
-        delays[t * M + j, i] = int(round(d / dt))
-        weights[t * M + j, i] = q["weight"]
+        syn = _synapse(fields, proj, pop, g, core.dt_ms)
+        if syn is not None:
+            j, d, w = syn
+            delays[t * M + j, i], weights[t * M + j, i] = d, w
     net = layer_network(core, delays, weights, cn["preset"])
     return CuneateLayer(cn["name"], M, fields, [t for t in range(T) for _ in range(M)],
                         [j for _ in range(T) for j in range(M)], delays, weights, cn["preset"],

@@ -12,6 +12,7 @@ from cuneate.hdl.izhikevich import IzhikevichConfig, IzhikevichTwin
 from cuneate.hdl.lib.config import ConfigError
 from cuneate.hdl.link import LinkConfig, LinkedFanoutCore, LinkModel
 from cuneate.sim.link.engines import BoardTransport, board_fanout_config
+from host_stream import stream_samples
 
 N, C = 30, 4
 CORE = IzhikevichConfig(n_neurons=N, clock_hz=4e3 * N, update_hz=4e3, spike_fifo_depth=32)
@@ -46,17 +47,8 @@ def test_the_board_with_the_fanout_equals_the_twins(ahead):
     raw = samples(40)
     n_sweeps = len(raw) * EVERY
     want, clamps = reference(raw, n_sweeps)
-    tr = BoardTransport(fanout=FAN, ahead=ahead)
-    tr.open(CORE)
-    try:
-        for k, row in enumerate(raw):
-            tr.write_currents(k * EVERY, 0, row)
-        tr.run(n_sweeps)
-        got = tr.collect()
-        counters = tr.check()
-    finally:
-        tr.close()
-    figures = tr.figures()
+    got, counters, figures = stream_samples(BoardTransport(fanout=FAN, ahead=ahead), CORE, raw,
+                                            EVERY)
     assert len(want) > 40
     assert list(zip(got.tick.tolist(), got.neuron.tolist())) == want
     # the link carried the channels: one frame of C samples a sample, nothing lost

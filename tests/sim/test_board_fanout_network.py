@@ -17,6 +17,7 @@ from cuneate.hdl.link.codec import MSG_WRITE, FrameDecoder, write_message
 from cuneate.hdl.network import NetworkConfig, NetworkTwin, REPORT_SETTLE
 from cuneate.sim.link.engines import BoardTransport, board_fanout_network_config
 from cuneate.sim.link.faults import Recorder
+from host_stream import stream_samples
 
 # 20 afferents on 4 channels; afferents 2 .. 17 drive 3 cuneate neurons at 4 kHz
 N, C, M, S, F = 20, 4, 3, 16, 2
@@ -64,16 +65,7 @@ def test_the_board_with_the_fanout_network_equals_the_twins(ahead):
     want, clamps = reference(raw, n_ticks)
     rec = Recorder()
     tr = BoardTransport(fanout=FAN, ahead=ahead, corrupt_host=rec)
-    tr.open(NETWORK)
-    try:
-        for k, row in enumerate(raw):
-            tr.write_currents(k * EVERY, 0, row)
-        tr.run(n_ticks)
-        got = tr.collect()
-        counters = tr.check()
-    finally:
-        tr.close()
-    figures = tr.figures()
+    got, counters, figures = stream_samples(tr, NETWORK, raw, EVERY)
     print(f"\n{'ahead' if ahead else 'lockstep'}: {figures}; "
           f"{sum(1 for _, i in want if i < N)} afferent and "
           f"{sum(1 for _, i in want if i >= N)} cuneate spikes")
