@@ -1,0 +1,238 @@
+"""Register packing for ECP5 multipliers: moves fabric flip-flops into the MULT18X18D's own
+input and output registers in a ``synth_ecp5`` JSON netlist, before nextpnr-ecp5 reads it.
+
+yosys maps a product to a bare MULT18X18D (no register enabled), so a multiplier fed from
+registers and feeding registers costs its whole combinational delay (about 3.9 ns on the
+LFE5U-85F -6) plus the routing from and to fabric flip-flops on each side. The DSP block has
+registers of its own (Lattice TN1267, sysDSP usage guide: ``REG_INPUTA/B`` and
+``REG_OUTPUT``, each with a clock, clock-enable and reset selected from ``CLK0..3``,
+``CE0..3``, ``RST0..3``). :func:`pack_dsp_registers` uses them where the netlist already has
+the equivalent register, so the cycle-level behaviour is unchanged:
+
+* **Inputs A and B.** Every bit of both ports is a constant or the ``Q`` of a plain
+  flip-flop (a ``TRELLIS_FF`` clocked on the rising edge, clock enable tied high, no set/reset
+  net), all on one clock. Each port bit driven by a flip-flop is rewired to the flip-flop's
+  ``DI`` net and ``REG_INPUTA/B_CLK = CLK0``: the DSP's register holds what the flip-flop
+  holds, cycle for cycle. A flip-flop left with no other load is removed; one with other loads
+  stays (the register is duplicated into the DSP). A constant port is registered too (it holds
+  its constant from the first clock edge after configuration on): nextpnr-ecp5 times the input
+  registers only when both ports have them, so both or neither are packed.
+* **Output.** Every used product bit's only load is a plain flip-flop on that same clock. The
+  flip-flops are removed and the product bits drive their ``Q`` nets (``REG_OUTPUT_CLK =
+  CLK0``).
+
+``CE0`` is tied high and ``RST0`` low; both the flip-flops replaced and the DSP registers start
+at zero after configuration. Anything else (a clock enable, a reset, two clocks, a product bit
+with a second load or a combinational load) leaves that port unpacked. The result is counted
+(:class:`PackReport`). nextpnr-ecp5 times a multiplier by which registers it has
+(``MULT18X18D_REGS_INPUT``/``OUTPUT``/``ALL``), so the packing shows in its fmax.
+
+Command line (the board build runs it between yosys and nextpnr)::
+
+    python -m cuneate.hdl.flow.ecp5_pack NETLIST.json
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from collections import defaultdict
+from dataclasses import dataclass, field
+from pathlib import Path
+
+__all__ = ["PackReport", "pack_dsp_registers", "pack_netlist_file"]
+
+@dataclass
+class PackReport:
+    """What :func:`pack_dsp_registers` did: multipliers seen, input ports (A and B counted
+    apart) and outputs packed, flip-flops removed and flip-flops duplicated into a DSP
+    block (kept for their other loads)."""
+
+    multipliers: int = 0
+    inputs_packed: int = 0
+    outputs_packed: int = 0
+    ffs_removed: int = 0
+    ffs_duplicated: int = 0
+    skipped: list = field(default_factory=list)
+
+    def to_dict(self) -> dict:
+        return {"multipliers": self.multipliers, "inputs_packed": self.inputs_packed,
+                "outputs_packed": self.outputs_packed, "ffs_removed": self.ffs_removed,
+                "ffs_duplicated": self.ffs_duplicated, "skipped": list(self.skipped)}
+
+    def line(self) -> str:
+        return (f"MULT18X18D register packing: {self.multipliers} multipliers, "
+                f"{self.inputs_packed} input ports and {self.outputs_packed} outputs "
+                f"registered in the DSP; {self.ffs_removed} flip-flops removed, "
+                f"{self.ffs_duplicated} duplicated")
+
+
+def _is_top(module: dict) -> bool:
+    flag = str(module.get("attributes", {}).get("top", "0"))
+    return int(flag, 2 if set(flag) <= {"0", "1"} else 10) != 0
+
+
+def _top(netlist: dict) -> dict:
+    tops = [m for m in netlist["modules"].values() if _is_top(m)]
+    if len(tops) != 1:
+        raise ValueError(f"the netlist has {len(tops)} top modules; expected one (flattened "
+                         f"synth_ecp5 output)")
+    return tops[0]
+
+
+class _Nets:
+    """Driver and loads of every net bit of one module."""
+
+    def __init__(self, module: dict):
+        self.cells = module["cells"]
+        self.driver: dict = {}
+        self.loads: dict = defaultdict(list)
+        self.ports: set = set()
+        for p in module.get("ports", {}).values():
+            self.ports.update(b for b in p["bits"] if not isinstance(b, str))
+        for name, c in self.cells.items():
+            for pin, bits in c["connections"].items():
+                out = c.get("port_directions", {}).get(pin) == "output"
+                for b in bits:
+                    if isinstance(b, str):
+                        continue
+                    if out:
+                        self.driver[b] = (name, pin)
+                    else:
+                        self.loads[b].append((name, pin))
+
+    def plain_ff(self, name: str) -> bool:
+        """A rising-edge flip-flop with no clock enable and no set/reset net."""
+        c = self.cells.get(name)
+        if c is None or c["type"] != "TRELLIS_FF":
+            return False
+        par, con = c["parameters"], c["connections"]
+        if par.get("CLKMUX", "CLK") != "CLK":
+            return False
+        ce_high = par.get("CEMUX", "1").strip() == "1" or con.get("CE") == ["1"]
+        no_lsr = con.get("LSR", ["0"]) in (["0"], ["x"], [])
+        return ce_high and no_lsr
+
+    def load_count(self, bit) -> int:
+        return len(self.loads.get(bit, [])) + (bit in self.ports)
+
+
+def _pin(cell: dict, pin: str):
+    return cell["connections"][pin][0]
+
+
+def _set_pin(cell: dict, pin: str, value, direction: str = "input"):
+    cell["connections"][pin] = [value]
+    cell.setdefault("port_directions", {})[pin] = direction
+
+
+def pack_dsp_registers(netlist: dict) -> PackReport:
+    """Pack plain flip-flops into the MULT18X18D input and output registers of the (flattened)
+    top module of ``netlist`` (yosys JSON, changed in place). Returns what it did."""
+    mod = _top(netlist)
+    cells = mod["cells"]
+    rep = PackReport()
+    for name in sorted(n for n, c in cells.items() if c["type"] == "MULT18X18D"):
+        rep.multipliers += 1
+        nets = _Nets(mod)              # rebuilt per block: the previous one rewired nets
+        dsp = cells[name]
+        clocks: set = set()
+        packed_in: dict = {}
+        for side in "AB":
+            ffs, ok = {}, True
+            for i in range(18):
+                b = _pin(dsp, f"{side}{i}")
+                if isinstance(b, str):
+                    continue
+                drv = nets.driver.get(b)
+                if drv is None or drv[1] != "Q" or not nets.plain_ff(drv[0]):
+                    ok = False
+                    break
+                ffs[i] = drv[0]
+            ff_clocks = {_pin(cells[f], "CLK") for f in ffs.values()}
+            if not ok or len(ff_clocks) > 1:
+                rep.skipped.append(f"{name}.{side}")
+                continue
+            packed_in[side] = (ffs, ff_clocks.pop() if ff_clocks else None)
+        if len(packed_in) < 2 or not any(ffs for ffs, _ in packed_in.values()):
+            packed_in = {}             # both ports or neither; constants alone: nothing to move
+        p_ffs, p_ok = {}, True
+        for i in range(36):
+            b = _pin(dsp, f"P{i}")
+            if isinstance(b, str) or nets.load_count(b) == 0:
+                continue
+            loads = nets.loads.get(b, [])
+            if b in nets.ports or len(loads) != 1 or loads[0][1] != "DI" \
+                    or not nets.plain_ff(loads[0][0]):
+                p_ok = False
+                break
+            p_ffs[i] = loads[0][0]
+        p_clock = {_pin(cells[f], "CLK") for f in p_ffs.values()}
+        if not p_ok or not p_ffs or len(p_clock) != 1:
+            rep.skipped.append(f"{name}.P")
+            p_ffs = {}
+        else:
+            clocks |= p_clock
+        clocks |= {clk for _, clk in packed_in.values() if clk is not None}
+        if len(clocks) > 1:            # one clock for the block: keep the output's, if any
+            keep = next(iter(p_clock)) if p_ffs else None
+            packed_in = {s: v for s, v in packed_in.items() if v[1] in (keep, None)}
+            clocks = {keep} if keep is not None else set()
+        if not clocks:
+            continue
+        clk = clocks.pop()
+        _set_pin(dsp, "CLK0", clk)
+        _set_pin(dsp, "CE0", "1")
+        _set_pin(dsp, "RST0", "0")
+        params = dsp.setdefault("parameters", {})
+        candidates: set = set()
+        for side, (ffs, _) in packed_in.items():
+            for i, ff in ffs.items():
+                _set_pin(dsp, f"{side}{i}", _pin(cells[ff], "DI"))
+                candidates.add(ff)
+            params.update({f"REG_INPUT{side}_CLK": "CLK0", f"REG_INPUT{side}_CE": "CE0",
+                           f"REG_INPUT{side}_RST": "RST0"})
+            rep.inputs_packed += 1
+        for i, ff in p_ffs.items():
+            _set_pin(dsp, f"P{i}", _pin(cells[ff], "Q"), "output")
+            cells.pop(ff)
+            rep.ffs_removed += 1
+        if p_ffs:
+            params.update({"REG_OUTPUT_CLK": "CLK0", "REG_OUTPUT_CE": "CE0",
+                           "REG_OUTPUT_RST": "RST0"})
+            rep.outputs_packed += 1
+        after = _Nets(mod)
+        for ff in sorted(candidates):
+            if after.load_count(_pin(cells[ff], "Q")) == 0:
+                cells.pop(ff)
+                rep.ffs_removed += 1
+            else:
+                rep.ffs_duplicated += 1
+    return rep
+
+
+def pack_netlist_file(path: Path) -> PackReport:
+    """:func:`pack_dsp_registers` on the JSON netlist at ``path``, rewritten in place."""
+    path = Path(path)
+    netlist = json.loads(path.read_text())
+    rep = pack_dsp_registers(netlist)
+    path.write_text(json.dumps(netlist))
+    return rep
+
+
+def main(argv=None) -> int:
+    args = sys.argv[1:] if argv is None else argv
+    if len(args) != 1:
+        print("usage: python -m cuneate.hdl.flow.ecp5_pack NETLIST.json", file=sys.stderr)
+        return 2
+    try:
+        rep = pack_netlist_file(Path(args[0]))
+    except (OSError, ValueError, KeyError) as exc:
+        print(f"ecp5_pack: {args[0]}: {exc}", file=sys.stderr)
+        return 2
+    print(rep.line())
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

