@@ -393,6 +393,17 @@ never applied.</p>
     return write_page(out, run.scene.name, body, figure_names(run))
 
 
+def board_link_line(c: dict) -> str:
+    """The ``board`` engine's counters (``board_*`` keys of a run's counters) in one sentence:
+    frames and bytes each way, frames lost, the cycles simulated, their rate and the device's
+    time against its sweeps at the tick rate."""
+    return (f"board link: {c['board_frames_to_device']} frames ({c['board_bytes_to_device']:,} "
+            f"bytes) to the device, {c['board_frames_from_device']} frames "
+            f"({c['board_bytes_from_device']:,} bytes) back, {c['frames_lost']} lost; "
+            f"{c['board_cycles']:,} cycles at {c['board_cycles_per_s']:,}/s, "
+            f"{c['board_cycles_per_sweep_rate']:.3f} x the sweeps' time")
+
+
 def _board_link_html(board: dict | None) -> str:
     """The board engine's line: frames, bytes and cycles, and the link budget table."""
     if not board or "link_budget" not in board:

@@ -85,6 +85,8 @@ class RidgeResult:
     tested: list = field(default_factory=list)    # per trial: counted in the accuracy
     #: (trials, 4) spikes per afferent (SA top, FA top, SA bottom, FA bottom)
     afferent_counts: np.ndarray | None = None
+    #: the engine's counters (on ``board``: the link's frames, bytes, losses and cycles)
+    counters: dict = field(default_factory=dict)
 
     def to_dict(self) -> dict:
         return {"engine": self.engine, "angles": self.angles, "accuracy": self.accuracy,
@@ -93,7 +95,8 @@ class RidgeResult:
                 "patterns": [list(p) for p in self.patterns],
                 "trial_angle": self.trial_angle, "counts": self.counts.tolist(),
                 "afferent_counts": None if self.afferent_counts is None
-                else self.afferent_counts.tolist(), "wall_s": self.wall_s}
+                else self.afferent_counts.tolist(), "wall_s": self.wall_s,
+                "counters": self.counters}
 
 
 def _lags_ms(spec: RidgeSpec, speed, angle_deg):
@@ -301,7 +304,8 @@ def ridge_experiment(engine: str = "fixed", spec: RidgeSpec | None = None,
         acc = float(np.mean([table.get(p) == a for p, a in zip(patterns, angles)]))
     decoded = [table.get(p) for p in patterns]
     return RidgeResult(engine, list(spec.angles_deg), angles, patterns, counts, table, acc,
-                       run.wall_s, decoded, [not t for t in train], aff_counts)
+                       run.wall_s, decoded, [not t for t in train], aff_counts,
+                       dict(getattr(run, "counters", None) or {}))
 
 
 def ridge_comparison(spec: RidgeSpec | None = None, hdl_engines=("verilator",),

@@ -243,10 +243,13 @@ def same_counts(a, b) -> dict:
 def format_run(run: RidgeSceneRun) -> str:
     """The lines ``cuneate run`` prints for a ridge scene."""
     from ..coincidence.experiments import format_ridge
+    from ..report import board_link_line
     out = [f"{run.scene.name}: engines {', '.join(run.results)}"]
     first_e, first = next(iter(run.results.items()))
     for e, r in run.results.items():
         out.append(format_ridge(r) + f"  ({run.timing['engines_s'][e]:.1f} s)")
+        if "board_cycles" in r.counters:
+            out.append(f"  {board_link_line(r.counters)}")
         if e != first_e:
             same = same_counts(r, first)
             out.append(f"  {e} vs {first_e}: cuneate spikes per trial "
@@ -257,7 +260,7 @@ def format_run(run: RidgeSceneRun) -> str:
 
 def write_report(run: RidgeSceneRun, out: Path) -> Path:
     """Write ``index.html``, ``run.json`` and one figure per engine into ``out``."""
-    from ..report import DPI, html_table, pyplot, write_page
+    from ..report import DPI, board_link_line, html_table, pyplot, write_page
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     (out / "run.json").write_text(json.dumps(summary(run), indent=2, default=float))
@@ -301,6 +304,8 @@ sensor, {cn['neurons']} cuneate neurons that differ only in their conduction del
 <h2>What ran</h2>
 <ul><li>stimulus: ridges at {html.escape(', '.join(f'{a:+g}' for a in first.angles))} degrees</li>
 <li>effects: none (force sensors)</li>
+{''.join(f"<li>{html.escape(e)}: {html.escape(board_link_line(r.counters))}</li>"
+         for e, r in run.results.items() if "board_cycles" in r.counters)}
 <li>blocks: Izhikevich core (4 afferents), coincidence detector ({cn['neurons']} x
 {cn['sources']}, delays (ms, upper and lower sensor per cuneate neuron)
 {html.escape(str([[round(x, 4) for x in row] for row in cn['delays_ms']]))}, ticks of

@@ -248,6 +248,7 @@ def summary(run: SkinSceneRun) -> dict:
 
 def format_run(run: SkinSceneRun) -> str:
     """The lines ``cuneate run`` prints for a skin scene."""
+    from ..report import board_link_line
     rows, cols = run.scene["sensor"]["grid"]
     out = [f"{run.scene.name}: {rows}x{cols} taxels, pressed taxel "
            f"{run.scene['stimulus']['press_taxel']}, engines {', '.join(run.results)}"]
@@ -258,21 +259,11 @@ def format_run(run: SkinSceneRun) -> str:
                    f"({run.timing['engines_s'][e]:.1f} s)")
         out.append(f"  {'':10s} row sums {r.row_sums}, column sums {r.col_sums}")
         if "board_cycles" in r.counters:
-            out.append(f"  {'':10s} {_board_line(r.counters)}")
+            out.append(f"  {'':10s} {board_link_line(r.counters)}")
     for k, v in run.agreement.items():
         out.append(f"  {k}: {v['identical_trains']}/{v['neurons']} identical trains, mean "
                    f"|spike count diff| {v['mean_abs_count_diff']:.2f}")
     return "\n".join(out)
-
-
-def _board_line(c: dict) -> str:
-    """The ``board`` engine's line in one sentence: frames and bytes each way, the cycles
-    simulated, their rate and the device's time against its sweeps at the tick rate."""
-    return (f"board link: {c['board_frames_to_device']} frames ({c['board_bytes_to_device']:,} "
-            f"bytes) to the device, {c['board_frames_from_device']} frames "
-            f"({c['board_bytes_from_device']:,} bytes) back, {c['frames_lost']} lost; "
-            f"{c['board_cycles']:,} cycles at {c['board_cycles_per_s']:,}/s, "
-            f"{c['board_cycles_per_sweep_rate']:.3f} x the sweeps' time")
 
 
 def _figures(run: SkinSceneRun, out: Path) -> list[str]:
@@ -317,7 +308,7 @@ def _figures(run: SkinSceneRun, out: Path) -> list[str]:
 
 def write_report(run: SkinSceneRun, out: Path) -> Path:
     """Write ``index.html``, ``run.json`` and figures into ``out``; returns the HTML path."""
-    from ..report import fmt, html_table, write_page
+    from ..report import board_link_line, fmt, html_table, write_page
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     (out / "run.json").write_text(json.dumps(summary(run), indent=2, default=float))
@@ -360,7 +351,7 @@ taxel; taxel {pressed} (row-major) is pressed.</p>
                          f"{b['current_format']}, state {b['state_format']}, decay "
                          f"{b['decay']}, dt {b['dt_ms']:g} ms)")}</li>
 <li>engines: {html.escape(', '.join(run.engines))}</li>
-{''.join(f"<li>{html.escape(e)}: {html.escape(_board_line(r.counters))}</li>"
+{''.join(f"<li>{html.escape(e)}: {html.escape(board_link_line(r.counters))}</li>"
          for e, r in run.results.items() if "board_cycles" in r.counters)}</ul>
 """
     return write_page(out, run.scene.name, body, figs)

@@ -139,3 +139,12 @@ def test_ridge_scene_on_board_equals_fixed(tmp_path):
     assert b.patterns == f.patterns and b.decoded == f.decoded and f.accuracy == 1.0
     assert same_counts(b, f) == {"cuneate": True, "afferent": True}
     assert int(f.counts.sum()) > 0 and int(f.afferent_counts.sum()) > 0
+    # the link's counters reach the run's report and its lines
+    from cuneate.sim.scenes.ridge import format_run, summary
+    c = b.counters
+    assert c["frames_lost"] == 0 and c["board_frames_to_device"] > 0 \
+        and c["board_frames_from_device"] > 0 and c["board_cycles"] > 0
+    assert summary(run)["engines"]["board"]["counters"]["board_frames_to_device"] == \
+        c["board_frames_to_device"]
+    assert f"{c['board_frames_to_device']} frames" in format_run(run) and "0 lost" in \
+        format_run(run)
