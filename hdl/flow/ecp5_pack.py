@@ -67,13 +67,10 @@ class PackReport:
                 f"{self.ffs_duplicated} duplicated")
 
 
-def _is_top(module: dict) -> bool:
-    flag = str(module.get("attributes", {}).get("top", "0"))
-    return int(flag, 2 if set(flag) <= {"0", "1"} else 10) != 0
-
-
 def _top(netlist: dict) -> dict:
-    tops = [m for m in netlist["modules"].values() if _is_top(m)]
+    # yosys writes the top attribute as a binary string
+    tops = [m for m in netlist["modules"].values()
+            if int(str(m.get("attributes", {}).get("top", "0")), 2)]
     if len(tops) != 1:
         raise ValueError(f"the netlist has {len(tops)} top modules; expected one (flattened "
                          f"synth_ecp5 output)")
@@ -136,27 +133,25 @@ def pack_dsp_registers(netlist: dict) -> PackReport:
         rep.multipliers += 1
         nets = _Nets(mod)              # rebuilt per block: the previous one rewired nets
         dsp = cells[name]
-        clocks: set = set()
         packed_in: dict = {}
         for side in "AB":
-            ffs, ok = {}, True
+            ffs = {}
             for i in range(18):
                 b = _pin(dsp, f"{side}{i}")
                 if isinstance(b, str):
                     continue
                 drv = nets.driver.get(b)
                 if drv is None or drv[1] != "Q" or not nets.plain_ff(drv[0]):
-                    ok = False
+                    rep.skipped.append(f"{name}.{side}")
                     break
                 ffs[i] = drv[0]
-            ff_clocks = {_pin(cells[f], "CLK") for f in ffs.values()}
-            if not ok or len(ff_clocks) > 1:
-                rep.skipped.append(f"{name}.{side}")
-                continue
-            packed_in[side] = (ffs, ff_clocks.pop() if ff_clocks else None)
-        if len(packed_in) < 2 or not any(ffs for ffs, _ in packed_in.values()):
-            packed_in = {}             # both ports or neither; constants alone: nothing to move
-        p_ffs, p_ok = {}, True
+            else:
+                packed_in[side] = ffs
+        in_clocks = {_pin(cells[f], "CLK") for ffs in packed_in.values() for f in ffs.values()}
+        if len(packed_in) < 2 or len(in_clocks) != 1:
+            # both ports or neither, on one clock; constant ports alone stay as they are
+            packed_in = {}
+        p_ffs = {}
         for i in range(36):
             b = _pin(dsp, f"P{i}")
             if isinstance(b, str) or nets.load_count(b) == 0:
@@ -164,20 +159,16 @@ def pack_dsp_registers(netlist: dict) -> PackReport:
             loads = nets.loads.get(b, [])
             if b in nets.ports or len(loads) != 1 or loads[0][1] != "DI" \
                     or not nets.plain_ff(loads[0][0]):
-                p_ok = False
+                p_ffs = {}
                 break
             p_ffs[i] = loads[0][0]
-        p_clock = {_pin(cells[f], "CLK") for f in p_ffs.values()}
-        if not p_ok or not p_ffs or len(p_clock) != 1:
+        p_clocks = {_pin(cells[f], "CLK") for f in p_ffs.values()}
+        if len(p_clocks) != 1:
             rep.skipped.append(f"{name}.P")
-            p_ffs = {}
-        else:
-            clocks |= p_clock
-        clocks |= {clk for _, clk in packed_in.values() if clk is not None}
-        if len(clocks) > 1:            # one clock for the block: keep the output's, if any
-            keep = next(iter(p_clock)) if p_ffs else None
-            packed_in = {s: v for s, v in packed_in.items() if v[1] in (keep, None)}
-            clocks = {keep} if keep is not None else set()
+            p_ffs, p_clocks = {}, set()
+        if packed_in and p_clocks and in_clocks != p_clocks:
+            packed_in = {}             # one clock for the block: the output's registers win
+        clocks = p_clocks or (in_clocks if packed_in else set())
         if not clocks:
             continue
         clk = clocks.pop()
@@ -186,7 +177,7 @@ def pack_dsp_registers(netlist: dict) -> PackReport:
         _set_pin(dsp, "RST0", "0")
         params = dsp.setdefault("parameters", {})
         candidates: set = set()
-        for side, (ffs, _) in packed_in.items():
+        for side, ffs in packed_in.items():
             for i, ff in ffs.items():
                 _set_pin(dsp, f"{side}{i}", _pin(cells[ff], "DI"))
                 candidates.add(ff)

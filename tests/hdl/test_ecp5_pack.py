@@ -183,6 +183,47 @@ endmodule
     assert f"CHECKS {n} ERRORS 0" in run.stdout, run.stdout[-2000:]
 
 
+def _hand_netlist(a_clock: int, p_clock: int) -> dict:
+    """One MULT18X18D: port A from 18 plain flip-flops on net ``a_clock``, port B constant,
+    every product bit into a plain flip-flop on net ``p_clock`` (nets from 100 up)."""
+    cells = {}
+
+    def ff(name, d, q, clk):
+        cells[name] = {"type": "TRELLIS_FF", "parameters": {"CEMUX": "1 ", "CLKMUX": "CLK"},
+                       "port_directions": {"CLK": "input", "DI": "input", "LSR": "input",
+                                           "Q": "output"},
+                       "connections": {"CLK": [clk], "DI": [d], "LSR": ["0"], "Q": [q]}}
+    mult = {"type": "MULT18X18D", "parameters": {}, "port_directions": {}, "connections": {}}
+    for i in range(18):
+        ff(f"a{i}", 100 + i, 200 + i, a_clock)
+        mult["connections"][f"A{i}"], mult["port_directions"][f"A{i}"] = [200 + i], "input"
+        mult["connections"][f"B{i}"], mult["port_directions"][f"B{i}"] = ["1"], "input"
+    for i in range(36):
+        ff(f"p{i}", 300 + i, 400 + i, p_clock)
+        mult["connections"][f"P{i}"], mult["port_directions"][f"P{i}"] = [300 + i], "output"
+    cells["mult"] = mult
+    ports = {"a": {"direction": "input", "bits": list(range(100, 118))},
+             "p": {"direction": "output", "bits": list(range(400, 436))},
+             "clk": {"direction": "input", "bits": [a_clock, p_clock]}}
+    return {"modules": {"t": {"attributes": {"top": "1"}, "ports": ports, "cells": cells}}}
+
+
+@pytest.mark.parametrize("p_clock, packed", [(2, (1, 1)), (3, (0, 1))])
+def test_one_clock_per_block_the_outputs_registers_win(p_clock, packed):
+    """Inputs and product on one clock: both packed, the constant port registered too. On
+    two clocks: the product's registers only, the inputs and the constant port untouched."""
+    netlist = _hand_netlist(2, p_clock)
+    rep = pack_dsp_registers(netlist)
+    mult = netlist["modules"]["t"]["cells"]["mult"]
+    assert (rep.inputs_packed // 2, rep.outputs_packed) == packed
+    assert mult["connections"]["CLK0"] == [p_clock]
+    assert mult["parameters"]["REG_OUTPUT_CLK"] == "CLK0"
+    regs = {k for k in mult["parameters"] if k.startswith("REG_INPUT") and k.endswith("CLK")}
+    assert regs == ({"REG_INPUTA_CLK", "REG_INPUTB_CLK"} if packed[0] else set())
+    assert mult["connections"]["A0"] == ([100] if packed[0] else [200])
+    assert rep.ffs_removed == 36 + 18 * packed[0]
+
+
 def test_command_line_rewrites_the_file_and_refuses_bad_input(netlists, tmp_path, capsys):
     from cuneate.hdl.flow.ecp5_pack import main
     d, *_ = netlists
