@@ -18,6 +18,7 @@ from __future__ import annotations
 import math
 
 from ..hdl.izhikevich.config import ConfigError, IzhikevichConfig
+from ..hdl.lib.banked import bank_shape
 from ..hdl.link.config import LINK_IDLE_CYCLES, LinkConfig
 from ..hdl.link.codec import HEADER_BYTES, MAX_FRAME
 from .top import ClockPlan
@@ -39,12 +40,9 @@ def clock_plans(target: dict) -> list:
 
 
 def _blocks(depth: int, width: int, target: dict) -> int:
-    """Whole RAM blocks for a depth x width memory (best aspect of the block's shapes)."""
-    best = None
-    for d, w in target["bram_shapes"]:
-        n = math.ceil(depth / d) * math.ceil(width / w)
-        best = n if best is None else min(best, n)
-    return best
+    """Whole RAM blocks for a depth x width memory: the cores' banks
+    (:func:`~cuneate.hdl.lib.banked.bank_shape`, the best of the block's shapes)."""
+    return bank_shape(depth, width, target["bram_shapes"])[1]
 
 
 def _core_memories(cfg: IzhikevichConfig, n: int) -> list:
@@ -190,6 +188,7 @@ def target_core(target: dict, core_kwargs: dict, n: int, clock_hz: float,
     kw.update(core_kwargs)
     kw.update(n_neurons=n, clock_hz=clock_hz, update_hz=update_hz, tick_source="external")
     kw.setdefault("spike_fifo_depth", 256)
+    kw.setdefault("bram_shapes", tuple(tuple(s) for s in target["bram_shapes"]))
     return IzhikevichConfig(**kw)
 
 

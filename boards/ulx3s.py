@@ -71,9 +71,13 @@ TARGET = {
     "bram_shapes": [(16384, 1), (8192, 2), (4096, 4), (2048, 9), (1024, 18), (512, 36)],
     "lutram_bits": 512, "dsp_width": 18,
     "default_neurons": 2500,
-    "pll_clocks": [60e6, 90e6],
+    "pll_clocks": [60e6, 70e6, 90e6],
     "clock_plans": [(ClockPlan(osc_hz=25e6, clock_hz=60e6, update_hz=16e3, baud=3e6),
                      _pll(5, 12, 10, 60.0)),
+                    # 25 MHz / 5 x 14 (VCO 560 MHz): 4375 cycles per sweep; 3 Mbaud would be
+                    # 23.3 clocks a bit, so this plan's line runs at 2 Mbaud (35 clocks)
+                    (ClockPlan(osc_hz=25e6, clock_hz=70e6, update_hz=16e3, baud=2e6),
+                     _pll(5, 14, 8, 70.0)),
                     (ClockPlan(osc_hz=25e6, clock_hz=90e6, update_hz=16e3, baud=3e6),
                      _pll(5, 18, 6, 90.0))],
     # fmax (MHz) of one core by pipeline depth: out of context, lowest of seeds 1-3

@@ -127,9 +127,10 @@ class SweepSpec:
     fmax: bool = False
     pipeline_stages: int = 5
     seeds: tuple = (1,)
-    pack_dsp: bool = False
-    """with ``fmax``: the multipliers' neighbouring flip-flops packed into their DSP
-    registers before place and route (:mod:`cuneate.hdl.flow.ecp5_pack`)"""
+    pack_registers: bool = False
+    """with ``fmax``: the flip-flops around the multipliers and after the block RAMs packed
+    into their DSP and block-RAM registers before place and route
+    (:mod:`cuneate.hdl.flow.ecp5_pack`)"""
 
 
 def reference_trains(spec: SweepSpec) -> list[np.ndarray]:

@@ -31,7 +31,7 @@ import numpy as np
 
 from ...golden import coincidence as gcun
 from ..izhikevich.config import CLAMP_KINDS, IzhikevichConfig
-from ..izhikevich.config import PIPELINE_DEPTH as IZ_PIPELINE_DEPTH
+from ..izhikevich.config import min_neurons as iz_min_neurons
 from ..lib.config import ConfigError, int_bits_for
 from ..lib.fixed import FixedPointError, QFormat
 from ..lib.synapses import TraceView, trace_spec
@@ -213,7 +213,7 @@ class CoincidenceConfig:
             raise ConfigError(f"target_sets needs {M} indices into the {len(self.param_sets)} "
                               f"parameter set(s)")
         self.target_sets_ = ts
-        n_iz = max(M, IZ_PIPELINE_DEPTH)
+        n_iz = max(M, iz_min_neurons())
         try:
             self.iz = IzhikevichConfig(
                 n_neurons=n_iz, clock_hz=self.update_hz * n_iz, update_hz=self.update_hz,

@@ -1,5 +1,6 @@
-"""Register packing for ECP5 multipliers: moves fabric flip-flops into the MULT18X18D's own
-input and output registers in a ``synth_ecp5`` JSON netlist, before nextpnr-ecp5 reads it.
+"""Register packing for ECP5 multipliers and block RAMs: moves fabric flip-flops into the
+MULT18X18D's own input and output registers and the DP16KD's output registers in a
+``synth_ecp5`` JSON netlist, before nextpnr-ecp5 reads it.
 
 yosys maps a product to a bare MULT18X18D (no register enabled), so a multiplier fed from
 registers and feeding registers costs its whole combinational delay (about 3.9 ns on the
@@ -27,7 +28,17 @@ with a second load or a combinational load) leaves that port unpacked. The resul
 (:class:`PackReport`). nextpnr-ecp5 times a multiplier by which registers it has
 (``MULT18X18D_REGS_INPUT``/``OUTPUT``/``ALL``), so the packing shows in its fmax.
 
-Command line (the board build runs it between yosys and nextpnr)::
+**Block RAM outputs** (:func:`pack_bram_registers`). yosys maps a memory's read port to a
+DP16KD without its output register (``REGMODE = "NOREG"``): its data leaves 5.6-5.8 ns after
+the clock. A read port whose every used data bit feeds only a plain flip-flop on the port's
+clock (a memory read into a register and nothing else, as
+:mod:`cuneate.hdl.lib.banked` builds the cores' memories) gets ``REGMODE = "OUTREG"``, the
+flip-flops removed and the output enable ``OCE`` tied high (Lattice TN1264: the output
+register loads the read latch every clock it is enabled), the same cycle behaviour.
+:func:`pack_registers` packs the block RAMs first, then the multipliers.
+
+Command line (what ``cuneate sweep --fmax --pack-registers`` and
+``synthesize(..., pack_registers=True)`` run between yosys and nextpnr)::
 
     python -m cuneate.hdl.flow.ecp5_pack NETLIST.json
 """
@@ -40,7 +51,8 @@ from collections import defaultdict
 from dataclasses import dataclass, field
 from pathlib import Path
 
-__all__ = ["PackReport", "pack_dsp_registers", "pack_netlist_file"]
+__all__ = ["PackReport", "pack_dsp_registers", "pack_bram_registers", "pack_registers",
+           "pack_netlist_file"]
 
 @dataclass
 class PackReport:
@@ -53,18 +65,24 @@ class PackReport:
     outputs_packed: int = 0
     ffs_removed: int = 0
     ffs_duplicated: int = 0
+    block_rams: int = 0
+    ram_outputs_packed: int = 0
+    ram_ffs_removed: int = 0
     skipped: list = field(default_factory=list)
 
     def to_dict(self) -> dict:
         return {"multipliers": self.multipliers, "inputs_packed": self.inputs_packed,
                 "outputs_packed": self.outputs_packed, "ffs_removed": self.ffs_removed,
-                "ffs_duplicated": self.ffs_duplicated, "skipped": list(self.skipped)}
+                "ffs_duplicated": self.ffs_duplicated, "block_rams": self.block_rams,
+                "ram_outputs_packed": self.ram_outputs_packed,
+                "ram_ffs_removed": self.ram_ffs_removed, "skipped": list(self.skipped)}
 
     def line(self) -> str:
-        return (f"MULT18X18D register packing: {self.multipliers} multipliers, "
-                f"{self.inputs_packed} input ports and {self.outputs_packed} outputs "
-                f"registered in the DSP; {self.ffs_removed} flip-flops removed, "
-                f"{self.ffs_duplicated} duplicated")
+        return (f"register packing: {self.multipliers} MULT18X18D, {self.inputs_packed} input "
+                f"ports and {self.outputs_packed} outputs registered in the DSP "
+                f"({self.ffs_removed} flip-flops removed, {self.ffs_duplicated} duplicated); "
+                f"{self.block_rams} DP16KD, {self.ram_outputs_packed} read ports registered in "
+                f"the block ({self.ram_ffs_removed} flip-flops removed)")
 
 
 def _top(netlist: dict) -> dict:
@@ -108,7 +126,8 @@ class _Nets:
             return False
         ce_high = par.get("CEMUX", "1").strip() == "1" or con.get("CE") == ["1"]
         no_lsr = con.get("LSR", ["0"]) in (["0"], ["x"], [])
-        return ce_high and no_lsr
+        starts_low = par.get("REGSET", "RESET") == "RESET"
+        return ce_high and no_lsr and starts_low
 
     def load_count(self, bit) -> int:
         return len(self.loads.get(bit, [])) + (bit in self.ports)
@@ -202,11 +221,76 @@ def pack_dsp_registers(netlist: dict) -> PackReport:
     return rep
 
 
+def pack_bram_registers(netlist: dict, rep: PackReport | None = None) -> PackReport:
+    """Pack plain flip-flops into the DP16KD output registers (``REGMODE_A/B = "OUTREG"``) of
+    the (flattened) top module of ``netlist`` (yosys JSON, changed in place): a read port
+    whose every used data bit has one load, the ``DI`` of a plain flip-flop clocked by the
+    port's own clock, with the port's reset tied low. The flip-flops are removed, the data
+    bits drive their ``Q`` nets and the output clock enable (``OCEA/B``) is tied high: the
+    block's register holds, cycle for cycle, what the flip-flops held. Counted into ``rep``
+    (a new report when None), which is returned."""
+    mod = _top(netlist)
+    cells = mod["cells"]
+    rep = rep or PackReport()
+    for name in sorted(n for n, c in cells.items() if c["type"] == "DP16KD"):
+        rep.block_rams += 1
+        ram = cells[name]
+        params = ram.setdefault("parameters", {})
+        for side in "AB":
+            if params.get(f"REGMODE_{side}", "NOREG") != "NOREG":
+                continue
+            nets = _Nets(mod)
+            ffs = {}
+            for i in range(18):
+                pin = f"DO{side}{i}"
+                if pin not in ram["connections"]:
+                    continue
+                b = _pin(ram, pin)
+                if isinstance(b, str) or nets.load_count(b) == 0:
+                    continue
+                loads = nets.loads.get(b, [])
+                if b in nets.ports or len(loads) != 1 or loads[0][1] != "DI" \
+                        or not nets.plain_ff(loads[0][0]):
+                    ffs = None
+                    break
+                ffs[pin] = loads[0][0]
+            if not ffs:
+                if ffs is None:
+                    rep.skipped.append(f"{name}.DO{side}")
+                continue
+            clk = ram["connections"].get(f"CLK{side}", [None])[0]
+            rst = ram["connections"].get(f"RST{side}", ["0"])
+            if {_pin(cells[f], "CLK") for f in ffs.values()} != {clk} or rst != ["0"]:
+                rep.skipped.append(f"{name}.DO{side}")
+                continue
+            for pin, ff in ffs.items():
+                _set_pin(ram, pin, _pin(cells[ff], "Q"), "output")
+                cells.pop(ff)
+                rep.ram_ffs_removed += 1
+            _set_pin(ram, f"OCE{side}", "1")
+            params[f"REGMODE_{side}"] = "OUTREG"
+            rep.ram_outputs_packed += 1
+    return rep
+
+
+def pack_registers(netlist: dict) -> PackReport:
+    """:func:`pack_bram_registers` then :func:`pack_dsp_registers` (a block RAM's output
+    register first: a flip-flop after a block RAM that also feeds a multiplier is then the
+    block's, and the multiplier's input stays unregistered)."""
+    rep = pack_bram_registers(netlist)
+    dsp = pack_dsp_registers(netlist)
+    for k in ("multipliers", "inputs_packed", "outputs_packed", "ffs_removed",
+              "ffs_duplicated"):
+        setattr(rep, k, getattr(dsp, k))
+    rep.skipped += dsp.skipped
+    return rep
+
+
 def pack_netlist_file(path: Path) -> PackReport:
-    """:func:`pack_dsp_registers` on the JSON netlist at ``path``, rewritten in place."""
+    """:func:`pack_registers` on the JSON netlist at ``path``, rewritten in place."""
     path = Path(path)
     netlist = json.loads(path.read_text())
-    rep = pack_dsp_registers(netlist)
+    rep = pack_registers(netlist)
     path.write_text(json.dumps(netlist))
     return rep
 

@@ -97,17 +97,18 @@ def summary(flow: str, cells: dict) -> dict:
 
 
 def synthesize(verilog: str, top: str, flow: str, workdir: Path | None = None,
-               netlist: bool = False, flatten: bool = False, pack_dsp: bool = False) -> dict:
+               netlist: bool = False, flatten: bool = False,
+               pack_registers: bool = False) -> dict:
     """Synthesize ``verilog`` (module ``top``) with ``flow``; returns ``{"flow", "seconds",
     "cells", "summary"}`` and, with ``netlist``, the path of the JSON netlist for nextpnr
-    (``"netlist"``; keep ``workdir`` to use it). ``pack_dsp`` (``ecp5`` with ``netlist``):
-    the netlist's flip-flops around the multipliers move into the MULT18X18D registers
-    (:mod:`~cuneate.hdl.flow.ecp5_pack`); ``"dsp_packing"`` says what moved and ``"cells"``
-    counts the packed netlist."""
+    (``"netlist"``; keep ``workdir`` to use it). ``pack_registers`` (``ecp5`` with
+    ``netlist``): the netlist's flip-flops around the multipliers and after the block RAMs move
+    into the MULT18X18D and DP16KD registers (:mod:`~cuneate.hdl.flow.ecp5_pack`);
+    ``"register_packing"`` says what moved and ``"cells"`` counts the packed netlist."""
     if flow not in FLOWS:
         raise ValueError(f"unknown flow {flow!r}; known: {', '.join(FLOWS)}")
-    if pack_dsp and (flow != "ecp5" or not netlist):
-        raise ValueError("pack_dsp applies to the ecp5 flow's netlist (netlist=True)")
+    if pack_registers and (flow != "ecp5" or not netlist):
+        raise ValueError("pack_registers applies to the ecp5 flow's netlist (netlist=True)")
 
     def go(d: Path) -> dict:
         (d / f"{top}.v").write_text(verilog)
@@ -121,10 +122,11 @@ def synthesize(verilog: str, top: str, flow: str, workdir: Path | None = None,
                "summary": summary(flow, cells)}
         if netlist:
             out["netlist"] = str(d / f"{top}.{flow}.json")
-        if pack_dsp:
+        if pack_registers:
             from .ecp5_pack import pack_netlist_file
-            out["dsp_packing"] = pack_netlist_file(Path(out["netlist"])).to_dict()
-            removed = out["dsp_packing"]["ffs_removed"]
+            out["register_packing"] = pack_netlist_file(Path(out["netlist"])).to_dict()
+            removed = out["register_packing"]["ffs_removed"] + \
+                out["register_packing"]["ram_ffs_removed"]
             cells["TRELLIS_FF"] = cells.get("TRELLIS_FF", 0) - removed
             out["summary"] = summary(flow, cells)
         return out

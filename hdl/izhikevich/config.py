@@ -44,11 +44,13 @@ from typing import Sequence
 import numpy as np
 
 from ...golden import izhikevich as golden
+from ..lib.banked import DP16KD_SHAPES, block_shapes
 from ..lib.config import SATURATION, ConfigError, CoreOptions, int_bits_for, shared_exponent
 from ..lib.fixed import FixedConstant, FixedPointError, QFormat, round_shift
 from .range import RangeSearchError, one_step_bound, reachable_ranges
 
 __all__ = ["ConfigError", "IzhikevichConfig", "PIPELINE_DEPTH", "PIPELINE_STAGES", "PIPELINE_CUTS",
+           "min_neurons",
            "CLAMP_KINDS", "SATURATION", "NARROW_STATE_RATIO"]
 
 #: How many times the default formats' per-update state rounding a configuration may take
@@ -63,6 +65,13 @@ PIPELINE_DEPTH = 5      # the default (the reference core's): fetch, read, 3 dat
 PIPELINE_CUTS = {5: (2, 3), 6: (2, 3, 4), 7: (1, 2, 3, 4), 8: (0, 1, 2, 3, 4)}
 #: The pipeline depths offered (``pipeline_stages``).
 PIPELINE_STAGES = tuple(PIPELINE_CUTS)
+
+
+def min_neurons(pipeline_stages: int = PIPELINE_DEPTH) -> int:
+    """The fewest neurons a core of this depth holds: its memories are read a cycle ahead of
+    a neuron's fetch and its write-back lands a cycle after the last stage, so a neuron must
+    be read again no sooner than ``depth + 1`` cycles after its fetch."""
+    return pipeline_stages + 1
 CLAMP_KINDS = ("v_low", "u_high", "u_low", "current", "y")
 _REL = 2.0 ** -12          # largest relative representation error accepted for a constant
 _INT64_GUARD = 1 << 62
@@ -118,8 +127,13 @@ class IzhikevichConfig(CoreOptions):
         Pipeline depth, one of :data:`PIPELINE_STAGES` (default 5, the reference core's):
         cycles from a neuron's fetch to its result on ``upd_*``. Deeper pipelines register more
         cuts of the same datapath (the arithmetic does not change); a neuron's state is read
-        again at the earliest ``n_neurons`` cycles after its fetch, so ``n_neurons`` must be at
-        least the depth (its write-back lands in the cycle before).
+        again at the earliest ``n_neurons`` cycles after its fetch, its memories are read a
+        cycle ahead of the fetch (a write landing then is bypassed) and its write-back is
+        registered before the RAM, so ``n_neurons`` must be at least the depth + 1.
+    bram_shapes
+        ``(depth, width)`` modes of the target's block RAM (default the ECP5 DP16KD's): the
+        memories are built in banks of the best shape, each bank's word registered beside its
+        RAM (:mod:`cuneate.hdl.lib.banked`).
     y_int_bits
         Integer bits of the ``b v - u`` operand. Default: the fewest that provably hold every
         state (no clamp); fewer bits add a flagged clamp.
@@ -149,6 +163,7 @@ class IzhikevichConfig(CoreOptions):
     v_init: Sequence[float] | None = None
     u_init: Sequence[float] | None = None
     pipeline_stages: int = PIPELINE_DEPTH
+    bram_shapes: tuple = DP16KD_SHAPES
 
     # derived (filled by __post_init__)
     sets: list = field(init=False, repr=False)
@@ -191,10 +206,17 @@ class IzhikevichConfig(CoreOptions):
                               f"{', '.join(map(str, PIPELINE_STAGES))}, got {D!r}")
         self.pipeline_stages = D = int(D)
         self.cuts = PIPELINE_CUTS[D]
-        if not isinstance(N, (int, np.integer)) or N < D:
-            raise ConfigError(f"n_neurons must be an integer >= {D} (the pipeline depth; a "
-                              f"neuron must leave the pipeline before it is read again), "
-                              f"got {N!r}")
+        if not isinstance(N, (int, np.integer)) or N < min_neurons(D):
+            raise ConfigError(f"n_neurons must be an integer >= {min_neurons(D)} (the pipeline "
+                              f"depth "
+                              f"+ 1; a neuron's registered write-back must land by the time "
+                              f"its memories are read again, a cycle ahead of its fetch), got "
+                              f"{N!r}")
+        shapes = block_shapes(self.bram_shapes)
+        if shapes is None:
+            raise ConfigError(f"bram_shapes must be (depth, width) pairs of positive integers, "
+                              f"each depth a power of two, got {self.bram_shapes!r}")
+        self.bram_shapes = shapes
         if not (isinstance(self.clock_hz, (int, float)) and isinstance(self.update_hz,
                                                                         (int, float))
                 and self.clock_hz > 0 and self.update_hz > 0 and math.isfinite(self.clock_hz)
@@ -527,6 +549,7 @@ class IzhikevichConfig(CoreOptions):
             "v0": float(self.v0), "v_th": float(self.v_th),
             "v_init": [float(x) for x in self._v_init], "u_init": [float(x) for x in self._u_init],
             "pipeline_stages": int(self.pipeline_stages),
+            "bram_shapes": [list(s) for s in self.bram_shapes],
         }
         kw.update(override)
         return kw

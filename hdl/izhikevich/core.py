@@ -33,41 +33,43 @@ class IzhikevichCore(wiring.Component):
     Pipeline (a neuron's index enters at cycle t; its result is on ``upd_*`` at t + D, D the
     depth):
 
-    1. **Fetch** - the sweep counter addresses the state (v, u), current and set-select RAMs
-       (synchronous read).
-    2. **Read** - the RAM outputs are registered (``v3``, ``u3``, ``i3``, ``sel3``: no logic
-       after the block RAM).
-    3. .. D. **Datapath** - the six steps of :data:`~cuneate.hdl.izhikevich.datapath.STEPS`
+    1. **Fetch** - the sweep counter issues the neuron; its memories (state v, u; current;
+       set) were addressed in the cycle before (``next_addr``), in banks of the block RAM's
+       shape (:mod:`cuneate.hdl.lib.banked`), each bank's word registered beside its RAM.
+    2. **Read** - bank multiplexer and write bypass into the stage-3 registers (``v3``,
+       ``u3``, ``i3``, ``sel3``); at depths 5-7 the operands step too, registered with them.
+    3. .. D. **Datapath** - the steps of :data:`~cuneate.hdl.izhikevich.datapath.STEPS`
        (0 operands, 1 multiply 1, 2 align, 3 multiply 2, 4 sums, 5 select), with a register
        after each step listed in ``config.cuts`` (:data:`~cuneate.hdl.izhikevich.config
        .PIPELINE_CUTS`):
 
        ======  ===================================================  ==========================
-       depth   stages 3 .. D                                        cuts (after step)
+       depth   stages 3 .. D (operands in stage 2 unless cut 0)     cuts (after step)
        ======  ===================================================  ==========================
-       5       operands+multiply1+align | multiply2 | sums+select   2, 3
-       6       operands+multiply1+align | multiply2 | sums | select 2, 3, 4
-       7       operands+multiply1 | align | multiply2 | sums | sel. 1, 2, 3, 4
+       5       multiply1+align | multiply2 | sums+select            2, 3
+       6       multiply1+align | multiply2 | sums | select          2, 3, 4
+       7       multiply1 | align | multiply2 | sums | select        1, 2, 3, 4
        8       operands | multiply1 | align | multiply2 | sums |sel 0, 1, 2, 3, 4
        ======  ===================================================  ==========================
 
        Every multiplier takes registers (floors: slices, no adder in front) and is followed
-       by at most one operand-wide adder (at depth 8 by none). The last stage writes the new
-       state back and registers ``upd_*``. Measured out of context on the LFE5U-85F -6
-       (docs/architecture.md): depth 5 at about 91-99 MHz (a multiplier, its routing and
-       one adder in a stage), depth 8 at about 107-111 MHz, there limited by the block RAM's
-       read into the stage-3 registers (yosys maps the DP16KD without its output register).
+       by at most one operand-wide adder (at depth 8 by none). The last stage registers the
+       new state's write (it lands in the RAM a cycle later) and ``upd_*``. Measured out of
+       context on the LFE5U-85F -6 with the block RAMs' and multipliers' registers packed
+       (docs/architecture.md): depth 5 at 106-111 MHz, depth 8 at 122-130 MHz.
 
     **Registers and hazards.** A value computed in stage ``s`` and still read later is
     registered at each cut as ``<name><s+1>`` (reset-less: data registers; the valid bit,
     index and sweep number of each stage are the tags ``valid<s>``, ``idx<s>``, ``swp<s>``
     of :func:`~cuneate.hdl.lib.bookkeeping.pipeline_tags`, with reset). The neuron in stage
-    ``s`` at cycle ``c`` is the one fetched at ``c - s + 1``; its state is read at its fetch
-    and written in stage D (cycle ``fetch + D - 1``), so the next read of that neuron, at the
-    earliest ``n_neurons`` cycles after its fetch (back-to-back sweeps), sees the write when
-    ``n_neurons >= D`` (the configuration refuses less). The host writes only the current and
-    set RAMs, which the pipeline never writes: a neuron's current and set are read once, at
-    its fetch, and travel with it.
+    ``s`` at cycle ``c`` is the one fetched at ``c - s + 1``; its memories are sampled at the
+    end of the cycle before its fetch, a write landing then replaced by the bypass, so an
+    update sees the memories as they are in its fetch cycle. Its state's write is issued in
+    stage D (cycle ``fetch + D - 1``) and lands a cycle later; the next sample of that neuron,
+    at the earliest ``n_neurons - 1`` cycles after its fetch (back-to-back sweeps), sees it
+    when ``n_neurons >= D + 1`` (the configuration refuses less). The host writes only the
+    current and set memories, which the pipeline never writes: a neuron's current and set are
+    read once, at its fetch, and travel with it.
 
     Sweeps start on a tick (internal divider of ``clock_hz / update_hz`` cycles, or the ``tick``
     input with ``tick_source="external"``). A tick that arrives while a sweep is still being
@@ -123,38 +125,58 @@ class IzhikevichCore(wiring.Component):
             return (v & ((1 << V.width) - 1)) | ((u & ((1 << U.width) - 1)) << V.width)
 
         init_state = [pack(int(v), int(u)) for v, u in zip(cfg.v_init_raw, cfg.u_init_raw)]
-        # a neuron's state is never read in the cycle it is written (n_neurons >= D): the
-        # read-during-write behaviour needs no logic
-        st_rd, st_wr, cur_rd, sel_rd = core_memories(m, self, cfg, V.width + U.width,
-                                                     init_state,
-                                                     state_attrs={"no_rw_check": 1})
 
         # --- sweep control and pipeline tags ----------------------------------------------
         tick = tick_strobe(m, cfg, getattr(self, "tick", None))
         issue = sweep_issue(m, self, N, tick, cfg.sweep_number_width)
-        for port in (st_rd, cur_rd, sel_rd):
-            m.d.comb += [port.addr.eq(issue.addr), port.en.eq(1)]
+        # the memories are read one cycle ahead of the fetch into registers beside the block
+        # RAMs (hdl/lib/banked.py), a write landing with the read bypassed (n_neurons >= D + 1:
+        # a neuron's registered write-back lands at the latest then)
+        st_rd, st_wr, cur_rd, sel_rd = core_memories(m, self, cfg, V.width + U.width,
+                                                     init_state,
+                                                     state_attrs={"no_rw_check": 1},
+                                                     prefetch=issue.next_addr)
         tags = pipeline_tags(m, N, cfg.sweep_number_width, issue, last_stage=D)
         tD = tags[D]
 
         reg = registrar(m, reset_less=True)
 
-        # --- stage 2: the RAM outputs go straight into registers -------------------------
-        vals = {"v": reg("v", st_rd.data[:V.width].as_signed(), 3),
-                "u": reg("u", st_rd.data[V.width:].as_signed(), 3),
-                "i": reg("i", cur_rd.data, 3), "sel": reg("sel", sel_rd.data, 3)}
+        # --- stage 2: the banks' registered words (bank multiplexer, host-write bypass) -----
+        words = {"v": st_rd.data[:V.width].as_signed(), "u": st_rd.data[V.width:].as_signed(),
+                 "i": cur_rd.data, "sel": sel_rd.data}
+        vals = {k: reg(k, x, 3) for k, x in words.items()}
         t3 = tags[3]
         # what an update starts from, for the formal harness (hdl/izhikevich/formal.py)
         self.probes = {"valid": t3[0], "index": t3[1], **{k: vals[k] for k in vals},
                        "latency": D - 2}
+        self.state_write_lag = 1            # the state's write is registered before its RAM
         if len(cfg.params) == 1:
-            vals["sel"] = 0
-        self.stages = {3: dict(vals)}
+            vals["sel"] = words["sel"] = 0
+
+        def live_after(k):
+            live = set(datapath.CARRIED)
+            for later in datapath.STEPS[k + 1:]:
+                live.update(later.reads)
+            return live
+
+        # without a cut after the operands (depth < 8) they are formed in stage 2, from the
+        # words, and registered with them: every stage-3 multiplier then takes registers
+        first = 0
+        if 0 not in cfg.cuts:
+            step = datapath.STEPS[0]
+            ops = step.fn(cfg, {n: words[n] for n in step.reads})
+            live = live_after(0)
+            vals.update({n: (reg(n, x, 3) if is_hdl(x) else x)
+                         for n, x in ops.items() if n in live})
+            first = 1
+        self.stages = {3: {n: x for n, x in vals.items() if is_hdl(x)}}
         # --- stages 3 .. D: the datapath steps, registered at the cuts -------------------
         # the step functions are looked up in their module at elaboration, so a fault
         # injected there (tests) reaches the RTL and not the twin
         stage = 3
         for k, step in enumerate(datapath.STEPS):
+            if k < first:
+                continue
             vals.update(step.fn(cfg, {n: vals[n] for n in step.reads}))
             for n in datapath.KEPT:
                 if n in vals and is_hdl(vals[n]) and not isinstance(vals[n], Signal):
@@ -162,9 +184,7 @@ class IzhikevichCore(wiring.Component):
                     m.d.comb += kept.eq(vals[n])
                     vals[n] = kept
             if k in cfg.cuts:
-                live = set(datapath.CARRIED)
-                for later in datapath.STEPS[k + 1:]:
-                    live.update(later.reads)
+                live = live_after(k)
                 stage += 1
                 vals = {n: (reg(n, x, stage) if is_hdl(x) else x)
                         for n, x in vals.items() if n in live}

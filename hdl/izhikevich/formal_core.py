@@ -76,8 +76,9 @@ class IzhikevichCoreProof(SweepCoreProof):
 def proof_config(n_neurons: int | None = None, **kwargs) -> IzhikevichConfig:
     """The configuration a core proof runs on: external tick (the harness drives it freely,
     which covers the internal divider), ``n_neurons`` neurons or, by default, the fewest the
-    configuration accepts (one per pipeline stage: the smallest core is the hardest, a neuron
-    is fetched again right after its write-back), ``kwargs`` passed on (``pipeline_stages``,
+    configuration accepts (the pipeline depth + 1: the smallest core is the hardest, a
+    neuron's memories are read again as its registered write-back lands),
+    ``kwargs`` passed on (``pipeline_stages``,
     formats ...)."""
     if n_neurons is not None:
         return IzhikevichConfig(n_neurons=n_neurons, clock_hz=n_neurons * 16e3,

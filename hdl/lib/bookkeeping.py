@@ -19,10 +19,14 @@ the contract of both cores (see :class:`cuneate.hdl.izhikevich.IzhikevichCore`):
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 from amaranth import Cat, Module, Mux, Signal
 from amaranth.lib.fifo import SyncFIFOBuffered
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
+
+from .banked import prefetched_memory
 
 __all__ = ["SweepIssue", "sweep_issue", "pipeline_tags", "registrar", "sweep_bookkeeping",
            "core_memories", "core_ports"]
@@ -55,12 +59,38 @@ def core_ports(cfg, clamp_kinds, state_ports: dict, extra: dict | None = None) -
 
 
 def core_memories(m: Module, core, cfg, state_width: int, state_init: list,
-                  state_attrs: dict | None = None):
+                  state_attrs: dict | None = None, prefetch=None):
     """The per-neuron memories every core has: the state (``state_width`` bits, ``state_init``,
     ``state_attrs`` for synthesis), the host-written current and the parameter-set index, with
     the host write ports (``i_wr_*``, ``sel_wr_*``) wired. Returns the state read and write
-    ports and the current and set read ports."""
+    ports and the current and set read ports.
+
+    ``prefetch`` (the issue's :attr:`SweepIssue.next_addr`): the memories are
+    :func:`~cuneate.hdl.lib.banked.prefetched_memory` banks in ``cfg.bram_shapes``, read one
+    cycle ahead and registered beside the block RAM, each with a write bypass (an update sees
+    the memories as they are in its fetch cycle); the read ports returned then carry only
+    ``data``, valid in the cycle a synchronous read at the fetch would have it. The state's
+    write is registered before its RAM and lands a cycle after it is issued, at the latest
+    with the neuron's next read, a cycle ahead of its next fetch: ``n_neurons >= depth + 1``
+    (the core sets ``state_write_lag = 1``)."""
     N = cfg.n_neurons
+    if prefetch is not None:
+        shapes = cfg.bram_shapes
+        st = prefetched_memory(m, "state_mem", state_width, N, state_init, prefetch, shapes,
+                               bypass=True, write_register=True, attrs=state_attrs)
+        cur = prefetched_memory(m, "cur_mem", cfg.I.shape(), N, [], prefetch, shapes,
+                                bypass=True)
+        sel = prefetched_memory(m, "sel_mem", cfg.sel_bits, N, cfg.neuron_sets, prefetch,
+                                shapes, bypass=True)
+        m.d.comb += [
+            cur.wr_addr.eq(core.i_wr_addr), cur.wr_data.eq(core.i_wr_data),
+            cur.wr_en.eq(core.i_wr_en),
+            sel.wr_addr.eq(core.sel_wr_addr), sel.wr_data.eq(core.sel_wr_data),
+            sel.wr_en.eq(core.sel_wr_en),
+        ]
+        st_wr = SimpleNamespace(addr=st.wr_addr, data=st.wr_data, en=st.wr_en)
+        return (SimpleNamespace(data=st.data), st_wr, SimpleNamespace(data=cur.data),
+                SimpleNamespace(data=sel.data))
     m.submodules.state_mem = state_mem = Memory(shape=state_width, depth=N, init=state_init,
                                                 attrs=state_attrs)
     m.submodules.cur_mem = cur_mem = Memory(shape=cfg.I.shape(), depth=N, init=[])
@@ -79,10 +109,12 @@ def core_memories(m: Module, core, cfg, state_width: int, state_init: list,
 
 class SweepIssue:
     """The issue counter's signals: ``start`` (a sweep starts this cycle), ``issuing``,
-    ``addr`` (the neuron issued), ``sweep_no`` (the sweep's number)."""
+    ``addr`` (the neuron issued), ``sweep_no`` (the sweep's number), ``next_addr`` (what
+    ``addr`` holds in the next cycle: the address a memory read one cycle ahead takes)."""
 
-    def __init__(self, start, issuing, addr, sweep_no):
+    def __init__(self, start, issuing, addr, sweep_no, next_addr):
         self.start, self.issuing, self.addr, self.sweep_no = start, issuing, addr, sweep_no
+        self.next_addr = next_addr
 
 
 def sweep_issue(m: Module, core, n_neurons: int, tick, number_width: int) -> SweepIssue:
@@ -94,19 +126,24 @@ def sweep_issue(m: Module, core, n_neurons: int, tick, number_width: int) -> Swe
     addr = Signal(range(N))
     sweep_no = Signal(number_width)
     started = Signal()
-    last_issue = issuing & (addr == N - 1)
+    # addr + 1 and addr == N - 1, registered beside addr: the next address (the memories'
+    # read address, a cycle ahead) is two multiplexers from registers and the tick
+    inc = Signal(range(N + 1), init=1, name="addr_inc")
+    at_last = Signal(init=int(N == 1), name="addr_at_last")
+    last_issue = issuing & at_last
     start = tick & (~issuing | last_issue)
+    next_addr = Signal(range(N), name="next_addr")
+    m.d.comb += next_addr.eq(Mux(start, 0, Mux(issuing & ~at_last, inc, addr)))
+    m.d.sync += [addr.eq(next_addr), inc.eq(next_addr + 1), at_last.eq(next_addr == N - 1)]
     with m.If(tick & ~start):
         m.d.sync += core.overrun.eq(1)
     with m.If(start):
-        m.d.sync += [issuing.eq(1), addr.eq(0), started.eq(1),
+        m.d.sync += [issuing.eq(1), started.eq(1),
                      sweep_no.eq(Mux(started, sweep_no + 1, 0))]
-    with m.Elif(issuing):
-        m.d.sync += addr.eq(addr + 1)
-        with m.If(last_issue):
-            m.d.sync += issuing.eq(0)
+    with m.Elif(issuing & last_issue):
+        m.d.sync += issuing.eq(0)
     m.d.comb += core.busy.eq(issuing)
-    return SweepIssue(start, issuing, addr, sweep_no)
+    return SweepIssue(start, issuing, addr, sweep_no, next_addr)
 
 
 def pipeline_tags(m: Module, n_neurons: int, number_width: int, issue: SweepIssue,

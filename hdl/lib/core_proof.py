@@ -24,8 +24,9 @@ against the block's one-step reference, for every input sequence of every length
 * each stage's tag (valid, index, sweep; ``pipeline_tags``) holds the fetch of ``k - 1`` cycles
   before, for every stage ``k`` of the core's own tag list (``L`` is its last stage);
 * every tracked memory word of ``t`` equals the reference's copy: the host memories the host's
-  writes, the state the reference's last result (the write-back happens with the result
-  leaving, so this holds in every cycle, an update of ``t`` in flight or not);
+  writes, the state the reference's last result from the cycle its write-back lands (with the
+  result leaving, or ``state_write_lag`` cycles later for a core that registers the write),
+  so this holds in every cycle, an update of ``t`` in flight or not;
 * the bookkeeping counters equal the reference's.
 
 The data registers between the stages need no invariant: they are a function of the last ``L``
@@ -294,9 +295,12 @@ class SweepCoreProof(Elaboratable):
         for name in self.read_only_memories(core):
             r, now = words[name]
             m.d.sync += r.eq(now)
+        # the write-back is issued from the last stage (fetched L - 1 cycles ago) and lands at
+        # the end of that cycle, or ``state_write_lag`` cycles later (a registered write)
+        lag = getattr(core, "state_write_lag", 0)
         for name in self.state_memories:
             r, now = words[name]
-            m.d.sync += r.eq(Mux(flight[L - 1], exp["words"][name], now))
+            m.d.sync += r.eq(Mux(flight[L - 1 + lag], exp["words"][name], now))
         checks = [(~flight[L] | core.upd_valid & (core.upd_index == t), "tracked update leaves")]
         checks += [(~flight[L] | (getattr(core, port) == value), f"tracked update: {port}")
                    for port, value in exp["ports"].items()]

@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..coincidence.config import CoincidenceConfig
-from ..izhikevich.config import PIPELINE_DEPTH, IzhikevichConfig
+from ..izhikevich.config import PIPELINE_DEPTH, IzhikevichConfig, min_neurons
 from ..lib.config import ConfigError
 from ..lib.fixed import QFormat
 
@@ -61,9 +61,9 @@ class NetworkConfig:
         if self.tick_source not in ("internal", "external"):
             raise ConfigError("tick_source must be 'internal' or 'external'")
         N = self.n_afferents
-        if not isinstance(N, (int, np.integer)) or N < PIPELINE_DEPTH:
-            raise ConfigError(f"n_afferents must be an integer >= {PIPELINE_DEPTH} (the core's "
-                              f"pipeline depth), got {N!r}")
+        if not isinstance(N, (int, np.integer)) or N < min_neurons():
+            raise ConfigError(f"n_afferents must be an integer >= {min_neurons()} (the core's "
+                              f"smallest core: its pipeline depth + 1), got {N!r}")
         det = dict(self.detector)
         for k in ("clock_hz", "update_hz", "tick_source"):
             if k in det:

@@ -101,10 +101,12 @@ def cmd_stream(args) -> int:
         cfg = afferent.core_config(scene, in_turn)
     except ValueError as exc:
         raise CliError(f"{COMMAND}: {scene.source}: {exc}") from None
-    _check_fits(target, scene, cfg, args.baud)
+    sized = _check_fits(target, scene, cfg, args.baud)
+    # the line rate of the plan the build chooses for this scene (a 70 MHz ULX3S build runs
+    # its line at 2 Mbaud), or the one given
+    baud = int(args.baud or sized["plan"]["baud"])
     board_baud = int(target["clock_plan"].baud)
-    baud = args.baud or board_baud
-    if baud != board_baud:
+    if args.baud and baud != board_baud:
         print(f"{COMMAND}: note: the line at {baud} baud, not the {args.board}'s default "
               f"{board_baud}: the board must be built for it (cuneate build {args.board} "
               f"--baud {baud})", file=sys.stderr)

@@ -48,12 +48,13 @@ def cmd_sweep(args) -> int:
     seeds = _list(args.seeds, int, "--seeds")
     if any(s < 1 for s in seeds):
         raise CliError("--seeds: placement seeds must be >= 1")
-    if args.pack_dsp and not args.fmax:
-        raise CliError("--pack-dsp: packs the netlist that --fmax places and routes; add --fmax")
+    if args.pack_registers and not args.fmax:
+        raise CliError("--pack-registers: packs the netlist that --fmax places and routes; "
+                       "add --fmax")
     spec = SweepSpec(battery=args.battery, duration_ms=duration,
                      reference_hz=args.reference_hz, clock_hz=args.clock_hz, synth=args.synth,
                      fmax=args.fmax, pipeline_stages=args.pipeline_stages, seeds=tuple(seeds),
-                     pack_dsp=args.pack_dsp)
+                     pack_registers=args.pack_registers)
     try:
         pts, columns = block.points_from_args(args, rates, widths, rnd, floats, _list)
     except ValueError as exc:
@@ -150,9 +151,10 @@ def register(groups: CommandGroups) -> None:
     p.add_argument("--seeds", default="1",
                    help="with --fmax: comma-separated nextpnr placement seeds; the lowest fmax "
                         "is reported (e.g. 1,2,3)")
-    p.add_argument("--pack-dsp", action="store_true",
-                   help="with --fmax: move the flip-flops around each multiplier into the "
-                        "MULT18X18D's input/output registers before place and route")
+    p.add_argument("--pack-registers", action="store_true",
+                   help="with --fmax: move the flip-flops around each multiplier and after "
+                        "each block RAM into the MULT18X18D's input/output and the DP16KD's "
+                        "output registers before place and route")
     from ..izhikevich.cli import add_pipeline_option
     add_pipeline_option(p)
     p.add_argument("--scheduler", default=None,

@@ -173,14 +173,16 @@ def detector_config(spec: RidgeSpec) -> CoincidenceConfig:
 
 
 def network_config(spec: RidgeSpec):
-    """The on-chip network of the experiment: 5 afferents (the core's minimum; the fifth idle),
+    """The on-chip network of the experiment: 6 afferents (the core's minimum; the fifth and
+    sixth idle),
     sources 0 .. 3 = (SA top, FA top, SA bottom, FA bottom), the detector of
     :func:`detector_config`."""
+    from ...hdl.izhikevich.config import min_neurons
     from ...hdl.network import NetworkConfig
     det = detector_config(spec).to_kwargs()
     for k in ("clock_hz", "update_hz", "tick_source"):
         det.pop(k)
-    return NetworkConfig(n_afferents=5, detector=det, clock_hz=spec.update_hz * 64,
+    return NetworkConfig(n_afferents=min_neurons(), detector=det, clock_hz=spec.update_hz * 64,
                          update_hz=spec.update_hz, tick_source="external")
 
 

@@ -193,7 +193,7 @@ class SweepPoint(Point):
                          spec.clock_hz, spec.synth or spec.fmax, spec.fmax,
                          *(() if spec.pipeline_stages == 5 and tuple(spec.seeds) == (1,) else
                            (spec.pipeline_stages, tuple(spec.seeds))),
-                         *(("pack_dsp",) if spec.pack_dsp and spec.fmax else ()))
+                         *(("pack_registers",) if spec.pack_registers and spec.fmax else ()))
 
     def label(self) -> str:
         if self.engine == "fixed":
@@ -302,8 +302,8 @@ def synth_point(p: SweepPoint, spec: SweepSpec) -> dict:
     with ``spec.fmax`` also nextpnr-ecp5 place and route of the bare core on the ULX3S's
     LFE5U-85F (CABGA381, speed grade 6, ports on free pins) at each of ``spec.seeds``:
     ``fmax_mhz`` (the lowest) and ``fmax_mhz_per_seed``; the core has
-    ``spec.pipeline_stages`` stages; with ``spec.pack_dsp`` its multipliers' neighbouring
-    flip-flops are packed into their DSP registers first."""
+    ``spec.pipeline_stages`` stages; with ``spec.pack_registers`` the flip-flops around its
+    multipliers and after its block RAMs are packed into their registers first."""
     import tempfile
 
     from ...hdl.flow.synth import nextpnr_ecp5, synthesize
@@ -317,7 +317,8 @@ def synth_point(p: SweepPoint, spec: SweepSpec) -> dict:
     out = {}
     with tempfile.TemporaryDirectory(prefix="cuneate-sweep-") as d:
         r = synthesize(izhikevich_verilog(cfg, "izhikevich_core"), "izhikevich_core", "ecp5",
-                       Path(d), netlist=spec.fmax, pack_dsp=spec.fmax and spec.pack_dsp)
+                       Path(d), netlist=spec.fmax,
+                       pack_registers=spec.fmax and spec.pack_registers)
         if spec.fmax:
             per_seed = [nextpnr_ecp5(Path(d), r["netlist"], device="85k", package="CABGA381",
                                      speed=6, seed=s, freq_mhz=spec.clock_hz / 1e6,

@@ -26,12 +26,13 @@ def test_clock_plans_have_whole_sweeps_and_line_rates_within_a_uarts_tolerance()
 @pytest.mark.parametrize("board,kw,match", [
     ("ulx3s", dict(n_neurons=60000), "17 cores of 3530 at 60 MHz need about 344 block RAMs.*"
                                      r"\(RAM limit\)"),
-    ("ulx3s", dict(n_neurons=40000), r"RAM limit.*90 MHz plan is above.*\(fmax limit"),
+    ("ulx3s", dict(n_neurons=40961), r"10 cores of 4097 at 70 MHz need about 254 block RAMs.*"
+                                     r"RAM limit.*90 MHz plan is above.*\(fmax limit"),
     ("ulx3s", dict(n_neurons=70000), "65536 neuron ids \\(link limit\\)"),
     ("icebreaker", dict(n_neurons=500, operand_width=18), "DSP limit"),
     ("icebreaker", dict(n_neurons=700, spike_fifo_depth=4096), "RAM limit"),
     ("icebreaker", dict(n_neurons=1000), "2 cores of 500 .* \\(RAM limit\\)"),
-    ("ulx3s", dict(clock_hz=48e6), "PLL plans give 60, 90 MHz"),
+    ("ulx3s", dict(clock_hz=48e6), "PLL plans give 60, 70, 90 MHz"),
 ])
 def test_refusals_name_the_limit(board, kw, match):
     with pytest.raises(ConfigError, match=match):
@@ -39,30 +40,36 @@ def test_refusals_name_the_limit(board, kw, match):
 
 
 def test_sizing_fills_the_ulx3s_with_cores():
-    """The largest ULX3S build: 10 cores of 3734 at 60 MHz (204 of the 208 block RAMs);
-    40 000 is refused naming both limits: 11 cores at 60 MHz need more block RAM, and the
-    90 MHz plan (4000 a core would fit) is above 0.9 x the fmax the filled board build
-    measured (the target's ``link_fmax_mhz``, below the depth-8 core's out of context)."""
-    r = size_core(TARGETS["ulx3s"], n_neurons=37340)
+    """The largest ULX3S build: 10 cores of 4096 at 70 MHz (204 of the 208 block RAMs by the
+    estimate; the line at 2 Mbaud, which 70 MHz divides exactly); 37 340 still fits the
+    60 MHz plan (the lower clock wins a tie of cores); 40 961 is refused naming every limit:
+    cores of 4097 cross the 2048 x 9 blocks' depth, 11 cores at 60 MHz need more block RAM,
+    and the 90 MHz plan is above 0.9 x the fmax the filled board build measured (the
+    target's ``link_fmax_mhz``)."""
+    r = size_core(TARGETS["ulx3s"], n_neurons=40960)
     lc = r["link"]
-    assert (lc.n_cores, lc.core.n_neurons, lc.n_neurons) == (10, 3734, 37340)
-    assert r["plan"]["clock_hz"] == 60e6 and r["plan"]["clocks_per_bit"] == 20
+    assert (lc.n_cores, lc.core.n_neurons, lc.n_neurons) == (10, 4096, 40960)
+    assert r["plan"]["clock_hz"] == 70e6 and r["plan"]["clocks_per_bit"] == 35
+    assert r["plan"]["cycles_per_tick"] == 4375 and r["plan"]["baud"] == 2e6
     assert r["estimate"]["BRAM"] == 204 and r["estimate"]["DSP"] == 40
-    with pytest.raises(ConfigError, match=r"224 block RAMs.*\(RAM limit\).*90 MHz plan is "
+    r = size_core(TARGETS["ulx3s"], n_neurons=37340)
+    assert r["plan"]["clock_hz"] == 60e6 and r["link"].n_cores == 10
+    with pytest.raises(ConfigError, match=r"4097 at 70 MHz need about 254 block RAMs.*"
+                                          r"224 block RAMs.*\(RAM limit\).*90 MHz plan is "
                                           r"above 0.9 x the 80 MHz fmax"):
-        size_core(TARGETS["ulx3s"], n_neurons=40000, pipeline_stages=8)
+        size_core(TARGETS["ulx3s"], n_neurons=40961, pipeline_stages=8)
 
 
 def test_limits_per_board():
     """The bounds on neurons at 16 kHz and the largest count each board's sizing accepts."""
     from cuneate.boards.sizing import limits
     u5, u8 = limits(TARGETS["ulx3s"], 5), limits(TARGETS["ulx3s"], 8)
-    assert (u5["largest"], u5["cores"], u5["clock_hz"]) == (37340, 10, 60e6)
-    # the board build's fmax rules both depths: below 90 MHz / 0.9, so the 90 MHz plan (10
-    # cores of 4096 would fit) is refused and the largest stays the 60 MHz one
+    assert (u5["largest"], u5["cores"], u5["clock_hz"]) == (40960, 10, 70e6)
+    # the board build's fmax rules both depths: below 90 MHz / 0.9, so the 90 MHz plan is
+    # refused and the largest is the 70 MHz one (cores of 4096: the block shape's depth)
     t = TARGETS["ulx3s"]
     assert u8["fmax_mhz"] == t["link_fmax_mhz"] == 80.0 < min(t["fmax_mhz"][8], 90 / 0.9)
-    assert u8["largest"] == u5["largest"] == 37340
+    assert u8["largest"] == u5["largest"] == 40960
     # every device bit at 76 bits per neuron: the block-RAM bound is the tightest
     assert u8["bram"] == 208 * 18432 // 76 < min(u8["multiplier"], u8["fmax"])
     ice = limits(TARGETS["icebreaker"], 5)
@@ -122,14 +129,16 @@ def test_ulx3s_bitstream_meets_60mhz(tmp_path):
 
 @pytest.mark.long
 def test_ulx3s_filled_with_cores_meets_timing(tmp_path):
-    """The largest count the ULX3S sizing accepts: 10 cores of 3734 neurons at 60 MHz behind
-    the link (597 M neuron updates/s), placed and routed into a bitstream with timing met."""
+    """The largest count the ULX3S sizing accepts: 10 cores of 4096 neurons at 70 MHz behind
+    the link (655 M neuron updates/s, 16 times the reference design), placed and routed into
+    a bitstream with timing met."""
     from cuneate.boards.sizing import limits
     largest = limits(TARGETS["ulx3s"])["largest"]
     r = build_target("ulx3s", tmp_path, n_neurons=largest, seed=1)
     text = (tmp_path / "cuneate_ulx3s.report.txt").read_text()
     print("\n" + text)
-    assert (r["neurons"], r["cores"], r["neurons_per_core"]) == (37340, 10, 3734)
+    assert (r["neurons"], r["cores"], r["neurons_per_core"]) == (40960, 10, 4096)
+    assert r["clock_plan"]["clock_hz"] == 70e6 and r["neurons"] * 16e3 >= 640e6
     assert r["bitstream"] and (tmp_path / "cuneate_ulx3s.bit").stat().st_size > 100_000
     pr = r["place_route"]
     assert pr["resources"]["DSP"]["used"] == 40

@@ -37,27 +37,31 @@ def test_the_ridge_scene_at_16_khz_is_refused_by_the_link_budget(tmp_path, capsy
                  str(tmp_path)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1, err
-    assert "the scene's currents take 800,000 B/s to the board" in err[0]
-    assert "5 currents every sample at 16000 Hz" in err[0] and "(link limit)" in err[0]
+    assert "the scene's currents take 848,000 B/s to the board" in err[0]
+    assert "6 currents every sample at 16000 Hz" in err[0] and "(link limit)" in err[0]
 
 
 def test_a_ridge_scene_builds_the_network_behind_the_link(tmp_path, capsys):
     """At 4 kHz sweeps the ridge's currents fit the line: the board holds the on-chip
-    afferent -> cuneate network (5 afferents, 3 coincidence detectors) behind the link."""
+    afferent -> cuneate network (6 afferents: the core's smallest, 3 coincidence detectors)
+    behind the link."""
     src = tmp_path / "ridge4k.toml"
     src.write_text(example_text("ridge_angle") + "\n[hardware]\nupdate_hz = 4000\n")
     assert main(["build", "ulx3s", str(src), "--no-bitstream", "--json", "--out",
                  str(tmp_path / "b")]) == 0
     r = json.loads(capsys.readouterr().out)
     sc = r["scene"]
-    assert sc["kind"] == "network" and r["neurons"] == 8
+    assert sc["kind"] == "network" and r["neurons"] == 9
     assert [b["block"] for b in sc["blocks"]] == ["izhikevich_core", "coincidence_detector"]
-    assert [b["neurons"] for b in sc["blocks"]] == [5, 3]
+    assert [b["neurons"] for b in sc["blocks"]] == [6, 3]
     # the link carries the spike ids of both populations; the sweep is the board's
-    assert r["link"]["n_spike_ids"] == 8 and r["link"]["n_written"] == 5
+    assert r["link"]["n_spike_ids"] == 9 and r["link"]["n_written"] == 6
     assert r["clock_plan"]["cycles_per_tick"] == 60e6 / 4000
     rows = {row["baud"]: row for row in sc["link_budget"]["rows"]}
-    assert rows[3_000_000]["real_time"] and rows[3_000_000]["in_load"] == pytest.approx(2 / 3)
+    # 53 bytes a sample (the 50 of five currents and one more current's 3) at 4 kHz, of the
+    # line's 300 000 B/s
+    assert rows[3_000_000]["real_time"]
+    assert rows[3_000_000]["in_load"] == pytest.approx(53 * 4000 / 300_000)
     v = (tmp_path / "b" / "cuneate_ulx3s_core.v").read_text()
     assert "module cuneate_ulx3s_core" in v and "module \\cuneate_ulx3s_core.network.det" in v
 
@@ -202,22 +206,23 @@ def test_a_scenes_board_top_elaborates_for_the_ulx3s(tmp_path, scene, leds):
 
 
 def test_a_sweep_too_short_for_the_blocks_is_refused():
-    """4032 taxels (a 64 x 63 skin) at 16 kHz (the scene's 80 MHz clock holds them): without
-    the real-time budget (a lockstep host waits for the line) their LIF core still needs 4032
-    cycles a sweep, more than a 60 MHz sweep's 3750 (the 90 MHz plan is above the measured
+    """4096 taxels (a 64 x 64 skin, the largest grid) at 20 kHz (the scene's 100 MHz clock
+    holds them): without the real-time budget (a lockstep host waits for the line) their LIF
+    core still needs 4096
+    cycles a sweep, more than a 70 MHz sweep's 3500 (the 90 MHz plan is above the measured
     fmax): refused before any synthesis, naming the figures."""
     from cuneate.boards.build import size_blocks
     from cuneate.boards.scene import scene_request
     from cuneate.boards.targets import TARGETS
     from cuneate.hdl.lib.config import ConfigError
     from cuneate.sim.scenes.scene import parse_scene
-    sc = parse_scene(example_text("skin_3x3").replace("grid = [3, 3]", "grid = [64, 63]")
-                     .replace("update_hz = 1000", "update_hz = 16000\nclock_hz = 80e6"),
+    sc = parse_scene(example_text("skin_3x3").replace("grid = [3, 3]", "grid = [64, 64]")
+                     .replace("update_hz = 1000", "update_hz = 20000\nclock_hz = 100e6"),
                      "big_skin.toml")
     t = TARGETS["ulx3s"]
     with pytest.raises(ConfigError) as err:
         size_blocks(t, scene_request(sc, t, real_time=False), None, None)
     msg = str(err.value)
     assert "\n" not in msg and "no clock plan holds the scene's lif_core" in msg
-    assert "a sweep of 3750 cycles cannot hold the LIF core's 4032 cycles of work and the " \
+    assert "a sweep of 3500 cycles cannot hold the LIF core's 4096 cycles of work and the " \
            "link's 16 idle ones" in msg and "(fmax limit)" in msg

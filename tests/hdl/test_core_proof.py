@@ -11,8 +11,11 @@ from cuneate.sim.hardcases import record
 
 #: the assertion each fault breaks first
 EXPECTED = {
-    "skipped_write": ("memory_state_mem_tracked_word", 6),   # the tracked neuron's word went stale
-    "stage_off_by_one": ("tracked_update_upd_u", 7),         # stage 4's u is the previous neuron's
+    # the tracked neuron's word went stale (the registered write lands a cycle after the
+    # result leaves, at step 6)
+    "skipped_write": ("memory_state_mem_tracked_word", 7),
+    # stage 4's u is the previous neuron's, in the first update that can leave
+    "stage_off_by_one": ("tracked_update_upd_u", 6),
     "late_host_write": ("memory_cur_mem_tracked_word", 1),   # the current lands a cycle late
     "tag_off_by_one": ("stage_5_neuron", 5),                 # the write-back addressed one off
 }

@@ -1,8 +1,11 @@
-"""MULT18X18D register packing (``cuneate.hdl.flow.ecp5_pack``): which flip-flops move into
-the DSP blocks, and that the packed netlist computes what yosys's netlist computes, cycle for
-cycle. Both netlists are simulated by Icarus with yosys's ECP5 cell models and a model of the
-MULT18X18D's registers written from Lattice TN1267 (input registers, output register, clock
-``CLK0``, enable ``CE0``, synchronous reset ``RST0``) on random inputs."""
+"""MULT18X18D and DP16KD register packing (``cuneate.hdl.flow.ecp5_pack``): which flip-flops
+move into the DSP blocks and the block RAMs' output registers, and that the packed netlist
+computes what yosys's netlist computes, cycle for cycle. Both netlists are simulated by Icarus
+with yosys's ECP5 cell models, a model of the MULT18X18D's registers written from Lattice
+TN1267 (input registers, output register, clock ``CLK0``, enable ``CE0``, synchronous reset
+``RST0``) and a model of the DP16KD in its 1024 x 18 mode written from Lattice TN1264 (the
+read latch, and with ``REGMODE = "OUTREG"`` the output register behind it, enabled by
+``OCE``), on random inputs."""
 
 import json
 import random
@@ -12,9 +15,10 @@ import subprocess
 import pytest
 from amaranth import Module, Signal, signed
 from amaranth.lib import wiring
+from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
-from cuneate.hdl.flow.ecp5_pack import pack_dsp_registers, pack_netlist_file
+from cuneate.hdl.flow.ecp5_pack import pack_dsp_registers, pack_netlist_file, pack_registers
 from cuneate.hdl.flow.synth import run_yosys
 from cuneate.hdl.flow.tools import find_tool
 from cuneate.hdl.flow.verilog import verilog_text
@@ -38,6 +42,11 @@ class Products(wiring.Component):
     q: Out(signed(32))
     a_seen: Out(signed(16))
     r: Out(signed(32))
+    wa: In(10)
+    ra: In(10)
+    m1: Out(16)
+    m2: Out(16)
+    m3: Out(16)
 
     def elaborate(self, platform):
         m = Module()
@@ -51,6 +60,20 @@ class Products(wiring.Component):
         with m.If(self.en):
             m.d.sync += a3.eq(self.a)
         m.d.comb += [self.p.eq(p1), self.r.eq(a3 * self.b)]
+        # a block RAM read three ways: into a plain register (packed into the block's output
+        # register), into a register with an enable (not packed), into logic (not packed)
+        m.submodules.mem = mem = Memory(shape=16, depth=1024, init=[],
+                                        attrs={"no_rw_check": 1})
+        wr = mem.write_port()
+        m.d.comb += [wr.addr.eq(self.wa), wr.data.eq(self.a), wr.en.eq(self.en)]
+        q1, q2 = Signal(16, reset_less=True), Signal(16, reset_less=True)
+        rd1, rd2, rd3 = mem.read_port(), mem.read_port(), mem.read_port()
+        for k, rd in enumerate((rd1, rd2, rd3)):      # three words: three ports kept
+            m.d.comb += rd.addr.eq(self.ra + k)
+        m.d.sync += q1.eq(rd1.data)
+        with m.If(self.en):
+            m.d.sync += q2.eq(rd2.data)
+        m.d.comb += [self.m1.eq(q1), self.m2.eq(q2), self.m3.eq(rd3.data + 1)]
         return m
 
 
@@ -93,6 +116,52 @@ endmodule
 """
 
 
+def _ram_model() -> str:
+    """A DP16KD in the 1024 x 18 mode on both ports: write on A (``WEA``, byte enables
+    ``ADA0/1``), read on either port into its latch at the clock when ``CE``; with
+    ``REGMODE = "OUTREG"`` the latch goes through the output register (enable ``OCE``)."""
+    def bus(p, n):
+        return ", ".join(f"{p}{i}" for i in reversed(range(n)))
+    ports = ", ".join(f"input {bus(f'DI{s}', 18)}, input {bus(f'AD{s}', 14)}, "
+                      f"input CE{s}, OCE{s}, CLK{s}, WE{s}, RST{s}, CS{s}2, CS{s}1, CS{s}0, "
+                      f"output {bus(f'DO{s}', 18)}" for s in "AB")
+    body = []
+    for s in "AB":
+        body.append(f"""
+  wire [17:0] di{s} = {{{bus(f'DI{s}', 18)}}};
+  wire [13:0] ad{s} = {{{bus(f'AD{s}', 14)}}};
+  reg [17:0] latch{s} = 0, oreg{s} = 0;
+  always @(posedge CLK{s}) begin
+    if (CE{s} && WE{s}) begin
+      if (ad{s}[0]) mem[ad{s}[13:4]][8:0] <= di{s}[8:0];
+      if (ad{s}[1]) mem[ad{s}[13:4]][17:9] <= di{s}[17:9];
+    end
+    if (CE{s} && !WE{s}) latch{s} <= mem[ad{s}[13:4]];
+    if (OCE{s}) oreg{s} <= latch{s};
+  end
+  assign {{{bus(f'DO{s}', 18)}}} = REGMODE_{s} == "OUTREG" ? oreg{s} : latch{s};""")
+    return f"""
+module DP16KD({ports});
+  parameter DATA_WIDTH_A = 18, DATA_WIDTH_B = 18;
+  parameter REGMODE_A = "NOREG", REGMODE_B = "NOREG";
+  parameter RESETMODE = "SYNC", ASYNC_RESET_RELEASE = "SYNC", GSR = "ENABLED";
+  parameter CSDECODE_A = "0b000", CSDECODE_B = "0b000";
+  parameter WRITEMODE_A = "NORMAL", WRITEMODE_B = "NORMAL";
+  parameter CLKAMUX = "CLKA", CLKBMUX = "CLKB";
+  parameter INIT_DATA = "STATIC";
+  // the initial contents: zeros (the test's memory has none)
+  {" ".join(f"parameter INITVAL_{i:02X} = 0;" for i in range(64))}
+  reg [17:0] mem [0:1023];
+  integer i;
+  initial for (i = 0; i < 1024; i = i + 1) mem[i] = 0;
+  initial if (DATA_WIDTH_A != 18 || DATA_WIDTH_B != 18) begin
+    $display("DP16KD model: 1024 x 18 mode only"); $finish;
+  end
+{"".join(body)}
+endmodule
+"""
+
+
 @pytest.fixture(scope="module")
 def netlists(tmp_path_factory):
     d = tmp_path_factory.mktemp("ecp5pack")
@@ -100,17 +169,21 @@ def netlists(tmp_path_factory):
     run_yosys(d, "read_verilog products.v; synth_ecp5 -top products -json products.json")
     plain = json.loads((d / "products.json").read_text())
     packed = json.loads((d / "products.json").read_text())
-    report = pack_dsp_registers(packed)
+    report = pack_registers(packed)
     (d / "packed.json").write_text(json.dumps(packed))
     (d / "mult18x18d.v").write_text(_mult_model())
+    (d / "dp16kd.v").write_text(_ram_model())
     for netlist, top in ((plain, "plain_top"), (packed, "packed_top")):
         only_top = {"modules": {"products": netlist["modules"]["products"]}}
         (d / f"{top}.json").write_text(json.dumps(only_top))
-        # the cells become yosys's ECP5 models and the model above, flattened into plain
-        # Verilog (Icarus does not read the models' elaboration-time checks)
+        # the cells become yosys's ECP5 models and the models above (yosys's DP16KD has its
+        # parameters only), flattened into plain Verilog (Icarus does not read the models'
+        # elaboration-time checks)
         run_yosys(d, f"read_json {top}.json; rename products {top}; "
-                     f"read_verilog -DNO_INCLUDES +/ecp5/cells_sim.v +/ecp5/cells_ff.vh "
-                     f"mult18x18d.v; hierarchy -top {top}; proc; flatten; opt_clean; "
+                     f"read_verilog -DNO_INCLUDES +/ecp5/cells_sim.v +/ecp5/cells_ff.vh; "
+                     f"delete DP16KD; read_verilog "
+                     f"mult18x18d.v dp16kd.v; hierarchy -top {top}; proc; flatten; "
+                     f"opt_clean; "
                      f"write_verilog -noattr {top}.v")
     return d, plain, packed, report
 
@@ -133,35 +206,57 @@ def test_packs_the_registers_it_may_and_leaves_the_others(netlists):
                      ("NONE", "NONE", "NONE")]
     # a1, b1 and p1 (16 + 16 + 32 flip-flops) leave; a2 stays (it is an output too)
     removed = len(_cells(plain, "TRELLIS_FF")) - len(_cells(packed, "TRELLIS_FF"))
-    assert removed == rep.ffs_removed == 64
+    assert removed - rep.ram_ffs_removed == rep.ffs_removed == 64
     assert rep.ffs_duplicated == 16
     assert any(s.endswith(".A") or s.endswith(".B") for s in rep.skipped)
+
+
+def test_packs_a_block_rams_output_register_only_where_a_plain_register_follows(netlists):
+    """Three read ports of one memory (three DP16KD): the one into a plain register gets
+    ``REGMODE = "OUTREG"`` and loses its 16 flip-flops; the register with an enable and the
+    read into logic stay as they are (named in ``skipped``)."""
+    _, plain, packed, rep = netlists
+    rams = _cells(packed, "DP16KD")
+    assert rep.block_rams == len(rams) == 3
+    modes = sorted((c["parameters"].get("REGMODE_A"), c["parameters"].get("REGMODE_B"))
+                   for c in rams.values())
+    assert sum(m.count("OUTREG") for m in modes) == rep.ram_outputs_packed == 1
+    assert rep.ram_ffs_removed == 16
+    assert sum(s.startswith("mem") and ".DO" in s for s in rep.skipped) == 2
+    packed_ram = next(c for c in rams.values() if "OUTREG" in c["parameters"].values())
+    side = "A" if packed_ram["parameters"]["REGMODE_A"] == "OUTREG" else "B"
+    assert packed_ram["connections"][f"OCE{side}"] == ["1"]
 
 
 def test_packed_netlist_equals_yosys_netlist_every_cycle(netlists):
     d, *_ = netlists
     rng = random.Random(7)
     n = 400
+    # addresses from a few words, so reads meet recent writes (also in the same cycle)
     stim = [(rng.randrange(-2 ** 15, 2 ** 15), rng.randrange(-2 ** 15, 2 ** 15),
-             rng.randrange(2)) for _ in range(n)]
-    vec = "\n".join(f"      a = {a}; b = {b}; en = {e}; @(posedge clk); #1 check();"
-                    for a, b, e in stim)
+             rng.randrange(2), rng.randrange(8), rng.randrange(8)) for _ in range(n)]
+    vec = "\n".join(f"      a = {a}; b = {b}; en = {e}; wa = {w}; ra = {r}; @(posedge clk); "
+                    f"#1 check();" for a, b, e, w, r in stim)
     (d / "tb.v").write_text(f"""
 `timescale 1ns/1ps
 module tb;
   reg clk = 0, rst = 0, en = 0;
   reg signed [15:0] a = 0, b = 0;
+  reg [9:0] wa = 0, ra = 0;
   wire [31:0] p0, q0, r0, p1, q1, r1;
-  wire [15:0] s0, s1;
+  wire [15:0] s0, s1, m10, m11, m20, m21, m30, m31;
+  integer reads = 0;
   integer errors = 0, checks = 0;
   always #5 clk = ~clk;
   plain_top u0(.clk(clk), .rst(rst), .a(a), .b(b), .en(en), .p(p0), .q(q0), .r(r0),
-               .a_seen(s0));
+               .a_seen(s0), .wa(wa), .ra(ra), .m1(m10), .m2(m20), .m3(m30));
   packed_top u1(.clk(clk), .rst(rst), .a(a), .b(b), .en(en), .p(p1), .q(q1), .r(r1),
-                .a_seen(s1));
+                .a_seen(s1), .wa(wa), .ra(ra), .m1(m11), .m2(m21), .m3(m31));
   task check; begin
     checks = checks + 1;
-    if (p0 !== p1 || q0 !== q1 || r0 !== r1 || s0 !== s1) begin
+    if (m10 != 0) reads = reads + 1;
+    if (p0 !== p1 || q0 !== q1 || r0 !== r1 || s0 !== s1 || m10 !== m11 || m20 !== m21
+        || m30 !== m31) begin
       errors = errors + 1;
       if (errors < 5) $display("MISMATCH t=%0t p %h/%h q %h/%h r %h/%h", $time, p0, p1,
                                q0, q1, r0, r1);
@@ -170,7 +265,7 @@ module tb;
   initial begin
     @(posedge clk); @(posedge clk); #1;
 {vec}
-    $display("CHECKS %0d ERRORS %0d", checks, errors);
+    $display("CHECKS %0d ERRORS %0d READS %0d", checks, errors, reads);
     $finish;
   end
 endmodule
@@ -181,6 +276,8 @@ endmodule
     assert comp.returncode == 0, comp.stderr[-2000:]
     run = subprocess.run(["vvp", "-n", "sim.vvp"], cwd=d, capture_output=True, text=True)
     assert f"CHECKS {n} ERRORS 0" in run.stdout, run.stdout[-2000:]
+    # the packed read port returned written words (not only the RAM's initial zeros)
+    assert int(run.stdout.split("READS ")[1].split()[0]) > n // 4, run.stdout[-500:]
 
 
 def _hand_netlist(a_clock: int, p_clock: int) -> dict:

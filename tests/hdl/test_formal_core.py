@@ -8,9 +8,9 @@ from cuneate.hdl.izhikevich import IzhikevichConfig
 
 
 def _cfg():
-    # the smallest core: 5 neurons for a 5-stage pipeline, so back-to-back sweeps read a
-    # neuron one cycle after its write-back
-    return IzhikevichConfig(n_neurons=5, clock_hz=5 * 16e3, update_hz=16e3,
+    # the smallest core: 6 neurons for a 5-stage pipeline, so back-to-back sweeps read a
+    # neuron's memories (a cycle ahead of its fetch) as its registered write-back lands
+    return IzhikevichConfig(n_neurons=6, clock_hz=6 * 16e3, update_hz=16e3,
                             tick_source="external")
 
 

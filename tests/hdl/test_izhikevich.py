@@ -37,8 +37,14 @@ from cuneate.sim.engines.amaranth import simulate
     ({"pipeline_stages": 4}, "pipeline_stages must be one of 5, 6, 7, 8"),
     ({"pipeline_stages": 9}, "pipeline_stages"),
     ({"pipeline_stages": True}, "pipeline_stages"),
-    ({"n_neurons": 7, "clock_hz": 16e3 * 7, "pipeline_stages": 8}, "n_neurons must be an "
-                                                                     "integer >= 8"),
+    ({"n_neurons": 8, "clock_hz": 16e3 * 8, "pipeline_stages": 8}, "n_neurons must be an "
+                                                                     "integer >= 9"),
+    ({"n_neurons": 5, "clock_hz": 16e3 * 5}, r"n_neurons must be an integer >= 6 \(the "
+                                             r"pipeline depth \+ 1"),
+    ({"bram_shapes": ((1000, 18),)}, "each depth a power of two"),
+    ({"bram_shapes": ()}, "bram_shapes must be"),
+    ({"bram_shapes": ((1024, 0),)}, "bram_shapes must be"),
+    ({"bram_shapes": "DP16KD"}, "bram_shapes must be"),
 ])
 def test_config_refuses_what_cannot_hold(kwargs, match):
     with pytest.raises(ConfigError, match=match):
@@ -276,12 +282,13 @@ def test_rtl_matches_twin_every_update_amaranth():
 
 @pytest.mark.parametrize("depth", PIPELINE_STAGES[1:])
 def test_deeper_pipelines_match_the_twin_every_update_amaranth(depth):
-    """Every deeper pipeline on its smallest core (back-to-back sweeps: a neuron is fetched
-    again ``depth`` cycles after its previous fetch, the cycle after its write-back) gives the
-    twin's updates, with host writes in flight."""
-    cfg = IzhikevichConfig(n_neurons=depth, clock_hz=16e3 * depth,
+    """Every deeper pipeline on its smallest core (back-to-back sweeps: a neuron's memories
+    are read again, a cycle ahead of its fetch, as its registered write-back lands: the
+    bypass) gives the twin's updates, with host writes in flight."""
+    n = depth + 1
+    cfg = IzhikevichConfig(n_neurons=n, clock_hz=16e3 * n,
                            param_sets=("RS", "IB", "CH", "FS"),
-                           neuron_sets=[i % 4 for i in range(depth)], spike_fifo_depth=32,
+                           neuron_sets=[i % 4 for i in range(n)], spike_fifo_depth=32,
                            pipeline_stages=depth)
     assert cfg.to_dict()["latency_cycles"] == depth
     rec = _run_rtl(cfg, 120, np.random.default_rng(depth))
@@ -448,3 +455,52 @@ def test_host_parameter_set_write_takes_effect_from_the_next_fetch():
         v, u = out["v"], out["u"]
     # and the switch made a difference: neuron 3 now differs from its RS neighbours
     assert ups[-1, 3, 1] != ups[-1, 2, 1] or ups[-1, 3, 2] != ups[-1, 2, 2]
+
+
+@pytest.mark.parametrize("depth", [PIPELINE_DEPTH, max(PIPELINE_STAGES)])
+def test_banked_memories_with_host_writes_every_cycle_amaranth(depth):
+    """Memories split into banks (block shape forced to 8 deep: 21 neurons in 3 banks, the
+    last padded), read a cycle ahead into registers, the state's write registered: in
+    back-to-back sweeps with a host write in every cycle (so writes land in the cycle before
+    a neuron's fetch, in its fetch cycle and after), every update uses the current last
+    written before its fetch cycle - the contract of a plain synchronous read at the fetch -
+    and equals the twin from the neuron's previous update."""
+    N = 21
+    cfg = IzhikevichConfig(n_neurons=N, clock_hz=16e3 * N, param_sets=("RS", "FS"),
+                           neuron_sets=[i % 2 for i in range(N)], pipeline_stages=depth,
+                           spike_fifo_depth=64, bram_shapes=((8, 64),))
+    dut = IzhikevichCore(cfg)
+    rng = np.random.default_rng(depth)
+    writes, ups = [], []
+    cycles = 40 * N
+
+    async def bench(ctx):
+        ctx.set(dut.spike_ready, 1)
+        for c in range(cycles):
+            n, raw = int(rng.integers(N)), int(cfg.I.to_raw(rng.uniform(-5.0, 150.0)))
+            ctx.set(dut.i_wr_en, 1)
+            ctx.set(dut.i_wr_addr, n)
+            ctx.set(dut.i_wr_data, raw)
+            writes.append((c, n, raw))
+            await ctx.tick()
+            if ctx.get(dut.upd_valid):          # seen in cycle c + 1
+                ups.append((c + 1, ctx.get(dut.upd_index), ctx.get(dut.upd_v),
+                            ctx.get(dut.upd_u), ctx.get(dut.upd_current)))
+
+    simulate(dut, bench)
+    assert len(ups) >= 30 * N
+    twin = IzhikevichTwin(cfg)
+    v = np.array(cfg.v_init_raw, dtype=np.int64)
+    u = np.array(cfg.u_init_raw, dtype=np.int64)
+    last_write = {}
+    k = 0
+    for cyc, idx, rv, ru, ri in ups:
+        fetch = cyc - depth
+        while k < len(writes) and writes[k][0] <= fetch - 1:
+            last_write[writes[k][1]] = writes[k][2]
+            k += 1
+        assert ri == last_write.get(idx, 0), (cyc, idx)
+        out = twin.update(v[idx:idx + 1], u[idx:idx + 1], np.array([ri]),
+                          np.array([cfg.neuron_sets[idx]]))
+        assert (rv, ru) == (int(out["v"][0]), int(out["u"][0])), (cyc, idx)
+        v[idx], u[idx] = rv, ru

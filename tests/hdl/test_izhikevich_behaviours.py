@@ -201,7 +201,7 @@ def test_behaviour_rtl_every_update_equals_twin(letter):
     and accommodation (u-equation a b (v + 65)): the RTL equals the twin on every update of
     the published stimulus (accommodation: its first 60 ms)."""
     b = BEHAVIOURS[letter]
-    cfg = core_config(b, n=5)
+    cfg = core_config(b, n=6)
     I = b.schedule(DT)[: int(60 / DT)] if letter == "R" else b.schedule(DT)
     rec = _run_rtl_schedule(cfg, I)
     twin = IzhikevichTwin(cfg)

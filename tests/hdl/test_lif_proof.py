@@ -9,7 +9,8 @@ from cuneate.hdl.lif.formal_core import MUTANTS, LifCoreProof, lif_proof_config,
 
 EXPECTED = {
     "skipped_write": ("memory_state_mem_tracked_word", 6),
-    "stage_off_by_one": ("tracked_update_upd_v", 7),    # stage 4's v is the previous neuron's
+    # stage 4's v is the previous neuron's: the update written back is wrong
+    "stage_off_by_one": ("memory_state_mem_tracked_word", 7),
     "late_host_write": ("memory_cur_mem_tracked_word", 1),
     "tag_off_by_one": ("stage_5_neuron", 5),
 }

@@ -84,9 +84,10 @@ CASES = [
     ("sweep-1e9-ms", ["sweep", "--battery", "yardstick", "--duration-ms", "1e9",
                       "--scheduler", "sync", "--out", "{tmp}/o"], {},
      2, "more than the limit of 60 min"),
-    ("sweep-pack-dsp-without-fmax", ["sweep", "--battery", "yardstick", "--pack-dsp",
-                                     "--scheduler", "sync", "--out", "{tmp}/o"], {},
-     2, "--pack-dsp: packs the netlist that --fmax places and routes"),
+    ("sweep-pack-registers-without-fmax", ["sweep", "--battery", "yardstick",
+                                           "--pack-registers", "--scheduler", "sync", "--out",
+                                           "{tmp}/o"], {},
+     2, "--pack-registers: packs the netlist that --fmax places and routes"),
     ("lif-quantization-1e5", ["lif", "quantization", "--inputs", "100000", "--neurons",
                               "100000"], {}, 2, "of memory, more than"),
     # --- divergence, files, tools, schedulers: one line, exit 2

@@ -7,7 +7,7 @@ enough to reach the extremes: the full-scale case holds the default formats at +
 (u reaches its ceiling, then the flip drives v to its deepest transient) with no clamp acting;
 the clamp case narrows the formats (saturation="flag") so that every clamp kind acts, and checks
 the flags, counters and sticky bits. Every pipeline depth (``pipeline_stages``) runs on its
-smallest core with back-to-back sweeps (a neuron's next read one cycle after its write-back)
+smallest core with back-to-back sweeps (a neuron's next read as its write-back lands)
 and host writes in flight; the deepest also with every clamp acting.
 """
 
@@ -49,14 +49,16 @@ CASES = {
                "sweeps": 400, "current_range": [-512.0, 511.99609375],
                "writes_per_sweep": 0.25},
 }
-# every pipeline depth on its smallest core with back-to-back sweeps (a neuron is read again
-# n_neurons = depth cycles after its fetch, the cycle after its write-back lands), host writes
-# in flight; the deepest depth also with every clamp kind acting
+# every pipeline depth on its smallest core with back-to-back sweeps (n_neurons = depth + 1:
+# a neuron's memories are read again, a cycle ahead of its fetch, as its registered
+# write-back lands, the write bypassed into the read), host writes in flight; the deepest
+# depth also with every clamp kind acting
 for _depth in PIPELINE_STAGES:
     CASES[f"depth{_depth}_back_to_back"] = {
-        "core": {"n_neurons": _depth, "clock_hz": 16e3 * _depth, "update_hz": 16e3,
+        "core": {"n_neurons": _depth + 1, "clock_hz": 16e3 * (_depth + 1), "update_hz": 16e3,
                  "param_sets": ["RS", "IB", "CH", "FS", "LTS", "RZ"][:_depth],
-                 "neuron_sets": [i % 6 for i in range(_depth)], "spike_fifo_depth": 64,
+                 "neuron_sets": [i % _depth for i in range(_depth + 1)],
+                 "spike_fifo_depth": 64,
                  "pipeline_stages": _depth},
         "sweeps": 600, "current_range": [-5.0, 120.0], "writes_per_sweep": 1.5}
 CASES[f"depth{max(PIPELINE_STAGES)}_clamps"] = dict(

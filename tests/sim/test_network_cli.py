@@ -45,10 +45,10 @@ def test_simulate_network_json_contract_and_engines_agree(capsys):
 
 def test_changing_currents_are_written_before_their_tick():
     det = dict(n_sources=2, n_targets=1, delays_ticks=[[0, 2]], max_delay_ticks=4)
-    cfg = NetworkConfig(n_afferents=5, detector=det, clock_hz=16e3 * 64,
+    cfg = NetworkConfig(n_afferents=6, detector=det, clock_hz=16e3 * 64,
                         tick_source="external")
     n = 500
-    cur = np.zeros((n, 5))
+    cur = np.zeros((n, 6))
     cur[100:, 0] = 40.0                    # afferent 0 switched on at tick 100
     cur[150:, 1] = 40.0
     w = current_writes(cfg, cur)
