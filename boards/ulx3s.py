@@ -7,13 +7,13 @@ a UART rate the FT231X can produce: 3750 cycles per 16 kHz sweep (up to 3750 neu
 clocks per bit at 3 Mbaud. (48 MHz, which would give 3000 cycles and 16 clocks per bit, needs
 an input divider of 25, below the PLL's 3.125 MHz phase-detector minimum.)
 
-A second plan, 90 MHz (25 / 5 * 18, VCO 540 MHz), gives 5625 cycles per sweep and 30 clocks per
-bit at 3 Mbaud: the sizing takes it when the measured fmax allows (the core's out of context on
-the LFE5U-85F -6, lowest of three placement seeds, and the host link's in a board build, less
-the sizing's 10 % margin). Today the filled device rules it out: with the link's frame checks
-pipelined, the 40 000-neuron depth-8 build reaches 80.0 MHz, its critical paths the cores'
-block-RAM reads routed across a device whose block RAMs are 93 % used (the link alone places
-at 114.5 MHz or more out of context, seeds 1-3).
+A second plan, 70 MHz (25 / 5 * 14, VCO 560 MHz), gives 4375 cycles per sweep (cores of 4096,
+the 2048 x 9 block shape's depth: 10 of them, 40 960 neurons, fill the block RAM); 3 Mbaud
+would be 23.3 clocks a bit, so its line runs at 2 Mbaud (35 clocks). A third, 90 MHz (25 / 5 *
+18, VCO 540 MHz), gives 5625 cycles per sweep and 30 clocks per bit at 3 Mbaud: the sizing
+takes a plan when the measured fmax allows (the core's out of context on the LFE5U-85F -6,
+lowest of three placement seeds, and the filled board build's, less the sizing's 10 %
+margin). The filled device rules 90 MHz out: the 40 960-neuron build reaches 90.5 MHz.
 """
 
 from __future__ import annotations
@@ -80,15 +80,14 @@ TARGET = {
                      _pll(5, 14, 8, 70.0)),
                     (ClockPlan(osc_hz=25e6, clock_hz=90e6, update_hz=16e3, baud=3e6),
                      _pll(5, 18, 6, 90.0))],
-    # fmax (MHz) of one core by pipeline depth: out of context, lowest of seeds 1-3
-    # (docs/architecture.md); the TRELLIS_COMB cells of one core and of the link
-    "fmax_mhz": {5: 90.9, 8: 108.7},
-    # the host link's fmax in a board build: the whole build's, 80.0 MHz in the 40 000-neuron
-    # depth-8 build (seed 1). The link's own paths are not critical there (a core's block-RAM
-    # read into its stage-3 registers, over 6 ns of routing, is), so this is a lower bound on
-    # the link's; it stands as the bound because the out-of-context core fmax above does not
-    # see the block RAMs spread over the filled device
-    "link_fmax_mhz": 80.0,
+    # fmax (MHz) of one core by pipeline depth: out of context with its block-RAM and
+    # multiplier registers packed, lowest of seeds 1-3 (docs/architecture.md); the
+    # TRELLIS_COMB cells of one core and of the link
+    "fmax_mhz": {5: 106.0, 8: 121.7},
+    # the fmax of a filled board build (the link and 10 cores of 4096 at depth 5, 194 of 208
+    # block RAMs, seed 1): the bound for any build, since the out-of-context core fmax above
+    # does not see the block RAMs spread over the filled device
+    "link_fmax_mhz": 90.4,
     "logic_per_core": 1900, "logic_link": 3000,
     "nextpnr_cells": {"LUT": "TRELLIS_COMB", "FF": "TRELLIS_FF", "BRAM": "DP16KD",
                       "DSP": "MULT18X18D"},

@@ -63,7 +63,7 @@ class NetworkConfig:
         N = self.n_afferents
         if not isinstance(N, (int, np.integer)) or N < min_neurons():
             raise ConfigError(f"n_afferents must be an integer >= {min_neurons()} (the core's "
-                              f"smallest core: its pipeline depth + 1), got {N!r}")
+                              f"smallest: its pipeline depth + 1), got {N!r}")
         det = dict(self.detector)
         for k in ("clock_hz", "update_hz", "tick_source"):
             if k in det:

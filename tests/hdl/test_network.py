@@ -21,7 +21,7 @@ def _cfg(**kw):
 
 
 @pytest.mark.parametrize("kw,expect", [
-    (dict(n_afferents=3), "n_afferents must be an integer >= 5"),
+    (dict(n_afferents=3), "n_afferents must be an integer >= 6"),
     (dict(detector=DET | {"n_sources": 8, "delays_ticks": None, "weights": None}),
      "the detector's 8 sources from afferent 0 on do not fit the core's 6 afferents"),
     (dict(first_source=3), "the detector's 4 sources from afferent 3 on do not fit"),

@@ -46,9 +46,9 @@ def test_the_board_network_link_carries_both_populations_and_one_batch_a_millise
 
 def test_a_linked_network_refuses_a_link_that_does_not_fit_it():
     net, lc = board_network_config(NETWORK)
-    with pytest.raises(ConfigError, match="spike_ids = 8, not 5"):
+    with pytest.raises(ConfigError, match="spike_ids = 9, not 6"):
         LinkedNetwork(net, LinkConfig(net.core, batch_sweeps=16))
-    with pytest.raises(ConfigError, match="spike_ids must be an integer in 5..65536"):
+    with pytest.raises(ConfigError, match="spike_ids must be an integer in 6..65536"):
         LinkConfig(net.core, spike_ids=4)
 
 

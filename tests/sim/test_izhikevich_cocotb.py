@@ -57,7 +57,7 @@ for _depth in PIPELINE_STAGES:
     CASES[f"depth{_depth}_back_to_back"] = {
         "core": {"n_neurons": _depth + 1, "clock_hz": 16e3 * (_depth + 1), "update_hz": 16e3,
                  "param_sets": ["RS", "IB", "CH", "FS", "LTS", "RZ"][:_depth],
-                 "neuron_sets": [i % _depth for i in range(_depth + 1)],
+                 "neuron_sets": [i % min(_depth, 6) for i in range(_depth + 1)],
                  "spike_fifo_depth": 64,
                  "pipeline_stages": _depth},
         "sweeps": 600, "current_range": [-5.0, 120.0], "writes_per_sweep": 1.5}

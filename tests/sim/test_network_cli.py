@@ -94,7 +94,7 @@ def test_generate_network(capsys, tmp_path):
     (["simulate", "network", "--engine", "fixed", "--current", "1e6"],
      "outside the core's accepted range"),
     (["generate", "network", "--out", "/tmp/x", "--afferents", "3"],
-     "n_afferents must be an integer >= 5"),
+     "n_afferents must be an integer >= 6"),
 ])
 def test_network_refusals_exit_2_with_one_line(capsys, argv, match):
     rc = main(argv)
