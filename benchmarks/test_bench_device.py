@@ -1,8 +1,8 @@
 """The limit table: per device and pipeline depth, the bounds on neurons at 16 kHz (block RAM,
 multipliers, fmax; :func:`cuneate.boards.sizing.limits`), the largest count the sizing
 accepts, and what a real build reaches (place and route with the open tools where the device
-has them: the ULX3S at its largest depth-8 count, the iCEBreaker at its largest count), as a
-fraction of the tightest bound. Prints the table and writes
+has them: the ULX3S at its largest count at the deepest depth, the iCEBreaker at its largest
+count), as a fraction of the tightest bound. Prints the table and writes
 ``benchmarks/results/device_limits.json``; asserts only that each build ran."""
 
 from __future__ import annotations

@@ -83,7 +83,7 @@ TARGET = {
     # fmax (MHz) of one core by pipeline depth: out of context with its block-RAM and
     # multiplier registers packed, lowest of seeds 1-3 (docs/architecture.md); the
     # TRELLIS_COMB cells of one core and of the link
-    "fmax_mhz": {5: 106.0, 8: 121.7},
+    "fmax_mhz": {5: 109.4, 8: 134.6, 9: 163.4},
     # the fmax of a filled board build (the link and 10 cores of 4096 at depth 5, 194 of 208
     # block RAMs, seed 1): the bound for any build, since the out-of-context core fmax above
     # does not see the block RAMs spread over the filled device

@@ -50,8 +50,7 @@ from ..lib.fixed import FixedConstant, FixedPointError, QFormat, round_shift
 from .range import RangeSearchError, one_step_bound, reachable_ranges
 
 __all__ = ["ConfigError", "IzhikevichConfig", "PIPELINE_DEPTH", "PIPELINE_STAGES", "PIPELINE_CUTS",
-           "min_neurons",
-           "CLAMP_KINDS", "SATURATION", "NARROW_STATE_RATIO"]
+           "PIPELINE_READ", "min_neurons", "CLAMP_KINDS", "SATURATION", "NARROW_STATE_RATIO"]
 
 #: How many times the default formats' per-update state rounding a configuration may take
 #: before it warns (2**8: eight fraction bits fewer than the default's).
@@ -62,15 +61,19 @@ PIPELINE_DEPTH = 5      # the default (the reference core's): fetch, read, 3 dat
 #: .STEPS`: 0 operands, 1 multiply 1, 2 align, 3 multiply 2, 4 sums; step 5, select, ends in
 #: the write-back) for each ``pipeline_stages``: each added stage adds the cut that shortens
 #: the longest remaining path (see :mod:`cuneate.hdl.izhikevich.core`).
-PIPELINE_CUTS = {5: (2, 3), 6: (2, 3, 4), 7: (1, 2, 3, 4), 8: (0, 1, 2, 3, 4)}
+PIPELINE_CUTS = {5: (2, 3), 6: (2, 3, 4), 7: (1, 2, 3, 4), 8: (0, 1, 2, 3, 4),
+                 9: (0, 1, 2, 3, 4)}
+#: Stages from a fetch to its memories' words: 1 read a cycle ahead (the next address), 2 read
+#: from the fetch's register, the host's writes registered too (:mod:`cuneate.hdl.lib.banked`).
+PIPELINE_READ = {5: 1, 6: 1, 7: 1, 8: 1, 9: 2}
 #: The pipeline depths offered (``pipeline_stages``).
 PIPELINE_STAGES = tuple(PIPELINE_CUTS)
 
 
 def min_neurons(pipeline_stages: int = PIPELINE_DEPTH) -> int:
-    """The fewest neurons a core of this depth holds: its memories are read a cycle ahead of
-    a neuron's fetch and its write-back lands a cycle after the last stage, so a neuron must
-    be read again no sooner than ``depth + 1`` cycles after its fetch."""
+    """The fewest neurons a core of this depth holds: a neuron's write-back lands ``depth``
+    cycles after its fetch and must be in its memory by its next fetch (read a cycle ahead,
+    it lands as the word is sampled and is bypassed into it)."""
     return pipeline_stages + 1
 CLAMP_KINDS = ("v_low", "u_high", "u_low", "current", "y")
 _REL = 2.0 ** -12          # largest relative representation error accepted for a constant
@@ -129,7 +132,8 @@ class IzhikevichConfig(CoreOptions):
         cuts of the same datapath (the arithmetic does not change); a neuron's state is read
         again at the earliest ``n_neurons`` cycles after its fetch, its memories are read a
         cycle ahead of the fetch (a write landing then is bypassed) and its write-back is
-        registered before the RAM, so ``n_neurons`` must be at least the depth + 1.
+        registered before the RAM, so ``n_neurons`` must be at least the depth + 1 (depth 9
+        reads them at the fetch instead, a stage later: :data:`PIPELINE_READ`).
     bram_shapes
         ``(depth, width)`` modes of the target's block RAM (default the ECP5 DP16KD's): the
         memories are built in banks of the best shape, each bank's word registered beside its
@@ -206,12 +210,11 @@ class IzhikevichConfig(CoreOptions):
                               f"{', '.join(map(str, PIPELINE_STAGES))}, got {D!r}")
         self.pipeline_stages = D = int(D)
         self.cuts = PIPELINE_CUTS[D]
+        self.read_stages = PIPELINE_READ[D]
         if not isinstance(N, (int, np.integer)) or N < min_neurons(D):
-            raise ConfigError(f"n_neurons must be an integer >= {min_neurons(D)} (the pipeline "
-                              f"depth "
-                              f"+ 1; a neuron's registered write-back must land by the time "
-                              f"its memories are read again, a cycle ahead of its fetch), got "
-                              f"{N!r}")
+            raise ConfigError(f"n_neurons must be an integer >= {min_neurons(D)} at pipeline "
+                              f"depth {D} (a neuron's registered write-back must land by the "
+                              f"time its memories are read again), got {N!r}")
         shapes = block_shapes(self.bram_shapes)
         if shapes is None:
             raise ConfigError(f"bram_shapes must be (depth, width) pairs of positive integers, "

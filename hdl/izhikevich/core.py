@@ -28,7 +28,7 @@ __all__ = ["IzhikevichCore", "izhikevich_verilog", "generate_izhikevich"]
 
 class IzhikevichCore(wiring.Component):
     """Time-multiplexed Izhikevich core: one neuron update per clock, a pipeline of
-    ``config.pipeline_stages`` stages (5 by default, up to 8).
+    ``config.pipeline_stages`` stages (5 by default, up to 9).
 
     Pipeline (a neuron's index enters at cycle t; its result is on ``upd_*`` at t + D, D the
     depth):
@@ -36,38 +36,47 @@ class IzhikevichCore(wiring.Component):
     1. **Fetch** - the sweep counter issues the neuron; its memories (state v, u; current;
        set) were addressed in the cycle before (``next_addr``), in banks of the block RAM's
        shape (:mod:`cuneate.hdl.lib.banked`), each bank's word registered beside its RAM.
-    2. **Read** - bank multiplexer and write bypass into the stage-3 registers (``v3``,
-       ``u3``, ``i3``, ``sel3``); at depths 5-7 the operands step too, registered with them.
+       At depth 9 they are addressed now, from the fetch's register (``addr``), and the
+       host's writes are registered before their RAMs: the words come a stage later
+       (:data:`~cuneate.hdl.izhikevich.config.PIPELINE_READ`), the address pins start at a
+       register.
+    2. **Read** (2 and 3 at depth 9) - bank multiplexer and write bypass into the first
+       datapath stage's registers (``v3``, ``u3``, ``i3``, ``sel3``; ``v4`` ... at depth 9);
+       at depths 5-7 the operands step too, registered with them.
     3. .. D. **Datapath** - the steps of :data:`~cuneate.hdl.izhikevich.datapath.STEPS`
        (0 operands, 1 multiply 1, 2 align, 3 multiply 2, 4 sums, 5 select), with a register
        after each step listed in ``config.cuts`` (:data:`~cuneate.hdl.izhikevich.config
        .PIPELINE_CUTS`):
 
        ======  ===================================================  ==========================
-       depth   stages 3 .. D (operands in stage 2 unless cut 0)     cuts (after step)
+       depth   datapath stages (operands in the read stage unless   cuts (after step)
+               cut 0)
        ======  ===================================================  ==========================
        5       multiply1+align | multiply2 | sums+select            2, 3
        6       multiply1+align | multiply2 | sums | select          2, 3, 4
        7       multiply1 | align | multiply2 | sums | select        1, 2, 3, 4
        8       operands | multiply1 | align | multiply2 | sums |sel 0, 1, 2, 3, 4
+       9       as 8, after two read stages                          0, 1, 2, 3, 4
        ======  ===================================================  ==========================
 
        Every multiplier takes registers (floors: slices, no adder in front) and is followed
-       by at most one operand-wide adder (at depth 8 by none). The last stage registers the
-       new state's write (it lands in the RAM a cycle later) and ``upd_*``. Measured out of
-       context on the LFE5U-85F -6 with the block RAMs' and multipliers' registers packed
-       (docs/architecture.md): depth 5 at 106-111 MHz, depth 8 at 122-130 MHz.
+       by at most one operand-wide adder (at depths 8 and 9 by none). The last stage
+       registers the new state's write (it lands in the RAM a cycle later) and ``upd_*``.
+       Measured out of context on the LFE5U-85F -6 with the block RAMs' and multipliers'
+       registers packed (docs/architecture.md, three placement seeds each).
 
     **Registers and hazards.** A value computed in stage ``s`` and still read later is
     registered at each cut as ``<name><s+1>`` (reset-less: data registers; the valid bit,
     index and sweep number of each stage are the tags ``valid<s>``, ``idx<s>``, ``swp<s>``
     of :func:`~cuneate.hdl.lib.bookkeeping.pipeline_tags`, with reset). The neuron in stage
     ``s`` at cycle ``c`` is the one fetched at ``c - s + 1``; its memories are sampled at the
-    end of the cycle before its fetch, a write landing then replaced by the bypass, so an
-    update sees the memories as they are in its fetch cycle. Its state's write is issued in
+    end of the cycle before its fetch (at depth 9: of the fetch, every write landing a cycle
+    later), a write landing then replaced by the bypass, so an update sees the memories as
+    they are in its fetch cycle. Its state's write is issued in
     stage D (cycle ``fetch + D - 1``) and lands a cycle later; the next sample of that neuron,
-    at the earliest ``n_neurons - 1`` cycles after its fetch (back-to-back sweeps), sees it
-    when ``n_neurons >= D + 1`` (the configuration refuses less). The host writes only the
+    at the earliest ``n_neurons - 1`` cycles after its fetch (back-to-back sweeps; at depth 9
+    ``n_neurons``), sees it when ``n_neurons >= D + 1`` (at depth 9 ``D``; the configuration
+    refuses less, :func:`~cuneate.hdl.izhikevich.config.min_neurons`). The host writes only the
     current and set memories, which the pipeline never writes: a neuron's current and set are
     read once, at its fetch, and travel with it.
 
@@ -132,24 +141,29 @@ class IzhikevichCore(wiring.Component):
         # the memories are read one cycle ahead of the fetch into registers beside the block
         # RAMs (hdl/lib/banked.py), a write landing with the read bypassed (n_neurons >= D + 1:
         # a neuron's registered write-back lands at the latest then)
-        st_rd, st_wr, cur_rd, sel_rd = core_memories(m, self, cfg, V.width + U.width,
-                                                     init_state,
-                                                     state_attrs={"no_rw_check": 1},
-                                                     prefetch=issue.next_addr)
+        # (depth 9: read at the fetch from its registered address, the host's writes
+        # registered too - the words come a stage later, PIPELINE_READ)
+        ahead = cfg.read_stages == 1
+        st_rd, st_wr, cur_rd, sel_rd = core_memories(
+            m, self, cfg, V.width + U.width, init_state, state_attrs={"no_rw_check": 1},
+            prefetch=issue.next_addr if ahead else issue.addr, host_write_register=not ahead)
         tags = pipeline_tags(m, N, cfg.sweep_number_width, issue, last_stage=D)
         tD = tags[D]
 
         reg = registrar(m, reset_less=True)
 
-        # --- stage 2: the banks' registered words (bank multiplexer, host-write bypass) -----
+        # --- stage 2 (3): the banks' registered words (bank multiplexer, host-write bypass) --
+        s0 = 2 + cfg.read_stages           # the first datapath stage
         words = {"v": st_rd.data[:V.width].as_signed(), "u": st_rd.data[V.width:].as_signed(),
                  "i": cur_rd.data, "sel": sel_rd.data}
-        vals = {k: reg(k, x, 3) for k, x in words.items()}
-        t3 = tags[3]
+        vals = {k: reg(k, x, s0) for k, x in words.items()}
+        t0 = tags[s0]
         # what an update starts from, for the formal harness (hdl/izhikevich/formal.py)
-        self.probes = {"valid": t3[0], "index": t3[1], **{k: vals[k] for k in vals},
-                       "latency": D - 2}
+        self.probes = {"valid": t0[0], "index": t0[1], **{k: vals[k] for k in vals},
+                       "latency": D - s0 + 1}
         self.state_write_lag = 1            # the state's write is registered before its RAM
+        # the memories sample at the end of the fetch cycle (depth 9) or of the one before
+        self.state_sample_lag = cfg.read_stages - 1
         if len(cfg.params) == 1:
             vals["sel"] = words["sel"] = 0
 
@@ -166,14 +180,14 @@ class IzhikevichCore(wiring.Component):
             step = datapath.STEPS[0]
             ops = step.fn(cfg, {n: words[n] for n in step.reads})
             live = live_after(0)
-            vals.update({n: (reg(n, x, 3) if is_hdl(x) else x)
+            vals.update({n: (reg(n, x, s0) if is_hdl(x) else x)
                          for n, x in ops.items() if n in live})
             first = 1
-        self.stages = {3: {n: x for n, x in vals.items() if is_hdl(x)}}
-        # --- stages 3 .. D: the datapath steps, registered at the cuts -------------------
+        self.stages = {s0: {n: x for n, x in vals.items() if is_hdl(x)}}
+        # --- stages s0 .. D: the datapath steps, registered at the cuts ------------------
         # the step functions are looked up in their module at elaboration, so a fault
         # injected there (tests) reaches the RTL and not the twin
-        stage = 3
+        stage = s0
         for k, step in enumerate(datapath.STEPS):
             if k < first:
                 continue

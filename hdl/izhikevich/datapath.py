@@ -260,9 +260,14 @@ def operand_step(cfg: IzhikevichConfig, x):
 
 def product1_step(cfg: IzhikevichConfig, x):
     """Step 1: the first multipliers, on registers: ``floor(w) (A dt)``, ``floor(v) b`` (and
-    ``(I - u) dt`` when dt is not a power of two)."""
+    ``(I - u) dt`` when dt is not a power of two); beside them ``vx = v + dt (I - u)`` when dt
+    is a power of two (the shifts' difference is ready), else ``vx = v``, so that each ``v`` sum
+    of the next step adds one constant."""
     out = {"pq": x["vs_w"] * x["ka"], "pb": x["vs_q"] * x["beta"]}
-    out["px"] = x["x"] * cfg.KDT.raw if cfg.dt_shift is None else x["x"]
+    if cfg.dt_shift is None:
+        out["px"], out["vx"] = x["x"] * cfg.KDT.raw, x["v"]
+    else:
+        out["px"], out["vx"] = x["x"], x["v"] + x["x"]
     return out
 
 
@@ -274,7 +279,7 @@ def align_step(cfg: IzhikevichConfig, x):
     joining the low bits), ``y = (b v - u) >> shift_y`` (clamped and flagged only where its format
     is narrowed) split into the operand ``y_hi`` and the low bits ``y_lo``, and the ``v`` sums
     ``v + dt (I - u) + K0`` pre-shifted (plain, less ``v_th``, less ``v_floor``)."""
-    v, sel, r = x["v"], x["sel"], cfg.rounding
+    sel, r = x["sel"], cfg.rounding
     sq = cfg.shift_q
     if cfg.q_split:
         # round(q) = (pq >> sq) + (q_inc >> sq) + qbit, qbit in 0..2 the carries of the
@@ -308,14 +313,15 @@ def align_step(cfg: IzhikevichConfig, x):
                                          cfg.bounds_y)
         borrow = 0
     if cfg.dt_shift is not None:
-        dx = x["px"]
+        vx = x["vx"]                    # v + dt (I - u), formed beside the first products
     else:
-        dx = round_shift(x["px"], cfg.X.frac_bits + cfg.KDT.frac_bits - cfg.V.frac_bits, r)
+        vx = x["vx"] + round_shift(x["px"], cfg.X.frac_bits + cfg.KDT.frac_bits -
+                                   cfg.V.frac_bits, r)
     half = (1 << (cfg.shift_p - 1)) if r == "nearest" else 0
     k0 = [c.raw for c in cfg.K0]
     sums = {}
     for name, off in (("vb", 0), ("vb_th", cfg.VTH.raw), ("vb_lo", cfg.v_floor_raw)):
-        sums[name] = ((v + dx + lookup([c - off for c in k0], sel)) << cfg.shift_p) + half
+        sums[name] = ((vx + lookup([c - off for c in k0], sel)) << cfg.shift_p) + half
     y_lo = (y[:k] if is_hdl(y) else y & ((1 << k) - 1)) if k else 0
     if cfg.y_borrow:        # the index of (y_lo - borrow) in _y_low_terms
         y_lo = (Cat(y_lo, borrow) if k else borrow) if is_hdl(y) else y_lo + (borrow << k)
@@ -447,8 +453,8 @@ class Step:
 #: the cuts ``IzhikevichConfig.cuts`` (after step ``k``).
 STEPS = (
     Step("operands", "operand_step", ("v", "u", "i", "sel")),
-    Step("multiply1", "product1_step", ("vs_w", "ka", "vs_q", "beta", "x")),
-    Step("align", "align_step", ("v", "sel", "pq", "q_inc", "pb", "uyp", "px")),
+    Step("multiply1", "product1_step", ("vs_w", "ka", "vs_q", "beta", "x", "v")),
+    Step("align", "align_step", ("vx", "sel", "pq", "q_inc", "pb", "uyp", "px")),
     Step("multiply2", "product2_step", ("u", "sel", "wq", "qq_f", "qbit", "y_hi", "y_lo",
                                       "alpha", "vb", "vb_th", "vb_lo")),
     Step("sums", "sum_step", ("p2", "m2", "vb", "vb_th", "vb_lo") + U_SUMS),

@@ -45,7 +45,7 @@ registers:
 The state RAM starts with **arbitrary contents** (its initial value is removed from the
 netlist), so every first update starts from any state the solver picks; ticks, host writes (any
 neuron, any time, any value), ``clamp_clear`` and ``spike_ready`` are free inputs. The state an
-update reads is taken at the core's stage-3 registers (``IzhikevichCore.probes``); the
+update reads is taken at the core's first datapath registers (``IzhikevichCore.probes``); the
 "state" property above ties it to the previous update's result, so together the checks say:
 every update's result is the one-step function of the previous result, the current and the
 set the contract gives it.
@@ -356,7 +356,7 @@ class _CoreVsOneStep(Elaboratable):
         i_ref, sel_ref = exp_cur[exp_idx], exp_sel[exp_idx]
 
         # one combinational step from the state the update read, computed in the cycle it is
-        # read (the stage-3 registers) and held until the result leaves (depth - 2 cycles)
+        # read (the first datapath registers) and held until the result leaves (probe latency)
         pv0, pi0, v0, u0, i0, sel0 = (probe[k] for k in ("valid", "index", "v", "u", "i", "sel"))
         sel_arg = sel0 if n_sets > 1 else 0
         o = reference_update(cfg, v0, u0, i0, sel_arg)

@@ -25,6 +25,14 @@ synchronous read port without moving any stage. Two things differ from a read at
   ``f + n_neurons``, so it needs ``n_neurons >= D`` (``D + 1`` with the register), the
   write landing with the read bypassed.
 
+**Read from the fetch's register** (the deepest pipelines): ``read_addr`` may instead be the
+fetch's own registered address. Every bank then samples at the end of ``f``, its word is
+valid in ``f + 2`` (a stage later) and the block RAMs' address pins are driven from a
+register, not from the issue's multiplexers. With every write registered too
+(``write_register``), such a memory samples and takes writes exactly a cycle later than one
+read ahead, so what an update sees is unchanged: a write issued in ``f - 1`` lands as the
+word is sampled and is bypassed into it, one issued in ``f`` lands after.
+
 Bank shape: the block shape (``(depth, width)`` of the device's block RAM, e.g. the DP16KD's
 :data:`DP16KD_SHAPES`) with the fewest whole blocks for the memory, the deeper on a tie (fewer
 banks); one bank of the memory's own depth when it fits a block's depth. The last bank is
@@ -77,9 +85,12 @@ class PrefetchedMemory:
     owner drives), ``banks`` (the :class:`~amaranth.lib.memory.Memory` of each bank) and
     ``bank_depth``."""
 
-    def __init__(self, data, wr_addr, wr_data, wr_en, banks, bank_depth):
+    def __init__(self, data, wr_addr, wr_data, wr_en, banks, bank_depth, pending=None):
         self.data, self.banks, self.bank_depth = data, banks, bank_depth
         self.wr_addr, self.wr_data, self.wr_en = wr_addr, wr_data, wr_en
+        #: ``(en, addr, data)`` of the registered write on its way to the RAM
+        #: (``write_register``), else None
+        self.pending = pending
 
 
 def prefetched_memory(m: Module, name: str, shape, depth: int, init, read_addr, shapes,
@@ -146,4 +157,5 @@ def prefetched_memory(m: Module, name: str, shape, depth: int, init, read_addr, 
                      hit_b.eq(hit_a), wd_b.eq(wd_a)]
         word = Mux(hit_b, wd_b, word)
     m.d.comb += data.eq(word)
-    return PrefetchedMemory(data, wr_addr, wr_data, wr_en, banks, bank_d)
+    pending = (ram_en, ram_addr, ram_data) if write_register else None
+    return PrefetchedMemory(data, wr_addr, wr_data, wr_en, banks, bank_d, pending)

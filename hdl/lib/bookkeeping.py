@@ -59,7 +59,8 @@ def core_ports(cfg, clamp_kinds, state_ports: dict, extra: dict | None = None) -
 
 
 def core_memories(m: Module, core, cfg, state_width: int, state_init: list,
-                  state_attrs: dict | None = None, prefetch=None):
+                  state_attrs: dict | None = None, prefetch=None,
+                  host_write_register: bool = False):
     """The per-neuron memories every core has: the state (``state_width`` bits, ``state_init``,
     ``state_attrs`` for synthesis), the host-written current and the parameter-set index, with
     the host write ports (``i_wr_*``, ``sel_wr_*``) wired. Returns the state read and write
@@ -72,16 +73,24 @@ def core_memories(m: Module, core, cfg, state_width: int, state_init: list,
     ``data``, valid in the cycle a synchronous read at the fetch would have it. The state's
     write is registered before its RAM and lands a cycle after it is issued, at the latest
     with the neuron's next read, a cycle ahead of its next fetch: ``n_neurons >= depth + 1``
-    (the core sets ``state_write_lag = 1``)."""
+    (the core sets ``state_write_lag = 1``).
+
+    ``prefetch`` may also be the issue's registered :attr:`SweepIssue.addr` (a read at the
+    fetch, addressed from a register: the words come a cycle later) with
+    ``host_write_register``: the host's writes are then registered before their RAMs too, so
+    that the memories sample and take writes a cycle later than with ``next_addr`` and an
+    update still sees them as they are in its fetch cycle. The read ports returned carry
+    ``pending``: ``(en, addr, data)`` of a write registered on its way to the RAM (None
+    without one), for a harness that observes the memories."""
     N = cfg.n_neurons
     if prefetch is not None:
         shapes = cfg.bram_shapes
         st = prefetched_memory(m, "state_mem", state_width, N, state_init, prefetch, shapes,
                                bypass=True, write_register=True, attrs=state_attrs)
         cur = prefetched_memory(m, "cur_mem", cfg.I.shape(), N, [], prefetch, shapes,
-                                bypass=True)
+                                bypass=True, write_register=host_write_register)
         sel = prefetched_memory(m, "sel_mem", cfg.sel_bits, N, cfg.neuron_sets, prefetch,
-                                shapes, bypass=True)
+                                shapes, bypass=True, write_register=host_write_register)
         m.d.comb += [
             cur.wr_addr.eq(core.i_wr_addr), cur.wr_data.eq(core.i_wr_data),
             cur.wr_en.eq(core.i_wr_en),
@@ -89,8 +98,9 @@ def core_memories(m: Module, core, cfg, state_width: int, state_init: list,
             sel.wr_en.eq(core.sel_wr_en),
         ]
         st_wr = SimpleNamespace(addr=st.wr_addr, data=st.wr_data, en=st.wr_en)
-        return (SimpleNamespace(data=st.data), st_wr, SimpleNamespace(data=cur.data),
-                SimpleNamespace(data=sel.data))
+        return (SimpleNamespace(data=st.data, pending=st.pending), st_wr,
+                SimpleNamespace(data=cur.data, pending=cur.pending),
+                SimpleNamespace(data=sel.data, pending=sel.pending))
     m.submodules.state_mem = state_mem = Memory(shape=state_width, depth=N, init=state_init,
                                                 attrs=state_attrs)
     m.submodules.cur_mem = cur_mem = Memory(shape=cfg.I.shape(), depth=N, init=[])
@@ -110,11 +120,12 @@ def core_memories(m: Module, core, cfg, state_width: int, state_init: list,
 class SweepIssue:
     """The issue counter's signals: ``start`` (a sweep starts this cycle), ``issuing``,
     ``addr`` (the neuron issued), ``sweep_no`` (the sweep's number), ``next_addr`` (what
-    ``addr`` holds in the next cycle: the address a memory read one cycle ahead takes)."""
+    ``addr`` holds in the next cycle: the address a memory read one cycle ahead takes),
+    ``inc`` and ``at_last`` (registers kept equal to ``addr + 1`` and ``addr == N - 1``)."""
 
-    def __init__(self, start, issuing, addr, sweep_no, next_addr):
+    def __init__(self, start, issuing, addr, sweep_no, next_addr, inc=None, at_last=None):
         self.start, self.issuing, self.addr, self.sweep_no = start, issuing, addr, sweep_no
-        self.next_addr = next_addr
+        self.next_addr, self.inc, self.at_last = next_addr, inc, at_last
 
 
 def sweep_issue(m: Module, core, n_neurons: int, tick, number_width: int) -> SweepIssue:
@@ -127,14 +138,19 @@ def sweep_issue(m: Module, core, n_neurons: int, tick, number_width: int) -> Swe
     sweep_no = Signal(number_width)
     started = Signal()
     # addr + 1 and addr == N - 1, registered beside addr: the next address (the memories'
-    # read address, a cycle ahead) is two multiplexers from registers and the tick
+    # read address, a cycle ahead) is two multiplexers from registers and the tick, and so
+    # are the next increment and end test (their adder and comparator work on ``inc``, a
+    # register, beside the tick's multiplexers)
     inc = Signal(range(N + 1), init=1, name="addr_inc")
     at_last = Signal(init=int(N == 1), name="addr_at_last")
     last_issue = issuing & at_last
+    advance = issuing & ~at_last
     start = tick & (~issuing | last_issue)
     next_addr = Signal(range(N), name="next_addr")
-    m.d.comb += next_addr.eq(Mux(start, 0, Mux(issuing & ~at_last, inc, addr)))
-    m.d.sync += [addr.eq(next_addr), inc.eq(next_addr + 1), at_last.eq(next_addr == N - 1)]
+    m.d.comb += next_addr.eq(Mux(start, 0, Mux(advance, inc, addr)))
+    m.d.sync += [addr.eq(next_addr),
+                 inc.eq(Mux(start, 1, Mux(advance, inc + 1, inc))),
+                 at_last.eq(Mux(start, int(N == 1), Mux(advance, inc == N - 1, at_last)))]
     with m.If(tick & ~start):
         m.d.sync += core.overrun.eq(1)
     with m.If(start):
@@ -143,7 +159,7 @@ def sweep_issue(m: Module, core, n_neurons: int, tick, number_width: int) -> Swe
     with m.Elif(issuing & last_issue):
         m.d.sync += issuing.eq(0)
     m.d.comb += core.busy.eq(issuing)
-    return SweepIssue(start, issuing, addr, sweep_no, next_addr)
+    return SweepIssue(start, issuing, addr, sweep_no, next_addr, inc, at_last)
 
 
 def pipeline_tags(m: Module, n_neurons: int, number_width: int, issue: SweepIssue,
@@ -175,12 +191,16 @@ def sweep_bookkeeping(m: Module, core, n_neurons: int, number_width: int, last_t
                       clamp_kinds, fifo_depth: int) -> None:
     """Per-sweep spike and clamp counters, sticky clamp flags and the spike FIFO, all fed from
     the core's registered ``upd_*`` outputs (off the datapath's critical path); ``last_tag`` is
-    the last stage's ``(valid, index, sweep)``."""
+    the last stage's ``(valid, index, sweep)``, which the core registers into ``upd_valid``
+    and ``upd_index``."""
     N = n_neurons
     upd_sweep = Signal(number_width)
     m.d.sync += upd_sweep.eq(last_tag[2])
     count = Signal(range(N + 1))
-    last = core.upd_valid & (core.upd_index == N - 1)
+    # the sweep's last update on upd_*, registered beside upd_valid and upd_index from the
+    # last stage's tag (the index comparison does not sit before every counter's adder)
+    last = Signal(name="upd_last")
+    m.d.sync += last.eq(last_tag[0] & (last_tag[1] == N - 1))
     m.d.sync += core.sweep_done.eq(last)
     with m.If(last):
         m.d.sync += [core.sweep_count.eq(count + core.upd_spike),

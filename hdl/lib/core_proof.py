@@ -9,7 +9,9 @@ against the block's one-step reference, for every input sequence of every length
   cycle; the update fetched in cycle ``f`` leaves on ``upd_*`` in cycle ``f + L`` (``L`` the
   pipeline's latency), in index order;
 * *host writes*: a write to a host memory (current, set, weights) in cycle ``c`` is in the
-  memory from ``c + 1``; an update sees the memories as they are in its fetch cycle;
+  memory from ``c + 1`` (where the core registers it on its way to the RAM, the memory seen
+  is the RAM with that pending write over it); an update sees the memories as they are in
+  its fetch cycle;
 * *each update of the tracked neuron* ``t`` (any neuron: ``t`` is a free constant) equals one
   step of the block's stage functions, composed combinationally, from the state its previous
   update produced (or the memory's initial contents), the current and set the host wrote, and
@@ -20,7 +22,8 @@ against the block's one-step reference, for every input sequence of every length
 **Why the induction step closes** - the invariants asserted in every cycle:
 
 * the contract's sweep model counts at most ``N`` neurons left (its counter is wider than that),
-  and the issue counter agrees with it (issuing, address, sweep number);
+  and the issue counter agrees with it (issuing, address, sweep number; the increment and
+  end test it keeps beside the address);
 * each stage's tag (valid, index, sweep; ``pipeline_tags``) holds the fetch of ``k - 1`` cycles
   before, for every stage ``k`` of the core's own tag list (``L`` is its last stage);
 * every tracked memory word of ``t`` equals the reference's copy: the host memories the host's
@@ -44,7 +47,7 @@ from __future__ import annotations
 import contextlib
 from types import SimpleNamespace
 
-from amaranth import ClockDomain, Elaboratable, Module, Mux, Signal
+from amaranth import Array, ClockDomain, Elaboratable, Module, Mux, Signal
 from amaranth.hdl import Fragment
 from amaranth.hdl._ast import AnyConst, AnySeq
 
@@ -122,7 +125,7 @@ class SweepCoreProof(Elaboratable):
     def _elaborate_core(self, platform, tick):
         core = self.make_core()
         core._MustUse__silence = True
-        rec = SimpleNamespace(issue=None, tags=None)
+        rec = SimpleNamespace(issue=None, tags=None, pending={})
         mut = self.mutant
         ns = self.core_module
 
@@ -171,6 +174,9 @@ class SweepCoreProof(Elaboratable):
                         m.d.sync += d.eq(getattr(core_, n))
                         setattr(view, n, d)
                 st_rd, st_wr, cur_rd, sel_rd = orig(m, view, *a, **k)
+                for name, rd in (("cur_mem", cur_rd), ("sel_mem", sel_rd)):
+                    if getattr(rd, "pending", None) is not None:
+                        rec.pending[name] = rd.pending
                 if mut == "skipped_write":
                     skip = Signal(name="mutant_skip")
                     m.d.comb += skip.eq(AnySeq(1))
@@ -206,15 +212,35 @@ class SweepCoreProof(Elaboratable):
         assume_all(m, [t < N])
 
         core, core_m, rec = self._elaborate_core(platform, tick)
-        # one asynchronous read port at the tracked neuron on each memory (observation only)
-        mems = {name: core_m.submodules[name]
-                for name in (*self.state_memories, *self.host_write_ports(core),
-                             *self.read_only_memories(core))}
+        # one asynchronous read port at the tracked neuron on each memory (observation only);
+        # a memory in banks (hdl/lib/banked.py: ``name``, ``name_1`` ...) is read in the bank
+        # that holds the tracked neuron
         seen = {}
-        for name, mem in mems.items():
-            port = mem.read_port(domain="comb")
-            m.d.comb += port.addr.eq(t)
-            seen[name] = port.data
+        for name in (*self.state_memories, *self.host_write_ports(core),
+                     *self.read_only_memories(core)):
+            banks = [core_m.submodules[name]]
+            while True:
+                try:
+                    banks.append(core_m.submodules[f"{name}_{len(banks)}"])
+                except (AttributeError, KeyError, NameError):
+                    break
+            ports = [bank.read_port(domain="comb") for bank in banks]
+            if len(ports) == 1:
+                m.d.comb += ports[0].addr.eq(t)
+                seen[name] = ports[0].data
+                continue
+            lo = (banks[0].depth - 1).bit_length()
+            for port in ports:
+                m.d.comb += port.addr.eq(t[:lo])
+            word = Signal.like(ports[0].data, name=f"seen_{name}")
+            m.d.comb += word.eq(Array(p.data for p in ports)[t[lo:]])
+            seen[name] = word
+        # a host memory whose writes are registered on their way to the RAM (read at the
+        # fetch, hdl/lib/banked.py): its word is the RAM's with the pending write over it
+        for name, (en, addr, data) in rec.pending.items():
+            word = Signal.like(seen[name], name=f"seen_{name}_pending")
+            m.d.comb += word.eq(Mux(en & (addr == t), data, seen[name]))
+            seen[name] = word
         frag = Fragment.get(core_m, platform)
         m.submodules.core = frag
         tags, issue = rec.tags, rec.issue
@@ -256,7 +282,9 @@ class SweepCoreProof(Elaboratable):
                        (issue.issuing == fetch_valid, "issue: busy as the sweep model"),
                        (~fetch_valid | (issue.addr == fetch_idx), "issue: neuron fetched"),
                        (core_started == started, "issue: first sweep"),
-                       (issue.sweep_no == number, "issue: sweep number")])
+                       (issue.sweep_no == number, "issue: sweep number"),
+                       (issue.inc == issue.addr + 1, "issue: the address's increment"),
+                       (issue.at_last == (issue.addr == N - 1), "issue: the last address")])
         for k, (valid, idx, swp) in sorted(tags.items()):
             assert_all(m, [(valid == dv[k - 1], f"stage {k}: valid"),
                            (~valid | (idx == di[k - 1]), f"stage {k}: neuron"),
@@ -276,8 +304,6 @@ class SweepCoreProof(Elaboratable):
             words[name] = (r, now)
             assert_all(m, [(data == now, f"memory {name}: tracked word")])
         held = {name: Signal.like(now, name=f"held_{name}") for name, (_, now) in words.items()}
-        with m.If(flight[0]):
-            m.d.sync += [held[n].eq(words[n][1]) for n in held]
         extra = self.fetched_inputs(m, core, frag, flight[0])
         held_in = {}
         for name, value in extra.items():
@@ -298,9 +324,21 @@ class SweepCoreProof(Elaboratable):
         # the write-back is issued from the last stage (fetched L - 1 cycles ago) and lands at
         # the end of that cycle, or ``state_write_lag`` cycles later (a registered write)
         lag = getattr(core, "state_write_lag", 0)
+        lands = flight[L - 1 + lag]
         for name in self.state_memories:
             r, now = words[name]
-            m.d.sync += r.eq(Mux(flight[L - 1 + lag], exp["words"][name], now))
+            m.d.sync += r.eq(Mux(lands, exp["words"][name], now))
+        # the update takes the memories as they are in its fetch cycle; a core whose memories
+        # sample at the end of the fetch (``state_sample_lag`` = 1: read from the fetch's
+        # registered address) also sees a write-back landing then (in a reachable state the
+        # tracked neuron's own write lands earlier: n_neurons > depth)
+        at_end = getattr(core, "state_sample_lag", 0)
+        fetched = {n: words[n][1] for n in held}
+        if at_end:
+            fetched.update({n: Mux(lands, exp["words"][n], words[n][1])
+                            for n in self.state_memories})
+        with m.If(flight[0]):
+            m.d.sync += [held[n].eq(fetched[n]) for n in held]
         checks = [(~flight[L] | core.upd_valid & (core.upd_index == t), "tracked update leaves")]
         checks += [(~flight[L] | (getattr(core, port) == value), f"tracked update: {port}")
                    for port, value in exp["ports"].items()]

@@ -218,14 +218,19 @@ _MEMINIT = r'(?:  attribute [^\n]*\n)*  cell \$meminit_v2 \S+\n    parameter \\M
 
 
 def free_memories(il: str, memids) -> str:
-    """``il`` with the initial contents of the memories ``memids`` removed: they start with
-    any contents the solver picks (a proof then covers every initial contents, the design's
+    """``il`` with the initial contents of the memories ``memids`` removed (and of their banks
+    ``<memid>_1``, ``<memid>_2`` ..., :mod:`cuneate.hdl.lib.banked`): they start with any
+    contents the solver picks (a proof then covers every initial contents, the design's
     included)."""
     for memid in memids:
-        il, n = re.subn(_MEMINIT.format(re.escape(memid)), "", il, flags=re.S)
-        if n > 1:
-            raise FormalError(f"expected at most one initializer of {memid} in the netlist, "
-                              f"found {n}")
+        for bank in range(1 << 16):
+            name = memid if bank == 0 else f"{memid}_{bank}"
+            il, n = re.subn(_MEMINIT.format(re.escape(name)), "", il, flags=re.S)
+            if n > 1:
+                raise FormalError(f"expected at most one initializer of {name} in the "
+                                  f"netlist, found {n}")
+            if n == 0 and bank > 0:
+                break
     return il
 
 

@@ -13,11 +13,15 @@ def tick_strobe(m: Module, cfg, tick_in=None) -> Signal:
     With ``cfg.tick_source == "internal"`` it comes from a divider of ``cfg.cycles_per_tick``
     cycles (first strobe in cycle 0); with ``"external"`` it is ``tick_in``, the block's
     ``tick`` input."""
-    tick = Signal()
     if cfg.tick_source == "internal":
-        div = Signal(range(cfg.cycles_per_tick))
-        m.d.comb += tick.eq(div == 0)
-        m.d.sync += div.eq(Mux(div == cfg.cycles_per_tick - 1, 0, div + 1))
-    else:
-        m.d.comb += tick.eq(tick_in)
+        # the strobe is a register (``div`` wraps to 0 in the cycle it is set): the sweep
+        # issue's multiplexers start from registers only
+        n = cfg.cycles_per_tick
+        div = Signal(range(n))
+        tick = Signal(init=1, name="tick_strobe")
+        wrap = div == n - 1
+        m.d.sync += [div.eq(Mux(wrap, 0, div + 1)), tick.eq(wrap)]
+        return tick
+    tick = Signal()
+    m.d.comb += tick.eq(tick_in)
     return tick

@@ -2,8 +2,9 @@
 (:mod:`cuneate.hdl.izhikevich.formal`); ``cuneate prove core|lif``: the pipelined Izhikevich or
 LIF core against its one-step datapath (:mod:`cuneate.hdl.izhikevich.formal_core`,
 :mod:`cuneate.hdl.lif.formal_core`); ``cuneate prove coincidence``: the coincidence detector
-against its one-tick reference (:mod:`cuneate.hdl.coincidence.formal_core`); k-induction with
-``--unbounded``."""
+against its one-tick reference (:mod:`cuneate.hdl.coincidence.formal_core`); ``cuneate prove
+banked``: a memory in banks of block RAM against its per-cycle contract
+(:mod:`cuneate.hdl.lib.banked_proof`); k-induction with ``--unbounded``."""
 
 from __future__ import annotations
 
@@ -32,6 +33,10 @@ def _proof_target(args):
         "coincidence": (coincidence_proof_config, CoincidenceConfig, prove_coincidence),
         "link": (decoder_proof_config, link_config, prove_decoder),
     }[args.target]
+    from ...hdl.lib.banked_proof import MUTANTS as BANK_MUTANTS
+    if args.mutant in BANK_MUTANTS:
+        raise CliError(f"cuneate prove {args.target}: mutant {args.mutant} is the banked "
+                       f"memory's (cuneate prove banked)")
     if args.target == "link":
         if args.mutant and args.mutant not in LINK_MUTANTS:
             raise CliError(f"cuneate prove link: mutant {args.mutant} is not the link's (its "
@@ -121,9 +126,57 @@ def cmd_prove_core(args) -> int:
     return 0 if r.passed and (slot is None or slot.passed) else 1
 
 
+def cmd_prove_banked(args) -> int:
+    """``cuneate prove banked``: a memory in banks of block RAM, read a cycle ahead or at the
+    fetch, against its per-cycle contract (:mod:`cuneate.hdl.lib.banked_proof`), with the
+    write port as the host's (unregistered) and as the write-back's or the deepest core's
+    (registered); by default the default core's state memory (2500 words in five banks of
+    512)."""
+    import json
+    import tempfile
+    from ...hdl.izhikevich.formal import FormalError
+    from ...hdl.lib.banked_proof import MUTANTS as BANK_MUTANTS
+    from ...hdl.lib.banked_proof import prove_banked
+    if args.mutant and args.mutant not in BANK_MUTANTS:
+        raise CliError(f"cuneate prove banked: mutant {args.mutant} is not the memory's (its "
+                       f"mutants: {', '.join(BANK_MUTANTS)})")
+    depth, bank = args.neurons or 2500, args.bank_depth or 512
+    if bank & (bank - 1):
+        raise CliError(f"cuneate prove banked: --bank-depth must be a power of two, got {bank}")
+    records = []
+    with tempfile.TemporaryDirectory(prefix="cuneate-prove-") as d:
+        for registered in (False, True):
+            work = Path(args.work_dir or d) / f"write_register_{int(registered)}"
+            try:
+                r = prove_banked(work, depth, bank, write_register=registered,
+                                 mode="prove" if args.unbounded else "bmc", k=args.depth,
+                                 mutant=args.mutant, timeout_s=args.timeout_s)
+            except FormalError as exc:
+                raise CliError(f"cuneate prove banked: {exc}") from None
+            records.append(r.to_dict() | {"words": depth, "bank_depth": bank,
+                                          "banks": -(-depth // bank),
+                                          "write_register": registered,
+                                          "mutant": args.mutant})
+    if args.json:
+        print(json.dumps(records))
+    else:
+        for rec in records:
+            what = "k-induction" if rec["mode"] == "prove" else "bounded from the start"
+            print(f"{rec['property']}: {rec['status'].upper()} ({what}, depth {rec['depth']}, "
+                  f"{rec['seconds']:.1f} s, {rec['words']} words in {rec['banks']} banks of "
+                  f"{rec['bank_depth']}, write {'registered' if rec['write_register'] else 'direct'}"
+                  + (f", mutant {args.mutant}" if args.mutant else "") + ")")
+            if rec["failed"]:
+                print(f"  failed in step {rec['step']} ({rec['phase']}): "
+                      f"{', '.join(rec['failed'])}")
+    return 0 if all(rec["status"] == "pass" for rec in records) else 1
+
+
 def cmd_prove(args) -> int:
     if args.target in ("core", "lif", "coincidence", "link"):
         return cmd_prove_core(args)
+    if args.target == "banked":
+        return cmd_prove_banked(args)
     import json
     import tempfile
     from ...hdl.izhikevich import ConfigError, IzhikevichConfig
@@ -168,21 +221,27 @@ def register(groups: CommandGroups) -> None:
     from ...hdl.coincidence.formal_core import MUTANTS as DETECTOR_MUTANTS
     from ...hdl.lib.core_proof import MUTANTS
     from ...hdl.link.formal_core import MUTANTS as LINK_MUTANTS
+    from ...hdl.lib.banked_proof import MUTANTS as BANK_MUTANTS
     f = groups.root.add_parser("prove", help="SymbiYosys checks of the one-update datapath "
                                "and of the pipelined core")
     f.add_argument("target", nargs="?",
-                   choices=("datapath", "core", "lif", "coincidence", "link"),
+                   choices=("datapath", "core", "lif", "coincidence", "link", "banked"),
                    default="datapath",
                    help="datapath (default): one update's range properties; core, lif: the "
                    "pipelined Izhikevich or LIF core equals its one-step datapath; "
                    "coincidence: the detector equals its one-tick reference; link: the host "
-                   "link's frame decoder meets the wire format")
+                   "link's frame decoder meets the wire format; banked: a memory in banks of "
+                   "block RAM meets its per-cycle contract")
     f.add_argument("--unbounded", action="store_true",
                    help="core: k-induction (every input sequence of every length)")
     f.add_argument("--depth", type=positive_int, default=None,
                    help="core: steps (default the core's latency + 2)")
     f.add_argument("--neurons", type=positive_int, default=None,
-                   help="core: neurons (default the fewest accepted, one per stage)")
+                   help="core: neurons (default the fewest accepted, one per stage); banked: "
+                   "the memory's words (default 2500)")
+    f.add_argument("--bank-depth", type=positive_int, default=None,
+                   help="banked: words per bank, a power of two (default 512, the default "
+                   "core's state banks)")
     f.add_argument("--default-config", action="store_true",
                    help="core, lif: the block's default configuration (e.g. 2500 neurons, "
                    "internal tick) instead of the smallest core")
@@ -193,7 +252,8 @@ def register(groups: CommandGroups) -> None:
     f.add_argument("--history", type=positive_int, default=None,
                    help="coincidence: history depth in ticks (default 3)")
     f.add_argument("--mutant",
-                   choices=tuple(dict.fromkeys(MUTANTS + DETECTOR_MUTANTS + LINK_MUTANTS)),
+                   choices=tuple(dict.fromkeys(MUTANTS + DETECTOR_MUTANTS + LINK_MUTANTS
+                                               + BANK_MUTANTS)),
                    default=None, help="core, lif, coincidence, link: build this fault into "
                    "the block (the proof must fail)")
     f.add_argument("--solver", choices=SOLVERS, default=SOLVER)

@@ -34,13 +34,16 @@ from cuneate.sim.engines.amaranth import simulate
     ({"n_neurons": 8, "clock_hz": 128e3, "neuron_sets": [0] * 7}, "neuron_sets"),
     ({"n_neurons": 8, "clock_hz": 128e3, "neuron_sets": [1] * 8}, "neuron_sets"),
     ({"v_frac_bits": 30, "u_frac_bits": 34}, "fraction bits"),
-    ({"pipeline_stages": 4}, "pipeline_stages must be one of 5, 6, 7, 8"),
-    ({"pipeline_stages": 9}, "pipeline_stages"),
+    ({"pipeline_stages": 4}, "pipeline_stages must be one of 5, 6, 7, 8, 9"),
+    ({"pipeline_stages": 10}, "pipeline_stages"),
     ({"pipeline_stages": True}, "pipeline_stages"),
     ({"n_neurons": 8, "clock_hz": 16e3 * 8, "pipeline_stages": 8}, "n_neurons must be an "
                                                                      "integer >= 9"),
-    ({"n_neurons": 5, "clock_hz": 16e3 * 5}, r"n_neurons must be an integer >= 6 \(the "
-                                             r"pipeline depth \+ 1"),
+    ({"n_neurons": 5, "clock_hz": 16e3 * 5}, r"n_neurons must be an integer >= 6 at "
+                                             r"pipeline depth 5"),
+    ({"n_neurons": 9, "clock_hz": 16e3 * 9, "pipeline_stages": 9}, "n_neurons must be an "
+                                                                     "integer >= 10 at pipeline "
+                                                                     "depth 9"),
     ({"bram_shapes": ((1000, 18),)}, "each depth a power of two"),
     ({"bram_shapes": ()}, "bram_shapes must be"),
     ({"bram_shapes": ((1024, 0),)}, "bram_shapes must be"),
