@@ -87,7 +87,7 @@ TARGET = {
     # the fmax of a filled board build (the link and 10 cores of 4096 at depth 5, 194 of 208
     # block RAMs, seed 1): the bound for any build, since the out-of-context core fmax above
     # does not see the block RAMs spread over the filled device
-    "link_fmax_mhz": 90.4,
+    "link_fmax_mhz": 83.0,
     "logic_per_core": 1900, "logic_link": 3000,
     "nextpnr_cells": {"LUT": "TRELLIS_COMB", "FF": "TRELLIS_FF", "BRAM": "DP16KD",
                       "DSP": "MULT18X18D"},
