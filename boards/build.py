@@ -150,19 +150,11 @@ def _size_cores(target: dict, request, n_neurons, clock_hz, update_hz, depth: di
                          if k not in ("update_hz", "neuron_sets")}
         if len(request.core["param_sets"]) > 1:
             neuron_sets = request.core["neuron_sets"]
-    sized = size_core(target, n_neurons=n_neurons, clock_hz=clock_hz, update_hz=update_hz,
-                      baud=baud, **depth)
-    if neuron_sets is not None:
-        # the cores of an array share one neuron-to-set table: one core, or one set
-        k = sized["link"].n_cores
-        if k > 1:
-            raise ConfigError(f"{target['name']}: the scene needs {k} cores and mixes "
-                              f"{len(request.core['param_sets'])} parameter sets; the cores "
-                              f"share one neuron-to-set table (one set, or "
-                              f"{sized['link'].core.n_neurons} neurons at most)")
-        sized = size_core(target, n_neurons=n_neurons, clock_hz=clock_hz,
-                          update_hz=update_hz, baud=baud, neuron_sets=neuron_sets, **depth)
-    return sized
+    # an array's cores share the table of parameter sets; each starts its own neurons with
+    # their own sets (the scene's populations wherever they land)
+    return size_core(target, n_neurons=n_neurons, clock_hz=clock_hz, update_hz=update_hz,
+                     baud=baud, **depth,
+                     **({} if neuron_sets is None else {"neuron_sets": neuron_sets}))
 
 
 def size_blocks(target: dict, request, clock_hz, pipeline_stages, baud=None) -> dict:

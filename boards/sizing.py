@@ -199,11 +199,12 @@ def _width_config(target: dict, **core_kwargs) -> IzhikevichConfig:
 
 
 def target_link(target: dict, core: IzhikevichConfig, plan: ClockPlan,
-                 n_cores: int = 1) -> LinkConfig:
-    """The link for ``n_cores`` cores of ``core`` at ``plan`` (one spike batch a millisecond)."""
+                 n_cores: int = 1, neuron_sets=None) -> LinkConfig:
+    """The link for ``n_cores`` cores of ``core`` at ``plan`` (one spike batch a millisecond;
+    ``neuron_sets``: each global id's initial parameter set, for an array)."""
     return LinkConfig(core, clocks_per_bit=plan.clocks_per_bit,
                       batch_sweeps=max(1, int(round(plan.update_hz / 1000))), n_cores=n_cores,
-                      **target.get("link_defaults", {}))
+                      neuron_sets=neuron_sets, **target.get("link_defaults", {}))
 
 
 def size_plan(target: dict, N: int, pipeline_stages: int = 5, plans=None, **core_kwargs):
@@ -249,13 +250,25 @@ def size_core(target: dict, n_neurons: int | None = None, clock_hz: float | None
               **core_kwargs) -> dict:
     """The link configuration for ``target`` (defaults from the target): its clock plan (the
     requested ``clock_hz`` or the one :func:`size_plan` chooses; the line at ``baud``), cores
-    and resource estimate; :class:`ConfigError` names the first limit exceeded."""
+    and resource estimate; :class:`ConfigError` names the first limit exceeded.
+    ``neuron_sets`` (in ``core_kwargs``: one parameter set per requested neuron) go to the
+    core, or, in an array, to each core's own neurons (the padding neurons take set 0)."""
     plans = chosen_plans(target, clock_hz, update_hz, baud)
     N = n_neurons or target["default_neurons"]
     depth = core_kwargs.get("pipeline_stages", 5)
+    sets = core_kwargs.pop("neuron_sets", None)
     plan, pll, k, n, est = size_plan(target, N, plans=plans, **core_kwargs)
+    if sets is not None:
+        sets = [int(s) for s in sets]
+        if len(sets) > n * k:
+            raise ConfigError(f"{target['name']}: neuron_sets gives {len(sets)} sets for "
+                              f"{N} neurons")
+        sets += [0] * (n * k - len(sets))
+        if k == 1:
+            core_kwargs["neuron_sets"] = sets
     core = target_core(target, core_kwargs, n, plan.clock_hz, plan.update_hz)
-    lcfg = target_link(target, core, plan, n_cores=k)
+    lcfg = target_link(target, core, plan, n_cores=k,
+                       neuron_sets=sets if sets is not None and k > 1 else None)
     return {"link": lcfg, "estimate": estimate(lcfg, target), "pll": pll,
             "requested_neurons": N, "pipeline_stages": depth,
             "plan": {"osc_hz": plan.osc_hz, "clock_hz": plan.clock_hz,

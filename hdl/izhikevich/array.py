@@ -1,9 +1,17 @@
 """An array of Izhikevich cores behind one host write port and one spike stream.
 
 :class:`IzhikevichArray` holds ``n_cores`` copies of :class:`~cuneate.hdl.izhikevich.core
-.IzhikevichCore` built from one configuration (``n_neurons`` each, the parameter sets shared),
-each with its own state, current and set memories and its own multipliers. Neuron ids are
-global: neuron ``n`` of core ``k`` is ``k * n_neurons + n``.
+.IzhikevichCore` built from one configuration (``n_neurons`` each, one table of parameter sets
+and one set of formats), each with its own state, current and set memories and its own
+multipliers. Neuron ids are global: neuron ``n`` of core ``k`` is ``k * n_neurons + n``.
+
+**Parameter sets shared or per core.** Every core holds the configuration's table of parameter
+sets; which set a neuron runs is its own (the set memory, written by the host like a current).
+By default every core starts with the configuration's ``neuron_sets``; ``neuron_sets`` given to
+the array (one set index per global id) starts each core with its own slice
+(:func:`core_configs`): core 0 all RS afferents, core 1 all FS interneurons, core 2 a mix.
+The formats are the table's (proven over every set), so the cores differ only in their set
+memories' and state memories' initial words.
 
 * **Host writes** (``i_wr_*``, ``sel_wr_*``) take a global id; the array registers the write
   and hands it to the owning core one cycle later (so a write reaches the core's RAM two cycles
@@ -35,6 +43,9 @@ scoreboard of the generated Verilog (:func:`izhikevich_array_verilog`).
 
 from __future__ import annotations
 
+import dataclasses
+
+import numpy as np
 from amaranth import Cat, Module, Mux, Signal
 from amaranth.lib.fifo import SyncFIFOBuffered
 from amaranth.lib import wiring
@@ -44,10 +55,36 @@ from ..flow.verilog import verilog_text
 from .config import CLAMP_KINDS, ConfigError, IzhikevichConfig
 from .core import IzhikevichCore
 
-__all__ = ["IzhikevichArray", "izhikevich_array_verilog", "PROBES"]
+__all__ = ["IzhikevichArray", "izhikevich_array_verilog", "core_configs", "PROBES"]
 
 #: the per-core update ports an array built with ``probes=True`` brings out
 PROBES = ("valid", "index", "v", "u", "spike", "clamp", "current")
+
+
+def core_configs(config: IzhikevichConfig, n_cores: int,
+                 neuron_sets=None) -> list[IzhikevichConfig]:
+    """The configuration of each core of an array of ``n_cores`` cores of ``config``: ``config``
+    itself, or, with ``neuron_sets`` (one parameter-set index per global neuron id, ``n_cores *
+    config.n_neurons`` of them), ``config`` with each core's slice as its ``neuron_sets`` (its
+    initial states follow its sets unless ``config`` gives them). Refused (:class:`ConfigError`)
+    when ``neuron_sets`` has the wrong length or names a set the table does not have."""
+    if neuron_sets is None:
+        return [config] * n_cores
+    N = config.n_neurons
+    sets = list(neuron_sets)
+    if len(sets) != n_cores * N:
+        raise ConfigError(f"neuron_sets must give one set per neuron of the array "
+                          f"({n_cores} x {N} = {n_cores * N}), got {len(sets)}")
+    n_sets = len(config.param_sets)
+    bad = [s for s in sets if isinstance(s, bool) or not isinstance(s, (int, np.integer))
+           or not 0 <= s < n_sets]
+    if bad:
+        raise ConfigError(f"neuron_sets must be set indices 0..{n_sets - 1}, got {bad[0]!r}")
+    if all(sets[k * N:(k + 1) * N] == sets[:N] for k in range(1, n_cores)) and \
+            list(config.neuron_sets) == sets[:N]:
+        return [config] * n_cores
+    return [dataclasses.replace(config, neuron_sets=[int(s) for s in sets[k * N:(k + 1) * N]])
+            for k in range(n_cores)]
 
 
 class IzhikevichArray(wiring.Component):
@@ -62,12 +99,18 @@ class IzhikevichArray(wiring.Component):
         the per-core update probes).
     """
 
-    def __init__(self, config: IzhikevichConfig, n_cores: int, probes: bool = False):
+    def __init__(self, config: IzhikevichConfig, n_cores: int, probes: bool = False,
+                 neuron_sets=None):
         if isinstance(n_cores, bool) or not isinstance(n_cores, int) or n_cores < 1:
             self._MustUse__silence = True       # refused: never elaborated
             raise ConfigError(f"n_cores must be an integer >= 1, got {n_cores!r}")
+        try:
+            configs = core_configs(config, n_cores, neuron_sets)
+        except ConfigError:
+            self._MustUse__silence = True
+            raise
         self.cfg, self.n_cores = config, n_cores
-        self.cores = [IzhikevichCore(config) for _ in range(n_cores)]
+        self.cores = [IzhikevichCore(c) for c in configs]
         total = config.n_neurons * n_cores
         kinds = len(CLAMP_KINDS)
         sig = {
@@ -172,7 +215,7 @@ class IzhikevichArray(wiring.Component):
 
 
 def izhikevich_array_verilog(config: IzhikevichConfig, n_cores: int, probes: bool = False,
-                             name: str = "izhikevich_array") -> str:
+                             name: str = "izhikevich_array", neuron_sets=None) -> str:
     """Verilog text of an array of ``n_cores`` cores (``probes``: with the per-core update
-    ports, for the scoreboard)."""
-    return verilog_text(IzhikevichArray(config, n_cores, probes), name)
+    ports, for the scoreboard; ``neuron_sets``: each global id's initial parameter set)."""
+    return verilog_text(IzhikevichArray(config, n_cores, probes, neuron_sets), name)

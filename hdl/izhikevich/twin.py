@@ -185,11 +185,14 @@ class IzhikevichTwin:
 class IzhikevichArrayTwin:
     """The bit-exact model of :class:`~cuneate.hdl.izhikevich.array.IzhikevichArray`: one
     :class:`IzhikevichTwin` per core (``twins[k]`` holds the global ids ``k * n_neurons ..
-    (k + 1) * n_neurons - 1``), all swept by the one tick."""
+    (k + 1) * n_neurons - 1``), all swept by the one tick; ``neuron_sets`` as the array's
+    (:func:`~cuneate.hdl.izhikevich.array.core_configs`)."""
 
-    def __init__(self, config: IzhikevichConfig, n_cores: int, **kwargs):
+    def __init__(self, config: IzhikevichConfig, n_cores: int, neuron_sets=None, **kwargs):
+        from .array import core_configs
         self.cfg, self.n_cores = config, n_cores
-        self.twins = [IzhikevichTwin(config, **kwargs) for _ in range(n_cores)]
+        self.twins = [IzhikevichTwin(c, **kwargs)
+                      for c in core_configs(config, n_cores, neuron_sets)]
 
     def set_current_raw(self, neuron: int, raw: int) -> None:
         """Store the raw current of global neuron ``neuron`` (a host write)."""

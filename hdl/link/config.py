@@ -28,12 +28,13 @@ class LinkConfig:
     the link's; the core is an :class:`~cuneate.hdl.izhikevich.IzhikevichConfig`
     (:class:`~cuneate.hdl.link.LinkedCore`, :class:`~cuneate.hdl.link.LinkedNetwork`,
     :class:`~cuneate.hdl.link.LinkedFanoutCore`) or a :class:`~cuneate.hdl.lif.LifConfig`
-    (:class:`~cuneate.hdl.link.LinkedLif`, one core)."""
+    (:class:`~cuneate.hdl.link.LinkedLif`, one core). ``neuron_sets`` (one parameter-set index
+    per global id) starts each core of an array with its own sets."""
 
     def __init__(self, core: IzhikevichConfig | LifConfig, clocks_per_bit: int = 16,
                  batch_sweeps: int = 16, batch_capacity: int = 79, rx_fifo_depth: int = 512,
                  tx_fifo_depth: int = 16, counter_width: int = 32, n_cores: int = 1,
-                 spike_ids: int | None = None, fanout=None):
+                 spike_ids: int | None = None, fanout=None, neuron_sets=None):
         if not isinstance(core, (IzhikevichConfig, LifConfig)):
             raise ConfigError(f"the link serves an Izhikevich or a LIF core, not "
                               f"{type(core).__name__}")
@@ -78,6 +79,16 @@ class LinkConfig:
             raise ConfigError("the link needs sweep numbers of at least 9 bits")
         if not 8 <= counter_width <= 32:
             raise ConfigError(f"counter_width must be 8..32, not {counter_width}")
+        if neuron_sets is not None:
+            if n_cores == 1 or not isinstance(core, IzhikevichConfig):
+                raise ConfigError("neuron_sets of the link are an array's (n_cores > 1); a "
+                                  "single core takes them in its own configuration")
+            from ..izhikevich.array import core_configs
+            core_configs(core, n_cores, neuron_sets)          # refuses what cannot be held
+            neuron_sets = tuple(int(s) for s in neuron_sets)
+        #: each global id's initial parameter set when the cores of an array differ
+        #: (:func:`~cuneate.hdl.izhikevich.array.core_configs`), else None
+        self.neuron_sets = neuron_sets
         self.counter_width = int(counter_width)
         self.core = core
         #: cores behind the link (an :class:`~cuneate.hdl.izhikevich.array.IzhikevichArray`

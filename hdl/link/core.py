@@ -543,7 +543,8 @@ class LinkedCore(wiring.Component):
         super().__init__({"rx": In(1, init=1), "tx": Out(1, init=1), "running": Out(1),
                           "overflow": Out(1)})
         # built here so that a simulation can watch the writes toward the core
-        self.core = IzhikevichArray(lcfg.core, lcfg.n_cores) if lcfg.n_cores > 1 else \
+        self.core = IzhikevichArray(lcfg.core, lcfg.n_cores, neuron_sets=lcfg.neuron_sets) \
+            if lcfg.n_cores > 1 else \
             IzhikevichCore(lcfg.core)
         self.link = HostLink(lcfg)
 

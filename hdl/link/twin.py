@@ -31,7 +31,7 @@ class LinkModel:
             raise ConfigError(f"the link model runs the Izhikevich twin, not a "
                               f"{type(lcfg.core).__name__} core")
         self.lcfg = lcfg
-        self.twin = IzhikevichArrayTwin(lcfg.core, lcfg.n_cores)
+        self.twin = IzhikevichArrayTwin(lcfg.core, lcfg.n_cores, neuron_sets=lcfg.neuron_sets)
         self.fanout = None
         if lcfg.fanout is not None:             # writes are channel samples, fanned out
             from ..fanout import FanoutTwin

@@ -272,8 +272,9 @@ async def array_check(dut):
     its own :class:`SweepChecker` (twin exact, golden bounded) and must have used a current the
     host wrote to that global id; the stream must carry every spike once as ``(k * N + n,
     sweep)``, each core's spikes in that core's order; ``sweep_count`` is the sum over the
-    cores; nothing overruns or overflows."""
-    from cuneate.hdl.izhikevich.array import PROBES
+    cores; nothing overruns or overflows. ``neuron_sets`` in the bench configuration: the
+    array's per-neuron initial parameter sets (each core checked against its own)."""
+    from cuneate.hdl.izhikevich.array import PROBES, core_configs
     cfgj = bench_config()
     cfg = make_config(cfgj["core"])
     K, N = int(cfgj["cores"]), cfg.n_neurons
@@ -308,7 +309,9 @@ async def array_check(dut):
             d.i_wr_en.value = 0
 
     cocotb.start_soon(driver())
-    checkers = [SweepChecker(cfg) for _ in range(K)]
+    # each core checked against its own configuration (its neurons' own parameter sets when
+    # the array was generated with per-neuron ``neuron_sets``)
+    checkers = [SweepChecker(c) for c in core_configs(cfg, K, cfgj.get("neuron_sets"))]
     probes = [{n: getattr(d, f"p{k}_{n}") for n in PROBES} for k in range(K)]
     bufs = [{n: np.zeros(N, dtype=np.int64) for n in ("v", "u", "i", "spike", "clamp")}
             for _ in range(K)]

@@ -208,3 +208,24 @@ def test_a_build_at_115200_baud_divides_the_clock_within_the_uart_tolerance(tmp_
                  str(tmp_path / "s")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "more than the 115200 baud link's 11,520 B/s (link limit)" in err[0]
+
+
+def test_sizing_gives_each_core_of_an_array_its_own_parameter_sets():
+    """A request mixing parameter sets over several cores: each core starts its own neurons
+    with their own sets (the link's ``neuron_sets``, padding neurons set 0), the model's twins
+    too; a single core takes them in its configuration; more sets than neurons are refused."""
+    from cuneate.hdl.link import LinkModel
+    sets = [0] * 3000 + [1] * 2000
+    r = size_core(TARGETS["ulx3s"], n_neurons=5000, param_sets=("RS", "FS"), neuron_sets=sets)
+    lc = r["link"]
+    assert lc.n_cores == 2 and lc.core.n_neurons == 2500
+    assert list(lc.neuron_sets) == sets
+    twins = LinkModel(lc).twin.twins
+    assert [list(t.cfg.neuron_sets) for t in twins] == [sets[:2500], sets[2500:]]
+    one = size_core(TARGETS["ulx3s"], n_neurons=100, param_sets=("RS", "FS"),
+                    neuron_sets=[1] * 100)["link"]
+    assert one.n_cores == 1 and one.neuron_sets is None
+    assert list(one.core.neuron_sets) == [1] * 100
+    with pytest.raises(ConfigError, match="neuron_sets gives 101 sets for 100 neurons"):
+        size_core(TARGETS["ulx3s"], n_neurons=100, param_sets=("RS", "FS"),
+                  neuron_sets=[1] * 101)

@@ -227,12 +227,18 @@ def test_damaged_frames_are_counted_never_accepted(structured):
           f"({', '.join(f'{k}={c[k]}' for k in COUNTER_NAMES if c[k])}), 0 accepted")
 
 
-def test_the_link_serves_an_array_of_cores():
+@pytest.mark.parametrize("per_core_sets", [False, True], ids=["one-set", "sets-per-core"])
+def test_the_link_serves_an_array_of_cores(per_core_sets):
     """Two cores of 8 behind the link (global ids 0..15): currents written over the link
     reach the right core, and the spike frames carry, per sweep, exactly the model's spikes
     (between cores the stream's order is the array's arbitration, so each frame's spikes are
-    compared as a set per sweep; docs/architecture.md)."""
-    lc = link_config(CORE, clocks_per_bit=CPB, batch_sweeps=32, batch_capacity=40, n_cores=2)
+    compared as a set per sweep; docs/architecture.md). With sets per core (core 0 RS, core 1
+    FS, from the link's ``neuron_sets``) the spikes are those of the model with the same sets,
+    and not those of one set everywhere."""
+    core = dict(CORE, param_sets=("RS", "FS")) if per_core_sets else CORE
+    sets = [0] * 8 + [1] * 8 if per_core_sets else None
+    lc = link_config(core, clocks_per_bit=CPB, batch_sweeps=32, batch_capacity=40, n_cores=2,
+                     neuron_sets=sets)
     assert (lc.n_cores, lc.n_neurons) == (2, 16)
     rng = np.random.default_rng(9)
     cur = lc.core.I.to_raw(rng.uniform(5.0, 40.0, 16))
@@ -253,3 +259,10 @@ def test_the_link_serves_an_array_of_cores():
     got = spikes(msgs)
     assert got == spikes(ref_msgs) and sum(map(len, got)) > 10
     assert any(n >= 8 for frame in got for _, n in frame)     # the second core spoke
+    if per_core_sets:
+        one = LinkModel(link_config(core, clocks_per_bit=CPB, batch_sweeps=32,
+                                    batch_capacity=40, n_cores=2))
+        alike = one.feed(b"".join(good))
+        one.advance(64)
+        alike += one.feed(b"")
+        assert spikes(FrameDecoder().feed(alike)) != got

@@ -8,6 +8,7 @@ import pytest
 
 from cuneate.hdl.izhikevich import (ConfigError, IzhikevichArray, IzhikevichArrayTwin,
                                     IzhikevichConfig)
+from cuneate.hdl.izhikevich.config import PIPELINE_STAGES
 from cuneate.sim.engines.amaranth import simulate
 
 
@@ -48,15 +49,28 @@ def _run(arr, n_sweeps, rng, lo=-5.0, hi=150.0, writes_per_sweep=3):
     return rec
 
 
-@pytest.mark.parametrize("depth", [5, 8])
-def test_array_matches_its_twins_every_update(depth):
+#: per global id: core 0 all RS, core 1 all FS, core 2 the four sets in turn
+PER_CORE_SETS = [0] * 12 + [3] * 12 + [i % 4 for i in range(12)]
+
+
+@pytest.mark.parametrize("depth, sets", [(5, None), (max(PIPELINE_STAGES), None),
+                                         (5, PER_CORE_SETS)],
+                         ids=["depth5", "deepest", "depth5-per-core-sets"])
+def test_array_matches_its_twins_every_update(depth, sets):
     K, N = 3, 12
     cfg = IzhikevichConfig(n_neurons=N, clock_hz=16e3 * 16, param_sets=("RS", "IB", "CH", "FS"),
                            neuron_sets=[i % 4 for i in range(N)], spike_fifo_depth=64,
                            pipeline_stages=depth)
-    arr = IzhikevichArray(cfg, K)
+    arr = IzhikevichArray(cfg, K, neuron_sets=sets)
     rec = _run(arr, 80, np.random.default_rng(depth))
-    twin = IzhikevichArrayTwin(cfg, K, kernel="stages")
+    twin = IzhikevichArrayTwin(cfg, K, kernel="stages", neuron_sets=sets)
+    if sets is not None:
+        # each core starts its neurons with their own sets (the RTL's set memories, checked
+        # below update by update against twins built with the same sets)
+        assert [list(c.cfg.neuron_sets) for c in arr.cores] == \
+            [sets[k * N:(k + 1) * N] for k in range(K)]
+        assert [list(t.cfg.neuron_sets) for t in twin.twins] == \
+            [sets[k * N:(k + 1) * N] for k in range(K)]
     n_full = min(min(len(u) for u in rec["ups"]) // N, len(rec["done"]))
     assert n_full >= 79
     written = {n: {0} for n in range(K * N)}          # the current RAM starts at zero
@@ -95,3 +109,27 @@ def test_array_refuses_a_core_count_it_cannot_build():
     for bad in (0, -1, 2.5, True):
         with pytest.raises(ConfigError, match="n_cores"):
             IzhikevichArray(cfg, bad)
+
+
+@pytest.mark.parametrize("sets, match", [([0] * 15, "one set per neuron of the array"),
+                                         ([0] * 15 + [2], "set indices 0..1"),
+                                         ([0] * 15 + [True], "set indices 0..1")])
+def test_array_refuses_sets_it_cannot_hold(sets, match):
+    cfg = IzhikevichConfig(n_neurons=8, clock_hz=16e3 * 8, param_sets=("RS", "FS"))
+    with pytest.raises(ConfigError, match=match):
+        IzhikevichArray(cfg, 2, neuron_sets=sets)
+    with pytest.raises(ConfigError, match=match):
+        IzhikevichArrayTwin(cfg, 2, neuron_sets=sets)
+
+
+def test_an_array_with_one_table_of_sets_everywhere_builds_one_configuration():
+    """Sets equal in every core (or none given): every core is built from the configuration
+    itself (one set of formats and one elaboration path)."""
+    from cuneate.hdl.izhikevich.array import core_configs
+    cfg = IzhikevichConfig(n_neurons=8, clock_hz=16e3 * 8, param_sets=("RS", "FS"),
+                           neuron_sets=[0, 1] * 4)
+    assert all(c is cfg for c in core_configs(cfg, 3))
+    assert all(c is cfg for c in core_configs(cfg, 3, [0, 1] * 12))
+    per = core_configs(cfg, 2, [1] * 8 + [0] * 8)
+    assert [list(c.neuron_sets) for c in per] == [[1] * 8, [0] * 8]
+    assert all((c.V, c.U) == (cfg.V, cfg.U) for c in per)

@@ -26,6 +26,9 @@ def _case(cores, n, depth, sweeps, current_range=(-5.0, 150.0), **extra):
 
 
 CASES = {f"k3_n12_depth{d}": _case(3, 12, d, 60) for d in (5, max(PIPELINE_STAGES))}
+# parameter sets per core: core 0 all RS, core 1 all FS, core 2 the four sets in turn
+CASES["k3_n12_per_core_sets"] = dict(_case(3, 12, 5, 60),
+                                     neuron_sets=[0] * 12 + [3] * 12 + [i % 4 for i in range(12)])
 # 4000 neurons: the first writes take 8 sweeps; strong currents so that every core spikes
 LONG = {"k8_n500": _case(8, 500, 5, 32, current_range=(60.0, 200.0), spike_fifo_depth=512)}
 
@@ -35,7 +38,8 @@ def _run(simulator, case, spec, build_root):
     build_dir = build_root / f"izh_array_{case}_{simulator}"
     build_dir.mkdir(parents=True, exist_ok=True)
     src = build_dir / "izhikevich_array.v"
-    src.write_text(izhikevich_array_verilog(cfg, spec["cores"], probes=True))
+    src.write_text(izhikevich_array_verilog(cfg, spec["cores"], probes=True,
+                                            neuron_sets=spec.get("neuron_sets")))
     run = run_cocotb(simulator, [src], "izhikevich_array", "cuneate.sim.izhikevich.bench",
                      build_dir, config=dict(spec, seed=5), testcase="array_check")
     r = run.report
@@ -51,9 +55,11 @@ def _run(simulator, case, spec, build_root):
 
 
 def _lane(simulator, case):
-    """The default lane runs both depths on Icarus and the deepest on Verilator (which compiles
-    each design, the slower first run); Verilator's reference depth runs in the long lane."""
-    marks = pytest.mark.long if (simulator, case) == ("verilator", "k3_n12_depth5") else ()
+    """The default lane runs both depths and the per-core sets on Icarus and the deepest on
+    Verilator (which compiles each design, the slower first run); Verilator's reference depth
+    and per-core sets run in the long lane."""
+    marks = pytest.mark.long if simulator == "verilator" and case != f"k3_n12_depth" \
+        f"{max(PIPELINE_STAGES)}" else ()
     return pytest.param(simulator, case, marks=marks, id=f"{simulator}-{case}")
 
 
