@@ -43,6 +43,9 @@ def _proof_target(args):
                            f"mutants: {', '.join(LINK_MUTANTS)})")
     elif args.mutant in LINK_MUTANTS:
         raise CliError(f"cuneate prove {args.target}: mutant {args.mutant} is the link's")
+    if args.target in ("coincidence", "link") and args.pipeline_stages is not None:
+        raise CliError(f"cuneate prove {args.target}: --pipeline-stages is the Izhikevich "
+                       f"core's (cuneate prove core)")
     if args.target == "coincidence":
         if args.default_config:
             raise CliError("cuneate prove coincidence: --default-config is not offered (its "
@@ -65,9 +68,15 @@ def _proof_target(args):
     if args.mutant in ("wrong_slot", "stamp_wrong_slot"):
         raise CliError(f"cuneate prove {args.target}: mutant {args.mutant} is the coincidence "
                        f"detector's")
+    kw = {}
+    if args.pipeline_stages is not None:
+        if args.target != "core":
+            raise CliError(f"cuneate prove {args.target}: --pipeline-stages is the Izhikevich "
+                           f"core's (cuneate prove core)")
+        kw["pipeline_stages"] = args.pipeline_stages
     if args.default_config:
-        return default(), prove
-    return (configure(args.neurons) if args.neurons else configure()), prove
+        return default(**kw), prove
+    return (configure(args.neurons, **kw) if args.neurons else configure(**kw)), prove
 
 
 def cmd_prove_core(args) -> int:
@@ -103,7 +112,8 @@ def cmd_prove_core(args) -> int:
              "max_delay_ticks": cfg.max_delay_ticks} if args.target == "coincidence"
             else {"n_neurons": cfg.n_neurons, "current_bytes": cfg.current_bytes,
                   "rx_fifo_depth": cfg.rx_fifo_depth} if args.target == "link"
-            else {"n_neurons": cfg.n_neurons})
+            else {"n_neurons": cfg.n_neurons, "pipeline_stages": cfg.pipeline_stages}
+            if args.target == "core" else {"n_neurons": cfg.n_neurons})
     out = r.to_dict() | size | {"mutant": args.mutant}
     if slot is not None:
         out["history_slot"] = slot.to_dict() | {"max_delay_ticks": ring}
@@ -175,6 +185,9 @@ def cmd_prove_banked(args) -> int:
 def cmd_prove(args) -> int:
     if args.target in ("core", "lif", "coincidence", "link"):
         return cmd_prove_core(args)
+    if args.pipeline_stages is not None:
+        raise CliError(f"cuneate prove {args.target}: --pipeline-stages is the core's (cuneate "
+                       f"prove core); the arithmetic does not change with the depth")
     if args.target == "banked":
         return cmd_prove_banked(args)
     import json
@@ -239,6 +252,10 @@ def register(groups: CommandGroups) -> None:
     f.add_argument("--neurons", type=positive_int, default=None,
                    help="core: neurons (default the fewest accepted, one per stage); banked: "
                    "the memory's words (default 2500)")
+    from ...hdl.izhikevich.config import PIPELINE_STAGES
+    f.add_argument("--pipeline-stages", type=int, choices=PIPELINE_STAGES, default=None,
+                   help="core: the pipeline depth proven (default 5; its smallest core is "
+                   "depth + 1 neurons)")
     f.add_argument("--bank-depth", type=positive_int, default=None,
                    help="banked: words per bank, a power of two (default 512, the default "
                    "core's state banks)")

@@ -75,3 +75,4 @@ def test_cuneate_prove_banked_reports_both_write_modes(capsys):
 def test_cuneate_prove_banked_refuses(argv, match, capsys):
     assert main(["prove", "banked", *argv]) == 2
     assert match in capsys.readouterr().err
+

@@ -106,3 +106,18 @@ def test_every_deeper_pipeline_equals_the_one_step_datapath(depth, tmp_path):
            f"SymbiYosys prove, k={r.depth}, {r.solver}, {r.seconds:.0f} s, N={cfg.n_neurons}")
     assert r.passed and r.depth == depth + 2 and cfg.n_neurons == min_neurons(depth), r
     assert cfg.n_neurons == depth + 1
+
+
+def test_cuneate_prove_core_takes_the_pipeline_depth(capsys):
+    """``--pipeline-stages``: the core's depth proven (its smallest core, depth + 1 neurons),
+    named in the record; refused for the targets without one."""
+    import json
+
+    from cuneate.sim.cli import main
+    rc = main(["prove", "core", "--pipeline-stages", "9", "--depth", "3", "--json"])
+    rec = json.loads(capsys.readouterr().out)
+    assert rc == 0 and rec["status"] == "pass", rec
+    assert (rec["pipeline_stages"], rec["n_neurons"]) == (9, 10), rec
+    for target in ("lif", "banked", "datapath"):
+        assert main(["prove", target, "--pipeline-stages", "9"]) == 2
+        assert "--pipeline-stages is the" in capsys.readouterr().err
