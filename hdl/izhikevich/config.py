@@ -59,8 +59,8 @@ NARROW_STATE_RATIO = 2.0 ** 8
 PIPELINE_DEPTH = 5      # the default (the reference core's): fetch, read, 3 datapath stages
 #: Registered cuts of the datapath (after step ``k`` of :data:`~cuneate.hdl.izhikevich.datapath
 #: .STEPS`: 0 operands, 1 multiply 1, 2 align, 3 multiply 2, 4 sums; step 5, select, ends in
-#: the write-back) for each ``pipeline_stages``: each added stage adds the cut that shortens
-#: the longest remaining path (see :mod:`cuneate.hdl.izhikevich.core`).
+#: the write-back) for each ``pipeline_stages`` (see :mod:`cuneate.hdl.izhikevich.core`; fmax
+#: per depth in docs/architecture.md).
 PIPELINE_CUTS = {5: (2, 3), 6: (2, 3, 4), 7: (1, 2, 3, 4), 8: (0, 1, 2, 3, 4),
                  9: (0, 1, 2, 3, 4)}
 #: Stages from a fetch to its memories' words: 1 read a cycle ahead (the next address), 2 read
