@@ -34,7 +34,9 @@ class BuildError(ToolError):
 def _nextpnr_report(path: Path, target: dict, clock_hz: float) -> dict:
     rep = nextpnr_summary(json.loads(path.read_text()))
     cells = {k: (v["used"], v["available"]) for k, v in rep["utilization"].items()}
-    fmax, core_fmax = rep["fmax_mhz"], rep["min_fmax_mhz"]
+    # nextpnr names a clock by its global net ("$glbnet$clk"): the report gives the domain's
+    fmax = {k.removeprefix("$glbnet$"): v for k, v in rep["fmax_mhz"].items()}
+    core_fmax = rep["min_fmax_mhz"]
     keys = target["nextpnr_cells"]
     res = {}
     for kind, cell in keys.items():
@@ -218,11 +220,15 @@ def _block_line(b: dict) -> str:
     return f"{b['block']} ({b['neurons']} neurons{sets}{role})"
 
 
+def _mhz(f: float | None) -> str:
+    return "unknown" if f is None else f"{f:.2f}"
+
+
 def format_report(r: dict) -> str:
     pr = r.get("place_route")
     lines = []
     if pr and not pr["timing_met"]:
-        lines.append(f"TIMING NOT MET: {pr['min_fmax_mhz']} MHz reached, "
+        lines.append(f"TIMING NOT MET: {_mhz(pr['min_fmax_mhz'])} MHz reached, "
                      f"{pr['requested_mhz']:g} MHz requested")
     cores = r.get("cores", 1)
     depth = r.get("pipeline_stages")
@@ -258,7 +264,10 @@ def format_report(r: dict) -> str:
         for kind, v in pr["resources"].items():
             pct = f" ({v['percent']:.1f} %)" if v["percent"] is not None else ""
             lines.append(f"{kind:5s} {v['used']:6d} / {v['available']}{pct}")
-        lines.append(f"fmax {pr['min_fmax_mhz']} MHz, requested {pr['requested_mhz']:g} MHz: "
+        per_clock = pr.get("fmax_mhz") or {}
+        if len(per_clock) > 1:
+            lines += [f"fmax of clock {clk}: {_mhz(f)} MHz" for clk, f in per_clock.items()]
+        lines.append(f"fmax {_mhz(pr['min_fmax_mhz'])} MHz, requested {pr['requested_mhz']:g} MHz: "
                      f"timing {'met' if pr['timing_met'] else 'NOT met'}")
     if r.get("bitstream"):
         lines.append(f"bitstream {r['bitstream']}")

@@ -140,8 +140,9 @@ def register(groups: CommandGroups) -> None:
                    help="core clock (must be one of the board's PLL plans)")
     c.add_argument("--update-hz", type=float, default=None)
     c.add_argument("--baud", type=positive_int, default=None,
-                   help="UART line rate (default the board's: 3000000 on the ULX3S); the clock "
-                        "must divide it within 1 %% (115200 on the ULX3S: 521 clocks a bit)")
+                   help="UART line rate (default the chosen clock plan's: 3000000 on the ULX3S at "
+                        "60 and 90 MHz, 2000000 at 70 MHz); the clock must divide it within "
+                        "1 %% (115200 on the ULX3S at 60 MHz: 521 clocks a bit)")
     c.add_argument("--out", required=True)
     c.add_argument("--seed", type=positive_int, default=1, help="nextpnr placement seed")
     from ..izhikevich.cli import add_pipeline_option

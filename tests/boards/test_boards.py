@@ -229,3 +229,24 @@ def test_sizing_gives_each_core_of_an_array_its_own_parameter_sets():
     with pytest.raises(ConfigError, match="neuron_sets gives 101 sets for 100 neurons"):
         size_core(TARGETS["ulx3s"], n_neurons=100, param_sets=("RS", "FS"),
                   neuron_sets=[1] * 101)
+
+
+def test_a_report_whose_timing_fails_says_so_first_with_each_clocks_fmax(tmp_path):
+    """A nextpnr report (written here by hand: two clocks, the core's below the requested 90
+    MHz) read as a build's: ``timing_met`` false, the failing fmax in the first line of the
+    text report, every clock's fmax under its domain's name."""
+    from cuneate.boards.build import _nextpnr_report, format_report
+    nextpnr = {"fmax": {"$glbnet$clk": {"achieved": 82.877, "constraint": 90.0},
+                        "$glbnet$clk_uart": {"achieved": 131.5, "constraint": 90.0}},
+               "utilization": {"TRELLIS_COMB": {"used": 21802, "available": 83640},
+                               "MULT18X18D": {"used": 40, "available": 156}}}
+    (tmp_path / "n.json").write_text(json.dumps(nextpnr))
+    pr = _nextpnr_report(tmp_path / "n.json", TARGETS["ulx3s"], 90e6)
+    assert pr["fmax_mhz"] == {"clk": 82.877, "clk_uart": 131.5}
+    assert (pr["min_fmax_mhz"], pr["requested_mhz"], pr["timing_met"]) == (82.877, 90.0, False)
+    assert pr["resources"]["LUT"] == {"used": 21802, "available": 83640, "percent": 26.07}
+    r = build_target("ulx3s", tmp_path / "b", bitstream=False)
+    lines = format_report({**r, "place_route": pr}).splitlines()
+    assert lines[0] == "TIMING NOT MET: 82.88 MHz reached, 90 MHz requested"
+    assert "fmax of clock clk: 82.88 MHz" in lines and "fmax of clock clk_uart: 131.50 MHz" in lines
+    assert lines[-1] == "fmax 82.88 MHz, requested 90 MHz: timing NOT met"
