@@ -46,11 +46,13 @@ def test_device_limit_table(tmp_path):
           f"{'fmax bound':>10s} {'largest':>8s} {'of tightest':>11s}  build")
     for r in rows:
         b = r.get("build")
-        built = (f"{b['neurons']} neurons, {b['cores']} cores at {b['clock_mhz']:g} MHz, fmax "
-                 f"{b['fmax_mhz']} MHz ({'met' if b['timing_met'] else 'NOT met'}), "
-                 f"{b['seconds']:.0f} s" if b else "-")
+        built = (f"{b['neurons']} neurons, {b['cores']} core{'s' if b['cores'] > 1 else ''} "
+                 f"at {b['clock_mhz']:g} MHz, fmax {b['fmax_mhz']:.1f} MHz "
+                 f"({'met' if b['timing_met'] else 'NOT met'}), {b['seconds']:.0f} s"
+                 if b else "-")
+        fmax = f"{r['fmax']:10d}" if r["fmax"] else f"{'-':>10s}"
         print(f"{r['board']:11s} {r['depth']:5d} {r['bram']:10d} {r['multiplier']:10d} "
-              f"{(r['fmax'] or 0):10d} {r['largest']:8d} "
+              f"{fmax} {r['largest']:8d} "
               f"{100 * r['largest'] / r['tightest']:10.0f} %  {built}")
     RESULTS.mkdir(exist_ok=True)
     (RESULTS / "device_limits.json").write_text(json.dumps(rows, indent=2, default=str))

@@ -31,11 +31,22 @@ class BuildError(ToolError):
     """A tool failed or is missing (one line naming which)."""
 
 
-def _nextpnr_report(path: Path, target: dict, clock_hz: float) -> dict:
+def _nextpnr_report(path: Path, target: dict, clock_hz: float,
+                    netlist: Path | None = None) -> dict:
+    """Resources, fmax per clock and timing of a board build's nextpnr report. nextpnr derives
+    each clock's constraint from the board oscillator's through the PLL's dividers: a derived
+    constraint other than the plan's clock (by more than 0.1 %) means the PLL does not make the
+    clock the plan sized the cores for, and raises :class:`BuildError`."""
     rep = nextpnr_summary(json.loads(path.read_text()))
     cells = {k: (v["used"], v["available"]) for k, v in rep["utilization"].items()}
     # nextpnr names a clock by its global net ("$glbnet$clk"): the report gives the domain's
     fmax = {k.removeprefix("$glbnet$"): v for k, v in rep["fmax_mhz"].items()}
+    for clk, c in rep.get("constraint_mhz", {}).items():
+        if c is not None and abs(c * 1e6 - clock_hz) > 1e-3 * clock_hz:
+            raise BuildError(f"{target['name']}: nextpnr derives {c:.4g} MHz for clock "
+                             f"{clk.removeprefix('$glbnet$')} from the PLL, the clock plan asks "
+                             f"{clock_hz / 1e6:g} MHz (the PLL's dividers do not give the plan's "
+                             f"clock)")
     core_fmax = rep["min_fmax_mhz"]
     keys = target["nextpnr_cells"]
     res = {}
@@ -43,6 +54,19 @@ def _nextpnr_report(path: Path, target: dict, clock_hz: float) -> dict:
         used, avail = cells.get(cell, (0, 0))
         res[kind] = {"used": used, "available": avail,
                      "percent": round(100.0 * used / avail, 2) if avail else None}
+    if target.get("netlist_cells"):
+        # iCE40: nextpnr counts logic cells (a LUT4 and a flip-flop each); the synthesized
+        # netlist says how many of each the design uses
+        types: dict = {}
+        for mod in json.loads(netlist.read_text())["modules"].values():
+            for cell in mod.get("cells", {}).values():
+                types[cell["type"]] = types.get(cell["type"], 0) + 1
+        avail = cells.get(target["netlist_cells"]["per"], (0, 0))[1]
+        for kind, prefix in target["netlist_cells"]["count"].items():
+            used = sum(v for k, v in types.items() if k.startswith(prefix))
+            res[kind] = {"used": used, "available": avail,
+                         "percent": round(100.0 * used / avail, 2) if avail else None}
+    res = {k: res[k] for k in dict.fromkeys(["LC", "LUT", "FF", *res]) if k in res}
     return {"resources": res, "fmax_mhz": fmax, "min_fmax_mhz": core_fmax,
             "requested_mhz": clock_hz / 1e6,
             "timing_met": core_fmax is not None and core_fmax >= clock_hz / 1e6}
@@ -129,7 +153,7 @@ def build_target(board: str, out: Path, n_neurons: int | None = None,
         bit = out / f"{name}.{target['bitstream_ext']}"
         report["bitstream"] = str(bit) if bit.exists() else None
         report["place_route"] = _nextpnr_report(out / f"{name}.nextpnr.json", target,
-                                                lcfg.core.clock_hz)
+                                                lcfg.core.clock_hz, out / f"{name}.json")
         report["timing_met"] = report["place_route"]["timing_met"]
     if target.get("synth_family") and bitstream:
         with prog.step(f"{board}: yosys synth_{target['synth_family']} resource estimate"):

@@ -154,9 +154,10 @@ def format_resources(res: dict) -> str:
 
 
 def nextpnr_summary(report: dict) -> dict:
-    """fmax per clock, the lowest, utilization and the critical path of a nextpnr ``--report``
-    JSON."""
+    """fmax per clock, each clock's constraint, the lowest fmax, utilization and the critical
+    path of a nextpnr ``--report`` JSON."""
     fmax = {k: v.get("achieved") for k, v in report.get("fmax", {}).items()}
+    constraint = {k: v.get("constraint") for k, v in report.get("fmax", {}).items()}
     util = {k: {"used": v.get("used", 0), "available": v.get("available", 0)}
             for k, v in report.get("utilization", {}).items()}
     crit = None
@@ -169,7 +170,8 @@ def nextpnr_summary(report: dict) -> dict:
                 "logic_ns": sum(x["delay"] for x in steps if x["type"] != "routing"),
                 "routing_ns": sum(x["delay"] for x in steps if x["type"] == "routing"),
                 "steps": len(steps)}
-    return {"fmax_mhz": fmax, "min_fmax_mhz": min((f for f in fmax.values() if f), default=None),
+    return {"fmax_mhz": fmax, "constraint_mhz": constraint,
+            "min_fmax_mhz": min((f for f in fmax.values() if f), default=None),
             "utilization": util, "critical_path": crit}
 
 

@@ -5,7 +5,7 @@ import json
 
 import pytest
 
-from cuneate.boards.build import build_target
+from cuneate.boards.build import BuildError, build_target
 from cuneate.boards.sizing import size_core
 from cuneate.boards.targets import TARGETS
 from cuneate.boards.top import BoardTop, ClockPlan
@@ -94,7 +94,24 @@ def test_ulx3s_verilog_and_board_top_elaborate(tmp_path):
     assert "EHXPLLL" in top_v and "CLKFB_DIV" in top_v
     lpf = plan.files["top.lpf"]
     lpf = lpf.decode() if isinstance(lpf, bytes) else lpf
-    assert "FREQUENCY NET" in lpf and "60000000" in lpf.replace(".0", "")
+    assert "FREQUENCY PORT" in lpf and "25000000" in lpf.replace(".0", "")
+
+
+@pytest.mark.parametrize("plan_index", range(len(TARGETS["ulx3s"]["clock_plans"])))
+def test_each_ulx3s_pll_makes_its_plans_clock(plan_index):
+    """nextpnr constrains the core's clock through the EHXPLLL's dividers (25 MHz / CLKI_DIV x
+    CLKFB_DIV, the VCO at that x CLKOP_DIV within the ECP5's 400-800 MHz): each plan's PLL
+    gives the plan's clock."""
+    import re
+    t = TARGETS["ulx3s"]
+    plan, pll = t["clock_plans"][plan_index]
+    il = t["platform"]().prepare(BoardTop(size_core(t, n_neurons=64)["link"], pll, True),
+                                 name="top").files["top.il"]
+    il = il.decode() if isinstance(il, bytes) else il
+    div = {k: int(re.search(rf"parameter \\{k} (\d+)", il).group(1))
+           for k in ("CLKI_DIV", "CLKFB_DIV", "CLKOP_DIV")}
+    out_hz = 25e6 / div["CLKI_DIV"] * div["CLKFB_DIV"]
+    assert out_hz == plan.clock_hz and 400e6 <= out_hz * div["CLKOP_DIV"] <= 800e6
 
 
 def test_cli_lists_boards_and_refuses_in_one_line(capsys, tmp_path):
@@ -160,7 +177,10 @@ def test_icebreaker_bitstream_fits_and_meets_12mhz(tmp_path):
     pr = r["place_route"]
     assert r["core"]["operand_width"] == 16 and r["core"]["n_neurons"] == largest == 734
     assert pr["resources"]["DSP"]["used"] == 4
-    assert pr["resources"]["BRAM"]["used"] <= 30 and pr["resources"]["LUT"]["used"] <= 5280
+    assert pr["resources"]["BRAM"]["used"] <= 30 and pr["resources"]["LC"]["used"] <= 5280
+    # a logic cell holds one LUT4 and one flip-flop: the netlist's counts of each fit the LCs
+    assert max(pr["resources"]["LUT"]["used"], pr["resources"]["FF"]["used"]) \
+        <= pr["resources"]["LC"]["used"]
     assert pr["timing_met"], pr["fmax_mhz"]
     print("\n" + (tmp_path / "cuneate_icebreaker.report.txt").read_text())
 
@@ -250,3 +270,8 @@ def test_a_report_whose_timing_fails_says_so_first_with_each_clocks_fmax(tmp_pat
     assert lines[0] == "TIMING NOT MET: 82.88 MHz reached, 90 MHz requested"
     assert "fmax of clock clk: 82.88 MHz" in lines and "fmax of clock clk_uart: 131.50 MHz" in lines
     assert lines[-1] == "fmax 82.88 MHz, requested 90 MHz: timing NOT met"
+    nextpnr["fmax"]["$glbnet$clk"]["constraint"] = 84.0      # a PLL making the wrong clock
+    (tmp_path / "n.json").write_text(json.dumps(nextpnr))
+    with pytest.raises(BuildError, match=r"^ulx3s: nextpnr derives 84 MHz for clock clk from "
+                                         r"the PLL, the clock plan asks 90 MHz"):
+        _nextpnr_report(tmp_path / "n.json", TARGETS["ulx3s"], 90e6)
