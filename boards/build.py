@@ -13,6 +13,7 @@ from __future__ import annotations
 import json
 import math
 import time
+from collections import Counter
 from pathlib import Path
 
 from ..hdl.flow.synth import cell_counts, nextpnr_summary, run_yosys
@@ -39,33 +40,34 @@ def _nextpnr_report(path: Path, target: dict, clock_hz: float,
     clock the plan sized the cores for, and raises :class:`BuildError`."""
     rep = nextpnr_summary(json.loads(path.read_text()))
     cells = {k: (v["used"], v["available"]) for k, v in rep["utilization"].items()}
+
+    def usage(used, avail):
+        return {"used": used, "available": avail,
+                "percent": round(100.0 * used / avail, 2) if avail else None}
+
     # nextpnr names a clock by its global net ("$glbnet$clk"): the report gives the domain's
-    fmax = {k.removeprefix("$glbnet$"): v for k, v in rep["fmax_mhz"].items()}
+    def domain(net):
+        return net.removeprefix("$glbnet$")
+
+    fmax = {domain(k): v for k, v in rep["fmax_mhz"].items()}
     for clk, c in rep.get("constraint_mhz", {}).items():
         if c is not None and abs(c * 1e6 - clock_hz) > 1e-3 * clock_hz:
             raise BuildError(f"{target['name']}: nextpnr derives {c:.4g} MHz for clock "
-                             f"{clk.removeprefix('$glbnet$')} from the PLL, the clock plan asks "
+                             f"{domain(clk)} from the PLL, the clock plan asks "
                              f"{clock_hz / 1e6:g} MHz (the PLL's dividers do not give the plan's "
                              f"clock)")
     core_fmax = rep["min_fmax_mhz"]
-    keys = target["nextpnr_cells"]
-    res = {}
-    for kind, cell in keys.items():
-        used, avail = cells.get(cell, (0, 0))
-        res[kind] = {"used": used, "available": avail,
-                     "percent": round(100.0 * used / avail, 2) if avail else None}
+    res = {kind: usage(*cells.get(cell, (0, 0)))
+           for kind, cell in target["nextpnr_cells"].items()}
     if target.get("netlist_cells"):
         # iCE40: nextpnr counts logic cells (a LUT4 and a flip-flop each); the synthesized
         # netlist says how many of each the design uses
-        types: dict = {}
-        for mod in json.loads(netlist.read_text())["modules"].values():
-            for cell in mod.get("cells", {}).values():
-                types[cell["type"]] = types.get(cell["type"], 0) + 1
+        types = Counter(cell["type"]
+                        for mod in json.loads(netlist.read_text())["modules"].values()
+                        for cell in mod.get("cells", {}).values())
         avail = cells.get(target["netlist_cells"]["per"], (0, 0))[1]
         for kind, prefix in target["netlist_cells"]["count"].items():
-            used = sum(v for k, v in types.items() if k.startswith(prefix))
-            res[kind] = {"used": used, "available": avail,
-                         "percent": round(100.0 * used / avail, 2) if avail else None}
+            res[kind] = usage(sum(v for k, v in types.items() if k.startswith(prefix)), avail)
     res = {k: res[k] for k in dict.fromkeys(["LC", "LUT", "FF", *res]) if k in res}
     return {"resources": res, "fmax_mhz": fmax, "min_fmax_mhz": core_fmax,
             "requested_mhz": clock_hz / 1e6,

@@ -43,9 +43,6 @@ def _proof_target(args):
                            f"mutants: {', '.join(LINK_MUTANTS)})")
     elif args.mutant in LINK_MUTANTS:
         raise CliError(f"cuneate prove {args.target}: mutant {args.mutant} is the link's")
-    if args.target in ("coincidence", "link") and args.pipeline_stages is not None:
-        raise CliError(f"cuneate prove {args.target}: --pipeline-stages is the Izhikevich "
-                       f"core's (cuneate prove core)")
     if args.target == "coincidence":
         if args.default_config:
             raise CliError("cuneate prove coincidence: --default-config is not offered (its "
@@ -68,12 +65,7 @@ def _proof_target(args):
     if args.mutant in ("wrong_slot", "stamp_wrong_slot"):
         raise CliError(f"cuneate prove {args.target}: mutant {args.mutant} is the coincidence "
                        f"detector's")
-    kw = {}
-    if args.pipeline_stages is not None:
-        if args.target != "core":
-            raise CliError(f"cuneate prove {args.target}: --pipeline-stages is the Izhikevich "
-                           f"core's (cuneate prove core)")
-        kw["pipeline_stages"] = args.pipeline_stages
+    kw = {} if args.pipeline_stages is None else {"pipeline_stages": args.pipeline_stages}
     if args.default_config:
         return default(**kw), prove
     return (configure(args.neurons, **kw) if args.neurons else configure(**kw)), prove
@@ -183,11 +175,11 @@ def cmd_prove_banked(args) -> int:
 
 
 def cmd_prove(args) -> int:
+    if args.pipeline_stages is not None and args.target != "core":
+        raise CliError(f"cuneate prove {args.target}: --pipeline-stages is the Izhikevich "
+                       f"core's (cuneate prove core)")
     if args.target in ("core", "lif", "coincidence", "link"):
         return cmd_prove_core(args)
-    if args.pipeline_stages is not None:
-        raise CliError(f"cuneate prove {args.target}: --pipeline-stages is the core's (cuneate "
-                       f"prove core); the arithmetic does not change with the depth")
     if args.target == "banked":
         return cmd_prove_banked(args)
     import json

@@ -118,6 +118,6 @@ def test_cuneate_prove_core_takes_the_pipeline_depth(capsys):
     rec = json.loads(capsys.readouterr().out)
     assert rc == 0 and rec["status"] == "pass", rec
     assert (rec["pipeline_stages"], rec["n_neurons"]) == (9, 10), rec
-    for target in ("lif", "banked", "datapath"):
+    for target in ("lif", "coincidence", "link", "banked", "datapath"):
         assert main(["prove", target, "--pipeline-stages", "9"]) == 2
         assert "--pipeline-stages is the" in capsys.readouterr().err
