@@ -4,7 +4,7 @@ STAMP   := $(VENV)/.cuneate-setup-stamp
 PYTEST_ARGS ?=
 JOBS    ?= 2
 
-.PHONY: setup demo test test-long crosscheck bench clean
+.PHONY: setup demo test test-long test-release crosscheck bench clean
 
 setup: $(STAMP)
 
@@ -19,15 +19,23 @@ demo: setup
 # the long lane below, which CI runs after this one.
 test: setup
 	mkdir -p build
-	$(VENV)/bin/python -m pytest -n $(JOBS) -m "not long and not benchmark and not crosscheck" \
+	$(VENV)/bin/python -m pytest -n $(JOBS) -m "not long and not release and not benchmark and not crosscheck" \
 	    --junitxml=build/junit.xml $(PYTEST_ARGS)
 	$(VENV)/bin/python scripts/check_simulators_ran.py build/junit.xml
 
 # Place and route, long runs and sweeps: real instances of each long kind.
 test-long: setup
 	mkdir -p build
-	$(VENV)/bin/python -m pytest -n $(JOBS) -m "long and not crosscheck" \
+	$(VENV)/bin/python -m pytest -n $(JOBS) -m "long and not release and not crosscheck" \
 	    --junitxml=build/junit-long.xml $(PYTEST_ARGS)
+
+# Outside CI: what only re-measures (multi-seed fmax, the filled-device builds, proofs at sizes
+# already proven). Run it when you change those areas; its last result is recorded under
+# benchmarks/release.md.
+test-release: setup
+	mkdir -p build
+	$(VENV)/bin/python -m pytest -n $(JOBS) -m "release" -s \
+	    --junitxml=build/junit-release.xml $(PYTEST_ARGS)
 
 # Independent simulators in their own environments (snnTorch on a CPU build of PyTorch, made
 # by scripts/crosscheck_env.sh in build/crosscheck-venv): the NIR cross-check.
