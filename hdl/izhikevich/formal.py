@@ -244,7 +244,7 @@ def one_step(cfg: IzhikevichConfig, prop: str = "datapath"):
 
 
 def prove(cfg: IzhikevichConfig, workdir: Path, prop: str = "datapath",
-          timeout_s: float = 1800, solver: str = "z3") -> dict:
+          timeout_s: float = 1800, solver: str = "portfolio") -> dict:
     """Run the one-step check; returns ``{"property", "status" ("pass"/"fail"), "seconds",
     "counterexample" ({"v", "u", "I", "sel"} raw, or None)}``; for ``steps`` also
     ``"products"``, the exhaustive comparison of :func:`prove_steps_products` (run first: a
@@ -267,7 +267,8 @@ def prove(cfg: IzhikevichConfig, workdir: Path, prop: str = "datapath",
     if status != "fail":
         return {"property": prop, "status": status, "seconds": secs, "counterexample": None,
                 **extra}
-    vcd = (Path(workdir) / "onestep" / "engine_0" / "trace.vcd").read_text()
+    # the engine that found the counterexample (one of two in a portfolio)
+    vcd = next((Path(workdir) / "onestep").glob("engine_*/trace.vcd")).read_text()
     names = dict(re.findall(r"\$var wire \d+ (\S+) (\w+) ", vcd))
     cex = {}
     for bits, ident in re.findall(r"^b([01]+) (\S+)$", vcd, re.M):

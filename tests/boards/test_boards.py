@@ -146,7 +146,7 @@ def test_ulx3s_bitstream_meets_60mhz(tmp_path):
     print("\n" + (tmp_path / "cuneate_ulx3s.report.txt").read_text())
 
 
-@pytest.mark.long
+@pytest.mark.release
 def test_ulx3s_filled_with_cores_meets_timing(tmp_path):
     """The largest count the ULX3S sizing accepts: 10 cores of 4096 neurons at 70 MHz behind
     the link (655 M neuron updates/s, 16 times the reference design), placed and routed into
@@ -185,8 +185,8 @@ def test_icebreaker_bitstream_fits_and_meets_12mhz(tmp_path):
     print("\n" + (tmp_path / "cuneate_icebreaker.report.txt").read_text())
 
 
-@pytest.mark.long
-@pytest.mark.parametrize("board", ["atlys", "arty"])
+@pytest.mark.parametrize("board", [pytest.param("atlys", marks=pytest.mark.long),
+                                   pytest.param("arty", marks=pytest.mark.release)])
 def test_xilinx_targets_yosys_estimate(board, tmp_path):
     r = build_target(board, tmp_path, n_neurons=2484)
     ye = r["yosys_estimate"]

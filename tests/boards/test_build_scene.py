@@ -170,7 +170,7 @@ def test_a_scene_whose_spikes_overflow_a_batch_frame_is_refused(tmp_path, capsys
         in err[0]
 
 
-@pytest.mark.long
+@pytest.mark.release
 def test_the_whole_hand_bitstream_meets_timing(tmp_path, capsys):
     """One hand of the whole-hand scene (48 channels fanned out to 192 afferents, six cuneate
     neurons over them) placed and routed for the ULX3S at 60 MHz (about 3 to 5 min): timing

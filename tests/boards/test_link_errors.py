@@ -29,7 +29,7 @@ from cuneate.hdl.link.codec import (CRC_BYTES, MAX_FRAME, MIN_FRAME, MSG_CONTROL
 EDGE = edge_messages()
 TYPES = {"write": MSG_WRITE, "control": MSG_CONTROL, "spikes": MSG_SPIKES,
          "counters": MSG_COUNTERS}
-#: samples per class and message type in the default lane (the long lane takes 20 times more)
+#: samples per class and message type in the default lane (the release lane takes 20 times more)
 SAMPLES = {"bits2": 5000, "bits3": 5000, "code_bits2": 2500, "byte": 2500, "drops": 1500,
            "insert": 2500, "inserts": 1500}
 
@@ -155,7 +155,7 @@ def test_sampled_multi_bit_errors_drops_and_insertions_are_counted(name):
         assert tally["tried"] == n
 
 
-@pytest.mark.long
+@pytest.mark.release
 @pytest.mark.parametrize("name", list(TYPES))
 def test_long_sampled_multi_bit_errors_drops_and_insertions(name):
     for kind, n in SAMPLES.items():

@@ -80,7 +80,7 @@ def test_cuneate_prove_core_reports_a_caught_fault_as_json(capsys):
     assert "memory_cur_mem_tracked_word" in rec["failed"], rec
 
 
-@pytest.mark.long
+@pytest.mark.release
 def test_the_default_configuration_core_equals_the_one_step_datapath(tmp_path):
     """The default configuration itself (2500 neurons, internal tick divider - the harness
     drives the tick freely, which covers the divider): k-induction closes at the same k."""

@@ -95,10 +95,15 @@ def test_the_steps_property_catches_a_fault(tmp_path, monkeypatch):
     assert r["products"]["mismatches"] > 0
 
 
-@pytest.mark.long
-@pytest.mark.parametrize("sets", [("IB", "FS"), ("CH", "LTS", "RZ")], ids="+".join)
+@pytest.mark.parametrize("sets", [
+    *[pytest.param((p,), marks=pytest.mark.long) for p in ("IB", "CH", "FS", "LTS", "RZ")],
+    *[pytest.param(s, marks=pytest.mark.release) for s in (("IB", "FS"), ("CH", "LTS", "RZ"))]],
+    ids="+".join)
 def test_the_core_steps_compute_the_four_stage_update_for_every_preset(sets, tmp_path):
-    """The other five presets (RS runs in the default lane), as two mixes of sets."""
+    """The other five presets (RS runs in the default lane), each alone at its own formats
+    (long lane); as two mixes of sets, the constants selected per neuron, in the release lane
+    (the selection is the same function on both sides of the property, so a mix proves each
+    set's arithmetic again, at formats wide enough for all of them, in 10-25 minutes)."""
     r = prove(_cfg(*sets), tmp_path, "steps", solver="yices")
     record(f"formal_steps_{'_'.join(sets)}", 1, 0, int(r["status"] != "pass"),
            "SymbiYosys, yices + numpy")

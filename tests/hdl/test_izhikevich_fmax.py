@@ -1,7 +1,7 @@
 """fmax of the Izhikevich core per pipeline depth: yosys synth_ecp5, the block RAMs' and
 multipliers' registers packed (hdl/flow/ecp5_pack.py), and nextpnr-ecp5 out of context on the
-LFE5U-85F (CABGA381, speed grade 6), the default 2 500-neuron configuration (long lane: place
-and route, ~1 min a depth). The floors are the goals: 100 MHz at the default depth, 150 MHz at
+LFE5U-85F (CABGA381, speed grade 6), the default 2 500-neuron configuration (release lane:
+place and route, ~1 min a depth). The floors are the goals: 100 MHz at the default depth, 150 MHz at
 the deepest (docs/architecture.md lists every depth's fmax per seed)."""
 
 import pytest
@@ -14,7 +14,7 @@ from cuneate.hdl.izhikevich import IzhikevichConfig, izhikevich_verilog
 FLOORS = {5: 100.0, 9: 150.0}
 
 
-@pytest.mark.long
+@pytest.mark.release
 @pytest.mark.parametrize("depth", sorted(FLOORS))
 def test_fmax_per_pipeline_depth(depth, tmp_path):
     if not available():

@@ -197,10 +197,23 @@ def test_refusals(argv, expect, tmp_path, capsys):
 
 
 @pytest.mark.long
+def test_sweep_with_synthesis_and_place_and_route(tmp_path):
+    """The sweep's synthesis path (yosys synth_ecp5, nextpnr-ecp5 fmax) on one fixed core,
+    16 kHz at 18-bit operands, sized for 40 MHz; its neighbours in update rate in the release
+    lane."""
+    spec = SweepSpec(duration_ms=100.0, synth=True, fmax=True)
+    pts = grid(update_hz=(16e3,), operand_width=(18,), schemes=("euler",))
+    rows = {r["label"]: r for r in run_sweep(pts, spec, tmp_path, workers=2)}
+    a = rows["fixed 16 kHz w18 v.18 u.20 nearest"]
+    assert a["neurons_per_core"] == 2500 and a["MULT18X18D"] >= 4 and a["DP16KD"] > 0
+    assert all(r["status"] == "ok" for r in rows.values())
+    assert a["fmax_mhz"] >= 40.0
+
+
+@pytest.mark.release
 def test_sweep_with_synthesis_and_update_rates(tmp_path):
-    """A real instance of the long kind: update rates (powers of two and not) at 18-bit
-    operands, with yosys synth_ecp5 and nextpnr-ecp5 (fmax) of each fixed core sized for
-    40 MHz (a second width's three place-and-route runs left the long lane for its time)."""
+    """Update rates (powers of two and not) at 18-bit operands, with yosys synth_ecp5 and
+    nextpnr-ecp5 (fmax) of each fixed core sized for 40 MHz."""
     spec = SweepSpec(duration_ms=1000.0, synth=True, fmax=True)
     pts = grid(update_hz=(8e3, 16e3, 20e3), operand_width=(18,), schemes=("euler", "rk4"))
     rows = {r["label"]: r for r in run_sweep(pts, spec, tmp_path, workers=2)}
