@@ -39,9 +39,11 @@ def run_scene(scene, engines: list[str] | None = None, build_dir: Path | None = 
     mod = kind_module(scene.kind)
     if scene.kind == "afferent":
         return mod.run(scene, engines, build_dir, progress, log, waves=waves, in_turn=in_turn)
+    if scene.kind == "texture" and in_turn is None:     # its afferents on the same core
+        return mod.run(scene, engines, build_dir, progress, log, waves=waves)
     if waves is not None or scene["run"]["waves"]:
-        raise ValueError(f"waveforms are written for afferent scenes (the Izhikevich core); a "
-                         f"{scene.kind} scene has none")
+        raise ValueError(f"waveforms are written for afferent and texture scenes (the "
+                         f"Izhikevich core); a {scene.kind} scene has none")
     if in_turn is not None:
         raise ValueError(f"trials in turn are an afferent scene's; a {scene.kind} scene has "
                          f"none")
