@@ -15,20 +15,23 @@ Textiles (woven): in coordinates turned by the weave's orientation ``theta``,
     h = A [ sum_n a_n cos(2 pi n u / P_u)                 yarns across u (harmonics a_n)
             + c_v sum_n a_n cos(2 pi n v / P_v)           yarns across v
             + c_i cos(2 pi u / P_u) cos(2 pi v / P_v) ]    interlacing
-        + A_m cos(2 pi u / P_m)                           the weave's motif (ribs, twill lines)
+        + A_m cos(2 pi (u / P_m + phi))                   the weave's motif (ribs, twill lines)
         + r(x, y)                                         yarn irregularity
 
-Glass, paper and polymers are random surfaces ``r(x, y)`` alone. ``r`` is a Gaussian random
+The weave's phases (``u``, ``v`` offsets, ``phi``) are the specimen's, drawn once. Glass, paper
+and polymers are random surfaces ``r(x, y)`` alone. ``r`` is a Gaussian random
 field with the power spectrum of a self-affine (fractal) surface, ``P(k) ~ k^-(2 + 2 H)``
 (Hurst exponent ``H``, Persson's form for a 2-D isotropic surface) between the wavelengths
 ``lambda_hi`` (shortest) and ``lambda_lo`` (longest), zero outside, scaled to the root mean
 square ``rms``; drawn by filtering white noise in the Fourier domain from the texture's own
-generator (seeded with the synthesis seed and the texture's name, so each specimen is the same
-in every trial and run).
+generator (seeded with the synthesis seed and the texture's specimen, so each specimen is the
+same in every trial and run). A texture made ``like`` another (:func:`texture`) is a variant of
+the same specimen: the same random draws (weave phases, roughness), some parameters changed -
+two such textiles of close periods are nearly the same surface.
 
 The ten: five textiles of different periods, orientations, harmonics and motifs; glass (nearly
 flat, fine roughness of nanometres: the ridges seen through it lie below its surface); paper
-(a fractal of a few micrometres); three polymers differing by friction - latex (high, static
+(a fractal of about ten micrometres); three polymers differing by friction - latex (high, static
 well above kinetic: stick-slip), bioskin (medium), the low-friction cover of a game controller
 (a fine matte roughness).
 """
@@ -66,6 +69,7 @@ class Texture:
     hurst: float = 0.8                  # H
     rough_hi_mm: float = 0.05           # lambda_hi, shortest wavelength of r
     rough_lo_mm: float = 4.0            # lambda_lo, longest wavelength of r
+    specimen: str = ""                  # whose random draws it takes ("": its own name)
 
     def __post_init__(self):
         if self.family not in ("textile", "glass", "paper", "polymer"):
@@ -136,6 +140,7 @@ def texture(spec) -> Texture:
     base = texture(spec.pop("like", "plain_weave"))
     if "harmonics" in spec:
         spec["harmonics"] = tuple(spec["harmonics"])
+    spec.setdefault("specimen", base.specimen or base.name)
     return replace(base, **spec)
 
 
@@ -191,7 +196,7 @@ def surface(tex: Texture, seed: int, x_mm: tuple, y_mm: tuple, dx_mm: float = 0.
     ny = int(np.ceil((y_mm[1] - y_mm[0]) / dx)) + 1
     x = x_mm[0] + dx * np.arange(nx)
     y = y_mm[0] + dx * np.arange(ny)
-    rng = _seed(seed, tex.name)
+    rng = _seed(seed, tex.specimen or tex.name)
     h = fractal_field(rng, (ny, nx), dx, tex.rough_rms_um, tex.hurst, tex.rough_hi_mm,
                       tex.rough_lo_mm)
     if tex.family == "textile":
