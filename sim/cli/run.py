@@ -99,7 +99,8 @@ def cmd_run(args) -> int:
                        f"scenes (the Izhikevich core); {scene.source} is a {scene.kind} scene")
     in_turn = None
     if args.in_turn:
-        k = scene["hardware"]["board_trials"] if scene.kind == "afferent" else None
+        k = scene["hardware"]["board_trials"] if scene.kind in ("afferent", "texture") \
+            else None
         if k is None:
             raise CliError(f"cuneate run: --in-turn: {scene.source} names no "
                            f"hardware.board_trials (the trials a board holds at a time)")

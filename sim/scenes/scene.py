@@ -399,12 +399,11 @@ def parse_scene(text: str, source: str = "<scene>", base_dir: Path | None = None
               "only afferent scenes decode a chosen population")
     scene = Scene(source, sections, pops, projs, base_dir, kind.name)
     n_trials = scene.n_trials()
-    if hw["board_trials"] is not None and (kind.name != "afferent" or st["kind"] == "recorded"
-                                           or hw["board_trials"] > n_trials):
+    in_turn = kind.name in ("afferent", "texture") and st["kind"] != "recorded"
+    if hw["board_trials"] is not None and (not in_turn or hw["board_trials"] > n_trials):
         V.err("hardware.board_trials", f"a board holds some of an afferent scene's trials "
-                                       f"(1 .. {n_trials})" if kind.name == "afferent" and
-              st["kind"] != "recorded" else "a board holds some of the trials of an afferent "
-              "scene with synthesized trials")
+                                       f"(1 .. {n_trials})" if in_turn else "a board holds some "
+              "of the trials of an afferent or texture scene with synthesized trials")
     need = n_trials * sum(p["size"] for p in pops if p["model"] == "izhikevich")
     capacity = int(hw["clock_hz"] // hw["update_hz"])
     if need > capacity:

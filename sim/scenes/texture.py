@@ -356,12 +356,15 @@ def decode_run(scene, arun) -> dict:
             for e, sp in arun.spikes.items()}
 
 
-def run_single(scene, engines=None, build_dir=None, progress=False, log=None, waves=None):
-    """One condition: the afferent machinery, then the texture decoders."""
+def run_single(scene, engines=None, build_dir=None, progress=False, log=None, waves=None,
+               in_turn: int | None = None):
+    """One condition: the afferent machinery (``in_turn``: its trials that many at a time, as
+    a board holding them plays them, :mod:`cuneate.sim.scenes.in_turn`), then the texture
+    decoders."""
     from .. import progress as prog
     from . import afferent
     arun = afferent.run(scene, engines, build_dir, progress, log, waves=waves,
-                        synth=synthesize, build=build_neurons)
+                        synth=synthesize, build=build_neurons, in_turn=in_turn)
     t0 = time.perf_counter()
     with prog.step("decoding the textures (rate, rate + CV, Victor-Purpura; kNN, "
                    "leave-one-out)"):
@@ -468,14 +471,16 @@ def run_grid(scene, engines=None, build_dir=None, progress=False, log=None) -> G
                     (g["scheduler"] or f"local cluster of {g['workers']}")})
 
 
-def run(scene, engines=None, build_dir=None, progress=False, log=None, waves=None):
+def run(scene, engines=None, build_dir=None, progress=False, log=None, waves=None,
+        in_turn: int | None = None):
     """Run a texture scene: one condition (:class:`TextureRun`) or its grid
     (:class:`GridRun`)."""
     if is_grid(scene):
-        if waves is not None or scene["run"]["waves"]:
-            raise ValueError("a grid of conditions writes no waveforms (run one condition)")
+        if waves is not None or scene["run"]["waves"] or in_turn:
+            raise ValueError("a grid of conditions runs each condition on its engines as a "
+                             "whole (no waveforms, no trials in turn: run one condition)")
         return run_grid(scene, engines, build_dir, progress, log)
-    return run_single(scene, engines, build_dir, progress, log, waves)
+    return run_single(scene, engines, build_dir, progress, log, waves, in_turn)
 
 
 # --------------------------------------------------------------------------- results
@@ -571,6 +576,11 @@ def format_run(run) -> str:
             out.append(f"  {'':10s} VP: {len(vt)} matrices of {vt[0]['trains']} trains, "
                        f"{min(x['spikes'] for x in vt)}-{max(x['spikes'] for x in vt)} spikes, "
                        f"{1000 * np.mean([x['seconds'] for x in vt]):.1f} ms a matrix")
+    turn = a.ran.get("in_turn")
+    if turn:
+        out.append(f"  trials in turn: {turn['trials_at_a_time']} at a time on the board's core, "
+                   f"{turn['groups']} groups of {turn['ticks_a_group']} ticks, each from the "
+                   f"state the last left")
     c = core_cost(sc, a)
     out.append(f"  core: {c['update_hz'] / 1e3:g} kHz (dt {c['dt_ms']:g} ms) at "
                f"{c['clock_hz'] / 1e6:g} MHz holds {c['neurons_per_core']} neurons "

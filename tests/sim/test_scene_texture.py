@@ -233,3 +233,82 @@ def test_a_grid_decodes_each_condition_and_the_spatial_vp_across_them(tmp_path):
     page = write_report(r, tmp_path)
     assert (tmp_path / "grid_golden.png").is_file() and "Spatial VP" in page.read_text()
     assert "grid of 4 conditions" in format_run(r)
+
+
+# --------------------------------------------------------------------------- HDL engines
+@pytest.mark.long
+@pytest.mark.cocotb
+def test_a_texture_scene_on_verilator_and_the_board_equals_fixed(build_root):
+    """The core at 20 kHz on Verilator (cocotb) and the board top behind its UART link (the
+    board engine): every train equal to the twin's."""
+    s = _scene(**{"trials = 3": "trials = 2", "pairs = [0, 1]": "pairs = [0]",
+                  '"golden", "fixed"': '"fixed", "verilator", "board"'})
+    r = run_scene(s, build_dir=build_root / "texture_scene")
+    a = r.afferent
+    for e in ("verilator", "board"):
+        ag = a.agreement[f"{e} vs fixed"]
+        assert ag["spikes_a"] > 100 and ag["identical_trains"] == ag["neurons"] == 6
+        assert r.decoding[e].to_dict()["rows"] == r.decoding["fixed"].to_dict()["rows"]
+    b = a.counters["board"]
+    assert b["frames_lost"] == 0 and b["link_budget"]["measured"]["rows"]
+
+
+# --------------------------------------------------------------------------- the experiment
+def _record(name: str, data: dict) -> None:
+    """The release lane's figures, kept under benchmarks/results/ (docs/textures.md quotes
+    them)."""
+    from pathlib import Path
+    out = Path(__file__).resolve().parents[2] / "benchmarks" / "results"
+    out.mkdir(parents=True, exist_ok=True)
+    (out / f"{name}.json").write_text(json.dumps(data, indent=1, default=float) + "\n")
+
+
+def _channel_means(d) -> dict:
+    return {dec: d.channel_range(dec)[0] for dec in ("rate", "rate + CV", "VP")}
+
+
+@pytest.mark.release
+@pytest.mark.cocotb
+def test_the_seeds_condition_on_golden_fixed_and_verilator(tmp_path, build_root):
+    """``cuneate run examples/textures.toml``: ten textures x 10 at 400 mN, 15 mm/s; VP + kNN
+    (leave-one-out) >= 90 % on every engine, rate and rate + CV below it, fixed = Verilator;
+    and the second synthesis seed orders the decoders alike."""
+    import time
+    t0 = time.perf_counter()
+    assert cli.main(["-q", "run", "examples/textures.toml", "--out", str(tmp_path / "a")]) == 0
+    wall = time.perf_counter() - t0
+    summ = json.loads((tmp_path / "a" / "run.json").read_text())
+    assert summ["agreement"]["verilator vs fixed"]["identical_trains"] == 400
+    rows = {}
+    for e in ("golden", "fixed", "verilator"):
+        pc = summ["texture_decoding"][e]["per_channel"]
+        m = {dec: pc[dec]["mean"] for dec in ("rate", "rate + CV", "VP")}
+        assert m["VP"] >= 0.9 and m["rate"] < m["rate + CV"] < m["VP"], (e, m)
+        rows[e] = summ["texture_decoding"][e]
+    s2 = load_scene(example_path("textures"))
+    s2["stimulus"]["texture_seed"] = 2
+    r2 = run_scene(s2, ["golden", "fixed"])
+    for e in ("golden", "fixed"):
+        m = _channel_means(r2.decoding[e])
+        assert m["rate"] < m["rate + CV"] < m["VP"] and m["VP"] >= 0.9, (e, m)
+    _record("textures_example", {"wall_s": wall, "timing": summ["timing"],
+                                 "agreement": summ["agreement"], "seed_1": rows,
+                                 "seed_2": {e: d.to_dict() for e, d in r2.decoding.items()}})
+
+
+@pytest.mark.release
+def test_the_grid_of_25_conditions_and_the_spatial_vp(tmp_path):
+    """Force 200-600 mN x velocity 5-25 mm/s, each condition its own run on a local Dask
+    cluster, decoded alone (the heat map), then the spatial VP across velocities and forces."""
+    import time
+    s = load_scene(example_path("textures_grid"))
+    t0 = time.perf_counter()
+    r = run_scene(s)
+    wall = time.perf_counter() - t0
+    from cuneate.sim.scenes.texture import format_run, grid_notes, summary, write_report
+    write_report(r, tmp_path)
+    assert len(r.cells) == 25 and (tmp_path / "grid_golden.png").is_file()
+    assert {x["across"] for x in r.spatial} == {"velocities", "forces"}
+    print(format_run(r))
+    _record("textures_grid", {"wall_s": wall, "notes": grid_notes(r, "golden")}
+            | {k: v for k, v in summary(r).items() if k in ("cells", "spatial", "timing")})
