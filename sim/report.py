@@ -20,7 +20,8 @@ import numpy as np
 __all__ = ["write_report", "summary_dict", "figure_names", "page_head", "figures_html",
            "pyplot", "html_table", "fmt", "write_page", "DPI", "save_figure",
            "decoding_rows", "DECODING_HEAD", "printable", "format_run", "engine_figures",
-           "agreement_html", "ran_html", "files_html", "board_link_html", "block_line"]
+           "agreement_html", "ran_html", "files_html", "board_link_html", "block_line",
+           "in_turn_line"]
 
 #: Resolution of every report figure (dots per inch); figures are drawn at their display size.
 DPI = 150
@@ -479,11 +480,8 @@ def format_run(run) -> str:
                f"{100 * pub.balanced_accuracy:.1f} %)") if pub else ""
         out.append(f"  {e:10s} balanced accuracy {100 * d.accuracy:5.1f} %  recall % "
                    f"{rec}{pub}  ({t:.1f} s)")
-    turn = run.ran.get("in_turn")
-    if turn:
-        out.append(f"  trials in turn: {turn['trials_at_a_time']} at a time on the board's core, "
-                   f"{turn['groups']} groups of {turn['ticks_a_group']} ticks, each from the "
-                   f"state the last left")
+    if run.ran.get("in_turn"):
+        out.append(in_turn_line(run.ran["in_turn"]))
     for k, v in run.decode_agreement.items():
         out.append(f"  balanced accuracy {k}: differs by {100 * v['difference']:.1f} points "
                    f"(tolerance {100 * v['tolerance']:.1f}): "
@@ -523,6 +521,13 @@ def format_run(run) -> str:
                    f"line load:")
         out += [f"    {line}" for line in format_budget(board["link_budget"]["measured"])]
     return "\n".join(out)
+
+
+def in_turn_line(turn: dict) -> str:
+    """What ``cuneate run`` prints of trials played in turn (a run's ``ran["in_turn"]``)."""
+    return (f"  trials in turn: {turn['trials_at_a_time']} at a time on the board's core, "
+            f"{turn['groups']} groups of {turn['ticks_a_group']} ticks, each from the state "
+            f"the last left")
 
 
 def front_end_detail(scene, neurons) -> list[str]:

@@ -356,7 +356,7 @@ def dask_map(fn, items: list, args: tuple, done, scheduler: str | None = None,
     cluster = None
     if remote is None:
         cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                               dashboard_address=None, silence_logs=logging.ERROR)
+                               dashboard_address=None, silence_logs=logging.CRITICAL)
         client = Client(cluster)
     else:
         client = remote

@@ -154,8 +154,7 @@ def parse_scene(text: str, source: str = "<scene>", base_dir: Path | None = None
     mems = sensor["kind"] == "mems"
     if mems:
         # a MEMS fingertip's own defaults (16 tethers, its sample rate, the seeds' 20 kHz ...)
-        from .texture import fill_defaults
-        fill_defaults(V, raw, sections)
+        kind_module("texture").fill_defaults(V, raw, sections)
     elif raw.get("grid"):
         V.err("grid", "a grid of sensing conditions runs texture scenes (sensor.kind = "
                       "\"mems\")")

@@ -305,7 +305,8 @@ def test_the_grid_of_25_conditions_and_the_spatial_vp(tmp_path):
     t0 = time.perf_counter()
     r = run_scene(s)
     wall = time.perf_counter() - t0
-    from cuneate.sim.scenes.texture import format_run, grid_notes, summary, write_report
+    from cuneate.sim.scenes.texture import format_run, summary, write_report
+    from cuneate.sim.scenes.texture_grid import grid_notes
     write_report(r, tmp_path)
     assert len(r.cells) == 25 and (tmp_path / "grid_golden.png").is_file()
     assert {x["across"] for x in r.spatial} == {"velocities", "forces"}
