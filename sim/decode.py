@@ -1,5 +1,7 @@
 """Decoding object properties from spike trains with scikit-learn: what the system decides per
-grasp, cross-validated so that no grasp is ever in its own training set.
+grasp, cross-validated so that no grasp is ever in its own training set; and the texture
+experiment's decoders (rate, rate + CV, Victor-Purpura by kNN under leave-one-out, the
+spatial VP across conditions: :func:`decode_textures`, :func:`decode_conditions`).
 
 Samples (scene key ``decoder.features``):
 
