@@ -204,7 +204,7 @@ def _rows_text(d, e: str) -> list[str]:
         out.append(f"  {e:10s} {dec:9s} "
                    + (f"{_pct(r[0]):>5s} % over the channels ({_pct(r[1])}-{_pct(r[2])})"
                       if r else "-")
-                   + (f", best {b.channel} {_pct(b.accuracy)}" if b else "")
+                   + (f", best {b.channel} {_pct(b.accuracy)} %" if b else "")
                    + (f", all channels {_pct(a.accuracy)} %" if a and a.accuracy is not None
                       else "") + f"  (seeds: {SEEDS[dec]})")
     return out
@@ -218,7 +218,7 @@ def format_run(run) -> str:
     a = run.afferent
     sc = run.scene
     out = [f"{sc.name}: {len(a.classes)} textures x {sc['scene']['trials']} trials, "
-           f"{len(a.neurons)} afferents ({len(run.channels)} channels a trial), engines "
+           f"{len(a.neurons)} afferents ({len(run.channels)} channel(s) a trial), engines "
            f"{', '.join(a.spikes)}"]
     first = next(iter(run.decoding.values()), None)
     if first is not None:
@@ -333,7 +333,8 @@ def _fig_decoding(run, e: str, d, out: Path, plt) -> list[tuple[str, str]]:
                                         f"Fig. 3B): trials grouped by texture"))
     rows = [r for r in (d.best("rate"), d.best("rate + CV"), h, d.row("VP", "all channels"))
             if r is not None and r.protocol is not None]
-    fig, axes = plt.subplots(1, len(rows), figsize=(5.0 * len(rows), 4.8), squeeze=False)
+    fig, axes = plt.subplots(1, len(rows), figsize=(5.0 * len(rows), 5.0), squeeze=False,
+                             layout="constrained")
     for ax, r in zip(axes[0], rows):
         p = r.protocol
         ConfusionMatrixDisplay(p.confusion, display_labels=p.labels).plot(
@@ -341,8 +342,7 @@ def _fig_decoding(run, e: str, d, out: Path, plt) -> list[tuple[str, str]]:
         ax.set_title(f"{e}: {r.decoder}, {r.channel}\nbalanced {_pct(p.balanced_accuracy)} % "
                      f"(chance {100 * p.chance_balanced:.0f} %)", fontsize=8)
         ax.tick_params(labelsize=6)
-    fig.tight_layout()
-    save_figure(fig, out / f"confusion_{e}.png")
+    save_figure(fig, out / f"confusion_{e}.png", bbox_inches="tight")
     names.append((f"confusion_{e}.png", f"Confusion matrices on {e} (leave-one-out kNN): "
                                         f"rate, rate + CV and VP on their best channels, VP "
                                         f"on all channels"))
