@@ -301,9 +301,16 @@ def victor_purpura_matrix(trains: Sequence[ArrayLike], q_per_ms: float) -> NDArr
     -------
     numpy.ndarray of float64, shape (k, k)
         Symmetric matrix with zero diagonal; entry ``[i, j]`` is ``victor_purpura(trains[i],
-        trains[j], q_per_ms)``.
+        trains[j], q_per_ms)`` (the same dynamic programme; compiled and run over the pairs in
+        parallel by :mod:`cuneate.golden.metrics_kernel` when numba is available, the minima
+        then taken in another order: equal to within rounding).
     """
     ts = [_train(t, f"trains[{i}]") for i, t in enumerate(trains)]
+    q = _positive(q_per_ms, "q_per_ms", allow_inf=True, allow_zero=True)
+    from .kernel import available
+    if available():
+        from .metrics_kernel import vp_matrix_compiled
+        return vp_matrix_compiled(ts, q)
     out = np.zeros((len(ts), len(ts)))
     for i in range(len(ts)):
         for k in range(i + 1, len(ts)):

@@ -51,7 +51,7 @@ from .fbg import bragg_shift_nm, strain_sensitivity_pm_per_microstrain
 __all__ = ["Material", "MATERIALS", "Pad", "contact_stiffness", "series_stiffness",
            "GraspSpec", "SlideSpec", "PulseSpec", "synthesize_grasp", "synthesize_slide",
            "synthesize_pulse", "EFFECTS",
-           "EFFECT_ORDER", "apply_effects", "sensor_effects", "Trace"]
+           "EFFECT_ORDER", "EFFECT_UNITS", "apply_effects", "sensor_effects", "Trace"]
 
 
 @dataclass(frozen=True)
@@ -241,43 +241,43 @@ def synthesize_pulse(spec: PulseSpec, rng: np.random.Generator,
 
 
 # ------------------------------------------------------------------------------ effects
-# Each effect: f(d_lambda_nm (n, g), params, rng, fs_hz, context) -> (new array, counts dict).
+# Each effect: f(x (n, channels), p, rng, fs_hz, context) -> (new array, counts dict), its
+# parameters ``p`` in the trace's own unit (nm for a grating's shift, V for a MEMS tether's
+# output): :func:`sensor_effects` converts a scene's parameters (pm, mV, ...) with the sensor's
+# table of units (:data:`EFFECT_UNITS`).
 
 def _eff_temperature(x, p, rng, fs, ctx):
     t = np.arange(x.shape[0]) / fs
-    dT = float(p.get("offset_K", 0.0)) + float(p.get("drift_K_per_s", 0.0)) * t
+    dT = p["offset_K"] + p["drift_K_per_s"] * t
     shift = bragg_shift_nm(0.0, dT, ctx.get("lambda_B_nm", 1550.0))
     return x + shift[:, None], {"max_shift_nm": float(np.max(np.abs(shift)))}
 
 
 def _eff_crosstalk(x, p, rng, fs, ctx):
-    f = float(p.get("fraction", 0.0))
+    f = p["fraction"]
     if x.shape[1] < 2:
-        return x, {"fraction": f}
+        return x, {}
     others = x.sum(axis=1, keepdims=True) - x
-    return x + f * others / (x.shape[1] - 1), {"fraction": f}
+    return x + f * others / (x.shape[1] - 1), {}
 
 
 def _eff_noise(x, p, rng, fs, ctx):
-    sigma = float(p.get("sigma_pm", 0.5)) * 1e-3
-    return x + sigma * rng.standard_normal(x.shape), {"sigma_pm": sigma * 1e3}
+    return x + p["sigma"] * rng.standard_normal(x.shape), {}
 
 
 def _eff_saturation(x, p, rng, fs, ctx):
-    lo, hi = float(p.get("min_nm", -2.0)), float(p.get("max_nm", 2.0))
+    lo, hi = p["lo"], p["hi"]
     n = int(np.count_nonzero((x < lo) | (x > hi)))
     return np.clip(x, lo, hi), {"samples_clipped": n}
 
 
 def _eff_resolution(x, p, rng, fs, ctx):
-    step = float(p.get("step_pm", 1.0)) * 1e-3
-    return np.round(x / step) * step, {"step_pm": step * 1e3}
+    return np.round(x / p["step"]) * p["step"], {}
 
 
 def _eff_dropped(x, p, rng, fs, ctx):
     """The interrogator misses samples: they come back as NaN, for the loader/driver to see."""
-    prob = float(p.get("probability", 0.001))
-    drop = rng.random(x.shape[0]) < prob
+    drop = rng.random(x.shape[0]) < p["probability"]
     drop[0] = False
     y = x.copy()
     y[drop, :] = np.nan
@@ -298,6 +298,17 @@ EFFECTS = {
 #: resolution, dropped samples). ``strain`` is the mechanical term computed by the synthesizers.
 EFFECT_ORDER = ("strain", "temperature", "crosstalk", "noise", "saturation", "resolution",
                 "dropped_samples")
+#: A grating's effect parameters as a scene gives them -> the effect functions' (in nm):
+#: ``{effect: {parameter: (scene key, scale, default)}}``.
+EFFECT_UNITS = {
+    "temperature": {"offset_K": ("offset_K", 1.0, 0.0),
+                    "drift_K_per_s": ("drift_K_per_s", 1.0, 0.0)},
+    "crosstalk": {"fraction": ("fraction", 1.0, 0.02)},
+    "noise": {"sigma": ("sigma_pm", 1e-3, 0.5)},
+    "saturation": {"lo": ("min_nm", 1.0, -2.0), "hi": ("max_nm", 1.0, 2.0)},
+    "resolution": {"step": ("step_pm", 1e-3, 1.0)},
+    "dropped_samples": {"probability": ("probability", 1.0, 0.001)},
+}
 
 
 def apply_effects(strain, effects, params: dict, rng: np.random.Generator, fs_hz: float,
@@ -323,10 +334,14 @@ def apply_effects(strain, effects, params: dict, rng: np.random.Generator, fs_hz
 
 
 def sensor_effects(d_lambda_nm, effects, params: dict, rng: np.random.Generator, fs_hz: float,
-                   lambda_B_nm: float = 1550.0) -> tuple[np.ndarray, dict]:
-    """Apply exactly the listed ``effects`` other than ``strain`` to shifts ``(n, gratings)``
-    (nm) that already hold the mechanical term (synthesized or recorded); returns the shifts
-    and one count entry per effect applied, in the order applied."""
+                   lambda_B_nm: float = 1550.0, units: dict = EFFECT_UNITS
+                   ) -> tuple[np.ndarray, dict]:
+    """Apply exactly the listed ``effects`` other than ``strain`` to a trace ``(n, channels)``
+    that already holds the mechanical term (synthesized or recorded): a grating's shifts (nm)
+    by default, or another sensor's outputs with that sensor's table of ``units`` (scene
+    parameters -> the trace's unit, :data:`EFFECT_UNITS`). Returns the trace and one count
+    entry per effect applied, in the order applied: the parameters as the scene gave them
+    and what the effect counted."""
     for e in effects:
         if e not in EFFECT_ORDER:
             raise ValueError(f"unknown effect {e!r}; known: {', '.join(EFFECT_ORDER)}")
@@ -337,6 +352,10 @@ def sensor_effects(d_lambda_nm, effects, params: dict, rng: np.random.Generator,
     ctx = {"lambda_B_nm": lambda_B_nm}
     for name in EFFECT_ORDER[1:]:
         if name in effects:
-            x, c = EFFECTS[name](x, params.get(name, {}), rng, fs_hz, ctx)
-            counts[name] = c
+            given = params.get(name, {})
+            scene = {key: float(given.get(key, default))
+                     for key, _, default in units[name].values()}
+            p = {k: scale * scene[key] for k, (key, scale, _) in units[name].items()}
+            x, c = EFFECTS[name](x, p, rng, fs_hz, ctx)
+            counts[name] = scene | c
     return x, counts

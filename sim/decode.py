@@ -1,5 +1,7 @@
 """Decoding object properties from spike trains with scikit-learn: what the system decides per
-grasp, cross-validated so that no grasp is ever in its own training set.
+grasp, cross-validated so that no grasp is ever in its own training set; and the texture
+experiment's decoders (rate, rate + CV, Victor-Purpura by kNN under leave-one-out, the
+spatial VP across conditions: :func:`decode_textures`, :func:`decode_conditions`).
 
 Samples (scene key ``decoder.features``):
 
@@ -46,7 +48,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 __all__ = ["Decoded", "Protocol", "isi_samples", "trial_features", "decode_trials",
-           "NO_DECISION", "decoded_neurons"]
+           "NO_DECISION", "decoded_neurons", "TEXTURE_DECODERS", "ALL_CHANNELS", "TextureRow",
+           "TextureDecoding", "confusions", "rate_cv", "vp_matrix", "knn_predict",
+           "loo_scaled_distances",
+           "decode_textures", "decode_conditions"]
 
 #: The predicted label of a grasp with no sample to decide on.
 NO_DECISION = "(no spikes)"
@@ -272,3 +277,247 @@ def decoded_neurons(population: str, spikes_ms, neurons, layer: dict, engine: st
     keep = [i for i, p in enumerate(neurons.population) if p == population]
     return ([spikes_ms[i] for i in keep], [neurons.trial[i] for i in keep],
             [neurons.grating[i] for i in keep])
+
+
+# --------------------------------------------------------------------------- textures
+# The texture experiment's decoders (the seeds'): each texture trial decided from one
+# channel's spike train (or from every channel's) by k nearest neighbours under leave-one-out,
+# on the spike rate, on the rate and the ISIs' coefficient of variation (features scaled on
+# the training trials), or on Victor-Purpura distances (Victor & Purpura 1996; q = 5/s by
+# default) - and the spatial VP: spike times within the slide rescaled by the trial's
+# velocity into positions, the cost then per mm.
+
+#: The texture decoders, in the report's order.
+TEXTURE_DECODERS = ("rate", "rate + CV", "VP")
+#: The name of the rows that pool every channel.
+ALL_CHANNELS = "all channels"
+
+
+@dataclass
+class TextureRow:
+    """One decoder on one channel (or every channel): its leave-one-out scores, or why it
+    did not decode."""
+
+    decoder: str
+    channel: str
+    protocol: Protocol | None
+    reason: str = ""
+
+    @property
+    def accuracy(self) -> float | None:
+        return None if self.protocol is None else self.protocol.balanced_accuracy
+
+    def to_dict(self) -> dict:
+        return {"decoder": self.decoder, "channel": self.channel, "reason": self.reason,
+                "balanced_accuracy": self.accuracy,
+                "scores": None if self.protocol is None else self.protocol.to_dict()}
+
+
+@dataclass
+class TextureDecoding:
+    """Every texture decoder on every channel of one engine's trains (:func:`decode_textures`).
+    ``best[decoder]`` is the channel decoding best with it, chosen on these same trials as the
+    seeds report it; the rows pooling every channel involve no such choice."""
+
+    classes: list
+    channels: list
+    rows: list = field(default_factory=list)
+    neighbours: int = 1
+    q_per_s: float = 5.0
+    window_ms: tuple = (0.0, 0.0)
+    reason: str = ""
+    spikes: dict = field(default_factory=dict)        # channel -> spikes in the window
+    no_cv: dict = field(default_factory=dict)         # channel -> trials with < 3 spikes
+    vp_timing: list = field(default_factory=list)     # one entry per matrix
+    matrices: dict = field(default_factory=dict)      # channel -> VP matrix (figures)
+
+    def row(self, decoder: str, channel: str) -> TextureRow | None:
+        return next((r for r in self.rows if r.decoder == decoder and r.channel == channel),
+                    None)
+
+    def best(self, decoder: str) -> TextureRow | None:
+        """The single channel decoding best with ``decoder`` (the first of equals)."""
+        rows = [r for r in self.rows if r.decoder == decoder and r.channel != ALL_CHANNELS
+                and r.accuracy is not None]
+        return max(rows, key=lambda r: r.accuracy) if rows else None
+
+    def channel_range(self, decoder: str) -> tuple | None:
+        """``(mean, lowest, highest)`` balanced accuracy of ``decoder`` over the single
+        channels that decoded, each alone (the seeds' per-channel figures)."""
+        acc = [r.accuracy for r in self.rows if r.decoder == decoder
+               and r.channel != ALL_CHANNELS and r.accuracy is not None]
+        return (float(np.mean(acc)), min(acc), max(acc)) if acc else None
+
+    @property
+    def headline(self) -> TextureRow | None:
+        """VP and kNN on the best channel (whose confusions and matrix the report shows)."""
+        return self.best("VP")
+
+    @property
+    def accuracy(self) -> float | None:
+        """The headline figure: VP + kNN's balanced accuracy averaged over the channels, each
+        decoded alone (no channel chosen on the results)."""
+        r = self.channel_range("VP")
+        return None if r is None else r[0]
+
+    def to_dict(self) -> dict:
+        return {"headline": "balanced accuracy of VP + kNN (leave-one-out), mean over the "
+                            "channels each decoded alone",
+                "balanced_accuracy": self.accuracy, "classes": list(self.classes),
+                "per_channel": {d: (dict(zip(("mean", "lowest", "highest"), r))
+                                    if (r := self.channel_range(d)) else None)
+                                for d in TEXTURE_DECODERS},
+                "channels": list(self.channels), "neighbours": self.neighbours,
+                "q_per_s": self.q_per_s, "window_ms": list(self.window_ms),
+                "reason": self.reason, "spikes": self.spikes, "trials_without_cv": self.no_cv,
+                "best_channel": {d: (b.channel if (b := self.best(d)) else None)
+                                 for d in TEXTURE_DECODERS},
+                "vp_timing": self.vp_timing, "rows": [r.to_dict() for r in self.rows]}
+
+
+def confusions(p: Protocol) -> list[tuple[str, str, int]]:
+    """The off-diagonal entries of a protocol's confusion matrix, ``(true, predicted,
+    count)``, most frequent first."""
+    out = [(str(t), str(q), int(p.confusion[i, j])) for i, t in enumerate(p.labels)
+           for j, q in enumerate(p.labels) if i != j and p.confusion[i, j]]
+    return sorted(out, key=lambda x: -x[2])
+
+
+def rate_cv(trains, window_ms) -> tuple[np.ndarray, np.ndarray]:
+    """Per train: the rate (Hz) and the ISIs' coefficient of variation (0 below three spikes)
+    within ``window_ms``."""
+    dur_s = (window_ms[1] - window_ms[0]) / 1000.0
+    rate, cv = [], []
+    for s in trains:
+        s = _window(s, window_ms)
+        rate.append(s.size / dur_s)
+        isi = np.diff(s)
+        cv.append(float(isi.std() / isi.mean()) if isi.size >= 2 and isi.mean() > 0 else 0.0)
+    return np.asarray(rate), np.asarray(cv)
+
+
+def vp_matrix(trains, q_per_ms: float, timing: list | None = None, what: str = "") -> np.ndarray:
+    """The Victor-Purpura matrix of ``trains`` (:func:`~cuneate.golden.metrics
+    .victor_purpura_matrix`); ``timing`` gets one entry: trains, spikes, seconds."""
+    import time
+    from ..golden.metrics import victor_purpura_matrix
+    t0 = time.perf_counter()
+    D = victor_purpura_matrix(trains, q_per_ms)
+    if timing is not None:
+        timing.append({"what": what, "trains": len(trains),
+                       "spikes": int(sum(len(t) for t in trains)),
+                       "seconds": time.perf_counter() - t0})
+    return D
+
+
+def loo_scaled_distances(X) -> np.ndarray:
+    """``D[i, j]``: the Euclidean distance from trial ``i`` to trial ``j`` with the features
+    standardized (scikit-learn's :class:`~sklearn.preprocessing.StandardScaler`: mean and
+    population standard deviation, a constant feature left unscaled) on every trial but ``i``:
+    what a pipeline scaling on the training set gives each left-out trial."""
+    X = np.asarray(X, dtype=np.float64).reshape(len(X), -1)
+    n = X.shape[0]
+    m = (X.sum(axis=0)[None] - X) / (n - 1)
+    var = ((X ** 2).sum(axis=0)[None] - X ** 2) / (n - 1) - m ** 2
+    sd = np.sqrt(np.maximum(var, 0.0))
+    sd[sd <= 1e-12 * np.maximum(1.0, np.abs(m))] = 1.0
+    diff = (X[:, None, :] - X[None, :, :]) / sd[:, None, :]
+    return np.sqrt((diff ** 2).sum(axis=-1))
+
+
+def knn_predict(X, y, neighbours: int, precomputed: bool, groups=None) -> np.ndarray:
+    """Leave-one-out predictions of k nearest neighbours (scikit-learn's
+    :class:`~sklearn.neighbors.KNeighborsClassifier`): on a precomputed distance matrix, or on
+    features standardized on each training set (:func:`loo_scaled_distances`). Leave-one-out
+    asks the fitted classifier for every trial's neighbours among the others
+    (``predict(None)``). With ``groups`` (a condition per trial): leave one group out
+    instead, each trial decided by the other groups' trials only."""
+    from sklearn.model_selection import LeaveOneGroupOut, cross_val_predict
+    from sklearn.neighbors import KNeighborsClassifier
+    y = np.asarray(y)
+    D = np.asarray(X, dtype=np.float64) if precomputed else loo_scaled_distances(X)
+    # the smallest training set: all trials but one, or but the largest group
+    train = y.size - (1 if groups is None else max(np.unique(groups, return_counts=True)[1]))
+    knn = KNeighborsClassifier(n_neighbors=max(1, min(int(neighbours), train)),
+                               metric="precomputed")
+    if groups is None:
+        return knn.fit(D, y).predict(None)
+    if not precomputed:
+        raise ValueError("leave one group out decodes precomputed distances")
+    return cross_val_predict(knn, D, y, cv=LeaveOneGroupOut(), groups=groups)
+
+
+def decode_textures(trains: dict, trial_class, classes, window_ms, q_per_s: float = 5.0,
+                    neighbours: int = 1) -> TextureDecoding:
+    """Decode each trial's texture from its spike trains. ``trains``: channel name -> one train
+    per trial (ms); ``window_ms``: the spikes decoded. Rows: every decoder of
+    :data:`TEXTURE_DECODERS` on every channel and on all channels together (rates and CVs as
+    one feature vector; VP distances summed over the channels). A channel that never spikes is
+    a row with its reason, never a chance-level figure; with no spike at all the decoding says
+    so and has no rows."""
+    y = np.asarray(trial_class, dtype=object)
+    out = TextureDecoding(list(classes), list(trains), neighbours=int(neighbours),
+                          q_per_s=float(q_per_s), window_ms=tuple(window_ms))
+    counts = {c: int(sum(_window(s, window_ms).size for s in tr)) for c, tr in trains.items()}
+    out.spikes = counts
+    present = [c for c in classes if np.any(y == c)]
+    per_class = min((int(np.count_nonzero(y == c)) for c in present), default=0)
+    if len(present) < 2 or per_class < 2:
+        out.reason = (f"too few trials to decode ({y.size} trials, {len(present)} textures, "
+                      f"fewest trials of a texture {per_class}; leave-one-out needs two of each)")
+        return out
+    if not any(counts.values()):
+        out.reason = (f"no afferent spiked in the window {window_ms[0]:g}-{window_ms[1]:g} ms "
+                      f"on any of {len(trains)} channels: nothing to decode")
+        return out
+    q = q_per_s / 1000.0
+    vp_matrix([np.zeros(0), np.ones(1)], q)     # the compiled kernel loaded before timing it
+    feats, mats = {}, {}
+    for ch, tr in trains.items():
+        w = [_window(s, window_ms) for s in tr]
+        rate, cv = rate_cv(w, window_ms)
+        out.no_cv[ch] = int(sum(len(s) < 3 for s in w))
+        if not counts[ch]:
+            for d in TEXTURE_DECODERS:
+                out.rows.append(TextureRow(d, ch, None, "no spike on this channel"))
+            continue
+        feats[ch] = (rate, cv)
+        mats[ch] = vp_matrix(w, q, out.vp_timing, ch)
+        out.matrices[ch] = mats[ch]
+    channels = [c for c in trains if c in feats]
+    sets = [(c, [c]) for c in channels] + ([(ALL_CHANNELS, channels)] if len(channels) > 1
+                                            else [])
+    for name, chs in sets:
+        X_rate = np.column_stack([feats[c][0] for c in chs])
+        X_cv = np.column_stack([x for c in chs for x in feats[c]])
+        D = sum(mats[c] for c in chs)
+        for d, X, pre in (("rate", X_rate, False), ("rate + CV", X_cv, False),
+                          ("VP", D, True)):
+            pred = knn_predict(X, y, neighbours, pre)
+            out.rows.append(TextureRow(d, name, _protocol(
+                f"{d}, {name}", "trial", "leave-one-out", y.size, y, pred, classes)))
+    return out
+
+
+def decode_conditions(trains: dict, trial_class, classes, condition, q: float,
+                      neighbours: int = 1) -> list[dict]:
+    """VP + kNN over trials of several sensing conditions (``condition``: one label per
+    trial), on ``trains`` (channel -> one train per trial, in ms or in mm; ``q`` per ms or per
+    mm): leave one trial out with every condition in the references (pooled), and leave one
+    condition out (each trial decided by the other conditions' trials alone). Returns one row
+    per channel (and all channels) and protocol: balanced accuracy and per-class recall."""
+    y = np.asarray(trial_class, dtype=object)
+    mats = {c: vp_matrix(tr, q) for c, tr in trains.items()}
+    sets = [(c, [c]) for c in trains] + ([(ALL_CHANNELS, list(trains))] if len(trains) > 1
+                                          else [])
+    rows = []
+    for name, chs in sets:
+        D = sum(mats[c] for c in chs)
+        for proto, groups in (("pooled, leave one trial out", None),
+                              ("leave one condition out", np.asarray(condition))):
+            pred = knn_predict(D, y, neighbours, True, groups)
+            p = _protocol(f"VP, {name}", "trial", proto, y.size, y, pred, classes)
+            rows.append({"channel": name, "protocol": proto,
+                         "balanced_accuracy": p.balanced_accuracy, "recall": p.recall,
+                         "chance": p.chance_balanced})
+    return rows

@@ -19,7 +19,9 @@ import numpy as np
 
 __all__ = ["write_report", "summary_dict", "figure_names", "page_head", "figures_html",
            "pyplot", "html_table", "fmt", "write_page", "DPI", "save_figure",
-           "decoding_rows", "DECODING_HEAD", "printable", "format_run"]
+           "decoding_rows", "DECODING_HEAD", "printable", "format_run", "engine_figures",
+           "agreement_html", "ran_html", "files_html", "board_link_html", "block_line",
+           "in_turn_line"]
 
 #: Resolution of every report figure (dots per inch); figures are drawn at their display size.
 DPI = 150
@@ -126,7 +128,9 @@ def _fig_confusion(d, e: str, path: Path, plt):
     save_figure(fig, path)
 
 
-def _fig_engine(run, e, out: Path, plt):
+def engine_figures(run, e, out: Path, plt):
+    """``raster_<e>.png``, ``isi_<e>.png`` (and ``confusion_<e>.png`` when the afferent
+    decoder ran) of engine ``e``."""
     sp = run.spikes[e]
     order = sorted(range(len(sp)), key=lambda i: (run.classes.index(
         run.trial_class[run.neurons.trial[i]]), i))
@@ -295,7 +299,8 @@ def decoding_rows(decoded: dict) -> list[list]:
     return rows
 
 
-def _files_html(files: dict) -> str:
+def files_html(files: dict) -> str:
+    """The report's list of spike and waveform files."""
     items = [f'<li>spikes of {html.escape(e)}: <a href="{html.escape(f)}">{html.escape(f)}</a>'
              f'</li>' for e, f in files.get("spikes", {}).items()]
     w = files.get("waves")
@@ -321,37 +326,20 @@ def write_report(run, out: Path) -> Path:
         plt = pyplot()
         _fig_traces(run, out, plt)
         for e in run.spikes:
-            _fig_engine(run, e, out, plt)
+            engine_figures(run, e, out, plt)
         summ = summary_dict(run)
         (out / "run.json").write_text(json.dumps(summ, indent=2, default=float))
-    agr_rows = [[k, v["spikes_a"], v["spikes_b"], f"{v['identical_trains']}/{v['neurons']}",
-                 fmt(v["mean_abs_count_diff"]), v["max_abs_count_diff"],
-                 fmt(v["mean_victor_purpura"]), fmt(v["fraction_within_1_tick"])]
-                for k, v in run.agreement.items()]
     cur_rows = [[r["class"], fmt(r["peak_min"], 1), fmt(r["peak_max"], 1), fmt(r["min"], 1)]
                 for r in summ["current_per_class"]]
     s = run.saturations
     n_sat = s.get("format_low", 0) + s.get("format_high", 0)
     n_range = s.get("range_low", 0) + s.get("range_high", 0)
-    ran = run.ran
-    t = run.timing
-    stage_rows = [["stimulus", fmt(t["stimulus_s"], 2)], ["front end", fmt(t["front_end_s"], 2)]]
-    for e, v in t["engines_s"].items():
-        sim_ms = run.counters.get(e, {}).get("simulate_ms")
-        note = f" (simulation {sim_ms / 1000:.2f} s, rest generate + build)" if sim_ms else ""
-        stage_rows.append([f"engine {e}{note}", fmt(v, 2)])
-    if "engines_wall_s" in t:
-        stage_rows.append(["all engines (HDL simulators overlapped with the others)",
-                           fmt(t["engines_wall_s"], 2)])
-    stage_rows += [["decode", fmt(t["decode_s"], 2)]]
-    blocks = "; ".join(_block_line(b) for b in ran["blocks"])
     dec = run.scene["decoder"]
     reports = "".join(
         f"<details><summary>{html.escape(e)}: scikit-learn classification report "
         f"(per grasp)</summary><pre>{html.escape(d.headline.report_text)}</pre></details>"
         for e, d in run.decoded.items() if d.rows)
     prov = summ["provenance"]
-    git = prov["git"]
     body = f"""<p>Scene: {html.escape(run.scene.source)}. {len(run.trial_class)} trials of
 {len(run.classes)} classes, {len(run.neurons)} neurons, {run.n_ticks} ticks of
 {run.dt_ms:g} ms.</p>
@@ -369,17 +357,45 @@ features of {html.escape(summ['decoded_population'])}.</p>
     f"{100 * v['tolerance']:.1f}: {'within' if v['within'] else 'OUTSIDE'}"
     for k, v in run.decode_agreement.items()))}</p>
 {reports}
-<h2>Engine agreement</h2>
-{html_table(agr_rows, ["pair", "spikes A", "spikes B", "identical trains", "mean |count diff|",
-                   "max |count diff|", "mean VP (q = 5/s)", "within 1 tick"])}
-{_board_link_html(run.counters.get("board"))}
+{agreement_html(run)}
 <h2>Currents per class (mV/ms) and saturation</h2>
 {html_table(cur_rows, ["class", "lowest peak", "highest peak", "minimum"])}
 <p>Format {html.escape(str(s.get('format')))}: {n_sat} of {s.get('values')} values saturated by
 the driver; {n_range} outside the accepted range; {s.get('gaps_held', 0)} missing samples held;
 {s.get('samples_past_end', 0)} of {s.get('samples', '-')} samples past the run's end (latency),
 never applied.</p>
-<h2>What ran</h2>
+{ran_html(run, prov, [["decode", fmt(run.timing["decode_s"], 2)]])}
+{files_html(getattr(run, "files", {}))}"""
+    return write_page(out, run.scene.name, body, figure_names(run))
+
+
+def agreement_html(run) -> str:
+    """The engine agreement of an afferent run (and the board's link, when it ran)."""
+    rows = [[k, v["spikes_a"], v["spikes_b"], f"{v['identical_trains']}/{v['neurons']}",
+             fmt(v["mean_abs_count_diff"]), v["max_abs_count_diff"],
+             fmt(v["mean_victor_purpura"]), fmt(v["fraction_within_1_tick"])]
+            for k, v in run.agreement.items()]
+    return f"""<h2>Engine agreement</h2>
+{html_table(rows, ["pair", "spikes A", "spikes B", "identical trains", "mean |count diff|",
+                   "max |count diff|", "mean VP (q = 5/s)", "within 1 tick"])}
+{board_link_html(run.counters.get("board"))}"""
+
+
+def ran_html(run, prov: dict, more_stages=()) -> str:
+    """What an afferent run ran (stimulus, effects, front end, blocks, engines, version) and
+    the wall time of each stage (``more_stages``: rows after the engines')."""
+    ran, t = run.ran, run.timing
+    git = prov["git"]
+    stages = [["stimulus", fmt(t["stimulus_s"], 2)], ["front end", fmt(t["front_end_s"], 2)]]
+    for e, v in t["engines_s"].items():
+        sim_ms = run.counters.get(e, {}).get("simulate_ms")
+        note = f" (simulation {sim_ms / 1000:.2f} s, rest generate + build)" if sim_ms else ""
+        stages.append([f"engine {e}{note}", fmt(v, 2)])
+    if "engines_wall_s" in t:
+        stages.append(["all engines (HDL simulators overlapped with the others)",
+                       fmt(t["engines_wall_s"], 2)])
+    blocks = "; ".join(block_line(b) for b in ran["blocks"])
+    return f"""<h2>What ran</h2>
 <ul><li>stimulus: {html.escape(ran['stimulus'])}</li>
 <li>effects: {html.escape(', '.join(ran['effects']) or 'none')}</li>
 <li>front end: {html.escape('; '.join(ran.get('front_end_detail', ran['front_end'])))}</li>
@@ -388,9 +404,7 @@ never applied.</p>
 <li>cuneate {html.escape(prov['cuneate'])}{html.escape(
     f", commit {git['commit'][:12]}{' (modified)' if git['dirty'] else ''}" if git else "")}
 (tools and seeds in run.json)</li></ul>
-{html_table(stage_rows, ["stage", "wall s"])}
-{_files_html(getattr(run, "files", {}))}"""
-    return write_page(out, run.scene.name, body, figure_names(run))
+{html_table(stages + list(more_stages), ["stage", "wall s"])}"""
 
 
 def board_link_line(c: dict) -> str:
@@ -404,7 +418,7 @@ def board_link_line(c: dict) -> str:
             f"{c['board_cycles_per_sweep_rate']:.3f} x the sweeps' time")
 
 
-def _board_link_html(board: dict | None) -> str:
+def board_link_html(board: dict | None) -> str:
     """The board engine's line: frames, bytes and cycles, and the link budget table."""
     if not board or "link_budget" not in board:
         return ""
@@ -466,11 +480,8 @@ def format_run(run) -> str:
                f"{100 * pub.balanced_accuracy:.1f} %)") if pub else ""
         out.append(f"  {e:10s} balanced accuracy {100 * d.accuracy:5.1f} %  recall % "
                    f"{rec}{pub}  ({t:.1f} s)")
-    turn = run.ran.get("in_turn")
-    if turn:
-        out.append(f"  trials in turn: {turn['trials_at_a_time']} at a time on the board's core, "
-                   f"{turn['groups']} groups of {turn['ticks_a_group']} ticks, each from the "
-                   f"state the last left")
+    if run.ran.get("in_turn"):
+        out.append(in_turn_line(run.ran["in_turn"]))
     for k, v in run.decode_agreement.items():
         out.append(f"  balanced accuracy {k}: differs by {100 * v['difference']:.1f} points "
                    f"(tolerance {100 * v['tolerance']:.1f}): "
@@ -512,6 +523,13 @@ def format_run(run) -> str:
     return "\n".join(out)
 
 
+def in_turn_line(turn: dict) -> str:
+    """What ``cuneate run`` prints of trials played in turn (a run's ``ran["in_turn"]``)."""
+    return (f"  trials in turn: {turn['trials_at_a_time']} at a time on the board's core, "
+            f"{turn['groups']} groups of {turn['ticks_a_group']} ticks, each from the state "
+            f"the last left")
+
+
 def front_end_detail(scene, neurons) -> list[str]:
     """The front end of an afferent scene's encodings, one line each, and its timing."""
     fe, out = scene["frontend"], []
@@ -530,7 +548,7 @@ def front_end_detail(scene, neurons) -> list[str]:
     return out
 
 
-def _block_line(b: dict) -> str:
+def block_line(b: dict) -> str:
     """One block of a run, as the report lists it."""
     if b["block"] == "channel_fanout":
         return (f"channel_fanout ({b['n_channels']} channels: {b['channels_shift']} shift, "

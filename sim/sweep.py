@@ -35,7 +35,8 @@ import numpy as np
 __all__ = ["Point", "SweepSpec", "register_battery", "battery_module", "battery_names",
            "reference_trains", "evaluate", "accuracy_row", "ok_row", "same_dt_columns",
            "refused", "point_key", "n_steps", "run_sweep", "pareto_front", "write_sweep",
-           "BLOCK_SAME_DT_KEYS", "VP_Q_PER_MS", "HEADLINE_ERROR", "COSTS", "estimate_sweep"]
+           "BLOCK_SAME_DT_KEYS", "VP_Q_PER_MS", "HEADLINE_ERROR", "COSTS", "estimate_sweep",
+           "dask_connect", "dask_map"]
 
 from ..golden.metrics import VP_Q_PER_MS  # noqa: E402  (5 / s, every report's q)
 
@@ -282,19 +283,7 @@ def run_sweep(points: list, spec: SweepSpec, cache_dir: Path,
             todo.append(p)
     say(f"sweep: {len(points)} points, {len(points) - len(todo)} cached, {len(todo)} to run")
     if todo:
-        remote = None
-        if scheduler not in (None, "sync"):        # before any work: a bad address fails fast
-            from dask.distributed import Client
-            try:
-                remote = Client(scheduler, timeout=scheduler_timeout_s)
-            except (ValueError, TypeError) as exc:
-                why = " ".join(str(exc).split())[:200] or type(exc).__name__
-                raise ValueError(f"scheduler {scheduler!r}: not a dask scheduler address "
-                                 f"({why})") from None
-            except (OSError, TimeoutError) as exc:
-                why = " ".join(str(exc).split())[:200] or type(exc).__name__
-                raise ValueError(f"scheduler {scheduler!r}: no dask scheduler answered "
-                                 f"within {scheduler_timeout_s:g} s ({why})") from None
+        remote = dask_connect(scheduler, scheduler_timeout_s)   # a bad address fails fast
         ref_file = cache_dir / f"reference-{point_key('reference', asdict(spec))}.json"
         try:
             if ref_file.exists():
@@ -325,32 +314,63 @@ def run_sweep(points: list, spec: SweepSpec, cache_dir: Path,
             rows[p] = row
             st.update(1)
             st.note(p.label())
-        if scheduler == "sync":
-            for p in todo:
-                done(p, _evaluate_task(p, spec, ref, repeats))
-        else:
-            import logging
-
-            from dask.distributed import Client, LocalCluster, as_completed
-            cluster = None
-            if scheduler is None:
-                cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                                       dashboard_address=None, silence_logs=logging.ERROR)
-                client = Client(cluster)
-            else:
-                client = remote
-            try:
-                ref_f = client.scatter(ref, broadcast=True)
-                futs = {client.submit(_evaluate_task, p, spec, ref_f, repeats, pure=False): p
-                        for p in todo}
-                for fut in as_completed(futs):
-                    done(futs[fut], fut.result())
-            finally:
-                client.close()
-                if cluster is not None:
-                    cluster.close()
+        dask_map(_evaluate_task, todo, (spec, ref, repeats), done, scheduler, workers, remote,
+                 shared=1)
         st_cm.__exit__(None, None, None)
     return [rows[p] for p in points]
+
+
+def dask_connect(scheduler: str | None, timeout_s: float = 10.0):
+    """A client of the ``dask.distributed`` scheduler at ``scheduler`` (``None`` for ``None``
+    or ``"sync"``: no remote scheduler), refused (``ValueError``, one line) when the address is
+    not one or no scheduler answers within ``timeout_s``."""
+    if scheduler in (None, "", "sync"):
+        return None
+    from dask.distributed import Client
+    try:
+        return Client(scheduler, timeout=timeout_s)
+    except (ValueError, TypeError) as exc:
+        why = " ".join(str(exc).split())[:200] or type(exc).__name__
+        raise ValueError(f"scheduler {scheduler!r}: not a dask scheduler address "
+                         f"({why})") from None
+    except (OSError, TimeoutError) as exc:
+        why = " ".join(str(exc).split())[:200] or type(exc).__name__
+        raise ValueError(f"scheduler {scheduler!r}: no dask scheduler answered "
+                         f"within {timeout_s:g} s ({why})") from None
+
+
+def dask_map(fn, items: list, args: tuple, done, scheduler: str | None = None,
+             workers: int = 2, remote=None, shared: int | None = None) -> None:
+    """``fn(item, *args)`` for every item, ``done(item, result)`` as each finishes:
+    ``scheduler`` ``"sync"`` in this process, ``None`` (or ``""``) on a local cluster of
+    ``workers`` processes, else on ``remote`` (:func:`dask_connect`). ``shared``: the index in
+    ``args`` of a value scattered once to every worker. The client (and a local cluster) is
+    closed at the end, whatever happens."""
+    if scheduler == "sync":
+        for it in items:
+            done(it, fn(it, *args))
+        return
+    import logging
+
+    from dask.distributed import Client, LocalCluster, as_completed
+    cluster = None
+    if remote is None:
+        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                               dashboard_address=None, silence_logs=logging.CRITICAL)
+        client = Client(cluster)
+    else:
+        client = remote
+    try:
+        args = list(args)
+        if shared is not None:
+            args[shared] = client.scatter(args[shared], broadcast=True)
+        futs = {client.submit(fn, it, *args, pure=False): it for it in items}
+        for fut in as_completed(futs):
+            done(futs[fut], fut.result())
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
 
 
 #: The error the sweep leads with (docs/accuracy.md): Victor-Purpura distance (q = 5/s) to the

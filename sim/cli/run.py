@@ -94,12 +94,13 @@ def cmd_run(args) -> int:
         r = scene["run"]
         waves = Waves(output_dir(out / r["waves"], "run.waves"), r["waves_start_tick"],
                       r["waves_ticks"])
-    if waves is not None and scene.kind != "afferent":
-        raise CliError(f"cuneate run: --waves: waveforms are written for afferent scenes (the "
-                       f"Izhikevich core); {scene.source} is a {scene.kind} scene")
+    if waves is not None and scene.kind not in ("afferent", "texture"):
+        raise CliError(f"cuneate run: --waves: waveforms are written for afferent and texture "
+                       f"scenes (the Izhikevich core); {scene.source} is a {scene.kind} scene")
     in_turn = None
     if args.in_turn:
-        k = scene["hardware"]["board_trials"] if scene.kind == "afferent" else None
+        k = scene["hardware"]["board_trials"] if scene.kind in ("afferent", "texture") \
+            else None
         if k is None:
             raise CliError(f"cuneate run: --in-turn: {scene.source} names no "
                            f"hardware.board_trials (the trials a board holds at a time)")

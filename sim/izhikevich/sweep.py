@@ -126,10 +126,17 @@ def scene_battery(which: str | None = None) -> Battery:
     ``trial/population/grating``) with the float currents its front end computes from its
     synthesized traces, per sensor sample. ``which``: ``None`` (the default scene), an example
     name or a scene file. Refused (``ValueError``, one line): a scene whose neurons are not
-    Izhikevich neurons driven by currents (the taxel skin, the ridge network)."""
+    Izhikevich neurons driven by currents (the taxel skin, the ridge network), a grid of
+    texture conditions (one condition is a battery)."""
     from ..scenes.afferent import build_izhikevich, build_neurons, front_end, synthesize
     from ..scenes.runner import check_budget
     scene = _scene_of(which)
+    if scene.kind == "texture":        # a MEMS fingertip's trials and SA afferents
+        from ..scenes import texture_trials
+        if texture_trials.is_grid(scene):
+            raise ValueError(f"scene {which!r} is a grid of conditions; a sweep battery is "
+                             f"one condition's neurons")
+        synthesize, build_neurons = texture_trials.synthesize, texture_trials.build_neurons
     check_budget(scene, ["golden"])
     _, _, traces, infos, _ = synthesize(scene)
     nn = build_neurons(scene, len(traces))

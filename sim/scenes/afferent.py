@@ -91,8 +91,7 @@ REPORT_BYTES = 100 << 20
 def n_driven(scene: Scene) -> tuple[int, int]:
     """``(trials, neurons)``: every trial of every class, and the driven Izhikevich neurons of
     all of them (the core holds them all)."""
-    trials = 1 if scene["stimulus"]["kind"] == "recorded" else \
-        scene["scene"]["trials"] * len(scene.classes())
+    trials = scene.n_trials()
     return trials, trials * sum(p["size"] for p in scene.populations
                                 if p["model"] == "izhikevich")
 
@@ -337,14 +336,19 @@ def scene_channel_plan(scene: Scene):
 
 def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None = None,
         progress: bool = False, log=None, waves=None,
-        engine_options: dict | None = None, in_turn: int | None = None) -> SceneRun:
+        engine_options: dict | None = None, in_turn: int | None = None, synth=None,
+        build=None) -> SceneRun:
     """Run an afferent ``scene`` on its engines (or ``engines``); each stage reports through
     :mod:`cuneate.sim.progress` (and ``log``, if given, gets one line per stage). ``waves``
     (a :class:`~cuneate.sim.engines.waves.Waves` window, or the scene's ``run.waves``): the
     RTL engines (amaranth, icarus, verilator) dump it. ``engine_options``: more keywords for
     an engine's transport, by engine (``{"board": {"port": "/dev/ttyUSB0"}}``: the board
     engine on a programmed board, ``cuneate stream``). ``in_turn``: play the trials that many
-    at a time on a core of that many, group after group (:mod:`.in_turn`)."""
+    at a time on a core of that many, group after group (:mod:`.in_turn`). ``synth`` and
+    ``build``: another kind's stimulus (``synth(scene)``, returning what :func:`synthesize`
+    does) and neuron table (``build(scene, n_trials)``, as :func:`build_neurons`) run through
+    the same machinery (texture scenes); only the afferent decoders ("tree", "knn") decode
+    here."""
     from .. import progress as prog
     timing: dict = {}
 
@@ -358,7 +362,7 @@ def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None =
     check_layer_engines(scene, names)
     n_grasps = scene["scene"]["trials"] * len(scene.classes())
     with prog.step(f"synthesizing the stimulus ({n_grasps} trial(s))"):
-        classes, trial_class, traces, infos, effect_counts = synthesize(scene)
+        classes, trial_class, traces, infos, effect_counts = (synth or synthesize)(scene)
     timing["stimulus_s"] = time.perf_counter() - t0
     if scene["stimulus"]["kind"] == "recorded":     # its length is known now
         from .runner import check_budget
@@ -367,7 +371,8 @@ def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None =
         f"{traces[0].shape[1]} grating(s) ({timing['stimulus_s']:.2f} s)")
     t0 = time.perf_counter()
     with prog.step("front end: filtering and quantizing the currents"):
-        neurons = build_neurons(scene, len(traces))
+        build = build or build_neurons
+        neurons = build(scene, len(traces))
         cfg, blocks = _build_blocks(scene, neurons)
         drv, currents, gaps = front_end(scene, neurons, traces, infos, cfg)
         raw, sat = drv.quantize(currents)
@@ -391,7 +396,7 @@ def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None =
     turn = None
     if in_turn:                                 # k trials at a time on the board's core
         from .in_turn import in_turn as turn_context
-        nk = build_neurons(scene, in_turn)
+        nk = build(scene, in_turn)
         turn, ctx = turn_context(scene, ctx, len(traces), nk, _build_blocks(scene, nk)[0])
         layer = ctx["layer"]
         say(f"trials in turn: {turn.k} at a time, {turn.n_groups} groups")
@@ -465,7 +470,7 @@ def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None =
     t0 = time.perf_counter()
     dec = scene["decoder"]
     decoded = {}
-    if dec["kind"] != "none":
+    if dec["kind"] in ("tree", "knn"):
         for e, sp in spikes.items():
             d_sp, d_trial, d_index = decoded_neurons(dec["population"], sp, neurons, lay, e)
             with prog.step(f"decoding {e} ({dec['kind']} on {dec['features']} features of "

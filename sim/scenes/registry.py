@@ -42,6 +42,8 @@ KINDS: dict[str, SceneKind] = {k.name: k for k in (
               "a taxel grid pressed with force pulses, one LIF neuron per taxel"),
     SceneKind("ridge", ("ridges",), "network",
               "ridges sliding over two sensors: SA/FA afferents into coincidence detectors"),
+    SceneKind("texture", ("textures",), "izhikevich",
+              "textures slid under the MEMS fingertip: SA afferents, the seeds' decoders"),
 )}
 
 

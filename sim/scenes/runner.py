@@ -27,7 +27,7 @@ def run_scene(scene, engines: list[str] | None = None, build_dir: Path | None = 
     ``progress``: show what each stage does (:mod:`cuneate.sim.progress`, on stderr) when no
     command has chosen how yet. ``waves``: a :class:`~cuneate.sim.engines.waves.Waves` window
     (afferent scenes; the others refuse it). ``in_turn``: an afferent scene's trials that many
-    at a time, group after group (:mod:`cuneate.sim.scenes.in_turn`).
+    at a time, group after group (:mod:`cuneate.sim.scenes.in_turn`; texture scenes too).
 
     The kind's estimate of the run's memory and time is checked first
     (:func:`check_budget`): a run that would exhaust the machine's memory or exceed the time
@@ -39,9 +39,11 @@ def run_scene(scene, engines: list[str] | None = None, build_dir: Path | None = 
     mod = kind_module(scene.kind)
     if scene.kind == "afferent":
         return mod.run(scene, engines, build_dir, progress, log, waves=waves, in_turn=in_turn)
+    if scene.kind == "texture":                 # its afferents on the afferent machinery
+        return mod.run(scene, engines, build_dir, progress, log, waves=waves, in_turn=in_turn)
     if waves is not None or scene["run"]["waves"]:
-        raise ValueError(f"waveforms are written for afferent scenes (the Izhikevich core); a "
-                         f"{scene.kind} scene has none")
+        raise ValueError(f"waveforms are written for afferent and texture scenes (the "
+                         f"Izhikevich core); a {scene.kind} scene has none")
     if in_turn is not None:
         raise ValueError(f"trials in turn are an afferent scene's; a {scene.kind} scene has "
                          f"none")

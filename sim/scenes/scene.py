@@ -21,8 +21,8 @@ from importlib import resources
 from pathlib import Path
 
 from .registry import KINDS, kind_for, kind_module
-from .schema import (EFFECT_NAMES, EFFECT_PARAMS, F, NUM, POPULATION, PROJECTION,
-                     SCHEMA, SceneError, Validator)
+from .schema import (EFFECT_NAMES, EFFECT_PARAMS, F, MEMS_EFFECT_PARAMS, NUM, POPULATION,
+                     PROJECTION, RECORDING, SCHEMA, SceneError, Validator)
 
 __all__ = ["SceneError", "Scene", "load_scene", "parse_scene", "default_scene",
            "DEFAULT_SCENE_TOML", "example_path", "example_names"]
@@ -118,7 +118,18 @@ class Scene:
             return [f"{a:+g} deg" for a in st["ridge_angles_deg"]]
         if st["kind"] == "press":
             return [f"taxel {st['press_taxel']}"]
+        if st["kind"] == "textures":
+            return [t if isinstance(t, str) else t["name"] for t in st["textures"]]
+        if st["recordings"]:
+            return list(dict.fromkeys(r["label"] for r in st["recordings"]))
         return [st["label"]]
+
+    def n_trials(self) -> int:
+        """The trials of a run: every class's ``scene.trials``, or one per recording."""
+        st = self.sections["stimulus"]
+        if st["kind"] == "recorded":
+            return max(1, len(st["recordings"]))
+        return self.sections["scene"]["trials"] * len(self.classes())
 
     def to_dict(self) -> dict:
         return copy.deepcopy(self.sections) | {"population": copy.deepcopy(self.populations),
@@ -140,6 +151,13 @@ def parse_scene(text: str, source: str = "<scene>", base_dir: Path | None = None
         sections[sec] = V.table(sec, raw.get(sec, {}), schema, sec)
     sensor = sections["sensor"]
     taxels = sensor["kind"] == "taxels"
+    mems = sensor["kind"] == "mems"
+    if mems:
+        # a MEMS fingertip's own defaults (16 tethers, its sample rate, the seeds' 20 kHz ...)
+        kind_module("texture").fill_defaults(V, raw, sections)
+    elif raw.get("grid"):
+        V.err("grid", "a grid of sensing conditions runs texture scenes (sensor.kind = "
+                      "\"mems\")")
     if taxels:
         # a taxel skin reads force directly: none of the optical effects of a grating apply
         if raw.get("sensor", {}).get("effects"):
@@ -148,15 +166,20 @@ def parse_scene(text: str, source: str = "<scene>", base_dir: Path | None = None
         sensor["effects"] = []
     elif sensor["grid"] is not None:
         V.err("sensor.grid", "a grid needs sensor.kind = \"taxels\"")
+    effect_params = MEMS_EFFECT_PARAMS if mems else EFFECT_PARAMS
     for i, e in enumerate(sensor["effects"]):
         if e not in EFFECT_NAMES:
             V.err(f"sensor.effects[{i}]", f"unknown effect {e!r} (known: "
                                           f"{', '.join(EFFECT_NAMES)})")
-    if not taxels and "strain" not in sensor["effects"]:
+        if mems and e not in effect_params:
+            V.err(f"sensor.effects[{i}]", f"{e!r} is not an effect of a MEMS fingertip (it "
+                                          f"has: {', '.join(effect_params)})")
+    if not taxels and not mems and "strain" not in sensor["effects"]:
         V.err("sensor.effects", "must include 'strain' (the mechanical term every trace has)")
     if len(set(sensor["effects"])) != len(sensor["effects"]):
         V.err("sensor.effects", "lists an effect twice")
-    for e, params in EFFECT_PARAMS.items():
+    for e in EFFECT_PARAMS:
+        params = effect_params.get(e, {})
         given = raw.get("sensor", {}).get(e)
         if given is not None and e not in sensor["effects"]:
             V.err(f"sensor.{e}", f"parameters given for effect {e!r}, which sensor.effects "
@@ -164,13 +187,15 @@ def parse_scene(text: str, source: str = "<scene>", base_dir: Path | None = None
         sensor[e] = V.table(f"sensor.{e}", given or {}, params) if e in sensor["effects"] \
             else {}
     sat = sensor.get("saturation") or {}
-    if sat and not sat["min_nm"] < sat["max_nm"]:
-        V.err("sensor.saturation", f"min_nm ({sat['min_nm']:g}) must be below max_nm "
-                                   f"({sat['max_nm']:g})")
+    lo, hi = ("min_mV", "max_mV") if mems else ("min_nm", "max_nm")
+    if sat and not sat[lo] < sat[hi]:
+        V.err("sensor.saturation", f"{lo} ({sat[lo]:g}) must be below {hi} ({sat[hi]:g})")
     st = sections["stimulus"]
     kind = kind_for(st["kind"])
     if taxels and kind.name == "afferent":
         kind = KINDS["skin"]            # its checks say what a taxel sensor takes
+    if mems and kind.name == "afferent":
+        kind = KINDS["texture"]         # a MEMS fingertip's recorded traces, say
     if st["kind"] == "grasp":
         from ...golden.tactile import MATERIALS
         if not st["materials"]:
@@ -214,13 +239,25 @@ def parse_scene(text: str, source: str = "<scene>", base_dir: Path | None = None
                   f"{len(st['coupling_microstrain_per_N'])}")
     if st["kind"] == "slide" and (not st["periods_mm"] or any(p <= 0 for p in st["periods_mm"])):
         V.err("stimulus.periods_mm", "must list periods > 0")
+    if st["recordings"] and not (mems and st["kind"] == "recorded"):
+        V.err("stimulus.recordings", "one table per recorded trial of a MEMS fingertip "
+                                     "(sensor.kind = \"mems\", stimulus.kind = \"recorded\")")
     if st["kind"] == "recorded":
-        if not st["file"]:
+        if st["file"] and st["recordings"]:
+            V.err("stimulus.file", "give either file (one trial) or recordings (a table per "
+                                   "trial), not both")
+        if not st["file"] and not st["recordings"]:
             V.err("stimulus.file", "missing required key for a recorded stimulus")
-        p = Path(st["file"])
-        if not p.is_absolute() and base_dir is not None:
-            p = base_dir / p
-        st["file"] = str(p)
+
+        def here(f):
+            p = Path(f)
+            return str(base_dir / p if not p.is_absolute() and base_dir is not None else p)
+        if st["file"]:
+            st["file"] = here(st["file"])
+        st["recordings"] = [V.table(f"stimulus.recordings[{i}]", r, RECORDING)
+                            for i, r in enumerate(st["recordings"])]
+        for r in st["recordings"]:
+            r["file"] = here(r["file"])
     fe = sections["frontend"]
     if (fe["filter_b"] is None) != (fe["filter_a"] is None):
         V.err("frontend.filter_a" if fe["filter_a"] is None else "frontend.filter_b",
@@ -234,7 +271,7 @@ def parse_scene(text: str, source: str = "<scene>", base_dir: Path | None = None
         if not rep.stable:
             V.err("frontend.filter_a", f"unstable filter: {rep.message}")
     fs = sensor["sample_rate_hz"]
-    if not taxels and fe["filter_b"] is None and \
+    if not taxels and not mems and fe["filter_b"] is None and \
             not 0 < fe["filter_low_hz"] < fe["filter_high_hz"] < fs / 2:
         V.err("frontend.filter_high_hz", f"band edges must satisfy 0 < filter_low_hz < "
                                          f"filter_high_hz < sample_rate_hz/2 = {fs / 2:g}")
@@ -308,6 +345,10 @@ def parse_scene(text: str, source: str = "<scene>", base_dir: Path | None = None
                                                    "afferent scene (encoding = \"SA\")")
         if not taxels and p["encoding"] == "force":
             V.err(f"population[{i}].encoding", "force encoding needs sensor.kind = \"taxels\"")
+        if p["pairs"] is not None and not mems:
+            V.err(f"population[{i}].pairs", "opponent pairs are a MEMS fingertip's "
+                                            "(sensor.kind = \"mems\"); FBG afferents take "
+                                            "gratings")
     names = [p["name"] for p in pops]
     for i, p in enumerate(pops):
         key = f"population[{i}]"
@@ -356,14 +397,12 @@ def parse_scene(text: str, source: str = "<scene>", base_dir: Path | None = None
                                     f"(\"\")" if kind.name == "afferent" else
               "only afferent scenes decode a chosen population")
     scene = Scene(source, sections, pops, projs, base_dir, kind.name)
-    n_trials = 1 if st["kind"] == "recorded" else sections["scene"]["trials"] * len(
-        scene.classes())
-    if hw["board_trials"] is not None and (kind.name != "afferent" or st["kind"] == "recorded"
-                                           or hw["board_trials"] > n_trials):
+    n_trials = scene.n_trials()
+    in_turn = kind.name in ("afferent", "texture") and st["kind"] != "recorded"
+    if hw["board_trials"] is not None and (not in_turn or hw["board_trials"] > n_trials):
         V.err("hardware.board_trials", f"a board holds some of an afferent scene's trials "
-                                       f"(1 .. {n_trials})" if kind.name == "afferent" and
-              st["kind"] != "recorded" else "a board holds some of the trials of an afferent "
-              "scene with synthesized trials")
+                                       f"(1 .. {n_trials})" if in_turn else "a board holds some "
+              "of the trials of an afferent or texture scene with synthesized trials")
     need = n_trials * sum(p["size"] for p in pops if p["model"] == "izhikevich")
     capacity = int(hw["clock_hz"] // hw["update_hz"])
     if need > capacity:
@@ -390,8 +429,9 @@ def _check_afferent_decoder(V, dec: dict, st: dict, trials: int) -> None:
     """An afferent scene decodes with a tree or k nearest neighbours (``winner`` and
     ``pattern`` belong to the skin and ridge scenes); per-trial kNN needs more training samples
     in the smallest fold than ``neighbours``."""
-    if dec["kind"] in ("winner", "pattern"):
-        what = "a taxel skin" if dec["kind"] == "winner" else "ridge scenes"
+    if dec["kind"] in ("winner", "pattern", "vp"):
+        what = {"winner": "a taxel skin", "pattern": "ridge scenes",
+                "vp": "texture scenes (sensor.kind = \"mems\")"}[dec["kind"]]
         V.err("decoder.kind", f"{dec['kind']!r} decodes {what}; a scene of FBG afferents "
                               f"takes \"tree\", \"knn\" or \"none\"")
     if dec["kind"] != "knn" or dec["features"] != "trial" or st["kind"] == "recorded":

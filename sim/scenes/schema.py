@@ -13,13 +13,14 @@ import copy
 from dataclasses import dataclass
 
 __all__ = ["SceneError", "F", "NUM", "SCHEMA", "POPULATION", "PROJECTION", "EFFECT_NAMES",
-           "EFFECT_PARAMS", "MODELS", "STIMULUS_KINDS", "UNIT_KEYS", "Validator"]
+           "EFFECT_PARAMS", "MEMS_EFFECT_PARAMS", "MODELS", "STIMULUS_KINDS", "UNIT_KEYS",
+           "RECORDING", "Validator"]
 
 EFFECT_NAMES = ("strain", "temperature", "noise", "resolution", "saturation",
                 "dropped_samples", "crosstalk")
 #: Neuron models a scene may name (``cuneate`` is the coincidence block's cuneate neurons).
 MODELS = ("izhikevich", "lif", "cuneate")
-STIMULUS_KINDS = ("grasp", "slide", "pulses", "recorded", "press", "ridges")
+STIMULUS_KINDS = ("grasp", "slide", "pulses", "recorded", "press", "ridges", "textures")
 
 
 class SceneError(ValueError):
@@ -49,18 +50,31 @@ EFFECT_PARAMS = {
     "dropped_samples": {"probability": F(NUM, 0.001, lo=0, hi=0.5)},
     "crosstalk": {"fraction": F(NUM, 0.02, lo=0, hi=1)},
 }
+#: A MEMS fingertip's effects and their parameters (mV of a tether's output; no strain or
+#: temperature term: :mod:`cuneate.golden.mems`).
+MEMS_EFFECT_PARAMS = {
+    "noise": {"sigma_mV": F(NUM, 0.01, lo=0, hi=1e3)},
+    "resolution": {"step_mV": F(NUM, 0.005, lo=1e-9, hi=1e3)},
+    "saturation": {"min_mV": F(NUM, -50.0), "max_mV": F(NUM, 50.0)},
+    "dropped_samples": {"probability": F(NUM, 0.001, lo=0, hi=0.5)},
+    "crosstalk": {"fraction": F(NUM, 0.02, lo=0, hi=1)},
+}
 
 SCHEMA: dict = {
     "scene": {"name": F(str, "scene"), "description": F(str, ""),
               "duration_ms": F(NUM, 700.0, lo=1, hi=600_000),
               "trials": F(int, 10, lo=1, hi=10_000), "seed": F(int, 1, lo=0, hi=2**32 - 1)},
-    "sensor": {"kind": F(str, "fbg", choices=("fbg", "taxels")),
+    "sensor": {"kind": F(str, "fbg", choices=("fbg", "taxels", "mems")),
                "channels": F(int, 2, lo=1, hi=1024),
                "grid": F(list, None, items=int),
                "sample_rate_hz": F(NUM, 1000.0, lo=1, hi=1e6),
                "lambda_B_nm": F(NUM, 1550.0, lo=100, hi=5000),
                "effects": F(list, ["strain"], items=str),
                **{e: F(dict, {}) for e in EFFECT_PARAMS}},
+    # a texture scene's grid of sensing conditions: one run per force x velocity
+    "grid": {"forces_mN": F(list, None, items=NUM),
+             "velocities_mm_per_s": F(list, None, items=NUM),
+             "scheduler": F(str, ""), "workers": F(int, 2, lo=1, hi=256)},
     "stimulus": {"kind": F(str, "grasp", choices=STIMULUS_KINDS),
                  # grasp
                  "velocity_mm_per_s": F(NUM, 1.5, lo=1e-3, hi=1e3),
@@ -111,7 +125,21 @@ SCHEMA: dict = {
                  "sensor_spacing_mm": F(NUM, 0.25, lo=1e-3, hi=100),
                  "jitter_ms": F(NUM, 0.3, lo=0, hi=100),
                  "trial_ms": F(NUM, 120.0, lo=1, hi=1e4),
-                 "onset_ms": F(NUM, 30.0, lo=0, hi=1e4)},
+                 "onset_ms": F(NUM, 30.0, lo=0, hi=1e4),
+                 # textures (MEMS fingertip): the platform's protocol and the specimens
+                 "textures": F(list, None, items=(str, dict)),
+                 "texture_seed": F(int, 1, lo=0, hi=2**32 - 1),
+                 "force_mN": F(NUM, 400.0, lo=1, hi=1e5),
+                 "slide_mm": F(NUM, 12.0, lo=0.1, hi=1e3),
+                 "rest_ms": F(NUM, 50.0, lo=0, hi=1e5),
+                 "indent_ms": F(NUM, 200.0, lo=1, hi=1e5),
+                 "hold_ms": F(NUM, 100.0, lo=0, hi=1e5),
+                 "retract_ms": F(NUM, 150.0, lo=1, hi=1e5),
+                 "spread_friction": F(NUM, 0.02, lo=0, hi=1),
+                 "jitter_mm": F(NUM, 0.05, lo=0, hi=10),
+                 # recorded MEMS traces: one table per trial, and the outputs' unit
+                 "recordings": F(list, [], items=dict),
+                 "signal_unit": F(str, "V", choices=("V", "mV"))},
     "frontend": {"filter_low_hz": F(NUM, 1.0, lo=1e-6), "filter_high_hz": F(NUM, 16.0, lo=1e-6),
                  "filter_order": F(int, 1, lo=1, hi=8),
                  "filter_kind": F(str, "butter",
@@ -122,6 +150,8 @@ SCHEMA: dict = {
                  "sa_gain": F(NUM, 12500.0, lo=-1e12, hi=1e12),
                  "sa_threshold_pm": F(NUM, 0.0),
                  "sa_unit_pm": F(NUM, 1000.0, lo=1e-6, hi=1e9),
+                 # a MEMS fingertip's SA threshold S_th on the opponent difference
+                 "sa_threshold_mV": F(NUM, 0.1, lo=0, hi=1e4),
                  "fa_rectify": F(str, "positive", choices=("positive", "abs", "none")),
                  "latency_ticks": F(int, 0, lo=0, hi=1_000_000),
                  "window": F(str, "none", choices=("none", "loading")),
@@ -137,7 +167,8 @@ SCHEMA: dict = {
                  "fanout_sample_bits": F(int, 16, lo=4, hi=32),
                  # trials a board built for the scene holds at once (None: every trial)
                  "board_trials": F(int, None, lo=1, hi=1_000_000)},
-    "decoder": {"kind": F(str, "tree", choices=("tree", "knn", "winner", "pattern", "none")),
+    "decoder": {"kind": F(str, "tree", choices=("tree", "knn", "winner", "pattern", "vp",
+                                                 "none")),
                 "target": F(str, "material"),
                 "features": F(str, "isi", choices=("isi", "trial")),
                 "cv_folds": F(int, 50, lo=2, hi=10_000), "max_depth": F(int, 3, lo=1, hi=64),
@@ -148,7 +179,10 @@ SCHEMA: dict = {
                 "tolerance": F(NUM, 0.10, lo=0, hi=1),
                 # the population decoded ("": every afferent; or an afferent population, or
                 # the cuneate layer)
-                "population": F(str, "")},
+                "population": F(str, ""),
+                # texture scenes (kind "vp"): the Victor-Purpura cost, in time and in space
+                "q_per_s": F(NUM, 5.0, lo=0, hi=1e6),
+                "q_per_mm": F(NUM, None, lo=0, hi=1e6)},
     "run": {"engines": F(list, ["golden", "fixed", "verilator"], items=str),
             "waves": F(str, ""),
             "waves_start_tick": F(int, 0, lo=0),
@@ -158,10 +192,14 @@ POPULATION = {"name": F(str, required=True), "model": F(str, "izhikevich", choic
               "preset": F(str, None), "size": F(int, None, lo=1, hi=1_000_000),
               "encoding": F(str, None, choices=("FA", "SA", "force", "spikes")),
               "gratings": F(list, None, items=int),
+              # a MEMS fingertip's opponent pairs (0-3: sliding direction, 4-7: across)
+              "pairs": F(list, None, items=int),
               "inputs": F(list, [], items=str),
               "gain": F(NUM, None),
               # an SA population's own threshold (default frontend.sa_threshold_pm)
               "threshold_pm": F(NUM, None, lo=0, hi=1e9)}
+#: One recorded MEMS trial (``stimulus.recordings``).
+RECORDING = {"file": F(str, required=True), "label": F(str, required=True)}
 PROJECTION = {"source": F(str, required=True), "target": F(str, required=True),
               "delays_ms": F(list, [0.0], items=NUM), "weight": F(NUM, 1.0),
               "psp": F(str, "biexp", choices=("biexp", "exp", "delta"))}
@@ -171,7 +209,7 @@ for _sec, _keys in SCHEMA.items():
     for _k in _keys:
         for suffix in ("_ms", "_hz", "_nm", "_pm", "_mm", "_mm2", "_MPa", "_N", "_K",
                        "_mm_per_s", "_microstrain_per_N", "_microstrain", "_K_per_s",
-                       "_ticks", "_mV", "_mV_per_N"):
+                       "_ticks", "_mV", "_mV_per_N", "_mN", "_per_s", "_per_mm"):
             if _k.endswith(suffix):
                 UNIT_KEYS.setdefault((_sec, _k[: -len(suffix)]), []).append(_k)
 

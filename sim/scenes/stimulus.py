@@ -10,7 +10,7 @@ from ...golden.tactile import (MATERIALS, GraspSpec, Material, Pad, PulseSpec, S
                               synthesize_slide)
 from .scene import Scene
 
-__all__ = ["synthesize"]
+__all__ = ["synthesize", "merge_counts"]
 
 
 def _material(m) -> Material:
@@ -18,6 +18,17 @@ def _material(m) -> Material:
         return MATERIALS[m]
     return Material(m["name"], m["young_MPa"] * 1e6, m["poisson"], m["diameter_mm"] * 1e-3,
                     m["height_mm"] * 1e-3)
+
+
+def merge_counts(agg: dict, counts: dict) -> None:
+    """Add one trial's effect counts into ``agg`` (integers summed, floats their maximum)."""
+    for e, cnt in counts.items():
+        a = agg.setdefault(e, {})
+        for k, v in cnt.items():
+            if isinstance(v, (int, np.integer)) and not isinstance(v, bool):
+                a[k] = a.get(k, 0) + int(v)
+            elif isinstance(v, float):
+                a[k] = max(a.get(k, v), v)
 
 
 def synthesize(scene: Scene):
@@ -80,13 +91,7 @@ def synthesize(scene: Scene):
                 strain, info = synthesize_slide(spec, rng, st["periods_mm"][c] * 1e-3)
             tr = apply_effects(strain, sen["effects"], effect_params, rng, fs,
                                sen["lambda_B_nm"])
-            for e, cnt in tr.effect_counts.items():
-                agg = counts_all.setdefault(e, {})
-                for k, v in cnt.items():
-                    if isinstance(v, (int, np.integer)) and not isinstance(v, bool):
-                        agg[k] = agg.get(k, 0) + int(v)
-                    elif isinstance(v, float):
-                        agg[k] = max(agg.get(k, v), v)
+            merge_counts(counts_all, tr.effect_counts)
             trial_class.append(cls)
             traces.append(tr.d_lambda_nm)
             infos.append(info)

@@ -344,3 +344,25 @@ def test_invalid_parameters_raise():
         compare_trains([1.0], [2.0], 0.0)
     with pytest.raises(ValueError, match="duration_ms"):
         isi_stats([1.0, 2.0], duration_ms=-5.0)
+
+
+def test_compiled_vp_matrix_equals_the_pairwise_programme():
+    """The compiled matrix (golden/metrics_kernel.py) against :func:`victor_purpura` pair by
+    pair: random and grid-aligned trains, empty ones, q = 0, q = inf; and against Elephant."""
+    from cuneate.golden.kernel import available
+    assert available()
+    rng = np.random.default_rng(11)
+    trains = [random_train(rng, 40, 500.0) for _ in range(12)] + [np.zeros(0), np.zeros(0)]
+    trains += [np.flatnonzero(rng.random(80) < 0.2) * 0.5 for _ in range(6)]
+    for q in (0.0, 0.005, 0.7, np.inf):
+        mat = victor_purpura_matrix(trains, q)
+        ref = np.array([[victor_purpura(a, b, q) for b in trains] for a in trains])
+        np.testing.assert_allclose(mat, ref, rtol=1e-12, atol=1e-12)
+        np.testing.assert_array_equal(mat, mat.T)
+    pq = pytest.importorskip("quantities")
+    neo = pytest.importorskip("neo")
+    sd = pytest.importorskip("elephant.spike_train_dissimilarity")
+    st = [neo.SpikeTrain(t * pq.ms, t_stop=500.0 * pq.ms) for t in trains[:8]]
+    np.testing.assert_allclose(victor_purpura_matrix(trains[:8], 0.005),
+                               sd.victor_purpura_distance(st, cost_factor=5.0 * pq.Hz),
+                               rtol=1e-9, atol=1e-12)

@@ -170,3 +170,77 @@ def test_trial_features_and_permutation_chance():
     assert h.balanced_accuracy > 0.75
     assert h.null["permutations"] == 20 and h.null["mean"] < 0.5
     assert h.null["p95"] < h.balanced_accuracy and 1 / 21 <= h.null["p_value"] <= 2 / 21
+
+
+# --------------------------------------------------------------------------- textures
+def test_knn_leave_one_out_equals_scikit_learns_pipeline_and_splitters():
+    from sklearn.model_selection import LeaveOneGroupOut, LeaveOneOut, cross_val_predict
+    from sklearn.neighbors import KNeighborsClassifier
+    from sklearn.pipeline import make_pipeline
+    from sklearn.preprocessing import StandardScaler
+    from cuneate.sim.decode import knn_predict
+    rng = np.random.default_rng(3)
+    X = rng.normal(size=(50, 3)) * [1.0, 30.0, 0.01] + [0, 5, 0]
+    y = rng.integers(0, 4, 50)
+    for k in (1, 3):
+        ref = cross_val_predict(make_pipeline(StandardScaler(), KNeighborsClassifier(k)), X, y,
+                                cv=LeaveOneOut())
+        np.testing.assert_array_equal(knn_predict(X, y, k, False), ref)
+        D = np.sqrt(((X[:, None] - X[None]) ** 2).sum(-1))
+        ref = cross_val_predict(KNeighborsClassifier(k, metric="precomputed"), D, y,
+                                cv=LeaveOneOut())
+        np.testing.assert_array_equal(knn_predict(D, y, k, True), ref)
+    groups = np.arange(50) % 5
+    got = knn_predict(D, y, 1, True, groups)
+    for g in range(5):                 # each trial's neighbour is from another group
+        sel = groups == g
+        nearest = np.argmin(np.where(groups[None] == g, np.inf, D[sel]), axis=1)
+        np.testing.assert_array_equal(got[sel], y[nearest])
+    assert np.array_equal(got, cross_val_predict(KNeighborsClassifier(1, metric="precomputed"),
+                                                 D, y, cv=LeaveOneGroupOut(), groups=groups))
+
+
+def _textures(rng, rates, n=6, t=1000.0):
+    """Poisson trains: per class, per channel a rate; ``n`` trials a class."""
+    y, trains = [], {f"c{k}": [] for k in range(len(rates[0]))}
+    for ci, r in enumerate(rates):
+        for _ in range(n):
+            y.append(f"t{ci}")
+            for k, rk in enumerate(r):
+                trains[f"c{k}"].append(np.sort(rng.uniform(0, t, rng.poisson(rk * t / 1e3))))
+    return trains, y
+
+
+def test_texture_decoders_report_every_row_and_never_a_silent_channel_at_chance():
+    from cuneate.sim.decode import TEXTURE_DECODERS, confusions, decode_textures
+    rng = np.random.default_rng(4)
+    trains, y = _textures(rng, [(10, 0), (40, 0), (80, 0)])
+    d = decode_textures(trains, y, ["t0", "t1", "t2"], (0.0, 1000.0), 5.0, 1)
+    assert not d.reason
+    # the silent channel is a row with its reason for every decoder, never a figure
+    for dec in TEXTURE_DECODERS:
+        r = d.row(dec, "c1")
+        assert r.accuracy is None and r.reason == "no spike on this channel"
+        assert d.row(dec, "c0").accuracy is not None
+    assert d.row("VP", "all channels") is None          # one channel decoded: nothing to pool
+    assert d.best("rate").accuracy == 1.0 and d.accuracy == d.channel_range("VP")[0]
+    assert [x["trains"] for x in d.vp_timing] == [18] and d.spikes["c1"] == 0
+    assert d.to_dict()["best_channel"] == {"rate": "c0", "rate + CV": "c0", "VP": "c0"}
+    # two classes of one rate: their confusions are listed
+    trains, y = _textures(rng, [(30, 30), (30, 30), (90, 5)], n=8)
+    d = decode_textures(trains, y, ["t0", "t1", "t2"], (0.0, 1000.0), 5.0, 1)
+    conf = confusions(d.headline.protocol)
+    assert {(a, b) for a, b, _ in conf} <= {("t0", "t1"), ("t1", "t0")} and conf
+    assert d.headline.protocol.recall["t2"] == 1.0
+
+
+def test_nothing_to_decode_is_said_not_scored():
+    from cuneate.sim.decode import decode_textures
+    silent = {"c0": [np.zeros(0)] * 6}
+    d = decode_textures(silent, ["a"] * 3 + ["b"] * 3, ["a", "b"], (0.0, 500.0))
+    assert d.rows == [] and d.accuracy is None
+    assert d.reason == "no afferent spiked in the window 0-500 ms on any of 1 channels: " \
+                       "nothing to decode"
+    d = decode_textures({"c0": [np.ones(3)] * 3}, ["a", "a", "b"], ["a", "b"], (0.0, 5.0))
+    assert d.reason.startswith("too few trials to decode (3 trials, 2 textures, fewest trials "
+                               "of a texture 1")
