@@ -12,7 +12,7 @@ every current is 0 as the host-side front end makes it.
 
 Engines: ``fixed`` runs the fan-out twin in front of the Izhikevich twin
 (:class:`FanoutTransport`), ``board`` the board top with the fan-out
-(:class:`~cuneate.hdl.link.LinkedFanoutCore`); ``golden`` integrates the float currents as
+(:class:`~cuneate.hdl.link.LinkedTop`); ``golden`` integrates the float currents as
 without the fan-out, so the fixed engines' difference from golden includes the samples'
 quantization (the fan-out's bound: :meth:`~cuneate.hdl.fanout.FanoutConfig.sample_bound`).
 """
@@ -130,7 +130,7 @@ def fanout_transport(engine: str, plan: ChannelPlan, kw: dict) -> Transport:
 class FanoutTransport(Transport):
     """The fan-out twin in front of another transport (the ``fixed`` engine's twin): channel
     writes set the twin's samples, and each write is followed by a fan-out run whose currents
-    go to ``inner`` for the same sweep, as :class:`~cuneate.hdl.link.LinkedFanoutCore` does
+    go to ``inner`` for the same sweep, as :class:`~cuneate.hdl.link.LinkedTop` does
     on chip. The fan-out's clamp counts join the counters (``fanout_current_low`` /
     ``fanout_current_high``)."""
 

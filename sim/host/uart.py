@@ -1,6 +1,6 @@
 """Host side of the UART link: :class:`UartTransport` behind the driver's transport interface.
 
-The transport talks to a :class:`~cuneate.hdl.link.LinkedCore` on a board through pyserial
+The transport talks to a :class:`~cuneate.hdl.link.LinkedTop` on a board through pyserial
 (any ``serial_for_url`` URL: a device path, ``socket://host:port``, ``loop://``), to the
 protocol model (:class:`ModelSerial`, the simulated serial path used by tests and for dry
 runs), or to the gateware in the Amaranth simulator

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from amaranth.sim import Simulator
 
-from cuneate.hdl.link import LinkedCore, link_config
+from cuneate.hdl.link import LinkedTop, link_config
 from cuneate.hdl.link.codec import (COUNTER_NAMES, MSG_COUNTERS, MSG_SPIKES, OP_READ_COUNTERS, OP_STEP, FrameDecoder, Message,
                                     cobs_encode, control_message, encode_frame, parse_counters,
                                     parse_spikes, write_message)
@@ -25,7 +25,7 @@ def lcfg():
 
 def run_link(chunks, total_cycles, lc):
     """Send each ``(bytes, gap_cycles)`` chunk over rx; return every byte seen on tx."""
-    dut = LinkedCore(lc)
+    dut = LinkedTop(lc)
     sim = Simulator(dut)
     sim.add_clock(1e-6)
     received = bytearray()
@@ -139,7 +139,7 @@ ERR_CORE = dict(n_neurons=80, clock_hz=16e3 * 96, update_hz=16e3, spike_fifo_dep
 def run_watching_writes(lc, stream: bytes, tail_cycles: int):
     """Send ``stream`` over rx; return the bytes seen on tx and every ``(neuron, raw current)``
     the link wrote toward the core, in order."""
-    dut = LinkedCore(lc)
+    dut = LinkedTop(lc)
     sim = Simulator(dut)
     sim.add_clock(1e-6)
     received, writes = bytearray(), []
@@ -155,12 +155,14 @@ def run_watching_writes(lc, stream: bytes, tail_cycles: int):
         await ctx.tick().repeat(tail_cycles)
 
     async def watch_writes(ctx):
-        # the write port's registers change only at clock edges, and the address steps on
-        # every write of a burst: each change with the enable set is one write
-        async for en, addr, data in ctx.changed(link.i_wr_en, link.i_wr_addr,
-                                                link.i_wr_data):
-            if en:
-                writes.append((addr, data))
+        # the write stream's registers change only at clock edges, and the address steps on
+        # every write of a burst: each change with valid set is one write (the core takes
+        # every write offered)
+        w = link.payload.write
+        mask = (1 << lc.current_width) - 1
+        async for valid, p in ctx.changed(w.valid, w.payload):
+            if valid:
+                writes.append((p.addr, p.value & mask))
 
     async def monitor(ctx):
         while True:

@@ -43,7 +43,12 @@ def build(lc, build_dir, simulator):
 
 def play(simulator, lc, chunks, total_cycles, build_dir, watch_writes=False):
     src = build(lc, build_dir, simulator)
+    from cuneate.hdl.lib.payload import write_layout
+    layout = write_layout(lc.info)
     cfg = {"clocks_per_bit": CPB, "total_cycles": total_cycles, "watch_writes": watch_writes,
+           "write_layout": {"addr_bits": layout["addr"].width,
+                            "value_offset": layout["value"].offset,
+                            "value_bits": layout["value"].width},
            "chunks": [[bytes(c).hex(), g] for c, g in chunks]}
     run = run_cocotb(simulator, [src], "linked_core", "cuneate.sim.link.bench",
                      build_dir, config=cfg, testcase="play")
