@@ -204,13 +204,13 @@ def target_link(target: dict, block, plan: ClockPlan, **spec) -> LinkConfig:
     the plan's clock, its ticks from the link, one spike batch a millisecond; refused (one
     line) when a sweep cannot hold the block's work and the link's idle cycles
     (:func:`~cuneate.hdl.link.config.sweep_cycles`)."""
-    p = payload_spec(block, **spec).retimed(plan.clock_hz)
+    p = payload_spec(block, **spec)          # its work a tick does not depend on the clock
     need = sweep_cycles(p.info)
     if plan.cycles_per_tick < need:
         raise ConfigError(f"a sweep of {plan.cycles_per_tick} cycles cannot hold the "
                           f"{p.info.block}'s {p.info.busy_cycles} cycles of work and the "
                           f"link's {LINK_IDLE_CYCLES} idle ones")
-    return LinkConfig(p, clocks_per_bit=plan.clocks_per_bit,
+    return LinkConfig(p.retimed(plan.clock_hz), clocks_per_bit=plan.clocks_per_bit,
                       batch_sweeps=max(1, int(round(plan.update_hz / 1000))),
                       **target.get("link_defaults", {}))
 

@@ -192,10 +192,23 @@ def payload_spec(config, **kw) -> PayloadSpec:
         if kw:
             raise ConfigError(f"a payload spec takes no more options ({', '.join(kw)})")
     else:
-        spec = _spec_class(config)(config, **kw)
+        cls = _spec_class(config)
+        spec = cls(config, **_options(cls, config, kw))
     if fanout is not None:                   # an adapter in front of the block
         spec = _spec_class(fanout)(fanout, inner=spec)
     return spec
+
+
+def _options(cls: type, config, kw: dict) -> dict:
+    """``kw`` if the spec class takes them all, else a one-line refusal naming the first."""
+    import inspect
+    params = inspect.signature(cls.__init__).parameters
+    for k in kw:
+        if k not in params:
+            raise ConfigError(f"a {type(config).__name__} behind a face takes no {k} (it is "
+                              f"one block; {cls.__name__} takes: "
+                              f"{', '.join(list(params)[2:]) or 'no options'})")
+    return kw
 
 
 def _spec_class(config) -> type:

@@ -50,7 +50,14 @@ class FrameDecoder(wiring.Component):
     """See the module docstring. ``bytes``: the received bytes; ``frame``: the checked
     frames; ``value_addr``/``value_en``/``value_data``: the value RAM's read port (synchronous:
     ``value_data`` is the word of the previous cycle's address, held while ``value_en`` is
-    low)."""
+    low).
+
+    For a proof harness: after elaboration the value RAM is the attribute ``values`` (a
+    harness adds a read port to watch it); :attr:`RESIDUE` and :meth:`value_slot` are what a
+    harness's faulty subclass changes (the proof's mutants)."""
+
+    #: the CRC register's value after an intact frame (its CRC included)
+    RESIDUE = CRC_RESIDUE
 
     def __init__(self, lcfg: LinkConfig):
         self.lcfg = lcfg
@@ -65,12 +72,17 @@ class FrameDecoder(wiring.Component):
         members |= {f"count_{v}": Out(1) for v in VERDICTS}
         super().__init__(members)
 
+    def value_slot(self, n):
+        """The value RAM word that holds a frame's value ``n``."""
+        return n
+
     def elaborate(self, platform):
         lc = self.lcfg
         N, W = lc.n_written, lc.current_bytes
         m = Module()
         max_vals = max_values(lc)
-        m.submodules.vmem = vmem = Memory(shape=lc.current_width, depth=max_vals, init=[])
+        m.submodules.vmem = self.values = vmem = Memory(shape=lc.current_width,
+                                                        depth=max_vals, init=[])
         vwr, vrd = vmem.write_port(), vmem.read_port()
         m.d.comb += [vrd.addr.eq(self.value_addr), vrd.en.eq(self.value_en),
                      self.value_data.eq(vrd.data)]
@@ -111,7 +123,7 @@ class FrameDecoder(wiring.Component):
                 with m.If(phase == W - 1):
                     m.d.sync += [phase.eq(0), nvals.eq(nvals + 1)]
                     with m.If(nvals < max_vals):
-                        m.d.comb += [vwr.en.eq(1), vwr.addr.eq(nvals),
+                        m.d.comb += [vwr.en.eq(1), vwr.addr.eq(self.value_slot(nvals)),
                                      vwr.data.eq(new_acc[:lc.current_width])]
                 with m.Else():
                     m.d.sync += phase.eq(phase + 1)
@@ -148,7 +160,7 @@ class FrameDecoder(wiring.Component):
                 # acts on them in the next cycle, in the order of the checks
                 m.d.sync += [
                     bad_size.eq(overlong | (flen < MIN_FRAME)),
-                    bad_crc.eq(crc != CRC_RESIDUE),
+                    bad_crc.eq(crc != self.RESIDUE),
                     bad_version.eq(ver != VERSION),
                     bad_len.eq(flen != plen + MIN_FRAME),
                     gap.eq(seq - exp_seq),

@@ -7,7 +7,7 @@ values to the payload, one a cycle from a register (a value the payload cannot t
 there); ``writing`` holds the tick generator meanwhile, so the values are in effect exactly
 from sweep ``tick``. A write whose sweep has started is refused (``count_late_writes``). A
 ``CONTROL`` pulses its command in the cycle it is taken. A frame is taken (``frame.ready``)
-once acted on: its last value registered toward the payload, or its command given.
+once acted on: its last value taken by the payload, or its command given.
 """
 
 from __future__ import annotations
@@ -86,6 +86,11 @@ class FrameExecutor(wiring.Component):
                 # value_data holds value widx - 1 (read in the last cycle that advanced)
                 m.d.comb += [self.writing.eq(1), load.eq(~w.valid | w.ready)]
                 with m.If(load & (widx == f.count)):
+                    m.next = "DRAIN"
+            with m.State("DRAIN"):
+                # the last value on offer: the frame is done when the payload takes it (the
+                # tick may go meanwhile: the write lands before the next fetch)
+                with m.If(w.ready):
                     m.d.comb += self.frame.ready.eq(1)
                     m.next = "IDLE"
         m.d.comb += self.value_en.eq(Mux(fsm.ongoing("WRITE"), load, 1))

@@ -1,6 +1,6 @@
 """The host link on Icarus and Verilator: frames in through a UART model, spikes out.
 
-The generated :class:`LinkedCore` Verilog receives host frames from cocotbext-uart. Checked:
+The generated :class:`LinkedTop` Verilog (a core behind the link) receives host frames from cocotbext-uart. Checked:
 the spike frames equal the protocol model's byte for byte and the twin's spikes with a current
 change at its sweep; a corrupted, a truncated, a late, an out-of-range, a runt and an unknown
 frame and a missing sequence number are each counted in the right counter; and a burst that
