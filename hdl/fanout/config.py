@@ -152,7 +152,9 @@ class FanoutConfig:
         self.gain_frac = self.gains_[0].frac_bits
         self._thresholds(N)
         self.shift = self.S.frac_bits + self.gain_frac - self.I.frac_bits
-        p_width = self.S.width + 1 + self.gain_width
+        # the rectified sample (|min| needs one bit more) and the full product, as registered
+        self.r_width = self.S.width + 1
+        p_width = self.p_width = self.r_width + self.gain_width
         if self.shift >= p_width:
             raise ConfigError(f"every current would round to 0: the product of a {self.S} "
                               f"sample and the gains ({self.gain_width} bits, largest "

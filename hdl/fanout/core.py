@@ -108,14 +108,14 @@ class ChannelFanout(wiring.Component):
         s = ch_rd.data.as_signed() if S.signed else ch_rd.data
         r = rectify_gate(s, mode2, gated2, theta2)
         v3, n3 = Signal(), Signal.like(n)
-        r3 = Signal(signed(S.width + 1))
+        r3 = Signal(signed(cfg.r_width))
         g3 = Signal.like(g2)
         m.d.sync += [v3.eq(v2), n3.eq(n2), r3.eq(r), g3.eq(g2)]
 
         # stage 4: the product
         p = product(r3, g3)
         v4, n4 = Signal(), Signal.like(n)
-        p4 = Signal(signed(S.width + 1 + cfg.gain_width))
+        p4 = Signal(signed(cfg.p_width))
         m.d.sync += [v4.eq(v3), n4.eq(n3), p4.eq(p)]
 
         # stage 5: round, clamp (flagged), write the current

@@ -47,6 +47,38 @@ def test_scoreboard(simulator, build_root):
     assert r["overruns"] > 0 and r["held_cycles"] > 0
 
 
+#: gains of about 1e18 (the shared exponent adds 46 bits to the product, more than the current
+#: holds): every non-zero rectified sample clamps, the sign of gain and sample deciding which
+#: way; the twin once wrapped these in int64 to the opposite clamp or to 0
+WIDE = dict(n_channels=3, channel=[0, 1, 2, 0, 1, 2, 0, 1],
+            gain=[1e18, -1e18, 5e17, -2.5e17, 7.5e17, 1e18, 0.0, -1e18],
+            rectify=["none", "none", "abs", "positive", "none", "abs", "none", "positive"],
+            threshold=[None, 2.0, None, None, -1.0, None, None, None])
+
+
+@pytest.mark.cocotb
+@pytest.mark.parametrize("simulator", SIMULATORS)
+def test_scoreboard_at_gains_of_1e18(simulator, build_root):
+    cfg = FanoutConfig(**WIDE)
+    assert cfg.shift < -cfg.I.width
+    bd = build_root / f"fanout_wide_{simulator}"
+    bd.mkdir(parents=True, exist_ok=True)
+    src = bd / "channel_fanout.v"
+    src.write_text(fanout_verilog(cfg, lowered=simulator == "icarus"))
+    runs = 12
+    r = run_cocotb(simulator, [src], "channel_fanout", "cuneate.sim.fanout.bench", bd,
+                   config={"fanout": cfg.to_kwargs(), "runs": runs, "seed": 3,
+                           "extreme_p": 0.2, "disturb_p": 0.0},
+                   testcase="scoreboard").report
+    print(f"\n{simulator}: " + json.dumps(r))
+    assert r["runs_checked"] == runs and r["currents_checked"] == runs * cfg.n_neurons
+    assert r["twin_mismatches"] == r["golden_violations"] == r["unneeded_clamps"] == 0
+    # both clamps counted, on the DUT's counters as in the twin (the bench compares them)
+    assert r["clamps_low"] > 0 and r["clamps_high"] > 0
+    assert r["clamp_counts"] == {"current_low": r["clamps_low"],
+                                 "current_high": r["clamps_high"]}
+
+
 @pytest.mark.cocotb
 @pytest.mark.parametrize("simulator", SIMULATORS)
 def test_the_hdl_engines_equal_the_twin(simulator, build_root):
