@@ -24,7 +24,8 @@ It derives:
   (:meth:`FanoutConfig.sample_bound`).
 
 Refused at construction, one line each: a channel index outside ``0 .. n_channels - 1``, a
-non-finite or oversized gain, a gain whose representation error exceeds ``max_gain_error``, a
+non-finite gain or one whose product with the largest sample exceeds float64 (every finite
+product is exact: a gain of 1e18 clamps, flagged), a gain whose representation error exceeds ``max_gain_error``, a
 threshold outside the sample range, an unknown rectification, a table larger than the block
 RAM of the largest supported FPGA, and a run of ``n_neurons + LATENCY`` cycles that does not fit
 one sample period at ``clock_hz``.
@@ -147,6 +148,12 @@ class FanoutConfig:
             raise ConfigError(f"sample_max must be > 0, got {self.sample_max!r}")
         self.S = QFormat.for_range(-self.sample_max, self.sample_max, self.sample_width)
         self.I = self.current_format
+        big = int(np.argmax(np.abs(g)))
+        if not math.isfinite(float(g[big]) * self.S.min_value):
+            raise ConfigError(f"the gain of afferent {big}, {float(g[big]):g}, times the "
+                              f"largest sample {-self.S.min_value:g} exceeds float64 (the "
+                              f"golden model's numbers): the gain must be below "
+                              f"{np.finfo(np.float64).max / -self.S.min_value:.4g}")
         self.gains_ = shared_exponent("gain", [float(x) for x in g], self.gain_width,
                                       max_rel_error=self.max_gain_error)
         self.gain_frac = self.gains_[0].frac_bits

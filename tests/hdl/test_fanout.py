@@ -51,6 +51,8 @@ def test_the_gate_passes_exactly_at_the_threshold_on_the_sample_grid():
     ({"channel": [0, 2, 1]}, "afferent 1 listens to channel 2, outside 0 .. 1"),
     ({"gain": [1.0, 2.0]}, "gain has 2 entries for 3 afferents"),
     ({"gain": [1.0, math.inf, 2.0]}, "gain of afferent 1 is not finite"),
+    ({"gain": [1.0, 1e307, 2.0]}, r"the gain of afferent 1, 1e\+307, times the largest sample "
+                                  "1024 exceeds float64"),
     ({"gain": [1e5, 1.4, 1.0]}, r"gain\[1\] = 1.4 has relative representation error"),
     ({"threshold": [None, 2000.0, None]}, "afferent 1: threshold 2000 is outside"),
     ({"rectify": ["none", "square", "abs"]}, "afferent 1: unknown rectify 'square'"),
