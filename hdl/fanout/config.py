@@ -41,18 +41,32 @@ from typing import Sequence
 import numpy as np
 
 from ...golden.fanout import RECTIFY
-from ..lib.config import ConfigError, shared_exponent
+from ..lib.config import MAX_BLOCK_RAM_BITS, ConfigError, shared_exponent
 from ..lib.fixed import FixedPointError, QFormat
 
 __all__ = ["FanoutConfig", "ConfigError", "CLAMP_KINDS", "LATENCY", "MAX_TABLE_BITS",
+           "check_table_size",
            "RECTIFY"]
 
 #: the clamps that can act: the current below / above its format
 CLAMP_KINDS = ("current_low", "current_high")
 #: cycles from issuing an afferent's table read to its current on ``i_wr_*``
 LATENCY = 5
-#: the most table bits a fan-out may hold: the block RAM of the ULX3S's ECP5-85F
-MAX_TABLE_BITS = 208 * 18 * 1024
+#: the most table bits a fan-out may hold: the block RAM of the largest supported FPGA
+MAX_TABLE_BITS = MAX_BLOCK_RAM_BITS
+
+
+def check_table_size(n_neurons: int, n_channels: int, gain_width: int = 18,
+                     sample_width: int = 16) -> int:
+    """The table bits of ``n_neurons`` entries (channel index, gain, threshold, mode, gate), or
+    a :class:`ConfigError` when no supported FPGA holds them: cheap, so a command checks it
+    before building a table of that size."""
+    entry = max(1, (int(n_channels) - 1).bit_length()) + gain_width + sample_width + 3
+    bits = int(n_neurons) * entry
+    if bits > MAX_TABLE_BITS:
+        raise ConfigError(f"the fan-out table of {n_neurons} afferents needs {bits} bits; "
+                          f"the largest supported FPGA holds {MAX_TABLE_BITS}")
+    return bits
 
 
 @dataclass
@@ -173,10 +187,7 @@ class FanoutConfig:
         self.entry_fields = (("channel", self.chan_bits), ("gain", self.gain_width),
                              ("theta", self.S.width), ("mode", 2), ("gated", 1))
         self.entry_width = sum(w for _, w in self.entry_fields)
-        if N * self.entry_width > MAX_TABLE_BITS:
-            raise ConfigError(f"the fan-out table of {N} afferents needs "
-                              f"{N * self.entry_width} bits; the largest supported FPGA holds "
-                              f"{MAX_TABLE_BITS}")
+        check_table_size(N, C, self.gain_width, self.S.width)
         self.cycles_per_run = N + LATENCY
         budget = self.clock_hz / self.sample_hz
         if self.cycles_per_run > budget:

@@ -31,7 +31,7 @@ __all__ = [
     "ROUNDINGS", "QFormat", "FixedConstant", "FixedPointError", "is_hdl", "round_shift",
     "round_shift_add",
     "round_shift_select", "saturate", "narrow", "clamp_flagged", "round_clamp_flagged", "select",
-    "check_int64",
+    "check_int64", "tree_sum",
     "tally_clamps", "clamp_report", "store_raw",
 ]
 
@@ -378,6 +378,20 @@ def round_clamp_flagged(x, shift: int, rounding: str, lo: int, hi: int, fmt: QFo
     arr = np.asarray(x)
     inside = np.where(below | above, 0, arr) << k
     return np.where(above, hi, np.where(below, lo, inside)), below, above
+
+
+def tree_sum(terms, zero=0):
+    """The sum of ``terms`` as a balanced tree of two-input adds: exact integers on both kinds
+    of operand (Amaranth grows each sum by a bit), an expression ``log2(n)`` deep instead of
+    ``n`` (a fan-in of thousands elaborates; a chain that deep exceeds Python's recursion
+    limit). ``zero``: the sum of no terms."""
+    terms = list(terms)
+    if not terms:
+        return zero
+    while len(terms) > 1:
+        terms = [terms[i] + terms[i + 1] if i + 1 < len(terms) else terms[i]
+                 for i in range(0, len(terms), 2)]
+    return terms[0]
 
 
 def tally_clamps(twin, kinds, counts) -> None:

@@ -30,7 +30,7 @@ from typing import Sequence
 import numpy as np
 
 from ...golden import lif as golden
-from ..lib.config import SATURATION, ConfigError, CoreOptions, check_delays, int_bits_for
+from ..lib.config import MAX_BLOCK_RAM_BITS, SATURATION, ConfigError, CoreOptions, check_delays, int_bits_for
 from ..lib.fixed import FixedConstant, QFormat
 
 __all__ = ["ConfigError", "LifConfig", "LifSet", "PIPELINE_DEPTH", "CLAMP_KINDS", "FORMS",
@@ -42,6 +42,10 @@ FORMS = ("continuous", "discrete")
 DECAYS = ("multiply", "shift")
 _GRID_EPS = 1e-9
 MAX_INPUT_DELAY = 64    #: the longest input delay the core's input history holds (ticks)
+#: the widest formats offered: the state's fraction, the leak multiplier's operands and a weight
+#: (with the state's integer bits and a fan-in, the twin's int64 holds every intermediate;
+#: :meth:`LifConfig._check_int64` checks the configuration's own widest value)
+MAX_V_FRAC_BITS, MAX_OPERAND_WIDTH, MAX_WEIGHT_BITS = 40, 36, 32
 
 
 @dataclass(frozen=True)
@@ -177,6 +181,41 @@ class LifConfig(CoreOptions):
         self._derive_inputs()
         self._derive_decay()
         self._derive_state()
+        self._check_leak()
+        self._check_int64()
+
+    def _check_leak(self):
+        """Refuse a leak that never acts below threshold: ``k x`` under the rounding's reach for
+        every state between reset, rest and threshold (the neuron would integrate and fire as
+        an IF neuron, which the core does not build)."""
+        lsb = self.V.lsb
+        reach = 0.5 * lsb if self.rounding == "nearest" else lsb
+        cont = self.form == "continuous"
+        for i, (s, kq) in enumerate(zip(self.sets, self.k_q)):
+            ref = s.v_rest if cont else 0.0
+            x = max(abs(s.v_th - ref), abs(s.v_reset - ref))
+            if kq * x < reach:
+                need = math.ceil(-math.log2(kq * x)) + (1 if self.rounding == "nearest" else 0)
+                raise ConfigError(
+                    f"set {i}: decay alpha = 1 - {kq:.3g}: below threshold the leak k x stays "
+                    f"under {kq * x:.3g}, less than the state's rounding ({reach:.3g} at "
+                    f"{self.v_frac_bits} fraction bits), so it never acts: the neuron would be "
+                    f"an IF neuron (no leak); give the state {need} fraction bits or a faster "
+                    f"decay")
+
+    def _check_int64(self):
+        """The widest intermediate of the twin (the leak product, the state sums, the total
+        input), bounded once from the formats: it must stay below 2**62 (int64)."""
+        fv = self.v_frac_bits
+        big = [abs(self.V.min_raw), self.V.max_raw, abs(self.d_lo_raw), abs(self.d_hi_raw),
+               abs(self.d_proven_raw[0]), abs(self.d_proven_raw[1])]
+        if self.X is not None:
+            big.append(max(abs(b) for b in self.x_bounds_raw) * max(abs(c.raw) for c in self.K))
+        bits = max(int(b).bit_length() for b in big) + 2
+        if bits >= 62:
+            raise ConfigError(f"the datapath's widest value needs {bits} bits (state "
+                              f"{self.V}, {fv} fraction bits); reduce the state fraction bits, "
+                              f"the weights or the operand width")
 
     # ------------------------------------------------------------------------------------------
     def _check_sizes(self):
@@ -203,10 +242,12 @@ class LifConfig(CoreOptions):
             raise ConfigError(f"{N} neurons do not fit one sweep of {self.cycles_per_tick} "
                               f"cycles (clock_hz / update_hz)")
         self.dt_ms = 1000.0 / self.update_hz
-        for k in ("v_frac_bits", "operand_width", "weight_bits"):
+        for k, top in (("v_frac_bits", MAX_V_FRAC_BITS), ("operand_width", MAX_OPERAND_WIDTH),
+                       ("weight_bits", MAX_WEIGHT_BITS)):
             v = getattr(self, k)
-            if not isinstance(v, (int, np.integer)) or v < 2:
-                raise ConfigError(f"{k} must be an integer >= 2, got {v!r}")
+            if not isinstance(v, (int, np.integer)) or not 2 <= v <= top:
+                raise ConfigError(f"{k} must be an integer in 2 .. {top} (the twin holds the "
+                                  f"state, its sums and products in int64), got {v!r}")
         if not 0 < self.max_decay_error < 1:
             raise ConfigError("max_decay_error must lie in (0, 1)")
 
@@ -257,6 +298,11 @@ class LifConfig(CoreOptions):
             if not np.all(np.isfinite(w)):
                 raise ConfigError("weights must be finite")
         self.n_inputs = F = w.shape[1]
+        bits = float(self.n_neurons) * F * self.weight_bits
+        if bits > MAX_BLOCK_RAM_BITS:
+            raise ConfigError(f"the weight memory of {self.n_neurons} neurons x {F} inputs x "
+                              f"{self.weight_bits} bits needs {bits:.4g} bits; the largest "
+                              f"supported FPGA holds {MAX_BLOCK_RAM_BITS} bits of block RAM")
         self.weights = w
         self.input_delays = check_delays(self.input_delays, F, MAX_INPUT_DELAY, "input")
         self.max_input_delay = max(self.input_delays or [0])
@@ -406,6 +452,12 @@ class LifConfig(CoreOptions):
             pre_hi_all.append(pre + margin)
         self.v_lo_proven, self.v_hi_proven = min(lo_all), max(hi_all)
         need = int_bits_for(self.v_lo_proven, self.v_hi_proven)
+        if need + fv > 60:
+            raise ConfigError(f"the state range [{self.v_lo_proven:.4g}, "
+                              f"{self.v_hi_proven:.4g}] needs {need} integer bits; with {fv} "
+                              f"fraction bits the state exceeds the 60 bits the twin's int64 "
+                              f"holds with its sums (thresholds, resets and inputs of that size "
+                              f"are not a neuron's)")
         self.v_int_bits_derived = need
         if self.v_int_bits is None:
             self.v_int_bits = need

@@ -17,7 +17,7 @@ from pathlib import Path
 
 from ...golden.budget import fmt_count, fmt_time
 
-__all__ = ["CliError", "Parser", "one_line", "anticipated", "ANTICIPATED", "CommandGroups",
+__all__ = ["CliError", "Parser", "one_line", "anticipated", "ANTICIPATED", "environment_failure", "CommandGroups",
            "finite_float", "positive_float", "positive_int", "nonneg_int", "seed_int",
            "probability", "verilog_name", "output_dir", "input_file", "run_budget",
            "check_estimate", "fmt_time",
@@ -65,6 +65,25 @@ def anticipated(exc: BaseException) -> bool:
         if m is not None and isinstance(exc, tuple(getattr(m, n) for n in names)):
             return True
     return False
+
+
+def environment_failure(exc: BaseException) -> str | None:
+    """One line for what the environment refused, or None: an :class:`OSError` naming a file
+    (disk full, no permission, a read-only file system, a name too long, a file where a
+    folder should be ...) says what failed on which path; a :class:`MemoryError` says that
+    memory ran out and how much this process may still use."""
+    if isinstance(exc, MemoryError):
+        from ...golden.budget import available_memory, fmt_bytes
+        detail = f" ({one_line(str(exc), 160)})" if str(exc) else ""
+        return (f"out of memory{detail}: this process can get about "
+                f"{fmt_bytes(available_memory())} more; free memory or ask for less")
+    if isinstance(exc, OSError) and getattr(exc, "filename", None) is not None:
+        what = exc.strerror or type(exc).__name__
+        name = str(exc.filename)
+        name = name if len(name) <= 120 else name[:117] + "..."
+        other = f" -> {exc.filename2!r}" if getattr(exc, "filename2", None) else ""
+        return f"{what}: {name!r}{other}"
+    return None
 
 
 def one_line(text: str, limit: int = 600) -> str:

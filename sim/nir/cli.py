@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from ..cli.options import (CliError, CommandGroups, engine_choices, input_file, nonneg_int,
-                           output_dir, positive_float, positive_int)
+                           output_dir, positive_float, positive_int, probability, run_budget)
 
 __all__ = ["register", "mapped_from_args", "load_input"]
 
@@ -69,6 +69,14 @@ def load_input(path: str, n_inputs: int) -> np.ndarray:
     return x
 
 
+def _decay(alpha: float, quantized: float) -> str:
+    """A decay and its quantized value, to digits that show the difference (``1 - 1e-08``
+    where six significant digits would print 1)."""
+    if alpha > 0.999:
+        return f"1 - {1 - alpha:.4g} -> 1 - {1 - quantized:.4g}"
+    return f"{alpha:.6g} -> {quantized:.6g}"
+
+
 def _print_report(mapped) -> None:
     print(f"dt {mapped.dt * 1e3:g} ms, scheme {mapped.scheme}, {mapped.n_inputs} inputs, "
           f"{len(mapped.report)} layer(s), settle {mapped.config.settle_cycles} cycles per tick")
@@ -81,7 +89,7 @@ def _print_report(mapped) -> None:
               f"{w['saturated']} zeroed {w['zeroed']}")
         print(f"    bias    {b['format']} range [{b['range'][0]:.4g}, {b['range'][1]:.4g}] "
               f"worst error {b['max_abs_error']:.3g} saturated {b['saturated']}")
-        print("    decay   " + ", ".join(f"{d['alpha']:.6g} -> {d['alpha_quantized']:.6g}"
+        print("    decay   " + ", ".join(_decay(d["alpha"], d["alpha_quantized"])
                                          for d in r["decay"][:4]))
         if "synapse" in r:
             s = r["synapse"]
@@ -128,13 +136,35 @@ def cmd_export(args) -> int:
     return 0
 
 
+def _budget(args, mapped, steps: int) -> dict:
+    """Refuse (one line) a run of ``steps`` whose memory (the input and, per step, every layer's
+    spikes and state) or time (neuron updates, each weighing its fan-in; HDL engines: the
+    network's cycles a tick) exceeds the limits, before anything of that size exists."""
+    from ...golden.budget import array_bytes
+    from ..engines.registry import ENGINES
+    layers = mapped.config.layers
+    neurons = sum(c.n_neurons for c in layers)
+    nbytes = array_bytes(steps, mapped.n_inputs, itemsize=9) + array_bytes(steps, neurons,
+                                                                          itemsize=24)
+    if ENGINES[args.engine].hdl:
+        work = float(steps) * (mapped.config.settle_cycles + 8)
+    else:
+        work = float(steps) * sum(c.n_neurons * (1 + c.n_inputs / 64) for c in layers)
+    return run_budget("cuneate simulate nir", "nir", args.engine, work, nbytes,
+                      what=f"{steps:.4g} steps of {args.graph} ({neurons} neurons in "
+                           f"{len(layers)} layer(s))",
+                      hint="fewer --steps or a shorter --input")
+
+
 def cmd_simulate(args) -> int:
     from .engines import run_network
     from .graph import NirError
     mapped = mapped_from_args(args, args.graph)
     if args.input:
         x = load_input(args.input, mapped.n_inputs)
+        _budget(args, mapped, x.shape[0])
     else:
+        _budget(args, mapped, args.steps)
         rng = np.random.default_rng(args.seed)
         x = (rng.random((args.steps, mapped.n_inputs)) < args.input_rate).astype(float)
     build = output_dir(args.build_dir, "--build-dir") if args.build_dir else None
@@ -180,7 +210,8 @@ def register(groups: CommandGroups) -> None:
                    help="input spikes or values (steps x inputs): .npy, .npz or .csv")
     s.add_argument("--steps", type=positive_int, default=200,
                    help="without --input: random input spikes for this many steps")
-    s.add_argument("--input-rate", type=positive_float, default=0.1)
+    s.add_argument("--input-rate", type=probability, default=0.1,
+                   help="without --input: each input's spike probability per step")
     s.add_argument("--seed", type=nonneg_int, default=0)
     s.add_argument("--build-dir", default=None)
     s.add_argument("--json", action="store_true")
