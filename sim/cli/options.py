@@ -17,7 +17,8 @@ from pathlib import Path
 
 from ...golden.budget import fmt_count, fmt_time
 
-__all__ = ["CliError", "Parser", "one_line", "anticipated", "ANTICIPATED", "environment_failure", "CommandGroups",
+__all__ = ["CliError", "Parser", "one_line", "anticipated", "ANTICIPATED", "environment_failure",
+           "engine_list", "CommandGroups",
            "finite_float", "positive_float", "positive_int", "nonneg_int", "seed_int",
            "probability", "verilog_name", "output_dir", "input_file", "run_budget",
            "check_estimate", "fmt_time",
@@ -65,6 +66,19 @@ def anticipated(exc: BaseException) -> bool:
         if m is not None and isinstance(exc, tuple(getattr(m, n) for n in names)):
             return True
     return False
+
+
+def engine_list(text: str, where: str) -> list[str]:
+    """A comma-separated engine list as names, refused in one line (``where`` names the option)
+    when it names none (``''``, ``',,,'``) or one twice (``fixed,fixed``)."""
+    names = [e.strip() for e in text.split(",")]
+    if not all(names):
+        raise CliError(f"{where}: {text!r} names an empty engine; give engine names separated "
+                       f"by commas")
+    twice = sorted({e for e in names if names.count(e) > 1})
+    if twice:
+        raise CliError(f"{where}: {text!r} names {twice[0]} twice")
+    return names
 
 
 def environment_failure(exc: BaseException) -> str | None:

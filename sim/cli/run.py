@@ -13,7 +13,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from .options import CliError, CommandGroups, add_max_minutes, output_dir
+from .options import CliError, CommandGroups, add_max_minutes, engine_list, output_dir
 
 __all__ = ["register", "cmd_run", "resolve_scene"]
 
@@ -80,8 +80,8 @@ def cmd_run(args) -> int:
         return 0
     scene = resolve_scene(args.scene)
     engines = None
-    if args.engines:
-        engines = [e.strip() for e in args.engines.split(",") if e.strip()]
+    if args.engines is not None:
+        engines = engine_list(args.engines, "cuneate run: --engines")
         for e in engines:
             try:
                 check_engine(KINDS[scene.kind].block, e)

@@ -9,6 +9,7 @@ with status 2 and one line naming the file or the node and the reason.
 from __future__ import annotations
 
 import json
+import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -49,18 +50,22 @@ def mapped_from_args(args, graph_path: str):
 
 
 def load_input(path: str, n_inputs: int) -> np.ndarray:
-    """An input file: ``.npy`` or ``.npz`` (the array ``input`` or the first), or ``.csv`` (one
-    row per step), of shape (steps, n_inputs)."""
+    """An input file: ``.npy`` or ``.npz`` (the array ``input``, or its only array), or ``.csv``
+    (one row per step), of shape (steps, n_inputs)."""
     p = input_file(path, "--input")
     try:
         if p.suffix == ".npz":
-            with np.load(p) as z:
+            with np.load(p, allow_pickle=False) as z:
+                if "input" not in z.files and len(z.files) != 1:
+                    raise CliError(f"--input {path!r}: holds {len(z.files)} arrays "
+                                   f"({', '.join(z.files[:6])}) and none named 'input'; name the "
+                                   f"one to use 'input'")
                 x = z["input"] if "input" in z.files else z[z.files[0]]
         elif p.suffix == ".npy":
             x = np.load(p)
         else:
             x = np.loadtxt(p, delimiter=",", ndmin=2)
-    except (OSError, ValueError, KeyError, IndexError) as exc:
+    except (OSError, ValueError, KeyError, IndexError, EOFError, zipfile.BadZipFile) as exc:
         raise CliError(f"--input {path!r}: not a readable array ({str(exc)[:120]})") from None
     x = np.asarray(x, dtype=np.float64)
     if x.ndim == 1 and n_inputs == 1:

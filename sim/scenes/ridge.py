@@ -68,7 +68,11 @@ def validate(V, raw: dict, sections: dict, pops: list, projs: list) -> None:
     if cn["encoding"] not in (None, "spikes"):
         V.err(f"population[{ci}].encoding", "a cuneate population is driven by spikes")
     cn["encoding"] = "spikes"
-    cn["preset"] = cn["preset"] or "RS"
+    if cn["preset"] not in (None, "RS"):
+        V.err(f"population[{ci}].preset", f"{cn['preset']!r}: a ridge scene's cuneate neurons "
+                                          f"are the experiment's RS detector (a preset here "
+                                          f"would not be applied); leave it out or write \"RS\"")
+    cn["preset"] = "RS"
     if sorted(cn["inputs"]) != sorted(aff):
         V.err(f"population[{ci}].inputs", f"must name the two afferent populations "
                                           f"{sorted(aff)}")

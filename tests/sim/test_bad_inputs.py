@@ -286,10 +286,11 @@ def test_narrow_state_formats_state_their_rounding_and_warn(capsys):
                    "golden model's many-fold"], err
 
 
-def test_input_spike_after_the_run_is_not_a_negative_tick(capsys):
-    """A spike time far beyond the run (1e300 ms) falls after it: no spike at all (it used to
-    wrap to tick -9223372036854775808)."""
+def test_input_spike_after_the_run_is_refused_not_dropped(capsys):
+    """A spike time far beyond the run (1e300 ms) is refused naming it (it once wrapped to tick
+    -9223372036854775808, then was dropped without a word)."""
     rc = main(["simulate", "coincidence", "--input", "1e300", "--input", "", "--input", "",
                "--input", "", "--duration-ms", "1", "--json"])
-    data = json.loads(capsys.readouterr().out)
-    assert rc == 0 and data["spikes_ms"] == [[], [], []]
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and len(err) == 1
+    assert "a spike at 1e+300 ms falls after the run's last tick (0.9375 ms)" in err[0]
