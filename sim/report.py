@@ -303,7 +303,8 @@ def _files_html(files: dict) -> str:
         for e, x in w["files"].items():
             items.append(f'<li>waveform of {html.escape(e)}: <a href="{html.escape(x["dump"])}">'
                          f'{html.escape(x["dump"])}</a> (GTKWave: <a href="'
-                         f'{html.escape(x["gtkw"])}">{html.escape(x["gtkw"])}</a>)</li>')
+                         f'{html.escape(x["gtkw"])}">{html.escape(x["gtkw"])}</a>; '
+                         f'{html.escape(x.get("time_axis", ""))})</li>')
         items.append(f"<li>waveform window: ticks {w['start_tick']} to "
                      f"{w['start_tick'] + w['ticks'] - 1}{html.escape(w.get('note', ''))}</li>")
     if not items:

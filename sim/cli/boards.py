@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import json
 
-from .options import (CliError, CommandGroups, add_quiet_option, output_dir, positive_float,
-                      positive_int)
+from .options import (CliError, CommandGroups, add_quiet_option, claim_output, output_dir,
+                      positive_float, positive_int)
 
 __all__ = ["register"]
 
@@ -73,11 +73,12 @@ def cmd_build(args) -> int:
         scene = resolve_scene(args.scene, "cuneate build")
     out = output_dir(args.out)
     try:
-        report = build_target(args.board, out, n_neurons=args.neurons,
-                              clock_hz=args.clock_hz, update_hz=args.update_hz,
-                              bitstream=not args.no_bitstream, seed=args.seed,
-                              pipeline_stages=args.pipeline_stages, scene=scene,
-                              baud=args.baud)
+        with claim_output(out, "cuneate build"):
+            report = build_target(args.board, out, n_neurons=args.neurons,
+                                  clock_hz=args.clock_hz, update_hz=args.update_hz,
+                                  bitstream=not args.no_bitstream, seed=args.seed,
+                                  pipeline_stages=args.pipeline_stages, scene=scene,
+                                  baud=args.baud)
     except ConfigError as exc:
         raise CliError(f"cuneate build: {exc}") from None
     except BuildError as exc:

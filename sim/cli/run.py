@@ -13,7 +13,8 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from .options import CliError, CommandGroups, add_max_minutes, engine_list, output_dir
+from .options import (CliError, CommandGroups, add_max_minutes, claim_output, engine_list,
+                      output_dir)
 
 __all__ = ["register", "cmd_run", "resolve_scene"]
 
@@ -109,14 +110,16 @@ def cmd_run(args) -> int:
     from ..host.transport import TransportError
     from ..scenes.runner import run_scene
     start_progress(args)
-    try:
-        run = run_scene(scene, engines, build_dir=out / "build", waves=waves, in_turn=in_turn)
-    except (TraceError, GapError, TransportError) as exc:
-        raise CliError(f"cuneate run: {exc}") from None
-    except ValueError as exc:
-        raise CliError(f"cuneate run: {scene.source}: {exc}") from None
-    kind = kind_module(run.kind)
-    page = kind.write_report(run, out)
+    with claim_output(out, "cuneate run"):
+        try:
+            run = run_scene(scene, engines, build_dir=out / "build", waves=waves,
+                            in_turn=in_turn)
+        except (TraceError, GapError, TransportError) as exc:
+            raise CliError(f"cuneate run: {exc}") from None
+        except ValueError as exc:
+            raise CliError(f"cuneate run: {scene.source}: {exc}") from None
+        kind = kind_module(run.kind)
+        page = kind.write_report(run, out)
     if args.json:
         print(json.dumps(kind.summary(run), default=float))
         return 0

@@ -14,6 +14,8 @@ import numpy as np
 from cocotb.clock import Clock
 from cocotb.triggers import FallingEdge, RisingEdge
 
+from .waves import BENCH_CLOCK_NS
+
 __all__ = ["bench_config", "bench_report", "bench_progress", "spikes_then_tick", "CoreBench"]
 
 
@@ -79,7 +81,7 @@ class CoreBench:
 
     async def start(self, idle=()):
         """Start the clock and reset with every host input idle (``idle``: more of them)."""
-        cocotb.start_soon(Clock(self.dut.clk, 10, unit="ns").start())
+        cocotb.start_soon(Clock(self.dut.clk, BENCH_CLOCK_NS, unit="ns").start())
         d = self.dut
         d.rst.value = 1
         for s in (d.i_wr_en, d.sel_wr_en, d.i_wr_addr, d.i_wr_data, d.sel_wr_addr,

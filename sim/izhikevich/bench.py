@@ -40,6 +40,7 @@ from cocotb.triggers import ClockCycles, FallingEdge, RisingEdge
 
 from cuneate.hdl.izhikevich import CLAMP_KINDS, IzhikevichConfig
 from cuneate.sim.engines.bench import CoreBench, bench_config, bench_progress, bench_report
+from cuneate.sim.engines.waves import BENCH_CLOCK_NS
 from cuneate.sim.izhikevich.scoreboard import SweepChecker
 
 
@@ -203,7 +204,7 @@ async def play(dut):
     n_ticks = int(cfgj["ticks"])
     writes = cfgj["writes"]
     d = dut
-    cocotb.start_soon(Clock(d.clk, 10, unit="ns").start())
+    cocotb.start_soon(Clock(d.clk, BENCH_CLOCK_NS, unit="ns").start())
     d.rst.value = 1
     for s in (d.i_wr_en, d.sel_wr_en, d.i_wr_addr, d.i_wr_data, d.sel_wr_addr, d.sel_wr_data,
               d.clamp_clear, d.tick, d.spike_ready):
@@ -279,7 +280,7 @@ async def array_check(dut):
     cfg = make_config(cfgj["core"])
     K, N = int(cfgj["cores"]), cfg.n_neurons
     d = dut
-    cocotb.start_soon(Clock(d.clk, 10, unit="ns").start())
+    cocotb.start_soon(Clock(d.clk, BENCH_CLOCK_NS, unit="ns").start())
     d.rst.value = 1
     for s in (d.i_wr_en, d.sel_wr_en, d.i_wr_addr, d.i_wr_data, d.sel_wr_addr, d.sel_wr_data,
               d.clamp_clear):
