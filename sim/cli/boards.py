@@ -38,9 +38,10 @@ def cmd_boards(args) -> int:
                 tight = min(x for x in (lim["bram"], lim["multiplier"], lim["fmax"]) if x)
                 print(f"{'':11s} depth {d}: largest {lim['largest']} neurons "
                       f"({lim['cores']} x {lim['per_core']} at {lim['clock_hz'] / 1e6:g} MHz, "
-                      f"{lim['estimate']['BRAM']} block RAMs); bounds: block RAM "
+                      f"{lim['estimate']['BRAM']} block RAMs); bounds in neurons: block RAM "
                       f"{lim['bram']}, multipliers {lim['multiplier']}"
-                      + (f", fmax {lim['fmax']}" if lim["fmax"] else "")
+                      + (f", logic at the measured fmax of {lim['fmax_mhz']:.1f} MHz "
+                         f"{lim['fmax']}" if lim["fmax"] else "")
                       + f" ({100 * lim['largest'] / tight:.0f} % of the tightest)")
     return 0
 

@@ -143,14 +143,13 @@ def cmd_import(args) -> int:
 def cmd_export(args) -> int:
     import nir
 
-    from ..scenes.scene import load_scene
-    from ..scenes.schema import SceneError
+    from ..cli.run import resolve_scene
     from .export import scene_graph
     from .graph import NirError
+    scene = resolve_scene(args.scene, "cuneate nir export")   # a file or a shipped example
     try:
-        scene = load_scene(input_file(args.scene, "SCENE"))
         graph = scene_graph(scene)
-    except (SceneError, NirError) as exc:
+    except NirError as exc:
         raise CliError(f"cuneate nir export: {args.scene}: {exc}") from None
     out = Path(args.out)
     output_dir(out.parent if str(out.parent) else ".", "--out")
@@ -254,7 +253,8 @@ def register(groups: CommandGroups) -> None:
     _mapping_options(i)
     i.set_defaults(func=cmd_import)
     e = sub.add_parser("export", help="write a scene's second layer as a NIR graph")
-    e.add_argument("scene", metavar="SCENE.toml")
+    e.add_argument("scene", metavar="SCENE", help="scene file or shipped example name (as "
+                                                  "cuneate run takes it)")
     e.add_argument("--out", required=True, metavar="GRAPH.nir")
     e.set_defaults(func=cmd_export)
     t = sub.add_parser("spiketouch", help="train, quantize, import and test a tactile SNN "

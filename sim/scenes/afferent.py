@@ -474,14 +474,16 @@ def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None =
     if dec["kind"] != "none":
         for e, sp in spikes.items():
             d_sp, d_trial, d_index = decoded_neurons(dec["population"], sp, neurons, lay, e)
+            noun = scene.trial_noun
             with prog.step(f"decoding {e} ({dec['kind']} on {dec['features']} features of "
-                           f"{dec['population'] or 'every afferent'}, grasp-grouped and "
-                           f"published protocols)"):
+                           f"{dec['population'] or 'every afferent'}, {noun}-grouped"
+                           + (" and published protocols)" if dec["features"] == "isi"
+                              else ")")):
                 decoded[e] = decode_trials(
                     d_sp, d_trial, d_index, trial_class, classes, dec["kind"],
                     dec["features"], dec["cv_folds"], dec["max_depth"], dec["neighbours"],
                     scene["scene"]["seed"], dec["window_ms"], dec["decision"],
-                    dec["permutations"])
+                    dec["permutations"], noun=noun)
     timing["decode_s"] = time.perf_counter() - t0
     agreement = {}
     names = list(spikes)
