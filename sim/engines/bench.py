@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 import os
+import time
 
 import cocotb
 import numpy as np
@@ -31,10 +32,19 @@ def bench_report(data: dict) -> None:
         json.dump(data, f, default=float)
 
 
-def bench_progress(config: dict, done: int) -> None:
-    """Tell the caller how far the bench got (the ``progress`` callback of the runner)."""
+#: the shortest interval between two progress reports of a bench (seconds): a bench may call
+#: :func:`bench_progress` every tick, the file is written about twice a second
+PROGRESS_INTERVAL_S = 0.4
+_last_progress = [0.0]
+
+
+def bench_progress(config: dict, done: int, force: bool = False) -> None:
+    """Tell the caller how far the bench got (the ``progress`` callback of the runner), at
+    most every :data:`PROGRESS_INTERVAL_S` unless ``force``."""
     path = config.get("progress_file")
-    if path:
+    now = time.monotonic()
+    if path and (force or now - _last_progress[0] >= PROGRESS_INTERVAL_S):
+        _last_progress[0] = now
         with open(path, "w") as f:
             json.dump({"done": int(done)}, f)
 

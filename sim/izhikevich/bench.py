@@ -171,8 +171,7 @@ async def engine(dut):
             for k in CLAMP_KINDS:
                 clamps[k] += int(counters[k].value)
             swept += 1
-            if swept % 1000 == 0:
-                bench_progress(cfgj, swept)
+            bench_progress(cfgj, swept)
         if int(d.spike_valid.value):
             raw = int(d.spike_sweep.value)
             if raw < last_raw:
@@ -255,8 +254,7 @@ async def play(dut):
                     rep["sweep_tag_mismatches"] += 1
                 await FallingEdge(d.clk)
             d.spike_ready.value = 0
-        if (k + 1) % 1000 == 0:
-            bench_progress(cfgj, k + 1)
+        bench_progress(cfgj, k + 1)
     rep["overflow"] = int(d.spike_overflow.value)
     rep["overrun"] += int(d.overrun.value)
     rep["writes_left"] = len(writes) - w
