@@ -47,6 +47,18 @@ COUNTER_BITS = 32
 class ChannelFanout(wiring.Component):
     """The channel fan-out as RTL (see the module docstring for the schedule and the ports)."""
 
+    #: the ports' meanings, for the Verilog's header (:func:`~cuneate.hdl.flow.verilog
+    #: .verilog_header`)
+    PORT_MEANINGS = {
+        "ch_wr_valid": "channel sample write: valid", "ch_wr_ready": "ready (low during a run)",
+        "ch_wr_addr": "the channel", "ch_wr_data": "its sample, raw in the sample format",
+        "start": "run the table over the samples written", "i_wr_en": "to the core: write",
+        "i_wr_addr": "to the core: the afferent",
+        "i_wr_data": "to the core: its current, raw in the current format",
+        "done": "pulse with a run's last write", "run_count": "runs started",
+        "overrun_count": "starts ignored during a run", "clamp_low_count": "low clamps",
+        "clamp_high_count": "high clamps"}
+
     def __init__(self, cfg: FanoutConfig):
         self.cfg = cfg
         S, I = cfg.S, cfg.I

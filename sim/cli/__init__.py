@@ -120,6 +120,33 @@ def _close_stdout() -> None:
         pass
 
 
+#: options whose value is an output place (left out of the command a file records)
+_OUTPUT_OPTIONS = ("--out", "--build-dir", "--work-dir", "--waves", "--spikes")
+
+
+def command_line(argv) -> str:
+    """``argv`` as the command a generated file records: ``cuneate`` and the arguments, without
+    the output places' options and with input files by their name only (no paths: the same
+    command gives the same bytes wherever it runs)."""
+    from pathlib import Path
+    words, skip = ["cuneate"], False
+    for a in argv:
+        if skip:
+            skip = False
+            continue
+        if a in _OUTPUT_OPTIONS:
+            skip = True
+            continue
+        if a.split("=", 1)[0] in _OUTPUT_OPTIONS:
+            continue
+        try:
+            is_file = len(a) < 4096 and Path(a).is_file()
+        except OSError:
+            is_file = False
+        words.append(Path(a).name if is_file else a)
+    return " ".join(words)
+
+
 def main(argv=None) -> int:
     """Run one command; see the module docstring for the exit status."""
     from ...golden import budget
@@ -132,8 +159,10 @@ def main(argv=None) -> int:
             args = build_parser().parse_args(argv)
             minutes = None if getattr(args, "force", False) else getattr(args, "max_minutes",
                                                                          None)
+            from ...hdl.flow.verilog import made_by
             # the command's time limit; a memory limit set around main (tests) stays
-            with budget.limited(max_minutes=minutes, memory_bytes=budget.limits().memory_bytes):
+            with budget.limited(max_minutes=minutes, memory_bytes=budget.limits().memory_bytes), \
+                    made_by(command_line(argv)):
                 return args.func(args)
         except CliError as exc:
             msg = one_line(str(exc))
