@@ -22,7 +22,7 @@ from pathlib import Path
 from .tools import ToolError, tool
 
 __all__ = ["FormalError", "run_sby", "signed_bits", "parse_sby_log", "ENGINES", "SOLVER",
-           "SOLVERS"]
+           "SOLVERS", "memory_failure"]
 
 #: engines a proof may name: ``smtbmc`` (SMT, z3; bmc and k-induction) and ``abc pdr``
 #: (property-directed reachability on the bit-level model; ``prove`` mode only)
@@ -106,7 +106,28 @@ def run_sby(workdir: Path, name: str, il: str, depth: int, timeout_s: float,
     for verdict, status in (("PASS", "pass"), ("FAIL", "fail"), ("UNKNOWN", "unknown")):
         if f"DONE ({verdict}" in r.stdout:
             return status, secs, r.stdout
+    short = memory_failure(r.stdout)
+    if short:
+        from ...golden.budget import available_memory, fmt_bytes
+        raise FormalError(f"the proof ran out of memory ({short}) after {secs:.0f} s; this "
+                          f"process can get about {fmt_bytes(available_memory())} more: free "
+                          f"memory or run it on a larger machine")
     raise FormalError("SymbiYosys did not finish: " + r.stdout.strip()[-400:])
+
+
+#: what a tool of the proof says when memory ran out (the solver killed by the kernel, a
+#: wasm runtime refused its reservation, an allocation that failed)
+_MEMORY = re.compile(r"(Cannot allocate memory|MemoryError|std::bad_alloc|[Oo]ut of memory|"
+                     r"mmap failed to reserve \S+ bytes|returncode=(?:-9|137)\b|Killed)")
+
+
+def memory_failure(log: str) -> str | None:
+    """The first sign in a SymbiYosys log that a tool ran out of memory, or None."""
+    m = _MEMORY.search(log)
+    if m is None:
+        return None
+    where = re.search(r"\] (\w+): [^\n]*" + re.escape(m.group(0)), log)
+    return f"{where.group(1)}: {m.group(0)}" if where else m.group(0)
 
 
 def parse_sby_log(log: str) -> dict:
