@@ -55,6 +55,7 @@ import numpy as np
 
 from ...golden import budget
 from ...golden import izhikevich as golden
+from ...golden.kernel import available as kernel_available
 
 __all__ = ["SetRange", "RangeSearchError", "reachable_ranges", "stimulus_battery",
            "search_estimate", "SEARCH_STATE_BOUND", "one_step_bound"]
@@ -212,34 +213,20 @@ def _cached(key) -> tuple[SetRange, ...]:
             cols_v0 += [v0] * n_stim
             cols_u0 += [u0] * n_stim
     cols_set = np.asarray(cols_set)
-    n_rep = len(cols_set) // n_stim
-    prm = golden.NeuronParams.from_sets([sets[i] for i in cols_set])
-    extras = prm.extras()
     v = np.asarray(cols_v0, dtype=np.float64)
     u = np.asarray(cols_u0, dtype=np.float64)
-    v_min, u_min, u_max, v_pre_max = v.copy(), u.copy(), u.copy(), v.copy()
-    with np.errstate(over="ignore", invalid="ignore"):
-        for k in range(n_steps):
-            if k % SEARCH_BLOCK == 0:
-                stim = _battery_rows(battery, k, min(k + SEARCH_BLOCK, n_steps), dt, n_steps)
-            I = np.tile(stim[k % SEARCH_BLOCK], n_rep)
-            v, u, _, v_pre = golden.step(v, u, I, prm.a, prm.b, prm.c, prm.d, dt, "euler",
-                                         **extras)
-            bad = ~(np.isfinite(v_pre) & np.isfinite(u) & (np.abs(v_pre) <= SEARCH_STATE_BOUND)
-                    & (np.abs(u) <= SEARCH_STATE_BOUND))
-            if bad.any():
-                j = int(np.flatnonzero(bad)[0])
-                s = sets[cols_set[j]]
-                raise RangeSearchError(
-                    f"parameter set {s.label()} diverges for currents in the accepted range "
-                    f"[{i_lo:g}, {i_hi:g}] mV/ms: under '{names[j % n_stim]}' the state leaves "
-                    f"|v|, |u| <= {SEARCH_STATE_BOUND:g} at t = {(k + 1) * dt:g} ms (dt = "
-                    f"{dt:g} ms); narrow the accepted current range (current_range) or use a "
-                    f"smaller dt")
-            np.minimum(v_min, v, out=v_min)
-            np.minimum(u_min, u, out=u_min)
-            np.maximum(u_max, u, out=u_max)
-            np.maximum(v_pre_max, v_pre, out=v_pre_max)
+    search = _search_compiled if kernel_available() else _search_numpy
+    ext = search(sets, cols_set, v, u, battery, n_steps, dt)
+    if isinstance(ext, tuple) and len(ext) == 2:              # a divergence: (step, column)
+        k, j = ext
+        s = sets[cols_set[j]]
+        raise RangeSearchError(
+            f"parameter set {s.label()} diverges for currents in the accepted range "
+            f"[{i_lo:g}, {i_hi:g}] mV/ms: under '{names[j % n_stim]}' the state leaves "
+            f"|v|, |u| <= {SEARCH_STATE_BOUND:g} at t = {(k + 1) * dt:g} ms (dt = "
+            f"{dt:g} ms); narrow the accepted current range (current_range) or use a "
+            f"smaller dt")
+    v_min, u_min, u_max, v_pre_max = ext
     out = []
     for si, (s, st) in enumerate(zip(sets, inits)):
         sel = cols_set == si
@@ -256,6 +243,164 @@ def _cached(key) -> tuple[SetRange, ...]:
                             float(v_pre_max[sel].max()), u_lo, u_hi,
                             base if proven is None else proven, v_floor))
     return tuple(out)
+
+
+def _search_numpy(sets, cols_set, v, u, battery, n_steps: int, dt: float):
+    """The search by :func:`cuneate.golden.izhikevich.step` over every trajectory per step
+    (the reference loop). Returns the extremes ``(v_min, u_min, u_max, v_pre_max)`` per
+    trajectory, or the first divergence as ``(step, trajectory)``."""
+    n_rep = len(cols_set) // len(battery)
+    prm = golden.NeuronParams.from_sets([sets[i] for i in cols_set])
+    extras = prm.extras()
+    v_min, u_min, u_max, v_pre_max = v.copy(), u.copy(), u.copy(), v.copy()
+    with np.errstate(over="ignore", invalid="ignore"):
+        for k in range(n_steps):
+            if k % SEARCH_BLOCK == 0:
+                stim = _battery_rows(battery, k, min(k + SEARCH_BLOCK, n_steps), dt, n_steps)
+            I = np.tile(stim[k % SEARCH_BLOCK], n_rep)
+            v, u, _, v_pre = golden.step(v, u, I, prm.a, prm.b, prm.c, prm.d, dt, "euler",
+                                         **extras)
+            bad = ~(np.isfinite(v_pre) & np.isfinite(u) & (np.abs(v_pre) <= SEARCH_STATE_BOUND)
+                    & (np.abs(u) <= SEARCH_STATE_BOUND))
+            if bad.any():
+                return k, int(np.flatnonzero(bad)[0])
+            np.minimum(v_min, v, out=v_min)
+            np.minimum(u_min, u, out=u_min)
+            np.maximum(u_max, u, out=u_max)
+            np.maximum(v_pre_max, v_pre, out=v_pre_max)
+    return v_min, u_min, u_max, v_pre_max
+
+
+# the compiled search: stimulus kinds and their columns
+_KINDS = {"const": 0, "step": 1, "square": 2, "ramp": 3}
+_SEARCH: dict = {}
+
+
+def _search_kernel():
+    """The compiled search loop (numba), built on first use around the golden model's
+    compiled step (:func:`cuneate.golden.izhikevich_kernel.step_kernel`)."""
+    if "run" in _SEARCH:
+        return _SEARCH["run"]
+    from numba import njit
+
+    from ...golden.izhikevich_kernel import step_kernel
+    advance = step_kernel()
+
+    @njit(nogil=True, cache=True, inline="always")
+    def _remainder(t, p, whole):
+        """``t % p`` (``t >= 0``, ``p > 0``: the exact remainder, :func:`math.fmod`'s); for a
+        whole ``p`` by one division, exactly: ``t - n p`` is a multiple of ``t``'s last place
+        no larger than ``max(t, 2 p)``, so representable, for ``n`` the rounded quotient's
+        floor, one off at most (corrected)."""
+        if not whole:
+            return t % p
+        r = t - math.floor(t / p) * p
+        if r < 0.0:
+            r += p
+        elif r >= p:
+            r -= p
+        return r
+
+    @njit(nogil=True, cache=True)
+    def run(v, u, kind, lo, hi, pidx, thr, slope, periods, whole, n_steps, half_k, dt, P, std_u,
+            vth, bound, v_min, u_min, u_max, vp_max, I, sel, flags, vpre, rem):
+        """Every step of the trajectories ``v, u`` (one parameter set ``P``) under their
+        stimuli, generated per step as :func:`_battery_rows` does (same operations, same
+        bits); the extremes kept in place. Returns (-1, -1), or the first step and column
+        whose state left the bound."""
+        C = v.shape[0]
+        for k in range(n_steps):
+            t = k * dt
+            for j in range(periods.shape[0]):
+                rem[j] = _remainder(t, periods[j], whole[j])
+            first = k < half_k
+            last = k == n_steps - 1
+            kf = float(k)
+            for c in range(C):          # branch-free, so that it vectorizes
+                kd = kind[c]
+                up = (kd == 1 and not first) or (kd == 2 and rem[pidx[c]] < thr[c]) \
+                    or (kd == 3 and last)
+                x = hi[c] if up else lo[c]
+                I[c] = kf * slope[c] + lo[c] if (kd == 3 and not last) else x
+            advance(v, u, I, sel, P, True, std_u, dt, dt, vth, False, flags, vpre)
+            bad = False
+            for c in range(C):
+                bad |= not (abs(vpre[c]) <= bound and abs(u[c]) <= bound)
+            if bad:
+                for c in range(C):
+                    if not (abs(vpre[c]) <= bound and abs(u[c]) <= bound):
+                        return k, c
+            for c in range(C):
+                v_min[c] = min(v_min[c], v[c])
+                u_min[c] = min(u_min[c], u[c])
+                u_max[c] = max(u_max[c], u[c])
+                vp_max[c] = max(vp_max[c], vpre[c])
+        return -1, -1
+
+    _SEARCH["run"] = run
+    return run
+
+
+def _search_compiled(sets, cols_set, v, u, battery, n_steps: int, dt: float,
+                     threads: int | None = None):
+    """:func:`_search_numpy` by the compiled loop: the same operations in the same order per
+    trajectory (so the same extremes to the bit), each parameter set's trajectories split
+    over ``threads`` (default: every core, at most 2)."""
+    import os
+    from concurrent.futures import ThreadPoolExecutor
+
+    run = _search_kernel()
+    n_stim = len(battery)
+    periods = sorted({a[2] for _, kind, a in battery if kind == "square"})
+    kind = np.array([_KINDS[b[1]] for b in battery], dtype=np.int64)
+    lo = np.zeros(n_stim)
+    hi = np.zeros(n_stim)
+    pidx = np.zeros(n_stim, dtype=np.int64)
+    thr = np.zeros(n_stim)
+    slope = np.zeros(n_stim)
+    for c, (_, kd, a) in enumerate(battery):
+        if kd == "const":
+            lo[c] = hi[c] = a[0]
+        elif kd == "step":
+            lo[c], hi[c] = a
+        elif kd == "square":
+            lo[c], hi[c], period, duty = a
+            pidx[c], thr[c] = periods.index(period), duty * period
+        else:
+            lo[c], hi[c] = a
+            slope[c] = (a[1] - a[0]) / (n_steps - 1) if n_steps > 1 else 0.0
+            if n_steps <= 1:
+                hi[c] = a[0]
+    periods = np.array(periods or [1.0])
+    whole = np.array([p == int(p) and p < 2.0 ** 40 for p in periods])
+    v_min, u_min, u_max, vp_max = v.copy(), u.copy(), u.copy(), v.copy()
+    n_rep = len(cols_set) // n_stim
+    tile = [np.tile(x, n_rep) for x in (kind, lo, hi, pidx, thr, slope)]
+    threads = threads or min(os.cpu_count() or 1, 2)
+    jobs = []
+    for si, s in enumerate(sets):
+        cols = np.flatnonzero(cols_set == si)
+        edges = np.linspace(cols[0], cols[-1] + 1, threads + 1).astype(int)
+        jobs += [(s, a, b) for a, b in zip(edges[:-1], edges[1:]) if b > a]
+
+    def job(j):
+        s, a, b = j
+        P = tuple((float(x),) for x in (s.a, s.b, s.c, s.d, s.A, s.B, s.C, s.u_leak, s.v_u))
+        std_u = s.u_leak == 1.0 and s.v_u == 0.0
+        n = b - a
+        return run(v[a:b], u[a:b], *(x[a:b] for x in tile), periods, whole, n_steps, n_steps // 2,
+                   float(dt), P, std_u, golden.V_TH, SEARCH_STATE_BOUND, v_min[a:b],
+                   u_min[a:b], u_max[a:b], vp_max[a:b], np.empty(n), np.zeros(n, np.int64),
+                   np.zeros(n, np.bool_), np.empty(n), np.empty(len(periods))), a
+    if len(jobs) == 1:
+        results = [job(jobs[0])]
+    else:
+        with ThreadPoolExecutor(min(threads, len(jobs))) as pool:
+            results = list(pool.map(job, jobs))
+    bad = [(k, a + c) for (k, c), a in results if k >= 0]
+    if bad:
+        return min(bad)
+    return v_min, u_min, u_max, vp_max
 
 
 def one_step_bound(cfg, v, u, I, sel=None):
