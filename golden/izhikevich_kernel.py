@@ -10,7 +10,7 @@ import numpy as np
 
 from .kernel import record, split_over_threads
 
-__all__ = ["simulate_compiled", "step_kernel", "PARALLEL_MIN_NEURONS",
+__all__ = ["simulate_compiled", "block_kernel", "BLOCK", "W_V", "W_U", "W_I", "W_VPRE", "PARALLEL_MIN_NEURONS",
            "PARALLEL_MIN_NEURONS_TABLE"]
 
 #: a callable current: one thread dispatch per step, so threads pay only for large populations
@@ -73,7 +73,7 @@ def _golden_kernel():
         return n_hit
 
     @njit(nogil=True, cache=True, inline="always")
-    def block_loop(w, flags, n, P, uniform, std_u, izh, dt, half, vth, bound):
+    def block_loop(w, flags, n, P, uniform, std_u, izh, dt, half, vth, bound, track):
         nh = 0
         nbad = 0
         if uniform:
@@ -88,6 +88,15 @@ def _golden_kernel():
                 flags[i] = hit
                 nh += hit
                 nbad += not (abs(vp) <= bound and abs(un) <= bound)
+                if track:
+                    x = w[4 * BLOCK + i]
+                    w[4 * BLOCK + i] = vn if vn < x else x
+                    x = w[5 * BLOCK + i]
+                    w[5 * BLOCK + i] = un if un < x else x
+                    x = w[6 * BLOCK + i]
+                    w[6 * BLOCK + i] = un if un > x else x
+                    x = w[7 * BLOCK + i]
+                    w[7 * BLOCK + i] = vp if vp > x else x
         else:
             for i in range(n):
                 vn, un, vp = update(
@@ -105,18 +114,28 @@ def _golden_kernel():
         return nh, nbad
 
     @njit(nogil=True, cache=True)
-    def block_steps(w, flags, n, P, uniform, std_u, izh, dt, half, vth, bound):
+    def block_steps(w, flags, n, P, uniform, std_u, izh, dt, half, vth, bound, track):
         """One step of the ``n`` neurons of a block held in the scratch ``w`` (rows of
         ``BLOCK``), in place, spikes flagged in ``flags``. Returns (spikes, states out of the
-        bound): a bound exceeded, infinite or NaN fails ``|x| <= bound``. The scheme and the
-        u-equation's form are constants of each loop (so that each vectorizes)."""
+        bound): a bound exceeded, infinite or NaN fails ``|x| <= bound``. With ``track``
+        (one parameter set, Euler) rows ``W_P`` to ``W_P + 3`` keep the running minimum of
+        v and of u and maximum of u and of v before reset. The scheme, the u-equation's form
+        and ``track`` are constants of each loop (so that each vectorizes)."""
+        if track:
+            if std_u:
+                return block_loop(w, flags, n, P, True, True, False, dt, half, vth, bound,
+                                  True)
+            return block_loop(w, flags, n, P, True, False, False, dt, half, vth, bound, True)
         if izh:
             if std_u:
-                return block_loop(w, flags, n, P, uniform, True, True, dt, half, vth, bound)
-            return block_loop(w, flags, n, P, uniform, False, True, dt, half, vth, bound)
+                return block_loop(w, flags, n, P, uniform, True, True, dt, half, vth, bound,
+                                  False)
+            return block_loop(w, flags, n, P, uniform, False, True, dt, half, vth, bound,
+                              False)
         if std_u:
-            return block_loop(w, flags, n, P, uniform, True, False, dt, half, vth, bound)
-        return block_loop(w, flags, n, P, uniform, False, False, dt, half, vth, bound)
+            return block_loop(w, flags, n, P, uniform, True, False, dt, half, vth, bound,
+                              False)
+        return block_loop(w, flags, n, P, uniform, False, False, dt, half, vth, bound, False)
 
     @njit(nogil=True, cache=True)
     def run(v, u, Irows, ioff, P, prm, uniform, std_u, dt, half, vth, izh, k0, k1, b0, kb0,
@@ -162,7 +181,7 @@ def _golden_kernel():
                         w[2 * BLOCK + i] = Irows[r, ioff + lo + i if cols > 1 else 0]
                     first = False
                 nh, nbad = block_steps(w, flags, n, P, uniform, std_u, izh, dt, half, vth,
-                                       bound)
+                                       bound, False)
                 if nbad:
                     for i in range(n):
                         vp, uu = w[3 * BLOCK + i], w[BLOCK + i]
@@ -202,12 +221,14 @@ def _golden_kernel():
     return run
 
 
-def step_kernel():
-    """The compiled step of every neuron in place (``advance``: the operations of
+def block_kernel():
+    """The compiled step of a block of neurons held in a scratch array (``block_steps(w,
+    flags, n, P, uniform, std_u, izh, dt, half, vth, bound, track)``: rows ``W_V``, ``W_U``,
+    ``W_I``, ``W_VPRE`` of :data:`BLOCK` each, then the extremes tracked; the operations of
     :func:`cuneate.golden.izhikevich.step` per neuron, in its order), for other compiled loops
     that step the golden model (the state-range search)."""
     _golden_kernel()
-    return _KERNEL["advance"]
+    return _KERNEL["block_steps"]
 
 
 def simulate_compiled(prm, v, u, current, I_of, n_steps, n_neurons, dt_ms, scheme, dtype,

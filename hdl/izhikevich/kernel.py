@@ -37,6 +37,8 @@ __all__ = ["available", "rounding_slots", "gather_constants", "update_arrays", "
 # rounding shifts, each as 4 slots (left shift, right shift, rounding-bit shift, bit mask)
 R_SV, R_SVQ, R_SDTI, R_SU, R_SIU, R_SUX, R_SDX, R_SHQ = (31 + 4 * j for j in range(8))
 N_SCALARS = 31 + 4 * 8
+#: neurons a run keeps in L1 and takes through every sweep at a time (rows v, u, I, set)
+BLOCK = 512
 
 
 def gather_constants(cfg: IzhikevichConfig) -> tuple[np.ndarray, np.ndarray]:
@@ -176,23 +178,126 @@ if available():
         totals[4] = c4
         return n_spk
 
-    @njit(**_jit)
-    def _run_const(v, u, I, sel, tab, sc, n_sweeps, k0, spk_k, spk_n, n_spk, totals, last,
-                   flags, fwords):
-        """Up to ``n_sweeps`` sweeps with constant currents, in place. Spikes are appended to
-        (spk_k, spk_n) from ``n_spk``; stops early (before a sweep) when the buffer could
-        overflow. Returns (sweeps done, spikes recorded)."""
+    @njit(inline="always", **_jit)
+    def _block_loop(w, flags, n, tab, sc, uniform):
+        """One sweep of the ``n`` neurons of a block held in the scratch ``w`` (rows of
+        ``BLOCK``: v, u, I, set), in place; spikes flagged in ``flags``. Returns the spikes
+        and the clamps per kind (``uniform``: one parameter set, a constant of each loop)."""
+        nh = c0 = c1 = c2 = c3 = c4 = 0
+        if uniform:
+            for i in range(n):
+                a, b, c, d, _ = neuron_update(w[i], w[BLOCK + i], w[2 * BLOCK + i], 0, tab, sc)
+                w[i] = a
+                w[BLOCK + i] = b
+                flags[i] = c
+                nh += c
+                c0 += d & 1
+                c1 += (d >> 1) & 1
+                c2 += (d >> 2) & 1
+                c3 += (d >> 3) & 1
+                c4 += (d >> 4) & 1
+        else:
+            for i in range(n):
+                a, b, c, d, _ = neuron_update(w[i], w[BLOCK + i], w[2 * BLOCK + i],
+                                              w[3 * BLOCK + i], tab, sc)
+                w[i] = a
+                w[BLOCK + i] = b
+                flags[i] = c
+                nh += c
+                c0 += d & 1
+                c1 += (d >> 1) & 1
+                c2 += (d >> 2) & 1
+                c3 += (d >> 3) & 1
+                c4 += (d >> 4) & 1
+        return nh, c0, c1, c2, c3, c4
+
+    @njit(inline="always", **_jit)
+    def _blocks(v, u, I, sel, tab, sc, k0, k1, b0, kb0, spk_k, spk_n, n_spk, w, flags,
+                fwords, totals, last, k_last):
         N = v.shape[0]
+        nb = (N + BLOCK - 1) // BLOCK
         cap = spk_k.shape[0]
-        for j in range(n_sweeps):
-            if cap - n_spk < N:
-                return j, n_spk
-            hits = _sweep_core(v, u, I, sel, tab, sc, flags, last, len(tab[0]) == 1)
-            if hits:
-                n_spk = record(flags, fwords, k0 + j, spk_k, spk_n, n_spk)
-            for k in range(last.shape[0]):
-                totals[k] += last[k]
-        return n_sweeps, n_spk
+        uniform = len(tab[0]) == 1
+        for blk in range(b0, nb):
+            lo = blk * BLOCK
+            n = min(N, lo + BLOCK) - lo
+            for i in range(n):
+                w[i] = v[lo + i]
+                w[BLOCK + i] = u[lo + i]
+                w[2 * BLOCK + i] = I[lo + i]
+                w[3 * BLOCK + i] = sel[lo + i]
+            for i in range(n, BLOCK):
+                flags[i] = False
+            t0 = t1 = t2 = t3 = t4 = 0
+            for k in range(kb0 if blk == b0 else k0, k1):
+                if cap - n_spk < n:
+                    totals[0] += t0
+                    totals[1] += t1
+                    totals[2] += t2
+                    totals[3] += t3
+                    totals[4] += t4
+                    for i in range(n):
+                        v[lo + i] = w[i]
+                        u[lo + i] = w[BLOCK + i]
+                    return blk, k, n_spk
+                nh, c0, c1, c2, c3, c4 = _block_loop(w, flags, n, tab, sc, uniform)
+                t0 += c0
+                t1 += c1
+                t2 += c2
+                t3 += c3
+                t4 += c4
+                if k == k_last:
+                    last[0] += c0
+                    last[1] += c1
+                    last[2] += c2
+                    last[3] += c3
+                    last[4] += c4
+                if nh:
+                    n_spk = record(flags[:(n + 7) // 8 * 8], fwords[:(n + 7) // 8], k, spk_k,
+                                   spk_n, n_spk, lo)
+            totals[0] += t0
+            totals[1] += t1
+            totals[2] += t2
+            totals[3] += t3
+            totals[4] += t4
+            for i in range(n):
+                v[lo + i] = w[i]
+                u[lo + i] = w[BLOCK + i]
+        return nb, k1, n_spk
+
+    @njit(**_jit)
+    def _run_blocks(v, u, I, sel, tab, sc, k0, k1, b0, kb0, spk_k, spk_n, n_spk, w, flags,
+                    fwords, totals, last, k_last):
+        """Sweeps ``k0 .. k1 - 1`` with constant currents, in place, a block of ``BLOCK``
+        neurons at a time through every sweep (from sweep ``kb0`` for block ``b0``: a
+        resumed call); spikes appended to (spk_k, spk_n) from ``n_spk``, per neuron in sweep
+        order; clamps per kind added to ``totals`` (and to ``last`` in sweep ``k_last``).
+        Stops before a block's sweep when the buffer could overflow: returns (block, sweep,
+        spikes) to resume from, ``(blocks, k1, spikes)`` when done."""
+        return _blocks(v, u, I, sel, tab, sc, k0, k1, b0, kb0, spk_k, spk_n, n_spk, w, flags,
+                       fwords, totals, last, k_last)
+
+
+_SPECIAL: dict = {}
+
+
+def specialized(cfg_consts):
+    """:func:`_run_blocks` compiled for one configuration: its constants are compile-time
+    constants of the loop (shifts by immediates, the rounding, clamps and dt form that the
+    configuration does not use folded away), the same operations otherwise. Compiled on
+    first use (about 2 s) and cached on disk per configuration."""
+    fn = _SPECIAL.get(cfg_consts)
+    if fn is None:
+        tab, sc = cfg_consts
+        blocks = _blocks
+
+        @njit(**_jit)
+        def run_special(v, u, I, sel, tab_, sc_, k0, k1, b0, kb0, spk_k, spk_n, n_spk, w,
+                        flags, fwords, totals, last, k_last):
+            return blocks(v, u, I, sel, tab, sc, k0, k1, b0, kb0, spk_k, spk_n, n_spk, w,
+                          flags, fwords, totals, last, k_last)
+        fn = _SPECIAL[cfg_consts] = run_special
+    return fn
 
 
 def update_arrays(cfg_consts, v, u, I, sel):
@@ -214,18 +319,22 @@ def sweep_inplace(cfg_consts, v, u, I, sel, spike, counts) -> int:
 
 
 def run_sweeps(cfg_consts, v, u, I, sel, n_sweeps: int, k0: int = 0,
-               threads: int | None = None):
+               threads: int | None = None, special: bool = False):
     """``n_sweeps`` sweeps with constant currents ``I``, in place on ``v``, ``u``.
 
     Returns ``(spike_sweeps, spike_neurons, totals, last)``: every spike as (sweep index from
-    ``k0``, neuron), the clamp counts per kind over the run and in its last sweep. Populations
-    of at least :data:`PARALLEL_MIN_NEURONS` are split over ``threads`` (default
-    :func:`default_threads`) contiguous chunks, each run by the GIL-free kernel.
+    ``k0``, neuron), per neuron in sweep order, the clamp counts per kind over the run and in
+    its last sweep. Neurons run a block of :data:`BLOCK` at a time through every sweep (the
+    block stays in L1, the loop over it vectorizes); populations of at least
+    :data:`PARALLEL_MIN_NEURONS` are split over ``threads`` (default :func:`default_threads`)
+    contiguous chunks, each run by the GIL-free kernel. ``special``: the loop compiled for
+    this configuration (:func:`specialized`).
     """
     tab, sc = cfg_consts
     N = v.shape[0]
     nk = len(CLAMP_KINDS)
     threads = default_threads(N) if threads is None else max(1, min(int(threads), N))
+    run = specialized(cfg_consts) if special else _run_blocks
 
     def chunk(lo, hi):
         vv, uu, II, ss = v[lo:hi], u[lo:hi], I[lo:hi], sel[lo:hi]
@@ -233,17 +342,18 @@ def run_sweeps(cfg_consts, v, u, I, sel, n_sweeps: int, k0: int = 0,
         cap = max(4 * n, 1024)
         spk_k, spk_n = np.empty(cap, np.int64), np.empty(cap, np.int64)
         totals, last = np.zeros(nk, np.int64), np.zeros(nk, np.int64)
-        flags = np.zeros((n + 7) // 8 * 8, np.bool_)
-        done, n_spk = 0, 0
-        while done < n_sweeps:
-            d, n_spk = _run_const(vv, uu, II, ss, tab, sc, n_sweeps - done, k0 + done,
-                                  spk_k, spk_n, n_spk, totals, last, flags,
-                                  flags.view(np.uint64))
-            done += d
-            if done < n_sweeps:        # buffer full: grow and go on
-                cap *= 2
-                spk_k = np.resize(spk_k, cap)
-                spk_n = np.resize(spk_n, cap)
-        return spk_k[:n_spk], spk_n[:n_spk] + lo, totals, last
+        w = np.zeros(4 * BLOCK, np.int64)
+        flags = np.zeros(BLOCK, np.bool_)
+        nb = (n + BLOCK - 1) // BLOCK
+        b, k, n_spk = 0, 0, 0
+        while True:
+            b, k, n_spk = run(vv, uu, II, ss, tab, sc, 0, n_sweeps, b, k, spk_k, spk_n, n_spk,
+                              w, flags, flags.view(np.uint64), totals, last, n_sweeps - 1)
+            if b >= nb:
+                break
+            cap *= 2                    # buffer full: grow and go on
+            spk_k = np.resize(spk_k, cap)
+            spk_n = np.resize(spk_n, cap)
+        return spk_k[:n_spk] + k0, spk_n[:n_spk] + lo, totals, last
 
     return split_over_threads(chunk, N, threads if n_sweeps else 1)

@@ -271,20 +271,22 @@ def _search_numpy(sets, cols_set, v, u, battery, n_steps: int, dt: float):
     return v_min, u_min, u_max, v_pre_max
 
 
-# the compiled search: stimulus kinds and their columns
+# the compiled search: stimulus kinds, the rows of its stimuli's constants
 _KINDS = {"const": 0, "step": 1, "square": 2, "ramp": 3}
+(_LO, _HI, _SLOPE, _THR) = range(4)
 _SEARCH: dict = {}
 
 
 def _search_kernel():
     """The compiled search loop (numba), built on first use around the golden model's
-    compiled step (:func:`cuneate.golden.izhikevich_kernel.step_kernel`)."""
+    compiled block step (:func:`cuneate.golden.izhikevich_kernel.block_kernel`)."""
     if "run" in _SEARCH:
         return _SEARCH["run"]
     from numba import njit
 
-    from ...golden.izhikevich_kernel import step_kernel
-    advance = step_kernel()
+    from ...golden.izhikevich_kernel import BLOCK, block_kernel
+    block_steps = block_kernel()
+    B = BLOCK
 
     @njit(nogil=True, cache=True, inline="always")
     def _remainder(t, p, whole):
@@ -302,105 +304,127 @@ def _search_kernel():
         return r
 
     @njit(nogil=True, cache=True)
-    def run(v, u, kind, lo, hi, pidx, thr, slope, periods, whole, n_steps, half_k, dt, P, std_u,
-            vth, bound, v_min, u_min, u_max, vp_max, I, sel, flags, vpre, rem):
-        """Every step of the trajectories ``v, u`` (one parameter set ``P``) under their
-        stimuli, generated per step as :func:`_battery_rows` does (same operations, same
-        bits); the extremes kept in place. Returns (-1, -1), or the first step and column
-        whose state left the bound."""
-        C = v.shape[0]
+    def run(w, st, n, steps, ramps, gper, gthr, gptr, gcols, periods, whole, n_steps, half_k, dt, P,
+            std_u, vth, bound, flags, rem, state):
+        """Every step of the ``n`` trajectories held in ``w`` (one parameter set ``P``) under
+        their stimuli (constants in ``st``'s rows), generated per step as
+        :func:`_battery_rows` does (same operations, same bits); the extremes kept in ``w``'s
+        rows ``W_P`` on (the block step's ``track``). A stimulus is written when it changes: a square wave's columns (``gcols``, per
+        (period, threshold) group: ``gper``, ``gthr``) when its comparison flips. Returns -1, or the
+        first step at which a state left the bound."""
+        for c in range(n):
+            w[2 * B + c] = st[_LO * B + c]
+        for g in range(gper.shape[0]):
+            state[g] = False
         for k in range(n_steps):
             t = k * dt
             for j in range(periods.shape[0]):
                 rem[j] = _remainder(t, periods[j], whole[j])
-            first = k < half_k
+            for g in range(gper.shape[0]):
+                up = rem[gper[g]] < gthr[g]
+                if up != state[g] or k == 0:
+                    state[g] = up
+                    for q in range(gptr[g], gptr[g + 1]):
+                        c = gcols[q]
+                        w[2 * B + c] = st[_HI * B + c] if up else st[_LO * B + c]
+            if k == half_k:
+                for c in steps:
+                    w[2 * B + c] = st[_HI * B + c]
             last = k == n_steps - 1
-            kf = float(k)
-            for c in range(C):          # branch-free, so that it vectorizes
-                kd = kind[c]
-                up = (kd == 1 and not first) or (kd == 2 and rem[pidx[c]] < thr[c]) \
-                    or (kd == 3 and last)
-                x = hi[c] if up else lo[c]
-                I[c] = kf * slope[c] + lo[c] if (kd == 3 and not last) else x
-            advance(v, u, I, sel, P, True, std_u, dt, dt, vth, False, flags, vpre)
-            bad = False
-            for c in range(C):
-                bad |= not (abs(vpre[c]) <= bound and abs(u[c]) <= bound)
-            if bad:
-                for c in range(C):
-                    if not (abs(vpre[c]) <= bound and abs(u[c]) <= bound):
-                        return k, c
-            for c in range(C):
-                v_min[c] = min(v_min[c], v[c])
-                u_min[c] = min(u_min[c], u[c])
-                u_max[c] = max(u_max[c], u[c])
-                vp_max[c] = max(vp_max[c], vpre[c])
-        return -1, -1
+            for c in ramps:
+                w[2 * B + c] = st[_HI * B + c] if last else \
+                    float(k) * st[_SLOPE * B + c] + st[_LO * B + c]
+            _, nbad = block_steps(w, flags, n, P, True, std_u, False, dt, dt, vth, bound, True)
+            if nbad:
+                return k
+        return -1
 
     _SEARCH["run"] = run
+    _SEARCH["block"] = BLOCK
     return run
 
 
 def _search_compiled(sets, cols_set, v, u, battery, n_steps: int, dt: float,
                      threads: int | None = None):
     """:func:`_search_numpy` by the compiled loop: the same operations in the same order per
-    trajectory (so the same extremes to the bit), each parameter set's trajectories split
-    over ``threads`` (default: every core, at most 2)."""
+    trajectory (so the same extremes to the bit), a parameter set's trajectories in blocks
+    (each kept in L1 and run through every step), the blocks split over ``threads``
+    (default: every core, at most 2)."""
     import os
     from concurrent.futures import ThreadPoolExecutor
 
+    from ...golden.izhikevich_kernel import W_P, W_ROWS, W_U, W_V
     run = _search_kernel()
+    B = _SEARCH["block"]
     n_stim = len(battery)
     periods = sorted({a[2] for _, kind, a in battery if kind == "square"})
     kind = np.array([_KINDS[b[1]] for b in battery], dtype=np.int64)
-    lo = np.zeros(n_stim)
-    hi = np.zeros(n_stim)
+    rows = np.zeros((4, n_stim))                   # the stimuli's constants
     pidx = np.zeros(n_stim, dtype=np.int64)
-    thr = np.zeros(n_stim)
-    slope = np.zeros(n_stim)
     for c, (_, kd, a) in enumerate(battery):
         if kd == "const":
-            lo[c] = hi[c] = a[0]
+            rows[_LO, c] = rows[_HI, c] = a[0]
         elif kd == "step":
-            lo[c], hi[c] = a
+            rows[_LO, c], rows[_HI, c] = a
         elif kd == "square":
-            lo[c], hi[c], period, duty = a
-            pidx[c], thr[c] = periods.index(period), duty * period
+            rows[_LO, c], rows[_HI, c], period, duty = a
+            pidx[c], rows[_THR, c] = periods.index(period), duty * period
         else:
-            lo[c], hi[c] = a
-            slope[c] = (a[1] - a[0]) / (n_steps - 1) if n_steps > 1 else 0.0
-            if n_steps <= 1:
-                hi[c] = a[0]
+            rows[_LO, c], rows[_HI, c] = a
+            if n_steps > 1:
+                rows[_SLOPE, c] = (a[1] - a[0]) / (n_steps - 1)
+            else:
+                rows[_HI, c] = a[0]
     periods = np.array(periods or [1.0])
     whole = np.array([p == int(p) and p < 2.0 ** 40 for p in periods])
-    v_min, u_min, u_max, vp_max = v.copy(), u.copy(), u.copy(), v.copy()
     n_rep = len(cols_set) // n_stim
-    tile = [np.tile(x, n_rep) for x in (kind, lo, hi, pidx, thr, slope)]
+    rows = np.tile(rows, n_rep)
+    kind, pidx = np.tile(kind, n_rep), np.tile(pidx, n_rep)
     threads = threads or min(os.cpu_count() or 1, 2)
-    jobs = []
+    jobs = []                                     # (set, first column, columns) of <= B
     for si, s in enumerate(sets):
         cols = np.flatnonzero(cols_set == si)
-        edges = np.linspace(cols[0], cols[-1] + 1, threads + 1).astype(int)
-        jobs += [(s, a, b) for a, b in zip(edges[:-1], edges[1:]) if b > a]
+        parts = max(threads, -(-cols.size // B))
+        edges = np.linspace(cols[0], cols[-1] + 1, parts + 1).astype(int)
+        jobs += [(s, a, b - a) for a, b in zip(edges[:-1], edges[1:]) if b > a]
 
     def job(j):
-        s, a, b = j
-        P = tuple((float(x),) for x in (s.a, s.b, s.c, s.d, s.A, s.B, s.C, s.u_leak, s.v_u))
+        s, a, n = j
+        P = ((s.a, s.b, s.c, s.d, s.A, s.B, s.C, s.u_leak, s.v_u),)
         std_u = s.u_leak == 1.0 and s.v_u == 0.0
-        n = b - a
-        return run(v[a:b], u[a:b], *(x[a:b] for x in tile), periods, whole, n_steps, n_steps // 2,
-                   float(dt), P, std_u, golden.V_TH, SEARCH_STATE_BOUND, v_min[a:b],
-                   u_min[a:b], u_max[a:b], vp_max[a:b], np.empty(n), np.zeros(n, np.int64),
-                   np.zeros(n, np.bool_), np.empty(n), np.empty(len(periods))), a
+        w, st = np.zeros((W_ROWS, B)), np.zeros((4, B))
+        w[W_V, :n], w[W_U, :n] = v[a:a + n], u[a:a + n]
+        w[W_P:W_P + 4, :n] = v[a:a + n], u[a:a + n], u[a:a + n], v[a:a + n]
+        st[:, :n] = rows[:, a:a + n]
+        # the square waves' columns by (period, threshold)
+        sq = np.flatnonzero(kind[a:a + n] == _KINDS["square"]).tolist()
+        keys = sorted({(int(pidx[a + c]), float(st[_THR, c])) for c in sq})
+        members = [[c for c in sq if (pidx[a + c], st[_THR, c]) == key] for key in keys]
+        gptr = np.cumsum([0] + [len(m) for m in members]).astype(np.int64)
+        gcols = np.array([c for m in members for c in m], dtype=np.int64)
+        gper = np.array([p for p, _ in keys], dtype=np.int64)
+        gthr = np.array([t for _, t in keys], dtype=np.float64)
+        kd = kind[a:a + n]
+        k = run(w.reshape(-1), st.reshape(-1), n,
+                np.flatnonzero(kd == _KINDS["step"]), np.flatnonzero(kd == _KINDS["ramp"]),
+                gper, gthr, gptr, gcols, periods, whole, n_steps, n_steps // 2, float(dt), P,
+                std_u, golden.V_TH, SEARCH_STATE_BOUND, np.zeros(B, np.bool_),
+                np.empty(len(periods)), np.zeros(len(keys), np.bool_))
+        if k >= 0:
+            bad = ~((np.abs(w[3, :n]) <= SEARCH_STATE_BOUND)
+                    & (np.abs(w[1, :n]) <= SEARCH_STATE_BOUND))
+            return k, a + int(np.flatnonzero(bad)[0]), None
+        return -1, a, w[W_P:W_P + 4, :n]
     if len(jobs) == 1:
         results = [job(jobs[0])]
     else:
         with ThreadPoolExecutor(min(threads, len(jobs))) as pool:
             results = list(pool.map(job, jobs))
-    bad = [(k, a + c) for (k, c), a in results if k >= 0]
+    bad = [(k, c) for k, c, _ in results if k >= 0]
     if bad:
         return min(bad)
-    return v_min, u_min, u_max, vp_max
+    ext = np.concatenate([r[2] for r in results], axis=1)
+    return ext[0], ext[1], ext[2], ext[3]
 
 
 def one_step_bound(cfg, v, u, I, sel=None):
