@@ -8,7 +8,7 @@ import os
 
 import numpy as np
 
-from .kernel import record, split_over_threads
+from .kernel import available, record, split_over_threads
 
 __all__ = ["simulate_compiled", "block_kernel", "BLOCK", "W_V", "W_U", "W_I", "W_VPRE", "PARALLEL_MIN_NEURONS",
            "PARALLEL_MIN_NEURONS_TABLE"]
@@ -30,9 +30,8 @@ W_V, W_U, W_I, W_VPRE, W_P = 0, 1, 2, 3, 4
 W_ROWS = W_P + 9
 
 
-def _golden_kernel():
-    if "run" in _KERNEL:
-        return _KERNEL["run"]
+if available():
+    # module-level functions (not closures), so that numba's disk cache finds them again
     from numba import njit
 
     @njit(nogil=True, cache=True, inline="always")
@@ -199,10 +198,6 @@ def _golden_kernel():
                 u[lo + i] = w[BLOCK + i]
         return nb, k1, n_spk
 
-    _KERNEL["run"] = run
-    _KERNEL["advance"] = advance
-    _KERNEL["update"] = update
-    _KERNEL["block_steps"] = block_steps
 
     @njit(nogil=True, cache=True)
     def first_bad(vpre, u, bound):
@@ -217,8 +212,12 @@ def _golden_kernel():
                     return i
         return -1
 
-    _KERNEL["first_bad"] = first_bad
-    return run
+    _KERNEL.update(run=run, advance=advance, update=update, block_steps=block_steps,
+                   first_bad=first_bad)
+
+
+def _golden_kernel():
+    return _KERNEL["run"]
 
 
 def block_kernel():

@@ -288,14 +288,14 @@ def specialized(cfg_consts):
     first use (about 2 s) and cached on disk per configuration."""
     fn = _SPECIAL.get(cfg_consts)
     if fn is None:
-        tab, sc = cfg_consts
-        blocks = _blocks
+        tab, sc = cfg_consts             # the closure's only cells: tuples of ints, so the
+                                         # disk cache keys on the configuration's constants
 
         @njit(**_jit)
         def run_special(v, u, I, sel, tab_, sc_, k0, k1, b0, kb0, spk_k, spk_n, n_spk, w,
                         flags, fwords, totals, last, k_last):
-            return blocks(v, u, I, sel, tab, sc, k0, k1, b0, kb0, spk_k, spk_n, n_spk, w,
-                          flags, fwords, totals, last, k_last)
+            return _blocks(v, u, I, sel, tab, sc, k0, k1, b0, kb0, spk_k, spk_n, n_spk, w,
+                           flags, fwords, totals, last, k_last)
         fn = _SPECIAL[cfg_consts] = run_special
     return fn
 

@@ -17,6 +17,9 @@ under a battery of stimuli spanning the accepted range ``[I_lo, I_hi]``:
 * linear ramps ``I_lo -> I_hi`` and ``I_hi -> I_lo`` over the run.
 
 The run lasts ``clip(10 / |a|, 400, 3000)`` ms (ten recovery time constants of the slowest set).
+The search runs compiled (numba: each trajectory's Euler steps are golden's operations in
+golden's order, the stimuli generated per step by the same operations as the matrix below,
+so its extremes equal the NumPy loop's to the bit; that loop is kept as the reference).
 The largest ``u`` comes from sustained maximal drive (more current, more spikes, each adding
 ``d``); square waves, steps and ramps were measured not to exceed it. The search's extremes are
 widened by a margin ``0.02 (u_max - u_min) + max(|d|)`` (one recovery jump more than ever seen,
@@ -149,6 +152,9 @@ def stimulus_battery(i_lo: float, i_hi: float, dt_ms: float, n_steps: int):
 SEARCH_BLOCK = 4096
 #: Conservative cost of the search: seconds per step and per trajectory-step (Euler on NumPy).
 SEARCH_S_PER_STEP, SEARCH_S_PER_TRAJECTORY_STEP = 6e-5, 1.5e-6
+#: The same for the compiled search (measured 0.17-0.5 us per step of 94 trajectories on a
+#: loaded 2-core machine: the stimuli's fixed cost per step, then about 1-2 ns a trajectory)
+SEARCH_S_PER_STEP_COMPILED, SEARCH_S_PER_TRAJECTORY_STEP_COMPILED = 3e-7, 4e-9
 
 
 def search_estimate(n_sets: int, n_inits: int, dt_ms: float, duration_ms: float = 3000.0
@@ -158,7 +164,10 @@ def search_estimate(n_sets: int, n_inits: int, dt_ms: float, duration_ms: float 
     3000 ms), before it runs."""
     n_steps = duration_ms / dt_ms
     cols = 100.0 * n_inits
-    seconds = n_steps * (SEARCH_S_PER_STEP + SEARCH_S_PER_TRAJECTORY_STEP * cols)
+    per_step, per_traj = ((SEARCH_S_PER_STEP_COMPILED, SEARCH_S_PER_TRAJECTORY_STEP_COMPILED)
+                          if kernel_available() else
+                          (SEARCH_S_PER_STEP, SEARCH_S_PER_TRAJECTORY_STEP))
+    seconds = n_steps * (per_step + per_traj * cols)
     nbytes = 8.0 * (SEARCH_BLOCK + 16) * cols + 4096.0 * n_sets
     return {"steps": n_steps, "trajectories": cols, "seconds": seconds, "bytes": nbytes}
 
@@ -277,35 +286,18 @@ _KINDS = {"const": 0, "step": 1, "square": 2, "ramp": 3}
 _SEARCH: dict = {}
 
 
-def _search_kernel():
-    """The compiled search loop (numba), built on first use around the golden model's
-    compiled block step (:func:`cuneate.golden.izhikevich_kernel.block_kernel`)."""
-    if "run" in _SEARCH:
-        return _SEARCH["run"]
+if kernel_available():
+    # the compiled search loop (numba) around the golden model's compiled block step; at
+    # module level (not closures), so that numba's disk cache finds it again
     from numba import njit
 
-    from ...golden.izhikevich_kernel import BLOCK, block_kernel
-    block_steps = block_kernel()
-    B = BLOCK
-
-    @njit(nogil=True, cache=True, inline="always")
-    def _remainder(t, p, whole):
-        """``t % p`` (``t >= 0``, ``p > 0``: the exact remainder, :func:`math.fmod`'s); for a
-        whole ``p`` by one division, exactly: ``t - n p`` is a multiple of ``t``'s last place
-        no larger than ``max(t, 2 p)``, so representable, for ``n`` the rounded quotient's
-        floor, one off at most (corrected)."""
-        if not whole:
-            return t % p
-        r = t - math.floor(t / p) * p
-        if r < 0.0:
-            r += p
-        elif r >= p:
-            r -= p
-        return r
+    from ...golden.izhikevich_kernel import BLOCK as B
+    from ...golden.izhikevich_kernel import _KERNEL as _GOLDEN
+    _block_steps = _GOLDEN["block_steps"]
 
     @njit(nogil=True, cache=True)
     def run(w, st, n, steps, ramps, gper, gthr, gptr, gcols, periods, whole, n_steps, half_k, dt, P,
-            std_u, vth, bound, flags, rem, state):
+            std_u, vth, bound, flags, rem, quot, state):
         """Every step of the ``n`` trajectories held in ``w`` (one parameter set ``P``) under
         their stimuli (constants in ``st``'s rows), generated per step as
         :func:`_battery_rows` does (same operations, same bits); the extremes kept in ``w``'s
@@ -319,7 +311,13 @@ def _search_kernel():
         for k in range(n_steps):
             t = k * dt
             for j in range(periods.shape[0]):
-                rem[j] = _remainder(t, periods[j], whole[j])
+                p = periods[j]
+                if whole[j]:
+                    while t - quot[j] * p >= p:
+                        quot[j] += 1.0
+                    rem[j] = t - quot[j] * p
+                else:
+                    rem[j] = t % p
             for g in range(gper.shape[0]):
                 up = rem[gper[g]] < gthr[g]
                 if up != state[g] or k == 0:
@@ -334,14 +332,18 @@ def _search_kernel():
             for c in ramps:
                 w[2 * B + c] = st[_HI * B + c] if last else \
                     float(k) * st[_SLOPE * B + c] + st[_LO * B + c]
-            _, nbad = block_steps(w, flags, n, P, True, std_u, False, dt, dt, vth, bound, True)
+            _, nbad = _block_steps(w, flags, n, P, True, std_u, False, dt, dt, vth, bound, True)
             if nbad:
                 return k
         return -1
 
     _SEARCH["run"] = run
-    _SEARCH["block"] = BLOCK
-    return run
+    _SEARCH["block"] = B
+
+
+def _search_kernel():
+    """The compiled search loop."""
+    return _SEARCH["run"]
 
 
 def _search_compiled(sets, cols_set, v, u, battery, n_steps: int, dt: float,
@@ -376,7 +378,7 @@ def _search_compiled(sets, cols_set, v, u, battery, n_steps: int, dt: float,
             else:
                 rows[_HI, c] = a[0]
     periods = np.array(periods or [1.0])
-    whole = np.array([p == int(p) and p < 2.0 ** 40 for p in periods])
+    whole = np.array([p == int(p) and n_steps * dt < 2.0 ** 40 for p in periods])
     n_rep = len(cols_set) // n_stim
     rows = np.tile(rows, n_rep)
     kind, pidx = np.tile(kind, n_rep), np.tile(pidx, n_rep)
@@ -409,7 +411,7 @@ def _search_compiled(sets, cols_set, v, u, battery, n_steps: int, dt: float,
                 np.flatnonzero(kd == _KINDS["step"]), np.flatnonzero(kd == _KINDS["ramp"]),
                 gper, gthr, gptr, gcols, periods, whole, n_steps, n_steps // 2, float(dt), P,
                 std_u, golden.V_TH, SEARCH_STATE_BOUND, np.zeros(B, np.bool_),
-                np.empty(len(periods)), np.zeros(len(keys), np.bool_))
+                np.empty(len(periods)), np.zeros(len(periods)), np.zeros(len(keys), np.bool_))
         if k >= 0:
             bad = ~((np.abs(w[3, :n]) <= SEARCH_STATE_BOUND)
                     & (np.abs(w[1, :n]) <= SEARCH_STATE_BOUND))
