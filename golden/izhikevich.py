@@ -414,9 +414,9 @@ def simulate(params="RS", current=10.0, *, duration_ms: float | None = None,
         :func:`step` per update (the reference). Default: ``"numba"`` where it applies.
     threads
         Threads for the compiled loop (neurons are independent); default two (at most the
-        cores) from 2000 neurons on when the current is an array (each thread runs its neurons
-        through every step: measured on 2 cores 1.7x at 10 000 neurons), from 50 000 on when
-        it is a callable (evaluated per step, so the threads meet once per step), else one.
+        cores) when the current is an array, from 512 neurons and 2e6 updates on (each thread
+        runs its blocks of neurons through every step), from 50 000 neurons on when it is a
+        callable (evaluated per step, so the threads meet once per step), else one.
         Per-neuron constants are cheapest as a zero-copy broadcast,
         ``np.broadcast_to(I, (n_steps, n_neurons))``.
 

@@ -8,24 +8,23 @@ import os
 
 import numpy as np
 
-from .kernel import available, record, split_over_threads
+from .kernel import BLOCK, available, close_block, open_block, record, split_over_threads
 
 __all__ = ["simulate_compiled", "block_kernel", "BLOCK", "W_V", "W_U", "W_I", "W_VPRE", "PARALLEL_MIN_NEURONS",
            "PARALLEL_MIN_NEURONS_TABLE"]
 
 #: a callable current: one thread dispatch per step, so threads pay only for large populations
 PARALLEL_MIN_NEURONS = 50_000
-#: an array current: one dispatch per run
-PARALLEL_MIN_NEURONS_TABLE = 2_000
+#: an array current: one dispatch per run, each thread its own blocks (from two half blocks on,
+#: for runs of at least PARALLEL_MIN_UPDATES updates)
+PARALLEL_MIN_NEURONS_TABLE = 512
+PARALLEL_MIN_UPDATES = 2_000_000
 
 
 _KERNEL: dict = {}
 
-#: neurons a compiled loop keeps in L1 and runs through every step of a table current at a time
-BLOCK = 512
 # rows of the scratch array of a block (each ``BLOCK`` long): state, current, v before reset,
-# then the parameters per neuron when the sets differ (constant row offsets, so the compiler
-# sees the rows cannot overlap and the loop vectorizes)
+# then the parameters per neuron when the sets differ
 W_V, W_U, W_I, W_VPRE, W_P = 0, 1, 2, 3, 4
 W_ROWS = W_P + 9
 
@@ -75,41 +74,31 @@ if available():
     def block_loop(w, flags, n, P, uniform, std_u, izh, dt, half, vth, bound, track):
         nh = 0
         nbad = 0
-        if uniform:
-            a, b, c, d, A_, B_, C_, lam, vu = P[0]
-            for i in range(n):
-                vn, un, vp = update(w[i], w[BLOCK + i], w[2 * BLOCK + i], a, b, c, d, A_, B_,
-                                    C_, lam, vu, std_u, izh, dt, half, vth)
-                w[i] = vn
-                w[BLOCK + i] = un
-                w[3 * BLOCK + i] = vp
-                hit = vp >= vth
-                flags[i] = hit
-                nh += hit
-                nbad += not (abs(vp) <= bound and abs(un) <= bound)
-                if track:
-                    x = w[4 * BLOCK + i]
-                    w[4 * BLOCK + i] = vn if vn < x else x
-                    x = w[5 * BLOCK + i]
-                    w[5 * BLOCK + i] = un if un < x else x
-                    x = w[6 * BLOCK + i]
-                    w[6 * BLOCK + i] = un if un > x else x
-                    x = w[7 * BLOCK + i]
-                    w[7 * BLOCK + i] = vp if vp > x else x
-        else:
-            for i in range(n):
-                vn, un, vp = update(
-                    w[i], w[BLOCK + i], w[2 * BLOCK + i], w[4 * BLOCK + i], w[5 * BLOCK + i],
-                    w[6 * BLOCK + i], w[7 * BLOCK + i], w[8 * BLOCK + i], w[9 * BLOCK + i],
-                    w[10 * BLOCK + i], w[11 * BLOCK + i], w[12 * BLOCK + i], std_u, izh, dt,
-                    half, vth)
-                w[i] = vn
-                w[BLOCK + i] = un
-                w[3 * BLOCK + i] = vp
-                hit = vp >= vth
-                flags[i] = hit
-                nh += hit
-                nbad += not (abs(vp) <= bound and abs(un) <= bound)
+        a, b, c, d, A_, B_, C_, lam, vu = P[0]
+        for i in range(n):
+            if not uniform:             # the neuron's own set, from the parameter rows
+                a, b, c, d = w[4 * BLOCK + i], w[5 * BLOCK + i], w[6 * BLOCK + i], \
+                    w[7 * BLOCK + i]
+                A_, B_, C_ = w[8 * BLOCK + i], w[9 * BLOCK + i], w[10 * BLOCK + i]
+                lam, vu = w[11 * BLOCK + i], w[12 * BLOCK + i]
+            vn, un, vp = update(w[i], w[BLOCK + i], w[2 * BLOCK + i], a, b, c, d, A_, B_, C_,
+                                lam, vu, std_u, izh, dt, half, vth)
+            w[i] = vn
+            w[BLOCK + i] = un
+            w[3 * BLOCK + i] = vp
+            hit = vp >= vth
+            flags[i] = hit
+            nh += hit
+            nbad += not (abs(vp) <= bound and abs(un) <= bound)
+            if track:
+                x = w[4 * BLOCK + i]
+                w[4 * BLOCK + i] = vn if vn < x else x
+                x = w[5 * BLOCK + i]
+                w[5 * BLOCK + i] = un if un < x else x
+                x = w[6 * BLOCK + i]
+                w[6 * BLOCK + i] = un if un > x else x
+                x = w[7 * BLOCK + i]
+                w[7 * BLOCK + i] = vp if vp > x else x
         return nh, nbad
 
     @njit(nogil=True, cache=True)
@@ -156,11 +145,7 @@ if available():
         for blk in range(b0, nb):
             lo = blk * BLOCK
             n = min(N, lo + BLOCK) - lo
-            for i in range(n):
-                w[i] = v[lo + i]
-                w[BLOCK + i] = u[lo + i]
-            for i in range(n, BLOCK):
-                flags[i] = False
+            open_block(w, flags, v, u, lo, n)
             if not uniform:
                 for j in range(9):
                     for i in range(n):
@@ -170,9 +155,7 @@ if available():
                 if k > bad[0]:
                     break
                 if cap - n_spk < n:
-                    for i in range(n):
-                        v[lo + i] = w[i]
-                        u[lo + i] = w[BLOCK + i]
+                    close_block(w, v, u, lo, n)
                     return blk, k, n_spk
                 if first or rows > 1:
                     r = k if rows > 1 else 0
@@ -193,9 +176,7 @@ if available():
                 if nh:
                     n_spk = record(flags[:(n + 7) // 8 * 8], fwords[:(n + 7) // 8], k, spk_k,
                                    spk_n, n_spk, lo)
-            for i in range(n):
-                v[lo + i] = w[i]
-                u[lo + i] = w[BLOCK + i]
+            close_block(w, v, u, lo, n)
         return nb, k1, n_spk
 
 
@@ -263,7 +244,8 @@ def simulate_compiled(prm, v, u, current, I_of, n_steps, n_neurons, dt_ms, schem
         np.zeros((9, 1), dtype)
     if threads is None:
         least = PARALLEL_MIN_NEURONS if callable(current) else PARALLEL_MIN_NEURONS_TABLE
-        threads = min(os.cpu_count() or 1, 2) if n_neurons >= least else 1
+        long = callable(current) or n_neurons * n_steps >= PARALLEL_MIN_UPDATES
+        threads = min(os.cpu_count() or 1, 2) if n_neurons >= least and long else 1
     threads = max(1, min(int(threads), n_neurons))
 
     # currents as a 2-D table read by (step, neuron), rows/columns of length 1 broadcast

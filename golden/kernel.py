@@ -13,7 +13,13 @@ from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
-__all__ = ["available", "record", "split_over_threads", "thread_slices", "by_neuron"]
+__all__ = ["available", "record", "split_over_threads", "thread_slices", "by_neuron", "BLOCK",
+           "open_block", "close_block"]
+
+#: neurons a compiled loop keeps in L1 and takes through every step of a run at a time: their
+#: state and inputs in one scratch array of rows ``BLOCK`` long (constant row offsets, so the
+#: compiler sees the rows cannot overlap and the loop over the block vectorizes)
+BLOCK = 512
 
 try:                                   # numba is a dependency; keep the models usable without it
     import numba
@@ -43,6 +49,23 @@ if numba is not None:
                         n_spk += 1
         return n_spk
 
+    @njit(nogil=True, cache=True, inline="always")
+    def open_block(w, flags, v, u, lo, n):
+        """Neurons ``lo .. lo + n - 1`` into a block: v and u into rows 0 and 1 of the
+        scratch ``w``, the spike flags past ``n`` cleared."""
+        for i in range(n):
+            w[i] = v[lo + i]
+            w[BLOCK + i] = u[lo + i]
+        for i in range(n, BLOCK):
+            flags[i] = False
+
+    @njit(nogil=True, cache=True, inline="always")
+    def close_block(w, v, u, lo, n):
+        """A block's v and u (rows 0 and 1 of ``w``) back to neurons ``lo ..``."""
+        for i in range(n):
+            v[lo + i] = w[i]
+            u[lo + i] = w[BLOCK + i]
+
     @njit(nogil=True, cache=True)
     def _count_sort(ks, ns, n):
         """Stable counting sort of ``ks`` by ``ns`` (0 <= ns < n): (sorted ks, bounds)."""
@@ -58,7 +81,7 @@ if numba is not None:
             pos[ns[j]] += 1
         return out, bounds
 else:                                  # pragma: no cover
-    record = _count_sort = None
+    record = _count_sort = open_block = close_block = None
 
 
 def by_neuron(ks: np.ndarray, ns: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:

@@ -19,10 +19,13 @@ All kernels release the GIL, so :func:`run_sweeps` splits large populations over
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 
-from ..lib.kernel import (INT64_MAX, INT64_MIN, PARALLEL_MIN_NEURONS, available, default_threads,
-                          record, rounding_slots, split_over_threads)
+from ..lib.kernel import (BLOCK, INT64_MAX, INT64_MIN, PARALLEL_MIN_NEURONS, available,
+                          close_block, default_threads, open_block, record, rounding_slots,
+                          split_over_threads)
 from .config import CLAMP_KINDS, IzhikevichConfig
 
 __all__ = ["available", "rounding_slots", "gather_constants", "update_arrays", "run_sweeps",
@@ -37,8 +40,6 @@ __all__ = ["available", "rounding_slots", "gather_constants", "update_arrays", "
 # rounding shifts, each as 4 slots (left shift, right shift, rounding-bit shift, bit mask)
 R_SV, R_SVQ, R_SDTI, R_SU, R_SIU, R_SUX, R_SDX, R_SHQ = (31 + 4 * j for j in range(8))
 N_SCALARS = 31 + 4 * 8
-#: neurons a run keeps in L1 and takes through every sweep at a time (rows v, u, I, set)
-BLOCK = 512
 
 
 def gather_constants(cfg: IzhikevichConfig) -> tuple[np.ndarray, np.ndarray]:
@@ -153,30 +154,13 @@ if available():
             clamp[i] = d
             v_pre[i] = e
 
-    @njit(**_jit)
-    def _sweep_core(v, u, I, sel, tab, sc, flags, totals, uniform):
-        """One sweep in place without stores under branches (so the loop can vectorize):
-        spikes go to ``flags``, clamp counts per kind are added to ``totals`` (kept as
-        scalar reductions here). Returns the number of spikes."""
-        n_spk = 0
-        c0 = c1 = c2 = c3 = c4 = 0
-        for i in range(v.shape[0]):
-            a, b, c, d, _ = neuron_update(v[i], u[i], I[i], 0 if uniform else sel[i], tab, sc)
-            v[i] = a
-            u[i] = b
-            flags[i] = c
-            n_spk += c
-            c0 += d & 1
-            c1 += (d >> 1) & 1
-            c2 += (d >> 2) & 1
-            c3 += (d >> 3) & 1
-            c4 += (d >> 4) & 1
-        totals[0] = c0
-        totals[1] = c1
-        totals[2] = c2
-        totals[3] = c3
-        totals[4] = c4
-        return n_spk
+    @njit(inline="always", **_jit)
+    def _add_counts(into, c0, c1, c2, c3, c4):
+        into[0] += c0
+        into[1] += c1
+        into[2] += c2
+        into[3] += c3
+        into[4] += c4
 
     @njit(inline="always", **_jit)
     def _block_loop(w, flags, n, tab, sc, uniform):
@@ -184,31 +168,18 @@ if available():
         ``BLOCK``: v, u, I, set), in place; spikes flagged in ``flags``. Returns the spikes
         and the clamps per kind (``uniform``: one parameter set, a constant of each loop)."""
         nh = c0 = c1 = c2 = c3 = c4 = 0
-        if uniform:
-            for i in range(n):
-                a, b, c, d, _ = neuron_update(w[i], w[BLOCK + i], w[2 * BLOCK + i], 0, tab, sc)
-                w[i] = a
-                w[BLOCK + i] = b
-                flags[i] = c
-                nh += c
-                c0 += d & 1
-                c1 += (d >> 1) & 1
-                c2 += (d >> 2) & 1
-                c3 += (d >> 3) & 1
-                c4 += (d >> 4) & 1
-        else:
-            for i in range(n):
-                a, b, c, d, _ = neuron_update(w[i], w[BLOCK + i], w[2 * BLOCK + i],
-                                              w[3 * BLOCK + i], tab, sc)
-                w[i] = a
-                w[BLOCK + i] = b
-                flags[i] = c
-                nh += c
-                c0 += d & 1
-                c1 += (d >> 1) & 1
-                c2 += (d >> 2) & 1
-                c3 += (d >> 3) & 1
-                c4 += (d >> 4) & 1
+        for i in range(n):
+            a, b, c, d, _ = neuron_update(w[i], w[BLOCK + i], w[2 * BLOCK + i],
+                                          0 if uniform else w[3 * BLOCK + i], tab, sc)
+            w[i] = a
+            w[BLOCK + i] = b
+            flags[i] = c
+            nh += c
+            c0 += d & 1
+            c1 += (d >> 1) & 1
+            c2 += (d >> 2) & 1
+            c3 += (d >> 3) & 1
+            c4 += (d >> 4) & 1
         return nh, c0, c1, c2, c3, c4
 
     @njit(inline="always", **_jit)
@@ -221,48 +192,25 @@ if available():
         for blk in range(b0, nb):
             lo = blk * BLOCK
             n = min(N, lo + BLOCK) - lo
+            open_block(w, flags, v, u, lo, n)
             for i in range(n):
-                w[i] = v[lo + i]
-                w[BLOCK + i] = u[lo + i]
                 w[2 * BLOCK + i] = I[lo + i]
                 w[3 * BLOCK + i] = sel[lo + i]
-            for i in range(n, BLOCK):
-                flags[i] = False
-            t0 = t1 = t2 = t3 = t4 = 0
             for k in range(kb0 if blk == b0 else k0, k1):
                 if cap - n_spk < n:
-                    totals[0] += t0
-                    totals[1] += t1
-                    totals[2] += t2
-                    totals[3] += t3
-                    totals[4] += t4
-                    for i in range(n):
-                        v[lo + i] = w[i]
-                        u[lo + i] = w[BLOCK + i]
+                    close_block(w, v, u, lo, n)
                     return blk, k, n_spk
-                nh, c0, c1, c2, c3, c4 = _block_loop(w, flags, n, tab, sc, uniform)
-                t0 += c0
-                t1 += c1
-                t2 += c2
-                t3 += c3
-                t4 += c4
+                if uniform:             # a constant of each loop: the set index folds away
+                    nh, c0, c1, c2, c3, c4 = _block_loop(w, flags, n, tab, sc, True)
+                else:
+                    nh, c0, c1, c2, c3, c4 = _block_loop(w, flags, n, tab, sc, False)
+                _add_counts(totals, c0, c1, c2, c3, c4)
                 if k == k_last:
-                    last[0] += c0
-                    last[1] += c1
-                    last[2] += c2
-                    last[3] += c3
-                    last[4] += c4
+                    _add_counts(last, c0, c1, c2, c3, c4)
                 if nh:
                     n_spk = record(flags[:(n + 7) // 8 * 8], fwords[:(n + 7) // 8], k, spk_k,
                                    spk_n, n_spk, lo)
-            totals[0] += t0
-            totals[1] += t1
-            totals[2] += t2
-            totals[3] += t3
-            totals[4] += t4
-            for i in range(n):
-                v[lo + i] = w[i]
-                u[lo + i] = w[BLOCK + i]
+            close_block(w, v, u, lo, n)
         return nb, k1, n_spk
 
     @njit(**_jit)
@@ -312,10 +260,20 @@ def update_arrays(cfg_consts, v, u, I, sel):
 
 
 def sweep_inplace(cfg_consts, v, u, I, sel, spike, counts) -> int:
-    """One sweep of every neuron in place; ``spike`` (bool) and ``counts`` (per clamp kind)
-    are filled. Returns the number of spikes."""
+    """One sweep of every neuron in place (the blocked loop for one sweep); ``spike`` (bool)
+    and ``counts`` (per clamp kind) are filled. Returns the number of spikes."""
     tab, sc = cfg_consts
-    return int(_sweep_core(v, u, I, sel, tab, sc, spike, counts, len(tab[0]) == 1))
+    N = v.shape[0]
+    ks = np.empty(N + BLOCK, np.int64)
+    ns = np.empty(N + BLOCK, np.int64)
+    flags = np.zeros(BLOCK, np.bool_)
+    counts[:] = 0
+    _, _, n_spk = _run_blocks(v, u, I, sel, tab, sc, 0, 1, 0, 0, ks, ns, 0,
+                              np.empty(4 * BLOCK, np.int64), flags, flags.view(np.uint64),
+                              counts, np.zeros(len(CLAMP_KINDS), np.int64), 0)
+    spike[:] = False
+    spike[ns[:n_spk]] = True
+    return int(n_spk)
 
 
 def run_sweeps(cfg_consts, v, u, I, sel, n_sweeps: int, k0: int = 0,
@@ -325,15 +283,18 @@ def run_sweeps(cfg_consts, v, u, I, sel, n_sweeps: int, k0: int = 0,
     Returns ``(spike_sweeps, spike_neurons, totals, last)``: every spike as (sweep index from
     ``k0``, neuron), per neuron in sweep order, the clamp counts per kind over the run and in
     its last sweep. Neurons run a block of :data:`BLOCK` at a time through every sweep (the
-    block stays in L1, the loop over it vectorizes); populations of at least
-    :data:`PARALLEL_MIN_NEURONS` are split over ``threads`` (default :func:`default_threads`)
-    contiguous chunks, each run by the GIL-free kernel. ``special``: the loop compiled for
+    block stays in L1, the loop over it vectorizes); the population is split over
+    ``threads`` contiguous chunks, each run by the GIL-free kernel (default: every core, at
+    most 2, from :data:`BLOCK` neurons and 2e6 updates on, else :func:`default_threads`). ``special``: the loop compiled for
     this configuration (:func:`specialized`).
     """
     tab, sc = cfg_consts
     N = v.shape[0]
     nk = len(CLAMP_KINDS)
-    threads = default_threads(N) if threads is None else max(1, min(int(threads), N))
+    if threads is None:          # each thread its own blocks: from two half blocks on
+        long = N >= BLOCK and N * n_sweeps >= 2_000_000
+        threads = min(os.cpu_count() or 1, 2) if long else default_threads(N)
+    threads = max(1, min(int(threads), N))
     run = specialized(cfg_consts) if special else _run_blocks
 
     def chunk(lo, hi):

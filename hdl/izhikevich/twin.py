@@ -42,7 +42,8 @@ class IzhikevichTwin:
         long runs. The default whenever numba is available and ``check`` is off.
 
     ``threads`` (compiled kernel, :meth:`run` with constant currents) splits the population
-    over threads; default: all cores from 2000 neurons on, else one. ``specialize``: such a
+    over threads; default: two cores from 512 neurons and 2e6 updates on (a block each),
+    else one. ``specialize``: such a
     run's loop compiled for this configuration (its constants folded in:
     :func:`~cuneate.hdl.izhikevich.kernel.specialized`, about 2x; compiled once per
     configuration, cached on disk); default from :data:`SPECIALIZE_MIN_UPDATES` updates on.
