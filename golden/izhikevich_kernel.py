@@ -107,13 +107,19 @@ if available():
         ``BLOCK``), in place, spikes flagged in ``flags``. Returns (spikes, states out of the
         bound): a bound exceeded, infinite or NaN fails ``|x| <= bound``. With ``track``
         (one parameter set, Euler) rows ``W_P`` to ``W_P + 3`` keep the running minimum of
-        v and of u and maximum of u and of v before reset. The scheme, the u-equation's form
-        and ``track`` are constants of each loop (so that each vectorizes)."""
+        v and of u and maximum of u and of v before reset. One set or several, the scheme, the
+        u-equation's form and ``track`` are constants of each loop (so that each vectorizes)."""
         if track:
             if std_u:
                 return block_loop(w, flags, n, P, True, True, False, dt, half, vth, bound,
                                   True)
             return block_loop(w, flags, n, P, True, False, False, dt, half, vth, bound, True)
+        if uniform:
+            return scheme_loop(w, flags, n, P, True, std_u, izh, dt, half, vth, bound)
+        return scheme_loop(w, flags, n, P, False, std_u, izh, dt, half, vth, bound)
+
+    @njit(nogil=True, cache=True, inline="always")
+    def scheme_loop(w, flags, n, P, uniform, std_u, izh, dt, half, vth, bound):
         if izh:
             if std_u:
                 return block_loop(w, flags, n, P, uniform, True, True, dt, half, vth, bound,
