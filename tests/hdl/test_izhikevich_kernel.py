@@ -220,7 +220,7 @@ def test_specialized_loop_equals_the_stages():
 @pytest.mark.long
 @pytest.mark.parametrize("name", sorted(CONFIGS))
 def test_long_specialized_loop_equals_the_stages_every_config(name):
-    """Every configuration of the property tests, 20 000 sweeps over and beyond the accepted
+    """Every configuration of the property tests, 5000 sweeps over and beyond the accepted
     currents: the specialized loop equals the stage functions."""
     cfg = config(name)
     rng = np.random.default_rng(11)
@@ -229,7 +229,7 @@ def test_long_specialized_loop_equals_the_stages_every_config(name):
                   cfg.I.min_value, cfg.I.max_value)
     ref = IzhikevichTwin(cfg, kernel="stages")
     fast = IzhikevichTwin(cfg, specialize=True)
-    a, b = ref.run(cur, 20000), fast.run(cur, 20000)
+    a, b = ref.run(cur, 5000), fast.run(cur, 5000)
     assert all(np.array_equal(x, y) for x, y in zip(a, b))
     assert np.array_equal(ref.v, fast.v) and np.array_equal(ref.u, fast.u)
     assert ref.clamp_counts == fast.clamp_counts and ref.clamp_sticky == fast.clamp_sticky
