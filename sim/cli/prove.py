@@ -183,12 +183,20 @@ def cmd_prove(args) -> int:
     if args.pipeline_stages is not None and args.target != "core":
         raise CliError(f"cuneate prove {args.target}: --pipeline-stages is the Izhikevich "
                        f"core's (cuneate prove core)")
+    import contextlib
     start_progress(args)
     what = (f"cuneate prove {args.target}" + (f" {args.property}" if args.target ==
                                                "datapath" else "")
             + (" (k-induction)" if getattr(args, "unbounded", False) else ""))
-    with progress.step(what) as st, reporting(st.note):
-        return _cmd_prove(args)
+    with contextlib.ExitStack() as stack:
+        steps = []
+
+        def note(text):                 # the step opens with the first SymbiYosys run, so a
+            if not steps:               # refused argument is still one line on stderr
+                steps.append(stack.enter_context(progress.step(what)))
+            steps[0].note(text)
+        with reporting(note):
+            return _cmd_prove(args)
 
 
 def _cmd_prove(args) -> int:
