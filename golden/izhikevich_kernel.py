@@ -10,7 +10,8 @@ import numpy as np
 
 from .kernel import BLOCK, available, close_block, open_block, record, split_over_threads
 
-__all__ = ["simulate_compiled", "block_kernel", "BLOCK", "W_V", "W_U", "W_I", "W_VPRE", "PARALLEL_MIN_NEURONS",
+__all__ = ["simulate_compiled", "block_kernel", "BLOCK", "W_V", "W_U", "W_I", "W_VPRE",
+           "PARALLEL_MIN_NEURONS",
            "PARALLEL_MIN_NEURONS_TABLE"]
 
 #: a callable current: one thread dispatch per step, so threads pay only for large populations

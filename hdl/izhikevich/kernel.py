@@ -29,7 +29,8 @@ from ..lib.kernel import (BLOCK, INT64_MAX, INT64_MIN, PARALLEL_MIN_NEURONS, ava
 from .config import CLAMP_KINDS, IzhikevichConfig
 
 __all__ = ["available", "rounding_slots", "gather_constants", "update_arrays", "run_sweeps",
-           "default_threads", "sweep_inplace", "PARALLEL_MIN_NEURONS", "neuron_update"]
+           "default_threads", "sweep_inplace", "sweep_scratch", "PARALLEL_MIN_NEURONS",
+           "neuron_update", "specialized", "BLOCK"]
 
 # table rows (per parameter set)
 (T_WOFF, T_KA, T_BETA, T_ESH, T_LEAK, T_K0, T_D, T_SA, T_HA, T_ALPHA, T_C) = range(11)
@@ -214,6 +215,17 @@ if available():
         return nb, k1, n_spk
 
     @njit(**_jit)
+    def _sweep_blocks(v, u, I, sel, tab, sc, spike, counts, w, flags, fwords, ks, ns, last):
+        """One sweep of every neuron by the blocked loop; ``spike`` and ``counts`` filled."""
+        counts[:] = 0
+        _, _, n_spk = _blocks(v, u, I, sel, tab, sc, 0, 1, 0, 0, ks, ns, 0, w, flags, fwords,
+                              counts, last, -1)
+        spike[:] = False
+        for j in range(n_spk):
+            spike[ns[j]] = True
+        return n_spk
+
+    @njit(**_jit)
     def _run_blocks(v, u, I, sel, tab, sc, k0, k1, b0, kb0, spk_k, spk_n, n_spk, w, flags,
                     fwords, totals, last, k_last):
         """Sweeps ``k0 .. k1 - 1`` with constant currents, in place, a block of ``BLOCK``
@@ -259,21 +271,23 @@ def update_arrays(cfg_consts, v, u, I, sel):
     return v_out, u_out, spike, clamp, v_pre
 
 
-def sweep_inplace(cfg_consts, v, u, I, sel, spike, counts) -> int:
-    """One sweep of every neuron in place (the blocked loop for one sweep); ``spike`` (bool)
-    and ``counts`` (per clamp kind) are filled. Returns the number of spikes."""
-    tab, sc = cfg_consts
-    N = v.shape[0]
-    ks = np.empty(N + BLOCK, np.int64)
-    ns = np.empty(N + BLOCK, np.int64)
+def sweep_scratch(n_neurons: int) -> tuple:
+    """The working arrays of :func:`sweep_inplace` for ``n_neurons`` (kept by the caller
+    across sweeps)."""
     flags = np.zeros(BLOCK, np.bool_)
-    counts[:] = 0
-    _, _, n_spk = _run_blocks(v, u, I, sel, tab, sc, 0, 1, 0, 0, ks, ns, 0,
-                              np.empty(4 * BLOCK, np.int64), flags, flags.view(np.uint64),
-                              counts, np.zeros(len(CLAMP_KINDS), np.int64), 0)
-    spike[:] = False
-    spike[ns[:n_spk]] = True
-    return int(n_spk)
+    return (np.empty(4 * BLOCK, np.int64), flags, flags.view(np.uint64),
+            np.empty(n_neurons + BLOCK, np.int64), np.empty(n_neurons + BLOCK, np.int64),
+            np.zeros(len(CLAMP_KINDS), np.int64))
+
+
+def sweep_inplace(cfg_consts, v, u, I, sel, spike, counts, scratch=None) -> int:
+    """One sweep of every neuron in place (the blocked loop for one sweep); ``spike`` (bool)
+    and ``counts`` (per clamp kind) are filled. Returns the number of spikes. ``scratch``:
+    :func:`sweep_scratch` of the population, reused across sweeps."""
+    tab, sc = cfg_consts
+    w, flags, fwords, ks, ns, last = scratch or sweep_scratch(v.shape[0])
+    return int(_sweep_blocks(v, u, I, sel, tab, sc, spike, counts, w, flags, fwords, ks, ns,
+                             last))
 
 
 def run_sweeps(cfg_consts, v, u, I, sel, n_sweeps: int, k0: int = 0,
@@ -285,8 +299,8 @@ def run_sweeps(cfg_consts, v, u, I, sel, n_sweeps: int, k0: int = 0,
     its last sweep. Neurons run a block of :data:`BLOCK` at a time through every sweep (the
     block stays in L1, the loop over it vectorizes); the population is split over
     ``threads`` contiguous chunks, each run by the GIL-free kernel (default: every core, at
-    most 2, from :data:`BLOCK` neurons and 2e6 updates on, else :func:`default_threads`). ``special``: the loop compiled for
-    this configuration (:func:`specialized`).
+    most 2, from :data:`BLOCK` neurons and 2e6 updates on, else :func:`default_threads`).
+    ``special``: the loop compiled for this configuration (:func:`specialized`).
     """
     tab, sc = cfg_consts
     N = v.shape[0]

@@ -301,9 +301,13 @@ if kernel_available():
         """Every step of the ``n`` trajectories held in ``w`` (one parameter set ``P``) under
         their stimuli (constants in ``st``'s rows), generated per step as
         :func:`_battery_rows` does (same operations, same bits); the extremes kept in ``w``'s
-        rows ``W_P`` on (the block step's ``track``). A stimulus is written when it changes: a square wave's columns (``gcols``, per
-        (period, threshold) group: ``gper``, ``gthr``) when its comparison flips. Returns -1, or the
-        first step at which a state left the bound."""
+        rows ``W_P`` on (the block step's ``track``). A stimulus is written when it changes: a
+        square wave's columns (``gcols``, per (period, threshold) group: ``gper``, ``gthr``)
+        when its comparison flips. ``t % p`` is the exact remainder (:func:`math.fmod`'s,
+        ``t >= 0``); for a whole period ``p`` it is ``t - n p`` with the quotient ``n`` kept
+        from step to step (``t`` only grows): ``n p`` is a whole number and ``t - n p``, a
+        multiple of ``t``'s last place no larger than ``max(t, 2 p)``, is representable, so
+        exact. Returns -1, or the first step at which a state left the bound."""
         for c in range(n):
             w[2 * B + c] = st[_LO * B + c]
         for g in range(gper.shape[0]):

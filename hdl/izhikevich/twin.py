@@ -74,6 +74,7 @@ class IzhikevichTwin:
         self.I = np.zeros(cfg.n_neurons, dtype=np.int64)
         self._spike = np.zeros(cfg.n_neurons, dtype=bool)
         self._counts = np.zeros(len(CLAMP_KINDS), dtype=np.int64)
+        self._scratch = None
         self.sweeps = 0
         self.clamp_sticky = 0
         self.clamp_counts = {k: 0 for k in CLAMP_KINDS}
@@ -128,8 +129,10 @@ class IzhikevichTwin:
     def sweep(self):
         """Update every neuron once (one tick); returns the boolean spike vector."""
         if self.kernel == "numba":
+            if self._scratch is None:
+                self._scratch = self._k.sweep_scratch(self.cfg.n_neurons)
             self._k.sweep_inplace(self._consts, self.v, self.u, self.I, self.sel, self._spike,
-                                  self._counts)
+                                  self._counts, self._scratch)
             self.sweeps += 1
             self._account(self._counts)
             return self._spike.copy()
