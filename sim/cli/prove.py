@@ -222,9 +222,31 @@ def cmd_prove_fanout(args) -> int:
 
 
 def cmd_prove(args) -> int:
+    """Every ``cuneate prove``: says while it runs what it checks, the phase and step each
+    SymbiYosys run has reached and the time (:mod:`cuneate.sim.progress`; ``-q`` silences)."""
+    from ...hdl.flow.sby import reporting
+    from .. import progress
+    from .options import start_progress
     if args.pipeline_stages is not None and args.target != "core":
         raise CliError(f"cuneate prove {args.target}: --pipeline-stages is the Izhikevich "
                        f"core's (cuneate prove core)")
+    import contextlib
+    start_progress(args)
+    what = (f"cuneate prove {args.target}" + (f" {args.property}" if args.target ==
+                                               "datapath" else "")
+            + (" (k-induction)" if getattr(args, "unbounded", False) else ""))
+    with contextlib.ExitStack() as stack:
+        steps = []
+
+        def note(text):                 # the step opens with the first SymbiYosys run, so a
+            if not steps:               # refused argument is still one line on stderr
+                steps.append(stack.enter_context(progress.step(what)))
+            steps[0].note(text)
+        with reporting(note):
+            return _cmd_prove(args)
+
+
+def _cmd_prove(args) -> int:
     if args.target in ("core", "lif", "coincidence", "link"):
         return cmd_prove_core(args)
     if args.target == "banked":
@@ -329,4 +351,6 @@ def register(groups: CommandGroups) -> None:
     f.add_argument("--timeout-s", type=positive_float, default=1800.0)
     f.add_argument("--work-dir", default=None, help="keep the SymbiYosys files here")
     f.add_argument("--json", action="store_true")
+    from .options import add_quiet_option
+    add_quiet_option(f)
     f.set_defaults(func=cmd_prove, preset=None)
