@@ -52,6 +52,7 @@ starts with any contents.
 from __future__ import annotations
 
 from pathlib import Path
+from types import SimpleNamespace
 
 from amaranth import Cat, ClockDomain, Const, Elaboratable, Module, Mux, Signal
 from amaranth.asserts import AnyConst, AnySeq
@@ -167,7 +168,18 @@ class DecoderProof(Elaboratable):
         st = _state_flags(m, reg["rx_fsm_state"], ("RECV", "CHECK", "DECIDE", "OFFER"), "dec")
         ex = _state_flags(m, signal_named(efrag, "exec_fsm_state"),
                           ("IDLE", "WAIT", "WRITE", "DRAIN"), "exe")
+        h = SimpleNamespace(N=N, W=W, I=I, max_vals=max_vals, dec=dec, exe=exe, w=w, kt=kt,
+                            vport=vport, reg=reg, hdr=hdr, widx=widx, st=st, ex=ex)
+        r = self._reference(m, h)
+        v = self._verdicts(m, h, r)
+        o = self._writes(m, h, r, v)
+        self._invariants(m, h, r, v, o)
+        return m
 
+    def _reference(self, m, h):
+        """The reference decoder, byte by byte: its state and the frame it ends."""
+        W, kt, dec = h.W, h.kt, h.dec
+        hdr = h.hdr
         # --- the reference decoder, byte by byte ----------------------------------------------
         take = Signal(name="ref_take")
         b = Signal(8, name="ref_byte")
@@ -222,7 +234,15 @@ class DecoderProof(Elaboratable):
             # the tracked value, whole, when its last byte comes (its first bytes are in last)
             with m.If(~z_over & (z_len == HEADER_BYTES + 2 + W * kt + W - 1)):
                 m.d.sync += val.eq(Cat(last[8:], ebyte))
+        return SimpleNamespace(take=take, b=b, left=left, zero=zero, framing=framing, ended=ended,
+                               flen=flen, over=over, crc=crc, rhdr=rhdr, last=last, val=val, delim=delim,
+                               cobs_err=cobs_err)
 
+    def _verdicts(self, m, h, r):
+        """The verdict the decoder counts, from the reference's fields."""
+        N, W, max_vals, dec, st = h.N, h.W, h.max_vals, h.dec, h.st
+        flen, over, crc = r.flen, r.over, r.crc
+        rhdr, delim, cobs_err = r.rhdr, r.delim, r.cobs_err
         # the verdict at a frame's end, from the reference's own fields, in the documented
         # order: size, CRC, version, length field; then the type's layout and range
         seq, plen, op = rhdr[2], rhdr[3], rhdr[8]
@@ -267,7 +287,15 @@ class DecoderProof(Elaboratable):
         checks = [(counted[k] == cur[k], f"verdict: {k}") for k in (*VERDICTS, "seq_gaps")]
         checks += [(dec.count_framing_errors == cobs_err, "verdict: framing_errors")]
         assert_all(m, checks)
+        return SimpleNamespace(n_vals=n_vals, first=first, write=write, exp_seq=exp_seq, ok=v)
 
+    def _writes(self, m, h, r, v):
+        """The writes the payload takes: an accepted frame's, in order, none lost."""
+        W, I, max_vals, kt = h.W, h.I, h.max_vals, h.kt
+        exe, w = h.exe, h.w
+        take = r.take
+        val, delim = r.val, r.delim
+        n_vals, first, write = v.n_vals, v.first, v.write
         # --- the writes -------------------------------------------------------------------------
         owed = Signal(name="ref_owed")                   # writes of an accepted frame to come
         wfirst = Signal(16, name="ref_write_first")
@@ -276,7 +304,7 @@ class DecoderProof(Elaboratable):
         done = Signal(range(max_vals + 1), name="ref_writes_seen")
         late = exe.count_late_writes
         wr = w.valid & w.ready                           # a write the payload takes
-        with m.If(delim & v["frames_ok"] & write):
+        with m.If(delim & v.ok["frames_ok"] & write):
             m.d.sync += [owed.eq(n_vals != 0), wfirst.eq(first), wcount.eq(n_vals),
                          done.eq(0), wval.eq(val)]
         with m.If(wr):
@@ -294,7 +322,18 @@ class DecoderProof(Elaboratable):
                    "late write: before any write"),
                   (~take | ~owed, "no byte taken while writes are owed")]
         assert_all(m, checks)
+        return SimpleNamespace(owed=owed, wfirst=wfirst, wcount=wcount, wval=wval, done=done)
 
+    def _invariants(self, m, h, r, v, o):
+        """The invariants that make the properties inductive."""
+        N, W, I, kt, max_vals = h.N, h.W, h.I, h.kt, h.max_vals
+        dec, w, vport = h.dec, h.w, h.vport
+        reg, hdr, widx, st, ex = h.reg, h.hdr, h.widx, h.st, h.ex
+        ended, flen, over, crc = r.ended, r.flen, r.over, r.crc
+        rhdr, last, val = r.rhdr, r.last, r.val
+        left, zero, framing = r.left, r.zero, r.framing
+        exp_seq = v.exp_seq
+        owed, wfirst, wcount, wval, done = o.owed, o.wfirst, o.wcount, o.wval, o.done
         # --- invariants -----------------------------------------------------------------------
         holding = (st["RECV"] & ~ended) | st["CHECK"] | st["DECIDE"]
         reset = (st["RECV"] & ended) | st["OFFER"]
@@ -307,6 +346,7 @@ class DecoderProof(Elaboratable):
             (ex["IDLE"] | working, "state: an executor state"),
             (~working | offered_write, "state: the executor works on the offered write"),
             (flen <= MAX_FRAME, "reference: length in range"),
+            (wcount < max_vals, "reference: a frame's values fit a frame"),
             (framing | (flen == 0) & ~over & (crc == CRC_INIT) & (left == 0) & ~zero,
              "reference: nothing before a frame's first byte"),
             (~holding | (reg["remain"] == left), "state: block bytes left"),
@@ -363,7 +403,6 @@ class DecoderProof(Elaboratable):
                    (~offered_write | (kt >= wcount) | (vport.data == wval[:I]),
                     "state: tracked value to write")]
         assert_all(m, checks)
-        return m
 
 
 def _same_top_bytes(a, b, n, width: int):
