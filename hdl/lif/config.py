@@ -30,7 +30,8 @@ from typing import Sequence
 import numpy as np
 
 from ...golden import lif as golden
-from ..lib.config import SATURATION, ConfigError, CoreOptions, check_delays, int_bits_for
+from ..lib.config import (MIN_NEURONS, SATURATION, ConfigError, CoreOptions, check_delays,
+                          int_bits_for)
 from ..lib.fixed import FixedConstant, QFormat
 
 __all__ = ["ConfigError", "LifConfig", "LifSet", "PIPELINE_DEPTH", "CLAMP_KINDS", "FORMS",
@@ -181,9 +182,9 @@ class LifConfig(CoreOptions):
     # ------------------------------------------------------------------------------------------
     def _check_sizes(self):
         N = self.n_neurons
-        if not isinstance(N, (int, np.integer)) or N < 8:
-            raise ConfigError(f"n_neurons must be an integer >= 8 (the pipeline depth plus "
-                              f"margin), got {N!r}")
+        if not isinstance(N, (int, np.integer)) or N < MIN_NEURONS:
+            raise ConfigError(f"n_neurons must be an integer >= {MIN_NEURONS} (the pipeline "
+                              f"depth plus margin), got {N!r}")
         if self.form not in FORMS:
             raise ConfigError(f"form must be one of {FORMS}, got {self.form!r}")
         if self.decay not in DECAYS:
