@@ -4,8 +4,7 @@
 (:class:`ConfigError`, at construction) what the formats cannot hold:
 
 * decay constants that round to 0 or 1, or miss ``max_decay_error`` (also a shift's 2**-s);
-* weights outside their format (given ``weight_frac_bits``), thresholds, resets and rests that
-  the state format cannot hold;
+* weights outside their format (given ``weight_frac_bits``), thresholds, resets, rests;
 * a fan-in whose weight sum can leave ``input_limit`` (refused, or clamped and flagged with
   ``saturation="flag"``), an accumulator narrower than its fan-in needs;
 * a state format narrower than the proven state range (refused, or flagged ``v_low`` clamp).
@@ -30,8 +29,8 @@ from typing import Sequence
 import numpy as np
 
 from ...golden import lif as golden
-from ..lib.config import (MIN_NEURONS, SATURATION, ConfigError, CoreOptions, check_delays,
-                          int_bits_for)
+from ..lib.config import MIN_NEURONS, SATURATION, ConfigError, CoreOptions, check_delays, \
+    int_bits_for
 from ..lib.fixed import FixedConstant, QFormat
 
 __all__ = ["ConfigError", "LifConfig", "LifSet", "PIPELINE_DEPTH", "CLAMP_KINDS", "FORMS",

@@ -13,6 +13,7 @@ from __future__ import annotations
 import json
 
 from ...golden.budget import fmt_count
+from ...hdl.lib.config import MIN_NEURONS
 from ..cli.options import (CliError, CommandGroups, add_block_commands, add_rate_options,
                            add_waves_options, build_config, finite_float, fmt_time, output_dir,
                            positive_float, positive_int, run_budget, start_progress,
@@ -179,7 +180,6 @@ def estimate_run(engine: str, n: int, n_sweeps: int, rate_hz: float = 50.0) -> d
     """Memory (bytes) and time (s) a run will take, from conservative per-engine figures;
     ``rate_hz`` is the spike rate assumed for the size of the output."""
     from ..engines.registry import estimate_seconds
-    from .engines import MIN_NEURONS
     n_core = max(n, MIN_NEURONS)
     work = n_core * n_sweeps                        # updates (= cycles on HDL simulators)
     seconds = estimate_seconds("izhikevich", engine, work)
@@ -192,7 +192,7 @@ def cmd_simulate(args) -> int:
     import numpy as np
     start_progress(args)
     from ...golden import izhikevich as gz
-    from .engines import MIN_NEURONS, run_engine
+    from .engines import run_engine
 
     n = args.neurons
     sets = _param_sets(args)

@@ -14,7 +14,8 @@ its own layer.
 The layer is the detector of the on-chip afferent -> cuneate network
 (:class:`~cuneate.hdl.network.NetworkConfig`): every afferent of the scene's core is a source,
 targets run trial-major, and a weight of 0 disconnects a pair (a target outside a source's
-trial or field). Engines (:data:`LAYER_ENGINES`):
+trial or field). Engines (those whose Izhikevich implementation runs the layer,
+:func:`layer_engines`):
 
 ``golden``
     the float64 cuneate model (:func:`cuneate.golden.coincidence.simulate_cuneate`) on the
@@ -41,12 +42,16 @@ import numpy as np
 from ...hdl.coincidence.config import CYCLES_PER_TARGET_EXTRA
 from ...hdl.network import NetworkConfig
 from ...hdl.network.config import SWEEP_EXTRA
+from ..engines.registry import block_engines, estimate_seconds, implementation
 
-__all__ = ["CuneateLayer", "LAYER_ENGINES", "validate_layer", "scene_layer", "layer_network",
+__all__ = ["CuneateLayer", "layer_engines", "validate_layer", "scene_layer", "layer_network",
            "layer_config", "run_layer", "check_layer_engines", "layer_estimate"]
 
-#: the engines that run an afferent scene's cuneate layer
-LAYER_ENGINES = ("golden", "fixed", "board")
+def layer_engines() -> tuple[str, ...]:
+    """The engines that run an afferent scene's cuneate layer: on the host after the
+    afferents (golden, fixed: :func:`run_layer`) or on chip (board)."""
+    return tuple(e for e in block_engines("izhikevich")
+                 if implementation("izhikevich", e).layer)
 
 
 def validate_layer(V, sections: dict, pops: list, projs: list) -> None:
@@ -112,10 +117,11 @@ def validate_layer(V, sections: dict, pops: list, projs: list) -> None:
     if missing:
         V.err("projection", f"the cuneate layer needs a projection from {missing[0]!r} to "
                             f"{c['name']!r} (its weight and delays)")
+    ok = layer_engines()
     for i, e in enumerate(sections["run"]["engines"]):
-        if e not in LAYER_ENGINES:
+        if e not in ok:
             V.err(f"run.engines[{i}]", f"engine {e!r} does not run the cuneate layer (engines "
-                                       f"that do: {', '.join(LAYER_ENGINES)})")
+                                       f"that do: {', '.join(ok)})")
     # one trial's detector, as every trial's: each neuron listens to some afferent, and the
     # detector holds its weights, delays and tick (as it is refused on chip)
     by_name = {p["name"]: p for p in pops}
@@ -266,7 +272,6 @@ def layer_estimate(scene, trials: int, n_sources: int, n_ticks: float,
     cn = next((p for p in scene.populations if p["model"] == "cuneate"), None)
     if cn is None:
         return 0.0, 0.0
-    from ..engines.registry import estimate_seconds
     pairs = float(cn["size"]) * trials * n_sources
     synapses = float(trials) * sum(p["size"] for p in scene.populations
                                    if p["name"] in cn["inputs"])
@@ -276,17 +281,20 @@ def layer_estimate(scene, trials: int, n_sources: int, n_ticks: float,
             seconds += synapses * n_ticks / 2e7
         elif e == "fixed":
             seconds += pairs * n_ticks / 1e8
-        elif e == "board":                          # the detector's cycles, on the board's clock
+        elif implementation("izhikevich", e).layer == "chip":  # the detector's cycles on chip
             seconds += estimate_seconds("izhikevich", e, pairs * n_ticks)
     return 150.0 * pairs, seconds
 
 
 def check_layer_engines(scene, engines) -> None:
     """Refuse (one line) an engine of ``engines`` that does not run the scene's cuneate layer."""
-    bad = [e for e in engines if e not in LAYER_ENGINES]
-    if bad and any(p["model"] == "cuneate" for p in scene.populations):
+    if not any(p["model"] == "cuneate" for p in scene.populations):
+        return
+    ok = layer_engines()
+    bad = [e for e in engines if e not in ok]
+    if bad:
         raise ValueError(f"population model \"cuneate\": engine {bad[0]!r} does not run the "
-                         f"cuneate layer (engines that do: {', '.join(LAYER_ENGINES)})")
+                         f"cuneate layer (engines that do: {', '.join(ok)})")
 
 
 def run_layer(engine: str, layer: CuneateLayer, afferent_ms: list, n_ticks: int):

@@ -129,7 +129,7 @@ def cmd_export(args) -> int:
 
 
 def cmd_simulate(args) -> int:
-    from .engines import run_network
+    from .engines import run_dict, run_network
     from .graph import NirError
     mapped = mapped_from_args(args, args.graph)
     if args.input:
@@ -142,7 +142,7 @@ def cmd_simulate(args) -> int:
         run = run_network(args.engine, mapped, x, build_dir=build)
     except NirError as exc:
         raise CliError(f"cuneate simulate nir: {exc}") from None
-    out = run.to_dict() | {"graph": args.graph, "scheme": mapped.scheme}
+    out = run_dict(run, mapped) | {"graph": args.graph, "scheme": mapped.scheme}
     if args.json:
         print(json.dumps(out, default=float))
         return 0

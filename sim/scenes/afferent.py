@@ -24,9 +24,11 @@ import numpy as np
 
 from ...golden import izhikevich as golden
 from ...golden.fbg import IIRFilter, design_bandpass
+from ...hdl.lib.config import MIN_NEURONS
 from ...hdl.lib.fixed import QFormat
 from ..decode import decode_trials, decoded_neurons
-from ..engines.registry import ENGINES as ENGINE_TRAITS, block_engines
+from ..engines.registry import ENGINES as ENGINE_TRAITS, block_engines, engine_for
+from ..engines.waves import FORMATS
 from ..fanout.scene import channel_plan, check_fanout_engines, scene_fanout
 from ..report import front_end_detail
 from ..host.driver import AfferentEncoding, FbgDriver
@@ -113,7 +115,7 @@ def estimate(scene: Scene, engines: list[str], n_samples: int | None = None) -> 
     trials, n = n_driven(scene)
     hold = max(1, round(hw["update_hz"] / fs))
     n_ticks = float(n_samples) * hold
-    n_core = max(n, 8)
+    n_core = max(n, MIN_NEURONS)
     per_sample = array_bytes(n_samples, n)
     nbytes = (BASE_BYTES + REPORT_BYTES + 4 * array_bytes(trials, n_samples, sen["channels"])
               + 6 * per_sample + 200.0 * n_ticks / 16e3 * n * 16)      # spikes at <= 200 Hz
@@ -257,8 +259,6 @@ def run_golden(ctx) -> tuple[list, dict]:
 
 def _run_transport(engine):
     def run(ctx):
-        from ..izhikevich.engines import make_transport
-        from ..engines.waves import FORMATS
         kw = {"progress": ctx.get("progress")}
         if engine != "fixed":
             bd = ctx.get("build_dir")
@@ -266,12 +266,13 @@ def _run_transport(engine):
         if engine in FORMATS and ctx.get("waves"):
             kw["waves"] = ctx["waves"]
         kw.update(ctx.get("engine_options", {}).get(engine, {}))
+        impl = engine_for("izhikevich", engine, **kw)
         fan = ctx.get("fanout")                 # channels streamed, fanned out on chip
-        tr, drv, raw = make_transport(engine, **kw), ctx["driver"], ctx["raw"]
-        if fan is not None:
-            from ..fanout.scene import fanout_transport
-            tr, drv, raw = fanout_transport(engine, fan, kw), fan.driver, fan.raw
-        layer = ctx.get("layer") if engine == "board" else None   # the network on chip
+        if fan is None:
+            tr, drv, raw = impl.transport(), ctx["driver"], ctx["raw"]
+        else:
+            tr, drv, raw = impl.fanout_transport(fan.config), fan.driver, fan.raw
+        layer = ctx.get("layer") if impl.layer == "chip" else None   # the network on chip
         try:
             tr.open(ctx["config"] if layer is None else layer.network)
             res = drv.stream(tr, None, ctx["n_ticks"], raw=raw)

@@ -19,6 +19,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..engines.run import spike_times
+
 __all__ = ["InTurn", "in_turn"]
 
 
@@ -62,7 +64,7 @@ class InTurn:
                 # the update of sweep T is at (T + 1) dt; window g holds sweeps g n .. g n + n - 1
                 ticks = np.rint(s / self.dt_ms).astype(np.int64) - 1 - g * self.n_ticks
                 keep = (ticks >= 0) & (ticks < self.n_ticks)
-                out.append((ticks[keep] + 1) * self.dt_ms)
+                out.append(spike_times(ticks[keep], self.dt_ms))
         return out
 
     def describe(self) -> dict:

@@ -290,15 +290,16 @@ def parse_scene(text: str, source: str = "<scene>", base_dir: Path | None = None
         except UnknownEngine as exc:
             V.err(f"run.engines[{i}]", str(exc))
     if hw["fanout"]:
-        from ..fanout.scene import FANOUT_SCENE_ENGINES
+        from ..fanout.scene import fanout_scene_engines
+        ok = fanout_scene_engines()
         if kind.block != "izhikevich":
             V.err("hardware.fanout", "the channel fan-out feeds afferent scenes' Izhikevich "
                                      "afferents")
         for i, e in enumerate(sections["run"]["engines"]):
-            if e not in FANOUT_SCENE_ENGINES:
+            if e not in ok:
                 V.err(f"run.engines[{i}]", f"engine {e!r} does not run the channel fan-out "
                                            f"(hardware.fanout; engines that do: "
-                                           f"{', '.join(FANOUT_SCENE_ENGINES)})")
+                                           f"{', '.join(ok)})")
     if not sections["run"]["engines"]:
         V.err("run.engines", "must name at least one engine")
     if len(set(sections["run"]["engines"])) != len(sections["run"]["engines"]):
