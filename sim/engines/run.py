@@ -11,12 +11,19 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["EngineRun", "TickUnwrap", "unwrap_ticks", "spike_times", "times_from_pairs"]
+__all__ = ["EngineRun", "TickUnwrap", "unwrap_ticks", "spike_times", "spike_ticks",
+           "times_from_pairs"]
 
 
 def spike_times(ticks, dt_ms: float) -> np.ndarray:
     """Spike times (ms, sorted) of the updates of ticks ``ticks``: ``(k + 1) dt``."""
     return (np.sort(np.asarray(ticks, dtype=np.float64).ravel()) + 1) * dt_ms
+
+
+def spike_ticks(times_ms, dt_ms: float) -> np.ndarray:
+    """The ticks whose updates made the spikes at ``times_ms`` (the inverse of
+    :func:`spike_times`)."""
+    return np.rint(np.asarray(times_ms, dtype=np.float64) / dt_ms).astype(np.int64) - 1
 
 
 def times_from_pairs(pairs, n: int, dt_ms: float, first: int = 0) -> list[np.ndarray]:
@@ -86,15 +93,13 @@ class EngineRun:
         if self.spikes_ms is None:
             return None
         out = np.zeros((self.n_ticks, len(self.spikes_ms)), dtype=bool)
-        for i, t in enumerate(self.spikes_ms):
-            k = np.rint(np.asarray(t, dtype=np.float64) / self.dt_ms).astype(np.int64) - 1
-            out[k, i] = True
+        for i in range(len(self.spikes_ms)):
+            out[self.spike_ticks(i), i] = True
         return out
 
     def spike_ticks(self, neuron: int) -> np.ndarray:
         """The ticks whose updates made neuron ``neuron``'s spikes."""
-        t = np.asarray(self.spikes_ms[neuron], dtype=np.float64)
-        return np.rint(t / self.dt_ms).astype(np.int64) - 1
+        return spike_ticks(self.spikes_ms[neuron], self.dt_ms)
 
     def counts(self) -> np.ndarray:
         """Spikes per neuron."""

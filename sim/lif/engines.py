@@ -68,8 +68,8 @@ class LifProgram:
 
 def engine_config(core: dict, n: int) -> LifConfig:
     """The configuration the engines simulate for ``n`` neurons of ``core`` (constructor
-    keywords): at least :data:`~cuneate.hdl.lib.config.MIN_NEURONS` neurons (idle ones get zero current and zero weights), external
-    tick. Raises :class:`~cuneate.hdl.lif.ConfigError`."""
+    keywords): at least :data:`~cuneate.hdl.lib.config.MIN_NEURONS` neurons (idle ones get
+    zero current and zero weights), external tick. Raises :class:`~cuneate.hdl.lif.ConfigError`."""
     N = max(n, MIN_NEURONS)
     kw = dict(core)
     kw.update(n_neurons=N, clock_hz=float(kw.get("update_hz", 16e3)) * N * 4,

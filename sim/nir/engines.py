@@ -54,7 +54,7 @@ def run_dict(run: EngineRun, mapped: MappedNetwork) -> dict:
          "clamps": run.clamp_counts, "wall_s": run.wall_s}
     if run.spikes_ms is not None:
         d["spike_counts"] = run.counts().tolist()
-        d["spikes_s"] = [((run.spike_ticks(i) + 1) * mapped.dt).tolist()
+        d["spikes_s"] = [spike_times(run.spike_ticks(i), mapped.dt).tolist()
                          for i in range(len(run.spikes_ms))]
     if run.values is not None:
         d["v_last"] = run.values[-1].tolist()

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..engines.run import spike_times
+from ..engines.run import spike_ticks, spike_times
 
 __all__ = ["InTurn", "in_turn"]
 
@@ -62,7 +62,7 @@ class InTurn:
             for s in trains[j * w:(j + 1) * w]:
                 s = np.asarray(s, dtype=np.float64)
                 # the update of sweep T is at (T + 1) dt; window g holds sweeps g n .. g n + n - 1
-                ticks = np.rint(s / self.dt_ms).astype(np.int64) - 1 - g * self.n_ticks
+                ticks = spike_ticks(s, self.dt_ms) - g * self.n_ticks
                 keep = (ticks >= 0) & (ticks < self.n_ticks)
                 out.append(spike_times(ticks[keep], self.dt_ms))
         return out
