@@ -216,10 +216,10 @@ class IzhikevichGolden(IzhikevichEngine):
     layer, fanout = "host", True
 
     def sweeps(self, cfg, cur, n_sweeps, n):
-        params = [cfg.sets[s].params for s in cfg.neuron_sets[:n]]
-        r = golden.simulate(params, np.asarray(cur[:n], dtype=np.float64), n_steps=n_sweeps,
-                            n_neurons=n, dt_ms=cfg.dt_ms, scheme="euler",
-                            progress=self.progress)
+        params = [cfg.params[s] for s in cfg.neuron_sets[:n]]
+        cur = np.asarray(cur[:n], dtype=np.float64)
+        r = golden.simulate(params, lambda t_ms: cur, n_steps=n_sweeps, n_neurons=n,
+                            dt_ms=cfg.dt_ms, scheme="euler", progress=self.progress)
         return [np.asarray(s).tolist() for s in r.spikes_ms], None, None, {}
 
     def transport(self) -> Transport:

@@ -43,15 +43,12 @@ def _coincidence(engine, build_dir):
 
 
 def _network(engine, build_dir):
-    from cuneate.sim.coincidence.experiments import RidgeSpec, afferent_currents, \
-        network_config
+    from cuneate.sim.coincidence.experiments import RidgeSpec, network_config
     from cuneate.sim.network.engines import run_network
-    spec = RidgeSpec(trials_per_angle=1)
-    net = network_config(spec)
-    cur, _, _ = afferent_currents(spec)
-    pad = np.zeros((120, net.n_afferents))
-    pad[:, :4] = cur[:120]
-    return run_network(engine, net, pad, build_dir=build_dir)
+    net = network_config(RidgeSpec(trials_per_angle=1))
+    cur = np.zeros((120, net.n_afferents))
+    cur[:, :4] = [12.0, 18.0, 24.0, 30.0]
+    return run_network(engine, net, cur, build_dir=build_dir)
 
 
 def _fanout_table():
