@@ -30,7 +30,6 @@ from ...golden import coincidence as gcun
 from ...hdl.coincidence import (CLAMP_KINDS, CoincidenceConfig, CoincidenceDetector,
                                 CoincidenceTwin, coincidence_verilog)
 from ..engines.amaranth import simulate
-from ..engines.cocotb import run_engine_bench
 from ..engines.engine import BlockEngine
 from ..engines.registry import engine_for, implements
 from ..engines.run import EngineRun, times_from_pairs
@@ -122,7 +121,27 @@ class CoincidenceAmaranth(CoincidenceEngine):
     """The Amaranth simulator on the detector."""
 
     def pairs(self, cfg, by_tick, n_ticks):
-        return _run_amaranth(cfg, by_tick, n_ticks)
+        dut = CoincidenceDetector(cfg)
+        pairs, out, words = [], {}, []
+
+        def sample(ctx) -> bool:
+            """Record this cycle's output spike and clamp word; False once the tick is done."""
+            if ctx.get(dut.spike_valid):
+                pairs.append((ctx.get(dut.spike_tick), ctx.get(dut.spike_target)))
+            if ctx.get(dut.upd_valid) and ctx.get(dut.upd_clamp):
+                words.append(ctx.get(dut.upd_clamp))
+            return bool(ctx.get(dut.busy) or ctx.get(dut.upd_valid))
+
+        async def tb(ctx):
+            for k in range(n_ticks):
+                await pulse_tick(ctx, dut, by_tick.get(k, []))
+                await ctx.tick()
+                while sample(ctx):
+                    await ctx.tick()
+            out["merged"] = ctx.get(dut.merged_count)
+
+        simulate(dut, tb, cfg.clock_hz)
+        return pairs, out["merged"], words
 
 
 @implements("coincidence", "icarus", speed=5e3)
@@ -131,10 +150,10 @@ class CoincidenceCocotb(CoincidenceEngine):
     """cocotb on the detector's Verilog (Icarus: the yosys-lowered netlist)."""
 
     def pairs(self, cfg, by_tick, n_ticks):
-        rep = run_engine_bench(self.name, lambda low: coincidence_verilog(cfg, lowered=low),
-                               "coincidence_detector", "coincidence",
-                               {"detector": cfg.to_kwargs(), "ticks": n_ticks, "events":
-                                {str(k): v for k, v in by_tick.items()}}, self.build_dir)
+        events = {str(k): v for k, v in by_tick.items()}
+        rep = self.engine_bench(lambda low: coincidence_verilog(cfg, lowered=low),
+                                "coincidence_detector",
+                                {"detector": cfg.to_kwargs(), "ticks": n_ticks, "events": events})
         return [tuple(p) for p in rep["spikes"]], rep["merged"], rep["clamp_words"]
 
 
@@ -155,27 +174,3 @@ async def pulse_tick(ctx, dut, sources) -> None:
     ctx.set(dut.tick, 1)
     await ctx.tick()
     ctx.set(dut.tick, 0)
-
-
-def _run_amaranth(cfg: CoincidenceConfig, by_tick: dict, n_ticks: int):
-    dut = CoincidenceDetector(cfg)
-    pairs, out, words = [], {}, []
-
-    def sample(ctx) -> bool:
-        """Record this cycle's output spike and clamp word; False once the tick is done."""
-        if ctx.get(dut.spike_valid):
-            pairs.append((ctx.get(dut.spike_tick), ctx.get(dut.spike_target)))
-        if ctx.get(dut.upd_valid) and ctx.get(dut.upd_clamp):
-            words.append(ctx.get(dut.upd_clamp))
-        return bool(ctx.get(dut.busy) or ctx.get(dut.upd_valid))
-
-    async def tb(ctx):
-        for k in range(n_ticks):
-            await pulse_tick(ctx, dut, by_tick.get(k, []))
-            await ctx.tick()
-            while sample(ctx):
-                await ctx.tick()
-        out["merged"] = ctx.get(dut.merged_count)
-
-    simulate(dut, tb, cfg.clock_hz)
-    return pairs, out["merged"], words

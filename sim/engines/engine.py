@@ -25,6 +25,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from ..host.transport import SpikeBatch, Transport, check_counters
+from .cocotb import run_engine_bench
 
 __all__ = ["BlockEngine", "WAVE_ENGINES"]
 
@@ -59,6 +60,12 @@ class BlockEngine:
         """The block's inputs on this engine: an :class:`~cuneate.sim.engines.run.EngineRun`
         (each block's engine class states its inputs)."""
         raise NotImplementedError
+
+    def engine_bench(self, verilog_of, toplevel: str, config: dict) -> dict:
+        """The report of the ``engine`` test of the block's cocotb bench on this engine's
+        simulator, ``verilog_of(lowered)`` its Verilog (Icarus: the yosys-lowered netlist)."""
+        return run_engine_bench(self.name, verilog_of, toplevel, self.block, config,
+                                self.build_dir)
 
     def transport(self) -> Transport:
         """The engine's host transport, not yet opened; refused by an engine without one."""

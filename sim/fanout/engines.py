@@ -18,7 +18,6 @@ import numpy as np
 
 from ...golden.fanout import RECTIFY, fanout_currents
 from ...hdl.fanout import CLAMP_KINDS, FanoutConfig, FanoutTwin, fanout_verilog
-from ..engines.cocotb import run_engine_bench
 from ..engines.engine import BlockEngine
 from ..engines.registry import engine_for, implements
 from ..engines.run import EngineRun
@@ -71,10 +70,9 @@ class FanoutFixed(FanoutEngine):
 @implements("fanout", "verilator", speed=5e4)
 class FanoutCocotb(FanoutEngine):
     def currents(self, cfg, x):
-        rep = run_engine_bench(self.name, lambda lowered: fanout_verilog(cfg, lowered=lowered),
-                               "channel_fanout", "fanout",
-                               {"fanout": cfg.to_kwargs(), "samples": cfg.S.to_raw(x).tolist()},
-                               self.build_dir)
+        rep = self.engine_bench(lambda lowered: fanout_verilog(cfg, lowered=lowered),
+                                "channel_fanout",
+                                {"fanout": cfg.to_kwargs(), "samples": cfg.S.to_raw(x).tolist()})
         counts = dict(zip(CLAMP_KINDS, (rep["clamp_low_count"], rep["clamp_high_count"])))
         return (cfg.I.to_float(np.asarray(rep["currents"], dtype=np.int64)), counts,
                 {"cycles": rep["cycles"], "wall_s": rep["wall_s"]})

@@ -29,7 +29,6 @@ from ...golden import coincidence as gcun
 from ...golden import izhikevich as giz
 from ...hdl.network import AfferentCuneateNetwork, NetworkTwin, network_verilog
 from ..engines.amaranth import simulate
-from ..engines.cocotb import run_engine_bench
 from ..engines.engine import BlockEngine
 from ..engines.registry import engine_for, implements
 from ..engines.run import EngineRun, times_from_pairs, unwrap_ticks
@@ -126,7 +125,39 @@ class NetworkAmaranth(NetworkEngine):
     """The Amaranth simulator on :class:`~cuneate.hdl.network.AfferentCuneateNetwork`."""
 
     def pairs(self, cfg, writes, n_ticks):
-        return _run_network_amaranth(cfg, writes, n_ticks)
+        dut = AfferentCuneateNetwork(cfg)
+        stream, out = [], {}
+
+        async def tb(ctx):
+            ctx.set(dut.out_ready, 1)
+
+            async def step():
+                if ctx.get(dut.out_valid):
+                    stream.append((ctx.get(dut.out_population), ctx.get(dut.out_tick),
+                                   ctx.get(dut.out_index)))
+                await ctx.tick()
+            for k in range(n_ticks):
+                while ctx.get(dut.busy):
+                    await step()
+                for i, raw in writes.get(k, []):
+                    ctx.set(dut.i_wr_en, 1)
+                    ctx.set(dut.i_wr_addr, i)
+                    ctx.set(dut.i_wr_data, raw)
+                    await step()
+                ctx.set(dut.i_wr_en, 0)
+                ctx.set(dut.tick, 1)
+                await step()
+                ctx.set(dut.tick, 0)
+            while ctx.get(dut.busy) or ctx.get(dut.out_valid):
+                await step()
+            for _ in range(8):
+                await step()
+            for k in ("tick_count", "link_count", "merged_count", "cuneate_overflow_count",
+                      "afferent_overflow", "overrun_count"):
+                out[k] = ctx.get(getattr(dut, k))
+
+        simulate(dut, tb, cfg.clock_hz)
+        return _split_stream(cfg, stream, n_ticks) + (out,)
 
 
 @implements("network", "icarus", speed=5e3)
@@ -135,11 +166,10 @@ class NetworkCocotb(NetworkEngine):
     """cocotb on the network's Verilog (Icarus: the yosys-lowered netlist)."""
 
     def pairs(self, cfg, writes, n_ticks):
-        rep = run_engine_bench(self.name, lambda low: network_verilog(cfg, lowered=low),
-                               "afferent_cuneate_network", "network",
-                               {"network": cfg.to_kwargs(), "ticks": n_ticks,
-                                "writes": {str(k): v for k, v in writes.items()}},
-                               self.build_dir)
+        rep = self.engine_bench(lambda low: network_verilog(cfg, lowered=low),
+                                "afferent_cuneate_network",
+                                {"network": cfg.to_kwargs(), "ticks": n_ticks,
+                                 "writes": {str(k): v for k, v in writes.items()}})
         pa, pc = _split_stream(cfg, [tuple(x) for x in rep["stream"]], n_ticks)
         return pa, pc, rep["counters"]
 
@@ -154,42 +184,6 @@ def run_network(engine: str, cfg, currents, build_dir: Path | None = None) -> Ne
     if cfg.tick_source != "external":               # the engines tick the network themselves
         cfg = type(cfg)(**(cfg.to_kwargs() | {"tick_source": "external"}))
     return impl.run(cfg, np.asarray(currents, dtype=np.float64))
-
-
-def _run_network_amaranth(cfg, writes: dict, n_ticks: int):
-    dut = AfferentCuneateNetwork(cfg)
-    stream, out = [], {}
-
-    async def tb(ctx):
-        ctx.set(dut.out_ready, 1)
-
-        async def step():
-            if ctx.get(dut.out_valid):
-                stream.append((ctx.get(dut.out_population), ctx.get(dut.out_tick),
-                               ctx.get(dut.out_index)))
-            await ctx.tick()
-        for k in range(n_ticks):
-            while ctx.get(dut.busy):
-                await step()
-            for i, raw in writes.get(k, []):
-                ctx.set(dut.i_wr_en, 1)
-                ctx.set(dut.i_wr_addr, i)
-                ctx.set(dut.i_wr_data, raw)
-                await step()
-            ctx.set(dut.i_wr_en, 0)
-            ctx.set(dut.tick, 1)
-            await step()
-            ctx.set(dut.tick, 0)
-        while ctx.get(dut.busy) or ctx.get(dut.out_valid):
-            await step()
-        for _ in range(8):
-            await step()
-        for k in ("tick_count", "link_count", "merged_count", "cuneate_overflow_count",
-                  "afferent_overflow", "overrun_count"):
-            out[k] = ctx.get(getattr(dut, k))
-
-    simulate(dut, tb, cfg.clock_hz)
-    return _split_stream(cfg, stream, n_ticks) + (out,)
 
 
 def current_runs(writes: list[tuple[int, int]]) -> list[tuple[int, list[int]]]:
