@@ -27,7 +27,10 @@ import os
 import pkgutil
 import sys
 import warnings
+from importlib.metadata import PackageNotFoundError
+from importlib.metadata import version as dist_version
 
+from ...golden import budget
 from .options import CliError, CommandGroups, Parser, add_quiet_option, anticipated, one_line
 
 __all__ = ["main", "build_parser", "COMMAND_MODULES", "CliError", "block_command_modules"]
@@ -50,8 +53,6 @@ def block_command_modules() -> list[str]:
 
 def version() -> str:
     """The installed cuneate version."""
-    from importlib.metadata import PackageNotFoundError
-    from importlib.metadata import version as dist_version
     try:
         return dist_version("cuneate")
     except PackageNotFoundError:             # pragma: no cover - running from a plain checkout
@@ -107,7 +108,6 @@ def _command(args) -> str:
 
 def main(argv=None) -> int:
     """Run one command; see the module docstring for the exit status."""
-    from ...golden import budget
     argv, debug = _split_debug(sys.argv[1:] if argv is None else argv)
     debug = debug or os.environ.get("CUNEATE_DEBUG", "") not in ("", "0")
     args = None

@@ -8,8 +8,23 @@ banked``: a memory in banks of block RAM against its per-cycle contract
 
 from __future__ import annotations
 
+import json
+import tempfile
 from pathlib import Path
 
+from ...hdl.coincidence import CoincidenceConfig
+from ...hdl.coincidence.formal_core import MUTANTS as DETECTOR_MUTANTS
+from ...hdl.coincidence.formal_core import coincidence_proof_config, prove_coincidence
+from ...hdl.flow.sby import SOLVER, SOLVERS
+from ...hdl.izhikevich import ConfigError, IzhikevichConfig
+from ...hdl.izhikevich.config import PIPELINE_STAGES
+from ...hdl.lib.banked_proof import MUTANTS as BANK_MUTANTS
+from ...hdl.lib.banked_proof import prove_banked
+from ...hdl.lib.core_proof import MUTANTS
+from ...hdl.lif import LifConfig
+from ...hdl.link.config import link_config
+from ...hdl.link.formal_core import MUTANTS as LINK_MUTANTS
+from ...hdl.link.formal_core import decoder_proof_config, prove_decoder
 from .options import CliError, CommandGroups, positive_float, positive_int
 
 __all__ = ["register", "cmd_prove"]
@@ -18,22 +33,14 @@ __all__ = ["register", "cmd_prove"]
 def _proof_target(args):
     """The configuration and the prove function of ``args.target`` (core, lif, coincidence,
     link)."""
-    from ...hdl.coincidence import CoincidenceConfig
-    from ...hdl.coincidence.formal_core import coincidence_proof_config, prove_coincidence
-    from ...hdl.izhikevich import IzhikevichConfig
     from ...hdl.izhikevich.formal_core import proof_config, prove_core
-    from ...hdl.lif import LifConfig
     from ...hdl.lif.formal_core import lif_proof_config, prove_lif
-    from ...hdl.link.config import link_config
-    from ...hdl.link.formal_core import MUTANTS as LINK_MUTANTS
-    from ...hdl.link.formal_core import decoder_proof_config, prove_decoder
     configure, default, prove = {
         "core": (proof_config, IzhikevichConfig, prove_core),
         "lif": (lif_proof_config, LifConfig, prove_lif),
         "coincidence": (coincidence_proof_config, CoincidenceConfig, prove_coincidence),
         "link": (decoder_proof_config, link_config, prove_decoder),
     }[args.target]
-    from ...hdl.lib.banked_proof import MUTANTS as BANK_MUTANTS
     if args.mutant in BANK_MUTANTS:
         raise CliError(f"cuneate prove {args.target}: mutant {args.mutant} is the banked "
                        f"memory's (cuneate prove banked)")
@@ -75,9 +82,6 @@ def cmd_prove_core(args) -> int:
     """``cuneate prove core|lif|coincidence``: bounded (``--depth``, default the induction
     depth) or, with ``--unbounded``, k-induction; PASS/FAIL with mode, depth, solver and
     time."""
-    import json
-    import tempfile
-    from ...hdl.izhikevich import ConfigError
     from ...hdl.izhikevich.formal import FormalError
     try:
         cfg, prove = _proof_target(args)
@@ -134,11 +138,7 @@ def cmd_prove_banked(args) -> int:
     write port as the host's (unregistered) and as the write-back's or the deepest core's
     (registered); by default the default core's state memory (2500 words in five banks of
     512)."""
-    import json
-    import tempfile
     from ...hdl.izhikevich.formal import FormalError
-    from ...hdl.lib.banked_proof import MUTANTS as BANK_MUTANTS
-    from ...hdl.lib.banked_proof import prove_banked
     if args.mutant and args.mutant not in BANK_MUTANTS:
         raise CliError(f"cuneate prove banked: mutant {args.mutant} is not the memory's (its "
                        f"mutants: {', '.join(BANK_MUTANTS)})")
@@ -182,9 +182,6 @@ def cmd_prove(args) -> int:
         return cmd_prove_core(args)
     if args.target == "banked":
         return cmd_prove_banked(args)
-    import json
-    import tempfile
-    from ...hdl.izhikevich import ConfigError, IzhikevichConfig
     from ...hdl.izhikevich.formal import FormalError, prove
     args.preset = args.preset or ["RS"]
     try:
@@ -222,11 +219,6 @@ def cmd_prove(args) -> int:
 
 
 def register(groups: CommandGroups) -> None:
-    from ...hdl.flow.sby import SOLVER, SOLVERS
-    from ...hdl.coincidence.formal_core import MUTANTS as DETECTOR_MUTANTS
-    from ...hdl.lib.core_proof import MUTANTS
-    from ...hdl.link.formal_core import MUTANTS as LINK_MUTANTS
-    from ...hdl.lib.banked_proof import MUTANTS as BANK_MUTANTS
     f = groups.root.add_parser("prove", help="SymbiYosys checks of the one-update datapath "
                                "and of the pipelined core")
     f.add_argument("target", nargs="?",
@@ -244,7 +236,6 @@ def register(groups: CommandGroups) -> None:
     f.add_argument("--neurons", type=positive_int, default=None,
                    help="core: neurons (default the fewest accepted, one per stage); banked: "
                    "the memory's words (default 2500)")
-    from ...hdl.izhikevich.config import PIPELINE_STAGES
     f.add_argument("--pipeline-stages", type=int, choices=PIPELINE_STAGES, default=None,
                    help="core: the pipeline depth proven (default 5; its smallest core is "
                    "depth + 1 neurons)")

@@ -18,7 +18,6 @@ import numpy as np
 
 from ..izhikevich.engines import IzhikevichEngine
 from ..lif.engines import LifEngine, current_runs as lif_writes
-from ..link.engines import BoardTransport
 from ..network.engines import NetworkEngine, current_runs as network_runs
 from .engine import BlockEngine
 from .registry import implements
@@ -36,7 +35,10 @@ class BoardEngine(BlockEngine):
         super().__init__(name, build_dir, progress, waves)
         self.options = options
 
-    def transport(self, **more) -> BoardTransport:
+    def transport(self, **more):
+        # the board top's simulation (amaranth.sim, the UART host stack) loads when a board
+        # runs, not with the registry at `cuneate --help` (measured 20 ms)
+        from ..link.engines import BoardTransport
         return BoardTransport(build_dir=self.build_dir, progress=self.progress,
                               waves=self.waves, **self.options, **more)
 
@@ -59,7 +61,7 @@ class BoardIzhikevich(BoardEngine, IzhikevichEngine):
         pairs = zip(got.tick.tolist(), got.neuron.tolist())
         return [t.tolist() for t in times_from_pairs(pairs, n, cfg.dt_ms)], None, None, counters
 
-    def fanout_transport(self, fanout) -> BoardTransport:
+    def fanout_transport(self, fanout):
         return self.transport(fanout=fanout)
 
 

@@ -39,7 +39,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ...golden.izhikevich import to_params
+from ...hdl.coincidence import CoincidenceConfig, CoincidenceTwin
 from ...hdl.coincidence.config import CYCLES_PER_TARGET_EXTRA
+from ...hdl.lib.config import ConfigError
 from ...hdl.network import NetworkConfig
 from ...hdl.network.config import SWEEP_EXTRA
 from ..engines.registry import block_engines, estimate_seconds, implementation
@@ -72,7 +75,6 @@ def validate_layer(V, sections: dict, pops: list, projs: list) -> None:
         V.err(f"{key}.encoding", "a cuneate population is driven by spikes (encoding = "
                                  "\"spikes\")")
     c["encoding"], c["preset"] = "spikes", c["preset"] or "RS"
-    from ...golden.izhikevich import to_params
     try:
         to_params(c["preset"])
     except ValueError as exc:
@@ -140,7 +142,6 @@ def validate_layer(V, sections: dict, pops: list, projs: list) -> None:
             V.err(f"population[{ci}].gratings", f"cuneate neuron {j}'s field (gratings "
                                                 f"{', '.join(map(str, f))}) holds none of its "
                                                 f"inputs' afferents")
-    from ...hdl.lib.config import ConfigError
     try:
         layer_config(delays, weights, c["preset"], sections["hardware"]["update_hz"],
                      sections["hardware"]["rounding"])
@@ -192,7 +193,6 @@ def layer_config(delays, weights, preset: str, update_hz: float, rounding: str =
     (ticks) and ``weights`` (mV/ms), ``(n_targets, n_sources)``, targets of Izhikevich set
     ``preset``, at ``update_hz`` and a clock that holds a tick's work: its refusals are the
     layer's (validation builds one trial's)."""
-    from ...hdl.coincidence import CoincidenceConfig
     d, w = np.asarray(delays, dtype=np.int64), np.asarray(weights, dtype=np.float64)
     M, N = w.shape
     det = {"n_sources": N, "n_targets": M, "delays_ticks": d.tolist(), "weights": w.tolist(),
@@ -327,7 +327,6 @@ def run_layer(engine: str, layer: CuneateLayer, afferent_ms: list, n_ticks: int)
     if engine != "fixed":
         raise ValueError(f"the cuneate layer runs on golden and fixed here, on board on chip; "
                          f"not on {engine!r}")
-    from ...hdl.coincidence import CoincidenceTwin
     tw = CoincidenceTwin(det)
     # the update of sweep k (spike at (k + 1) dt) is stamped with detector tick k + 1
     out = tw.run([np.rint(s / dt).astype(np.int64) for s in aff], n_ticks)

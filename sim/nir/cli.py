@@ -173,9 +173,8 @@ def cmd_spiketouch(args) -> int:
 def register(groups: CommandGroups) -> None:
     s = groups.simulate.add_parser("nir", help="a NIR graph on the LIF cores")
     s.add_argument("graph", metavar="GRAPH.nir")
-    engines = engine_choices("nir")
-    s.add_argument("--engine", choices=engines, default="golden",
-                   help=f"{', '.join(engines)} (default golden)")
+    s.add_argument("--engine", choices=engine_choices("nir"), metavar="ENGINE", default="golden",
+                   help="%(choices)s (default golden)")
     s.add_argument("--input", default=None, metavar="FILE",
                    help="input spikes or values (steps x inputs): .npy, .npz or .csv")
     s.add_argument("--steps", type=positive_int, default=200,

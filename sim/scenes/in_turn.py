@@ -20,6 +20,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..engines.run import spike_ticks, spike_times
+from ..fanout.scene import ChannelPlan
+from ..host.driver import FbgDriver
+from ..network.scene import scene_layer
 
 __all__ = ["InTurn", "in_turn"]
 
@@ -78,9 +81,6 @@ def in_turn(scene, ctx: dict, n_trials: int, nk, cfg):
     ``ctx`` (the run's context for every trial side by side: its driver, currents, raw
     currents, channel plan, cuneate layer, sweeps) with the board's core, neurons, driver,
     folded currents, channel plan and layer and the groups' sweeps."""
-    from ..fanout.scene import ChannelPlan
-    from ..host.driver import FbgDriver
-    from ..network.scene import scene_layer
     per = len(ctx["neurons"]) // n_trials
     k = len(nk) // per
     if not 1 <= k <= n_trials:

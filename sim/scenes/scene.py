@@ -20,9 +20,10 @@ from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
 
+from ..engines.registry import UnknownEngine, check_engine
 from .registry import KINDS, kind_for, kind_module
-from .schema import (EFFECT_NAMES, EFFECT_PARAMS, F, MEMS_EFFECT_PARAMS, NUM, POPULATION,
-                     PROJECTION, RECORDING, SCHEMA, SceneError, Validator)
+from .schema import (EFFECT_NAMES, EFFECT_PARAMS, MEMS_EFFECT_PARAMS, NUM, POPULATION, PROJECTION,
+                     RECORDING, SCHEMA, F, SceneError, Validator)
 
 __all__ = ["SceneError", "Scene", "load_scene", "parse_scene", "default_scene",
            "DEFAULT_SCENE_TOML", "example_path", "example_names"]
@@ -283,7 +284,6 @@ def parse_scene(text: str, source: str = "<scene>", base_dir: Path | None = None
                                     f"ticks, got ratio {ratio:g}")
     if hw["clock_hz"] / hw["update_hz"] < 1:
         V.err("hardware.clock_hz", "must be >= update_hz")
-    from ..engines.registry import UnknownEngine, check_engine
     for i, e in enumerate(sections["run"]["engines"]):
         try:
             check_engine(kind.block, e)
