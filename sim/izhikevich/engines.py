@@ -59,6 +59,7 @@ from ..engines.registry import engine_for, implements
 from ..engines.run import EngineRun, TickUnwrap, spike_times
 from ..engines.verilator_fast import run_harness
 from ..engines.waves import WindowedVcd, write_gtkw
+from ..fanout.engines import FanoutTransport
 from ..host.transport import SpikeBatch, Transport, TransportError
 
 __all__ = ["IzhikevichEngine", "EngineRun", "engine_core", "run_engine", "engine_config",
@@ -187,8 +188,12 @@ class IzhikevichEngine(BlockEngine):
                          time.perf_counter() - t0, counters)
 
     def sweeps(self, cfg: IzhikevichConfig, cur, n_sweeps: int, n: int):
-        """``(spike times per neuron as lists, clamp counts, sticky flags, counters)``."""
-        raise NotImplementedError
+        """``(spike times per neuron as lists, clamp counts, sticky flags, counters)``; by
+        default through :meth:`transport` (the currents written once, before the first sweep;
+        no clamps seen: ``None``)."""
+        raw = np.asarray(cfg.I.to_raw(cur), dtype=np.int64)
+        got, counters = self.stream(cfg, {0: [(0, raw)]}, n_sweeps)
+        return [t.tolist() for t in got.times_ms(cfg.dt_ms, n)], None, None, counters
 
     #: How the engine runs a scene's cuneate layer: ``"host"`` (its afferents' spikes into
     #: the layer's model or twin, :func:`~cuneate.sim.network.scene.run_layer`), ``"chip"``
@@ -201,7 +206,6 @@ class IzhikevichEngine(BlockEngine):
         """The transport of a scene that streams channels: the channel fan-out ``fanout``
         (:class:`~cuneate.hdl.fanout.FanoutConfig`) in front of the core; by default its twin
         before this engine's transport."""
-        from ..fanout.scene import FanoutTransport
         return FanoutTransport(self.transport(), fanout)
 
 

@@ -114,8 +114,19 @@ class LifEngine(BlockEngine):
                          time.perf_counter() - t0, counters=counters)
 
     def sweeps(self, cfg: LifConfig, cur: np.ndarray, inputs):
-        """``(spike ticks per neuron, clamp counts, sticky flags, counters)``."""
-        raise NotImplementedError
+        """``(spike ticks per neuron, clamp counts, sticky flags, counters)``; by default
+        through :meth:`transport` (the currents that change written for their sweep,
+        :func:`current_runs`; no clamps seen). A transport carries host currents alone: a
+        program with input spikes is refused."""
+        if inputs is not None and np.any(inputs):
+            raise ValueError(f"the {self.name} engine's transport carries no input spikes: a "
+                             f"LIF program on it has host currents alone")
+        raw = np.asarray(cfg.I.to_raw(cur), dtype=np.int64)
+        got, counters = self.stream(cfg, current_runs(raw), raw.shape[0])
+        steps: list[list[int]] = [[] for _ in range(cfg.n_neurons)]
+        for k, i in zip(got.tick.tolist(), got.neuron.tolist()):
+            steps[i].append(k)
+        return steps, {}, {}, counters
 
 
 def run_lif(engine: str, cfg: LifConfig, program: LifProgram, n: int | None = None,

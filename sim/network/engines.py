@@ -79,8 +79,15 @@ class NetworkEngine(BlockEngine):
             times_from_pairs(pc, cfg.n_targets, dt), counters
 
     def pairs(self, cfg, writes: dict, n_ticks: int):
-        """``(afferent (tick, index) pairs, cuneate pairs, counters)``."""
-        raise NotImplementedError
+        """``(afferent (tick, index) pairs, cuneate pairs, counters)``; by default through
+        :meth:`transport` (the changed currents written in lockstep, one write per run of
+        consecutive afferents; spike ids ``n_afferents + j`` are cuneate neuron ``j``)."""
+        got, counters = self.stream(cfg, {k: current_runs(w) for k, w in writes.items()},
+                                    n_ticks)
+        N = cfg.n_afferents
+        pairs = list(zip(got.tick.tolist(), got.neuron.tolist()))
+        return ([(t, i) for t, i in pairs if i < N], [(t, i - N) for t, i in pairs if i >= N],
+                counters)
 
 
 @implements("network", "golden", speed=8e5)
