@@ -16,7 +16,7 @@ from pathlib import Path
 
 from ..engines.registry import UnknownEngine, check_engine
 from .options import (CliError, CommandGroups, add_max_minutes, add_quiet_option, add_waves_options,
-                      output_dir, start_progress, waves_from_args)
+                      claim_output, engine_list, output_dir, start_progress, waves_from_args)
 
 __all__ = ["register", "cmd_run", "resolve_scene"]
 
@@ -80,8 +80,8 @@ def cmd_run(args) -> int:
         return 0
     scene = resolve_scene(args.scene)
     engines = None
-    if args.engines:
-        engines = [e.strip() for e in args.engines.split(",") if e.strip()]
+    if args.engines is not None:
+        engines = engine_list(args.engines, "cuneate run: --engines")
         for e in engines:
             try:
                 check_engine(KINDS[scene.kind].block, e)
@@ -110,14 +110,16 @@ def cmd_run(args) -> int:
     from ..host.transport import TransportError
     from ..scenes.runner import run_scene
     start_progress(args)
-    try:
-        run = run_scene(scene, engines, build_dir=out / "build", waves=waves, in_turn=in_turn)
-    except (TraceError, GapError, TransportError) as exc:
-        raise CliError(f"cuneate run: {exc}") from None
-    except ValueError as exc:
-        raise CliError(f"cuneate run: {scene.source}: {exc}") from None
-    kind = kind_module(run.kind)
-    page = kind.write_report(run, out)
+    with claim_output(out, "cuneate run"):
+        try:
+            run = run_scene(scene, engines, build_dir=out / "build", waves=waves,
+                            in_turn=in_turn)
+        except (TraceError, GapError, TransportError) as exc:
+            raise CliError(f"cuneate run: {exc}") from None
+        except ValueError as exc:
+            raise CliError(f"cuneate run: {scene.source}: {exc}") from None
+        kind = kind_module(run.kind)
+        page = kind.write_report(run, out)
     if args.json:
         print(json.dumps(kind.summary(run), default=float))
         return 0

@@ -49,9 +49,8 @@ class BoardEngine(BlockEngine):
 
 @implements("izhikevich", "board", speed=1e5)
 class BoardIzhikevich(BoardEngine, IzhikevichEngine):
-    """The core (:class:`~cuneate.hdl.link.LinkedCore`), in a scene also behind the channel
-    fan-out (:class:`~cuneate.hdl.link.LinkedFanoutCore`) or as the afferents of the
-    afferent -> cuneate network (:class:`~cuneate.hdl.link.LinkedNetwork`)."""
+    """The core behind the link (:class:`~cuneate.hdl.link.LinkedTop`), in a scene also behind
+    the channel fan-out or as the afferents of the afferent -> cuneate network."""
 
     layer, fanout = "chip", True
 
@@ -61,9 +60,9 @@ class BoardIzhikevich(BoardEngine, IzhikevichEngine):
 
 @implements("lif", "board", speed=1e3)
 class BoardLif(BoardEngine, LifEngine):
-    """The LIF core (:class:`~cuneate.hdl.link.LinkedLif`)."""
+    """The LIF core behind the link (:class:`~cuneate.hdl.link.LinkedTop`)."""
 
 
 @implements("network", "board", speed=1e4)
 class BoardNetwork(BoardEngine, NetworkEngine):
-    """The network (:class:`~cuneate.hdl.link.LinkedNetwork`)."""
+    """The network behind the link (:class:`~cuneate.hdl.link.LinkedTop`)."""

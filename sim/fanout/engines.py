@@ -90,7 +90,7 @@ def run_fanout(engine: str, cfg: FanoutConfig, samples, build_dir=None) -> Engin
 class FanoutTransport(Transport):
     """The fan-out twin in front of another transport (the ``fixed`` engine's twin): channel
     writes set the twin's samples, and each write is followed by a fan-out run whose currents
-    go to ``inner`` for the same sweep, as :class:`~cuneate.hdl.link.LinkedFanoutCore` does
+    go to ``inner`` for the same sweep, as :class:`~cuneate.hdl.link.LinkedTop` does
     on chip. The fan-out's clamp counts join the counters (``fanout_current_low`` /
     ``fanout_current_high``)."""
 

@@ -13,7 +13,7 @@ every current is 0 as the host-side front end makes it.
 Engines (those whose Izhikevich implementation says it runs the fan-out,
 :func:`fanout_scene_engines`): ``fixed`` runs the fan-out twin in front of the Izhikevich twin
 (:class:`~cuneate.sim.fanout.engines.FanoutTransport`), ``board`` the board top with the
-fan-out (:class:`~cuneate.hdl.link.LinkedFanoutCore`); ``golden`` integrates the float
+fan-out (:class:`~cuneate.hdl.link.LinkedTop`); ``golden`` integrates the float
 currents as without the fan-out, so the fixed engines' difference from golden includes the samples'
 quantization (the fan-out's bound: :meth:`~cuneate.hdl.fanout.FanoutConfig.sample_bound`).
 """

@@ -25,7 +25,7 @@ from ..cli.options import (CliError, CommandGroups, add_block_commands, add_rate
                            positive_float, positive_int, run_budget, start_progress,
                            waves_from_args, write_simulate_spikes)
 from ..engines.registry import estimate_seconds
-from ..engines.waves import FORMATS
+from ..engines.waves import FORMATS, time_axis
 
 __all__ = ["register", "add_core_options", "add_pipeline_option", "core_from_args",
            "parse_param_set", "estimate_run"]
@@ -228,6 +228,11 @@ def cmd_simulate(args) -> int:
     if waves is not None and args.engine not in FORMATS:
         raise CliError(f"--waves: engine {args.engine!r} writes no waveforms (those that do: "
                        f"{', '.join(FORMATS)})")
+    if waves is not None:
+        try:
+            waves = waves.within(n_sweeps)
+        except ValueError as exc:
+            raise CliError(f"--waves-start {waves.start}: {exc}") from None
     build_dir = None
     if not golden_run and args.build_dir:
         build_dir = output_dir(args.build_dir, "--build-dir")
@@ -272,7 +277,8 @@ def cmd_simulate(args) -> int:
     if waves is not None:
         dump = waves.path(args.engine)
         out["waves"] = waves.to_dict() | {"dump": str(dump),
-                                          "gtkw": str(dump.with_suffix(".gtkw"))}
+                                          "gtkw": str(dump.with_suffix(".gtkw")),
+                                          "time_axis": time_axis(args.engine, cfg.clock_hz)}
     if args.spikes:
         out["spike_file"] = str(args.spikes)
     if args.json:
@@ -292,7 +298,8 @@ def cmd_simulate(args) -> int:
                                   if acted else "none acted"))
         if waves is not None:
             print(f"  waves: {out['waves']['dump']} (ticks {waves.start}.."
-                  f"{waves.start + waves.ticks - 1}; GTKWave: {out['waves']['gtkw']})")
+                  f"{waves.start + waves.ticks - 1}; GTKWave: {out['waves']['gtkw']}; "
+                  f"{out['waves']['time_axis']})")
         if args.spikes:
             print(f"  spikes: {args.spikes}")
     return 0

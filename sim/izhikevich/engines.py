@@ -60,7 +60,7 @@ from ..engines.run import EngineRun, TickUnwrap, spike_times
 from ..engines.verilator_fast import run_harness
 from ..engines.waves import WindowedVcd, write_gtkw
 from ..fanout.engines import FanoutTransport
-from ..host.transport import SpikeBatch, Transport, TransportError
+from ..host.transport import SpikeBatch, Transport, TransportError, sweep_count
 
 __all__ = ["IzhikevichEngine", "EngineRun", "engine_core", "run_engine", "engine_config",
            "run_hardware_engine", "run_cocotb_engine", "run_amaranth_sweeps", "MIN_NEURONS",
@@ -399,7 +399,7 @@ class TwinTransport(_Buffered):
     def run(self, n_ticks: int) -> None:
         t0 = time.perf_counter()
         tw = self.twin
-        for _ in range(int(n_ticks)):
+        for _ in range(sweep_count(n_ticks, self.name)):
             for first, raw in self.pending.pop(self.tick, []):
                 tw.I[first:first + len(raw)] = raw
                 self.cnt["writes"] += 1
@@ -445,7 +445,7 @@ class _Batch(_Buffered):
         self.writes.append((int(tick), int(first), raw))
 
     def run(self, n_ticks: int) -> None:
-        self.tick += int(n_ticks)
+        self.tick += sweep_count(n_ticks, self.name)
 
     def collect(self) -> SpikeBatch:
         if self.tick == self.ran_ticks:
