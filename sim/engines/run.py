@@ -2,7 +2,8 @@
 share to read a core's spike stream.
 
 Spike times follow the golden convention everywhere: the update of tick (sweep) ``k`` reports
-its spike at ``(k + 1) dt`` ms (:func:`spike_times`, the one conversion).
+its spike at ``(k + 1) dt`` ms (:func:`~cuneate.golden.izhikevich.spike_times`, the one
+conversion, with its inverse :func:`~cuneate.golden.izhikevich.spike_ticks`).
 """
 
 from __future__ import annotations
@@ -11,19 +12,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ...golden.izhikevich import spike_ticks, spike_times
+
 __all__ = ["EngineRun", "TickUnwrap", "unwrap_ticks", "spike_times", "spike_ticks",
            "times_from_pairs"]
-
-
-def spike_times(ticks, dt_ms: float) -> np.ndarray:
-    """Spike times (ms, sorted) of the updates of ticks ``ticks``: ``(k + 1) dt``."""
-    return (np.sort(np.asarray(ticks, dtype=np.float64).ravel()) + 1) * dt_ms
-
-
-def spike_ticks(times_ms, dt_ms: float) -> np.ndarray:
-    """The ticks whose updates made the spikes at ``times_ms`` (the inverse of
-    :func:`spike_times`)."""
-    return np.rint(np.asarray(times_ms, dtype=np.float64) / dt_ms).astype(np.int64) - 1
 
 
 def times_from_pairs(pairs, n: int, dt_ms: float, first: int = 0) -> list[np.ndarray]:
@@ -33,7 +25,7 @@ def times_from_pairs(pairs, n: int, dt_ms: float, first: int = 0) -> list[np.nda
     for k, i in pairs:
         if first <= i < first + n:
             out[int(i) - first].append(int(k))
-    return [spike_times(ks, dt_ms) for ks in out]
+    return [spike_times(np.sort(ks), dt_ms) for ks in out]
 
 
 @dataclass

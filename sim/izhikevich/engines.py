@@ -210,7 +210,7 @@ class IzhikevichEngine(BlockEngine):
 
 
 def _times(spike_sweeps, n: int, dt_ms: float) -> list[list[float]]:
-    return [spike_times(spike_sweeps[i], dt_ms).tolist() for i in range(n)]
+    return [spike_times(np.sort(spike_sweeps[i]), dt_ms).tolist() for i in range(n)]
 
 
 @implements("izhikevich", "golden", speed=15e6)

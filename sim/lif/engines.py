@@ -109,7 +109,7 @@ class LifEngine(BlockEngine):
         ``None``) on ``cfg``; the spikes of its first ``n`` neurons."""
         t0 = time.perf_counter()
         steps, counts, sticky, counters = self.sweeps(cfg, cur, inputs)
-        spikes = [spike_times(steps[i], cfg.dt_ms).tolist() for i in range(n)]
+        spikes = [spike_times(np.sort(steps[i]), cfg.dt_ms).tolist() for i in range(n)]
         return EngineRun(self.name, cfg.dt_ms, cur.shape[0], spikes, counts, sticky,
                          time.perf_counter() - t0, counters=counters)
 
