@@ -23,10 +23,7 @@ from ..engines.registry import engine_for, implements
 from ..engines.run import EngineRun
 from ..host.transport import Transport
 
-__all__ = ["FanoutEngine", "FanoutRun", "run_fanout", "FanoutTransport"]
-
-#: A fan-out run is an :class:`~cuneate.sim.engines.run.EngineRun` (its ``currents``).
-FanoutRun = EngineRun
+__all__ = ["FanoutEngine", "run_fanout", "FanoutTransport"]
 
 
 class FanoutEngine(BlockEngine):

@@ -41,10 +41,7 @@ from ..engines.run import EngineRun, TickUnwrap, spike_times
 from .graph import NirError
 from .mapping import MappedNetwork
 
-__all__ = ["NirEngine", "NirRun", "run_network", "input_spikes", "host_program", "run_dict"]
-
-#: A NIR run is an :class:`~cuneate.sim.engines.run.EngineRun`.
-NirRun = EngineRun
+__all__ = ["NirEngine", "run_network", "input_spikes", "host_program", "run_dict"]
 
 
 def run_dict(run: EngineRun, mapped: MappedNetwork) -> dict:
