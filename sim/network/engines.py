@@ -33,11 +33,7 @@ from ..engines.engine import BlockEngine
 from ..engines.registry import engine_for, implements
 from ..engines.run import EngineRun, times_from_pairs, unwrap_ticks
 
-__all__ = ["NetworkEngine", "NetworkRun", "run_network", "current_writes", "current_runs"]
-
-#: A network run is an :class:`~cuneate.sim.engines.run.EngineRun` with the populations
-#: ``afferent`` and ``cuneate``.
-NetworkRun = EngineRun
+__all__ = ["NetworkEngine", "run_network", "current_writes", "current_runs"]
 
 
 def current_writes(cfg, currents) -> dict[int, list[tuple[int, int]]]:
@@ -181,9 +177,11 @@ class NetworkCocotb(NetworkEngine):
         return pa, pc, rep["counters"]
 
 
-def run_network(engine: str, cfg, currents, build_dir: Path | None = None) -> NetworkRun:
+def run_network(engine: str, cfg, currents, build_dir: Path | None = None) -> EngineRun:
     """Run the network (:class:`cuneate.hdl.network.NetworkConfig`) with host currents
-    ``(n_ticks, n_afferents)`` (mV/ms, written before each tick) on ``engine``. Spike times use
+    ``(n_ticks, n_afferents)`` (mV/ms, written before each tick) on ``engine``: an
+    :class:`~cuneate.sim.engines.run.EngineRun` with the populations ``afferent`` and
+    ``cuneate``. Spike times use
     the golden convention for both populations (update of tick ``T`` -> ``(T + 1) dt``); the
     golden engine runs the float64 afferents and feeds their spikes, stamped one tick later,
     to the float64 cuneate model."""
