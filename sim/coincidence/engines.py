@@ -34,11 +34,8 @@ from ..engines.engine import BlockEngine
 from ..engines.registry import engine_for, implements
 from ..engines.run import EngineRun, times_from_pairs
 
-__all__ = ["CoincidenceEngine", "CoincidenceRun", "run_coincidence", "events_by_tick",
+__all__ = ["CoincidenceEngine", "run_coincidence", "events_by_tick",
            "clamp_tally"]
-
-#: A coincidence run is an :class:`~cuneate.sim.engines.run.EngineRun`.
-CoincidenceRun = EngineRun
 
 
 def clamp_tally(words) -> tuple[dict, int]:
@@ -158,7 +155,7 @@ class CoincidenceCocotb(CoincidenceEngine):
 
 
 def run_coincidence(engine: str, cfg: CoincidenceConfig, input_ticks, n_ticks: int,
-                    build_dir: Path | None = None) -> CoincidenceRun:
+                    build_dir: Path | None = None) -> EngineRun:
     """Run ``n_ticks`` with ``input_ticks`` (one tick array per source) on ``engine``."""
     return engine_for("coincidence", engine, build_dir=build_dir).run(cfg, input_ticks,
                                                                       n_ticks)

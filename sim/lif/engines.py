@@ -42,10 +42,7 @@ from ..engines.engine import BlockEngine
 from ..engines.registry import engine_for, implements
 from ..engines.run import EngineRun, TickUnwrap, spike_times
 
-__all__ = ["LifEngine", "LifProgram", "LifRun", "engine_config", "run_lif", "current_runs"]
-
-#: A LIF run is an :class:`~cuneate.sim.engines.run.EngineRun`.
-LifRun = EngineRun
+__all__ = ["LifEngine", "LifProgram", "engine_config", "run_lif", "current_runs"]
 
 
 @dataclass
@@ -130,7 +127,7 @@ class LifEngine(BlockEngine):
 
 
 def run_lif(engine: str, cfg: LifConfig, program: LifProgram, n: int | None = None,
-            build_dir: Path | None = None) -> LifRun:
+            build_dir: Path | None = None) -> EngineRun:
     """Run ``program`` on ``engine``; returns the spikes of the first ``n`` neurons."""
     impl = engine_for("lif", engine, build_dir=build_dir)
     N = cfg.n_neurons
