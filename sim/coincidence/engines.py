@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from ...golden import coincidence as gcun
+from ...golden import izhikevich as giz
 from ...hdl.coincidence import (CLAMP_KINDS, CoincidenceConfig, CoincidenceDetector,
                                 CoincidenceTwin, coincidence_verilog)
 from ..engines.amaranth import simulate
@@ -70,12 +71,15 @@ class CoincidenceEngine(BlockEngine):
 
     def run(self, cfg: CoincidenceConfig, input_ticks, n_ticks: int) -> EngineRun:
         """``n_ticks`` ticks with ``input_ticks`` (one tick array per source): the targets'
-        spikes, the merged input events and the clamps."""
+        spikes, the input events of those ticks (``events``) and the ones merged with an
+        earlier one of the same tick (``merged_count``), the clamps."""
         by_tick = events_by_tick(input_ticks, cfg.n_sources)
         t0 = time.perf_counter()
         spikes, merged, counts, sticky = self.spikes(cfg, input_ticks, by_tick, n_ticks)
+        events = sum(len(s) for k, s in by_tick.items() if k < n_ticks)
         return EngineRun(self.name, cfg.dt_ms, n_ticks, spikes, counts, sticky,
-                         time.perf_counter() - t0, {"merged_count": int(merged)})
+                         time.perf_counter() - t0,
+                         {"events": events, "merged_count": int(merged)})
 
     def spikes(self, cfg, input_ticks, by_tick: dict, n_ticks: int):
         """``(spike times per target, merged events, clamp counts, sticky)``: by default from
@@ -91,15 +95,24 @@ class CoincidenceEngine(BlockEngine):
 
 @implements("coincidence", "golden", speed=8e5)
 class CoincidenceGolden(CoincidenceEngine):
-    """The float64 PSP sums with the exact delays and weights."""
+    """The float64 model (:func:`~cuneate.golden.coincidence.simulate_cuneate`'s scheme) with
+    the exact delays and weights: each target's drive summed over its connected sources
+    (weight > 0; a weight of 0 disconnects a pair), then every target integrated at once."""
 
     def spikes(self, cfg, input_ticks, by_tick, n_ticks):
         dt = cfg.dt_ms
         times = [np.asarray(ts, dtype=np.float64) * dt for ts in input_ticks]
-        r = gcun.simulate_cuneate(times, cfg.delays * dt, n_ticks * dt, dt_ms=dt, J=1.0,
-                                  weights=cfg.weights_real,
-                                  params=[cfg.param_sets[s] for s in cfg.target_sets_],
-                                  tau_rise_ms=cfg.tau_rise_ms, tau_decay_ms=cfg.tau_decay_ms)
+        grid = np.arange(n_ticks) * dt
+        drive = np.zeros((n_ticks, cfg.n_targets))
+        for k in range(cfg.n_targets):
+            src = np.flatnonzero(cfg.weights_real[k])
+            if src.size:
+                drive[:, k] = gcun.psp_drive([times[s] for s in src], cfg.delays[k, src] * dt,
+                                             grid, J=1.0, weights=cfg.weights_real[k, src],
+                                             tau_rise_ms=cfg.tau_rise_ms,
+                                             tau_decay_ms=cfg.tau_decay_ms)[:, 0]
+        r = giz.simulate([cfg.param_sets[s] for s in cfg.target_sets_], drive, n_steps=n_ticks,
+                         n_neurons=cfg.n_targets, dt_ms=dt, scheme="euler")
         return [np.asarray(s) for s in r.spikes_ms], 0, {}, 0
 
 

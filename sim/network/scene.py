@@ -39,12 +39,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...golden.izhikevich import to_params
-from ...hdl.coincidence import CoincidenceConfig, CoincidenceTwin
+from ...golden.izhikevich import spike_ticks, to_params
+from ...hdl.coincidence import CoincidenceConfig
 from ...hdl.coincidence.config import CYCLES_PER_TARGET_EXTRA
 from ...hdl.lib.config import ConfigError
 from ...hdl.network import NetworkConfig
 from ...hdl.network.config import SWEEP_EXTRA
+from ..coincidence.engines import run_coincidence
 from ..engines.registry import block_engines, estimate_seconds, implementation
 
 __all__ = ["CuneateLayer", "layer_engines", "validate_layer", "scene_layer", "layer_network",
@@ -298,38 +299,16 @@ def check_layer_engines(scene, engines) -> None:
 
 
 def run_layer(engine: str, layer: CuneateLayer, afferent_ms: list, n_ticks: int):
-    """The layer's spike trains (ms, one array per target) and counters on ``engine``
-    (``golden`` or ``fixed``) from that engine's afferent trains ``afferent_ms`` (ms, golden
-    convention: the update of tick ``k`` at ``(k + 1) dt``)."""
+    """The layer's spike trains (ms, one array per target) and counters on ``engine``'s
+    coincidence detector (:func:`~cuneate.sim.coincidence.engines.run_coincidence`: golden, the
+    float64 model; fixed, the twin, bit for bit the network's) from that engine's afferent
+    trains ``afferent_ms`` (ms, golden convention: the update of tick ``k`` at ``(k + 1) dt``),
+    each spike stamped as the network stamps it (the update of sweep ``k`` at detector tick
+    ``k + 1``)."""
     det = layer.network.det
-    dt = det.dt_ms
-    N = layer.weights.shape[1]
-    aff = [np.asarray(s, dtype=np.float64) for s in afferent_ms]
-    aff += [np.zeros(0)] * (N - len(aff))
-    if engine == "golden":
-        from ...golden import coincidence as gcun
-        from ...golden import izhikevich as giz
-        # each target's drive from its own synapses (direct summation), then every target
-        # integrated at once: simulate_cuneate's scheme, without the disconnected pairs
-        grid = np.arange(n_ticks) * dt
-        drive = np.zeros((n_ticks, layer.n_targets))
-        for k in range(layer.n_targets):
-            src = np.flatnonzero(layer.weights[k])
-            if src.size:
-                drive[:, k] = gcun.psp_drive([aff[s] for s in src], layer.delays[k, src] * dt,
-                                             grid, J=1.0, weights=layer.weights[k, src],
-                                             tau_rise_ms=det.tau_rise_ms,
-                                             tau_decay_ms=det.tau_decay_ms)[:, 0]
-        r = giz.simulate([det.param_sets[s] for s in det.target_sets_], drive, n_steps=n_ticks,
-                         n_neurons=layer.n_targets, dt_ms=dt, scheme="euler")
-        out = [np.asarray(s, dtype=np.float64) for s in r.spikes_ms]
-        return out, {"spikes": int(sum(len(s) for s in out))}
-    if engine != "fixed":
-        raise ValueError(f"the cuneate layer runs on golden and fixed here, on board on chip; "
-                         f"not on {engine!r}")
-    tw = CoincidenceTwin(det)
-    # the update of sweep k (spike at (k + 1) dt) is stamped with detector tick k + 1
-    out = tw.run([np.rint(s / dt).astype(np.int64) for s in aff], n_ticks)
-    counters = {"spikes": int(sum(len(s) for s in out)), "events": tw.events,
-                "merged": tw.merged} | {f"clamp_{k}": v for k, v in tw.clamp_counts.items()}
-    return out, counters
+    ticks = [spike_ticks(s, det.dt_ms) + 1 for s in afferent_ms]
+    ticks += [np.zeros(0, dtype=np.int64)] * (det.n_sources - len(ticks))
+    run = run_coincidence(engine, det, ticks, n_ticks)
+    out = [np.asarray(s, dtype=np.float64) for s in run.spikes_ms]
+    return out, {"spikes": int(run.counts().sum()), "events": run.counters["events"],
+                 "merged": run.merged} | {f"clamp_{k}": v for k, v in run.clamp_counts.items()}
