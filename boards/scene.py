@@ -148,7 +148,7 @@ def _afferent(scene, target: dict, real_time: bool = True,
     def linked(plan, target, pipeline_stages=5):
         from .sizing import target_core, target_link
         from ..hdl.fanout import FanoutConfig
-        from ..sim.izhikevich.engines import MIN_NEURONS
+        from ..hdl.lib.config import MIN_NEURONS
         n = max(len(neurons), MIN_NEURONS)      # a core's fewest neurons, as the engines pad
         kw = {k: v for k, v in core.items() if k != "update_hz"}
         kw["neuron_sets"] = list(core["neuron_sets"]) + [0] * (n - len(neurons))

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...golden.izhikevich import group_spikes
+from ...golden.izhikevich import group_spikes, spike_times
 from ..izhikevich import IzhikevichTwin
 from ..lib.fixed import tally_clamps
 from ..lib.synapses import trace_products, trace_update
@@ -156,4 +156,4 @@ class CoincidenceTwin:
             self.merged += int(np.count_nonzero(self.pending & (counts[0] > 0)))
         ks, ns = self.run_pending(counts > 0)
         steps = group_spikes([ks], [ns], self.cfg.n_targets)
-        return [(np.asarray(h, dtype=np.float64) + 1) * self.cfg.dt_ms for h in steps]
+        return [spike_times(h, self.cfg.dt_ms) for h in steps]

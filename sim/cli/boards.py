@@ -3,9 +3,15 @@
 from __future__ import annotations
 
 import json
+import shutil
+import subprocess
+from pathlib import Path
 
+from ...hdl.izhikevich.config import PIPELINE_STAGES
+from ...hdl.lib.config import ConfigError
+from ..izhikevich.cli import add_pipeline_option
 from .options import (CliError, CommandGroups, add_quiet_option, claim_output, output_dir,
-                      positive_float, positive_int)
+                      positive_float, positive_int, start_progress)
 
 __all__ = ["register"]
 
@@ -13,7 +19,6 @@ __all__ = ["register"]
 def cmd_boards(args) -> int:
     from ...boards.sizing import limits
     from ...boards.targets import TARGETS
-    from ...hdl.izhikevich.config import PIPELINE_STAGES
     rows = []
     for name, t in TARGETS.items():
         plan = t["clock_plan"]
@@ -49,8 +54,6 @@ def cmd_boards(args) -> int:
 def cmd_build(args) -> int:
     from ...boards.build import BuildError, build_target
     from ...boards.targets import TARGETS
-    from ...hdl.lib.config import ConfigError
-    from .options import start_progress
     if args.board_option is not None:
         if args.board is not None and args.board != args.board_option and args.scene is None:
             args.board, args.scene = args.board_option, args.board    # --board B SCENE
@@ -92,9 +95,6 @@ def cmd_build(args) -> int:
 
 
 def cmd_program(args) -> int:
-    import shutil
-    import subprocess
-    from pathlib import Path
     from ...boards.targets import TARGETS
     t = TARGETS.get(args.board)
     if t is None or not t.get("loader_board"):
@@ -149,7 +149,6 @@ def register(groups: CommandGroups) -> None:
                         "1 %% (115200 on the ULX3S at 60 MHz: 521 clocks a bit)")
     c.add_argument("--out", required=True)
     c.add_argument("--seed", type=positive_int, default=1, help="nextpnr placement seed")
-    from ..izhikevich.cli import add_pipeline_option
     add_pipeline_option(c)
     c.add_argument("--no-bitstream", action="store_true",
                    help="Verilog and estimate only (no place and route)")

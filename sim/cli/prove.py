@@ -10,9 +10,30 @@ sample (:mod:`cuneate.hdl.fanout.formal`)."""
 
 from __future__ import annotations
 
+import contextlib
+import json
+import tempfile
 from pathlib import Path
 
-from .options import CliError, CommandGroups, positive_float, positive_int
+from ...hdl.coincidence import CoincidenceConfig
+from ...hdl.coincidence.formal_core import MUTANTS as DETECTOR_MUTANTS
+from ...hdl.coincidence.formal_core import (coincidence_proof_config, prove_coincidence,
+                                             prove_history_slot)
+from ...hdl.fanout.formal import MUTANTS as FANOUT_MUTANTS
+from ...hdl.fanout.formal import prove_fanout
+from ...hdl.flow.sby import SOLVER, SOLVERS, FormalError, reporting
+from ...hdl.izhikevich import ConfigError, IzhikevichConfig
+from ...hdl.izhikevich.config import PIPELINE_STAGES
+from ...hdl.lib.banked_proof import MUTANTS as BANK_MUTANTS
+from ...hdl.lib.banked_proof import prove_banked
+from ...hdl.lib.core_proof import MUTANTS
+from ...hdl.lif import LifConfig
+from ...hdl.link.config import link_config
+from ...hdl.link.formal_core import MUTANTS as LINK_MUTANTS
+from ...hdl.link.formal_core import decoder_proof_config, prove_decoder
+from .. import progress
+from .options import (CliError, CommandGroups, add_quiet_option, positive_float, positive_int,
+                      start_progress)
 
 __all__ = ["register", "cmd_prove"]
 
@@ -20,26 +41,17 @@ __all__ = ["register", "cmd_prove"]
 def _proof_target(args):
     """The configuration and the prove function of ``args.target`` (core, lif, coincidence,
     link)."""
-    from ...hdl.coincidence import CoincidenceConfig
-    from ...hdl.coincidence.formal_core import coincidence_proof_config, prove_coincidence
-    from ...hdl.izhikevich import IzhikevichConfig
     from ...hdl.izhikevich.formal_core import proof_config, prove_core
-    from ...hdl.lif import LifConfig
     from ...hdl.lif.formal_core import lif_proof_config, prove_lif
-    from ...hdl.link.config import link_config
-    from ...hdl.link.formal_core import MUTANTS as LINK_MUTANTS
-    from ...hdl.link.formal_core import decoder_proof_config, prove_decoder
     configure, default, prove = {
         "core": (proof_config, IzhikevichConfig, prove_core),
         "lif": (lif_proof_config, LifConfig, prove_lif),
         "coincidence": (coincidence_proof_config, CoincidenceConfig, prove_coincidence),
         "link": (decoder_proof_config, link_config, prove_decoder),
     }[args.target]
-    from ...hdl.lib.banked_proof import MUTANTS as BANK_MUTANTS
     if args.mutant in BANK_MUTANTS:
         raise CliError(f"cuneate prove {args.target}: mutant {args.mutant} is the banked "
                        f"memory's (cuneate prove banked)")
-    from ...hdl.fanout.formal import MUTANTS as FANOUT_MUTANTS
     if args.mutant in FANOUT_MUTANTS:
         raise CliError(f"cuneate prove {args.target}: mutant {args.mutant} is the fan-out's "
                        f"(cuneate prove fanout)")
@@ -81,10 +93,6 @@ def cmd_prove_core(args) -> int:
     """``cuneate prove core|lif|coincidence``: bounded (``--depth``, default the induction
     depth) or, with ``--unbounded``, k-induction; PASS/FAIL with mode, depth, solver and
     time."""
-    import json
-    import tempfile
-    from ...hdl.izhikevich import ConfigError
-    from ...hdl.izhikevich.formal import FormalError
     try:
         cfg, prove = _proof_target(args)
     except ConfigError as exc:
@@ -98,8 +106,6 @@ def cmd_prove_core(args) -> int:
             if args.target == "coincidence" and not args.mutant:
                 # the ring address at the default detector's 513-tick history (the scale
                 # argument of docs/formal.md rests on it)
-                from ...hdl.coincidence import CoincidenceConfig
-                from ...hdl.coincidence.formal_core import prove_history_slot
                 detector = CoincidenceConfig()
                 ring = detector.max_delay_ticks
                 slot = prove_history_slot(detector, Path(d) / "history_slot",
@@ -140,11 +146,6 @@ def cmd_prove_banked(args) -> int:
     write port as the host's (unregistered) and as the write-back's or the deepest core's
     (registered); by default the default core's state memory (2500 words in five banks of
     512)."""
-    import json
-    import tempfile
-    from ...hdl.izhikevich.formal import FormalError
-    from ...hdl.lib.banked_proof import MUTANTS as BANK_MUTANTS
-    from ...hdl.lib.banked_proof import prove_banked
     if args.mutant and args.mutant not in BANK_MUTANTS:
         raise CliError(f"cuneate prove banked: mutant {args.mutant} is not the memory's (its "
                        f"mutants: {', '.join(BANK_MUTANTS)})")
@@ -184,10 +185,6 @@ def cmd_prove_fanout(args) -> int:
     """``cuneate prove fanout``: :func:`~cuneate.hdl.fanout.formal.prove_fanout` on each of its
     tables (a combinational check: every input at once, so ``--unbounded`` changes nothing);
     one line per table, exit 0 when every one passes."""
-    import json
-    import tempfile
-    from ...hdl.fanout.formal import MUTANTS as FANOUT_MUTANTS
-    from ...hdl.fanout.formal import FormalError, prove_fanout
     if args.mutant and args.mutant not in FANOUT_MUTANTS:
         raise CliError(f"cuneate prove fanout: mutant {args.mutant} is not the fan-out's (its "
                        f"mutants: {', '.join(FANOUT_MUTANTS)})")
@@ -224,13 +221,9 @@ def cmd_prove_fanout(args) -> int:
 def cmd_prove(args) -> int:
     """Every ``cuneate prove``: says while it runs what it checks, the phase and step each
     SymbiYosys run has reached and the time (:mod:`cuneate.sim.progress`; ``-q`` silences)."""
-    from ...hdl.flow.sby import reporting
-    from .. import progress
-    from .options import start_progress
     if args.pipeline_stages is not None and args.target != "core":
         raise CliError(f"cuneate prove {args.target}: --pipeline-stages is the Izhikevich "
                        f"core's (cuneate prove core)")
-    import contextlib
     start_progress(args)
     what = (f"cuneate prove {args.target}" + (f" {args.property}" if args.target ==
                                                "datapath" else "")
@@ -253,10 +246,7 @@ def _cmd_prove(args) -> int:
         return cmd_prove_banked(args)
     if args.target == "fanout":
         return cmd_prove_fanout(args)
-    import json
-    import tempfile
-    from ...hdl.izhikevich import ConfigError, IzhikevichConfig
-    from ...hdl.izhikevich.formal import FormalError, prove
+    from ...hdl.izhikevich.formal import prove
     args.preset = args.preset or ["RS"]
     try:
         cfg = IzhikevichConfig(n_neurons=8, clock_hz=args.update_hz * 8,
@@ -293,12 +283,6 @@ def _cmd_prove(args) -> int:
 
 
 def register(groups: CommandGroups) -> None:
-    from ...hdl.flow.sby import SOLVER, SOLVERS
-    from ...hdl.coincidence.formal_core import MUTANTS as DETECTOR_MUTANTS
-    from ...hdl.lib.core_proof import MUTANTS
-    from ...hdl.link.formal_core import MUTANTS as LINK_MUTANTS
-    from ...hdl.lib.banked_proof import MUTANTS as BANK_MUTANTS
-    from ...hdl.fanout.formal import MUTANTS as FANOUT_MUTANTS
     f = groups.root.add_parser("prove", help="SymbiYosys checks of the one-update datapath "
                                "and of the pipelined core")
     f.add_argument("target", nargs="?",
@@ -317,7 +301,6 @@ def register(groups: CommandGroups) -> None:
     f.add_argument("--neurons", type=positive_int, default=None,
                    help="core: neurons (default the fewest accepted, one per stage); banked: "
                    "the memory's words (default 2500)")
-    from ...hdl.izhikevich.config import PIPELINE_STAGES
     f.add_argument("--pipeline-stages", type=int, choices=PIPELINE_STAGES, default=None,
                    help="core: the pipeline depth proven (default 5; its smallest core is "
                    "depth + 1 neurons)")
@@ -351,6 +334,5 @@ def register(groups: CommandGroups) -> None:
     f.add_argument("--timeout-s", type=positive_float, default=1800.0)
     f.add_argument("--work-dir", default=None, help="keep the SymbiYosys files here")
     f.add_argument("--json", action="store_true")
-    from .options import add_quiet_option
     add_quiet_option(f)
     f.set_defaults(func=cmd_prove, preset=None)

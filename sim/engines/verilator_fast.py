@@ -29,7 +29,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ...hdl.izhikevich import CLAMP_KINDS, IzhikevichConfig
+from ...hdl.izhikevich import CLAMP_KINDS, IzhikevichConfig, izhikevich_verilog
+from ...hdl.izhikevich.array import izhikevich_array_verilog
+from .toolchain import apply_simulator_env
 
 __all__ = ["HARNESS_SOURCE", "HarnessError", "HarnessRun", "compile_harness", "build_harness",
            "run_harness",
@@ -80,7 +82,6 @@ def default_build_root() -> Path:
 
 
 def _verilator() -> str:
-    from .toolchain import apply_simulator_env
     apply_simulator_env()
     exe = shutil.which("verilator")
     if exe is None:
@@ -136,8 +137,6 @@ def build_harness(cfg: IzhikevichConfig, build_root: Path | None = None,
     """Build (or reuse) the harness executable for ``cfg`` (``n_cores`` > 1: an
     :class:`~cuneate.hdl.izhikevich.array.IzhikevichArray` of that many cores of ``cfg``, its
     per-core update probes read by the harness); returns its path."""
-    from ...hdl.izhikevich import izhikevich_verilog
-    from ...hdl.izhikevich.array import izhikevich_array_verilog
     for fmt, name in ((cfg.V, "v"), (cfg.U, "u"), (cfg.I, "current")):
         if fmt.width > 64:
             raise HarnessError(f"the harness reads ports up to 64 bits; {name} has {fmt.width}")

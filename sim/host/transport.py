@@ -31,6 +31,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..engines.run import spike_times
+
 __all__ = ["SpikeBatch", "Transport", "TransportError", "sweep_count", "COUNTERS", "check_counters",
            "SimulatedSerial"]
 
@@ -80,10 +82,8 @@ class SpikeBatch:
 
     def times_ms(self, dt_ms: float, n_neurons: int, first: int = 0) -> list[np.ndarray]:
         """Spike times per neuron (``first`` .. ``first + n_neurons - 1``) in ms, ``(k+1) dt``."""
-        out = []
-        for i in range(first, first + n_neurons):
-            out.append((self.tick[self.neuron == i] + 1) * dt_ms)
-        return out
+        return [spike_times(self.tick[self.neuron == i], dt_ms)
+                for i in range(first, first + n_neurons)]
 
 
 def sweep_count(n_ticks, name: str) -> int:

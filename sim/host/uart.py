@@ -34,12 +34,12 @@ import time
 
 import numpy as np
 
-from ...hdl.link.codec import (COUNTER_NAMES, FRAME_ERRORS, MSG_COUNTERS, MSG_SPIKES,
-                              OP_CLEAR_COUNTERS, OP_READ_COUNTERS, OP_STEP, OP_STOP,
-                              FrameDecoder, FrameError, control_message, current_bytes,
-                              encode_frame, parse_counters, parse_spikes, write_message)
+from ...hdl.link.codec import (COUNTER_NAMES, FRAME_ERRORS, MAX_FRAME, MIN_FRAME, MSG_COUNTERS,
+                               MSG_SPIKES, OP_CLEAR_COUNTERS, OP_READ_COUNTERS, OP_STEP, OP_STOP,
+                               SPIKE_HEADER, FrameDecoder, FrameError, control_message,
+                               current_bytes, encode_frame, parse_counters, parse_spikes,
+                               write_message)
 from ...hdl.link.twin import LinkModel
-from ...hdl.link.codec import MAX_FRAME, MIN_FRAME
 from .transport import SimulatedSerial, SpikeBatch, Transport, TransportError, sweep_count
 
 __all__ = ["UartTransport", "ModelSerial", "DEVICE_ERRORS", "HOST_ERRORS", "link_budget",
@@ -450,7 +450,6 @@ def link_budget(n_neurons: int, current_width: int, sample_hz: float, update_hz:
     direction and whether both fit the line (``real_time``: a bandwidth bound; the lockstep
     host also waits for each step's batch before its next writes, see docs/boards.md).
     """
-    from ...hdl.link.codec import SPIKE_HEADER, current_bytes
     cb = current_bytes(current_width)
     per_frame = (MAX_FRAME - MIN_FRAME - 2) // cb
     words = float(n_neurons if words_per_sample is None else words_per_sample)

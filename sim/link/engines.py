@@ -28,10 +28,12 @@ from pathlib import Path
 
 from amaranth.sim import Simulator
 
+from ...hdl.flow.verilog import verilog_text
 from ...hdl.lib.payload import payload_spec
 from ...hdl.link import LinkConfig, LinkedTop
 from ...hdl.link.config import sweep_cycles
 from ...hdl.link.codec import MAX_FRAME
+from ..engines.verilator_fast import compile_harness
 from ..host.transport import SimulatedSerial
 from ..host.uart import UartTransport
 
@@ -190,8 +192,6 @@ class VerilatorSerial(SimulatedSerial):
 
     def __init__(self, lcfg: LinkConfig, corrupt=None, corrupt_host=None,
                  build_root: Path | None = None):
-        from ...hdl.flow.verilog import verilog_text
-        from ..engines.verilator_fast import compile_harness
         self.lcfg = lcfg
         self.corrupt, self.corrupt_host = corrupt, corrupt_host
         cpb = lcfg.clocks_per_bit

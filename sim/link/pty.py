@@ -22,14 +22,21 @@ default scene without one) until interrupted: it prints the device path to give 
 
 from __future__ import annotations
 
+import argparse
 import errno
 import fcntl
 import os
 import select
+import signal
 import threading
+import time
 import tty
+from pathlib import Path
 
 from ...hdl.link import LinkConfig
+from ..network.scene import scene_layer
+from ..scenes.afferent import build_neurons, core_config, n_driven, scene_channel_plan
+from ..scenes.scene import default_scene, example_path, load_scene
 from .engines import BOARD_CLOCKS_PER_BIT, VerilatorSerial, board_link
 
 __all__ = ["PtyBoard", "PtyBoardError", "scene_link", "main"]
@@ -211,8 +218,6 @@ def scene_link(scene, clocks_per_bit: int = BOARD_CLOCKS_PER_BIT):
     as ``cuneate build`` does: the link of its core, or with a cuneate layer of the
     afferent -> cuneate network, behind the scene's channel fan-out with
     ``hardware.fanout``."""
-    from ..network.scene import scene_layer
-    from ..scenes.afferent import build_neurons, core_config, n_driven, scene_channel_plan
     k = scene["hardware"]["board_trials"] or n_driven(scene)[0]
     neurons = build_neurons(scene, k)
     cfg = core_config(scene, k)
@@ -226,11 +231,6 @@ def scene_link(scene, clocks_per_bit: int = BOARD_CLOCKS_PER_BIT):
 def main(argv=None) -> int:
     """Serve the board for a scene's core (a scene file or shipped example name; the default
     scene without one) on a pty until interrupted."""
-    import argparse
-    import signal
-    import time
-    from pathlib import Path
-    from ..scenes.scene import default_scene, example_path, load_scene
     p = argparse.ArgumentParser(prog="python -m cuneate.sim.link.pty",
                                 description="serve a simulated board on a pseudo-terminal")
     p.add_argument("scene", nargs="?", default=None,

@@ -4,20 +4,18 @@ cuneate network (:mod:`cuneate.hdl.network`), with the coincidence detector's op
 
 from __future__ import annotations
 
-
 import numpy as np
 
-from ..cli.options import (CliError, CommandGroups, add_block_commands, build_config,
-                           finite_float, nonneg_int, output_dir, positive_int, print_run,
-                           run_ticks)
+from ...hdl.network import SWEEP_EXTRA, NetworkConfig, generate_network, synth_resources
+from ..cli.options import (CliError, CommandGroups, add_block_commands, build_config, finite_float,
+                           nonneg_int, output_dir, positive_int, print_run, run_ticks)
 from ..coincidence.cli import add_coincidence_options, coincidence_kwargs, print_resources
+from ..izhikevich.cli import parse_param_set
 
 __all__ = ["register"]
 
 
 def _network_from_args(args, clock_default=None):
-    from ...hdl.network import SWEEP_EXTRA, NetworkConfig
-    from ..izhikevich.cli import parse_param_set
     det = coincidence_kwargs(args)
     det.pop("update_hz")
     clock = det.pop("clock_hz", None)
@@ -78,7 +76,6 @@ def cmd_simulate_network(args) -> int:
 
 
 def cmd_generate_network(args) -> int:
-    from ...hdl.network import generate_network, synth_resources
     cfg = _network_from_args(args, clock_default=40e6)
     print_resources(args, cfg, generate_network(output_dir(args.out), cfg, name=args.name),
                     synth_resources)

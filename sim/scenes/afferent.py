@@ -23,14 +23,25 @@ from pathlib import Path
 import numpy as np
 
 from ...golden import izhikevich as golden
+from ...golden.budget import BASE_BYTES, array_bytes
 from ...golden.fbg import IIRFilter, design_bandpass
+from ...hdl.izhikevich import PIPELINE_DEPTH
+from ...hdl.izhikevich.range import search_estimate
+from ...hdl.lib.config import MIN_NEURONS
 from ...hdl.lib.fixed import QFormat
+from .. import progress as prog
 from ..decode import decode_trials, decoded_neurons
-from ..engines.registry import ENGINES as ENGINE_TRAITS, block_engines
+from ..engines.registry import ENGINES as ENGINE_TRAITS
+from ..engines.registry import block_engines, engine_for, estimate_seconds
+from ..engines.waves import FORMATS, Waves
 from ..fanout.scene import channel_plan, check_fanout_engines, scene_fanout
-from ..report import front_end_detail
 from ..host.driver import AfferentEncoding, FbgDriver
+from ..izhikevich.engines import engine_core
 from ..network.scene import check_layer_engines, layer_estimate, run_layer, scene_layer
+from ..report import format_run as fmt_run
+from ..report import front_end_detail, summary_dict
+from ..report import write_report as write
+from ..spikes import write_spikes
 from .runner import agreement as train_agreement
 from .scene import Scene
 from .stimulus import synthesize
@@ -102,10 +113,6 @@ def estimate(scene: Scene, engines: list[str], n_samples: int | None = None) -> 
     and their synthesis, the front end's arrays (shifts, currents, raw currents), the golden
     engine's per-tick currents, the batch engines' write schedules and the spikes; the state
     range search, each engine's updates (or cycles) at the registry's speed."""
-    from ...golden.budget import BASE_BYTES, array_bytes
-    from ...hdl.izhikevich import PIPELINE_DEPTH
-    from ...hdl.izhikevich.range import search_estimate
-    from ..engines.registry import estimate_seconds
     sen, hw = scene["sensor"], scene["hardware"]
     fs = sen["sample_rate_hz"]
     if n_samples is None:
@@ -113,7 +120,7 @@ def estimate(scene: Scene, engines: list[str], n_samples: int | None = None) -> 
     trials, n = n_driven(scene)
     hold = max(1, round(hw["update_hz"] / fs))
     n_ticks = float(n_samples) * hold
-    n_core = max(n, 8)
+    n_core = max(n, MIN_NEURONS)
     per_sample = array_bytes(n_samples, n)
     nbytes = (BASE_BYTES + REPORT_BYTES + 4 * array_bytes(trials, n_samples, sen["channels"])
               + 6 * per_sample + 200.0 * n_ticks / 16e3 * n * 16)      # spikes at <= 200 Hz
@@ -174,7 +181,6 @@ def build_neurons(scene: Scene, n_trials: int) -> Neurons:
 def build_izhikevich(scene: Scene, neurons: Neurons):
     """The Izhikevich core for the scene's Izhikevich neurons (one parameter set per preset),
     sized to them; refused if they do not fit the hardware clock's capacity."""
-    from ..izhikevich.engines import engine_core
     hw = scene["hardware"]
     n = len(neurons)
     capacity = int(hw["clock_hz"] // hw["update_hz"])
@@ -257,8 +263,6 @@ def run_golden(ctx) -> tuple[list, dict]:
 
 def _run_transport(engine):
     def run(ctx):
-        from ..izhikevich.engines import make_transport
-        from ..engines.waves import FORMATS
         kw = {"progress": ctx.get("progress")}
         if engine != "fixed":
             bd = ctx.get("build_dir")
@@ -266,12 +270,13 @@ def _run_transport(engine):
         if engine in FORMATS and ctx.get("waves"):
             kw["waves"] = ctx["waves"]
         kw.update(ctx.get("engine_options", {}).get(engine, {}))
+        impl = engine_for("izhikevich", engine, **kw)
         fan = ctx.get("fanout")                 # channels streamed, fanned out on chip
-        tr, drv, raw = make_transport(engine, **kw), ctx["driver"], ctx["raw"]
-        if fan is not None:
-            from ..fanout.scene import fanout_transport
-            tr, drv, raw = fanout_transport(engine, fan, kw), fan.driver, fan.raw
-        layer = ctx.get("layer") if engine == "board" else None   # the network on chip
+        if fan is None:
+            tr, drv, raw = impl.transport(), ctx["driver"], ctx["raw"]
+        else:
+            tr, drv, raw = impl.fanout_transport(fan.config), fan.driver, fan.raw
+        layer = ctx.get("layer") if impl.layer == "chip" else None   # the network on chip
         try:
             tr.open(ctx["config"] if layer is None else layer.network)
             res = drv.stream(tr, None, ctx["n_ticks"], raw=raw)
@@ -308,7 +313,6 @@ def waves_request(scene: Scene, waves=None):
     ``run.waves_ticks``; ``None`` when neither asks for waveforms."""
     if waves is not None or not scene["run"]["waves"]:
         return waves
-    from ..engines.waves import Waves
     r = scene["run"]
     return Waves(Path(r["waves"]), r["waves_start_tick"], r["waves_ticks"])
 
@@ -354,7 +358,6 @@ def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None =
     does) and neuron table (``build(scene, n_trials)``, as :func:`build_neurons`) run through
     the same machinery (texture scenes); only the afferent decoders ("tree", "knn") decode
     here."""
-    from .. import progress as prog
     timing: dict = {}
 
     def say(msg):
@@ -537,7 +540,6 @@ def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None =
 # --------------------------------------------------------------------------- results
 def summary(run: SceneRun) -> dict:
     """The run as a JSON-ready dictionary (``run.json``)."""
-    from ..report import summary_dict
     return summary_dict(run)
 
 
@@ -545,7 +547,6 @@ def write_spike_files(run: SceneRun, out: Path) -> dict:
     """Write ``spikes_<engine>.npz`` per engine into ``out`` (:mod:`cuneate.sim.spikes`:
     neuron table population, trial, grating, class; the cuneate layer's neurons after the
     afferents, grating -1); returns ``{engine: file name}``."""
-    from ..spikes import write_spikes
     nn, lay = run.neurons, run.layer
     pop, trial, grating = list(nn.population), list(nn.trial), list(nn.grating)
     if lay:
@@ -565,7 +566,6 @@ def write_spike_files(run: SceneRun, out: Path) -> dict:
 def write_report(run: SceneRun, out: Path) -> Path:
     """Write the spike files, ``index.html``, ``run.json`` and figures into ``out``; returns
     the HTML path."""
-    from ..report import write_report as write
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     run.files["spikes"] = write_spike_files(run, out)
@@ -579,5 +579,4 @@ def write_report(run: SceneRun, out: Path) -> Path:
 
 def format_run(run: SceneRun) -> str:
     """The lines ``cuneate run`` prints for an afferent scene."""
-    from ..report import format_run as fmt_run
     return fmt_run(run)

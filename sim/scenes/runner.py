@@ -10,6 +10,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ...golden import budget, metrics
+from .. import progress as prog
 from .registry import kind_module
 
 __all__ = ["run_scene", "agreement", "kind_of", "check_budget"]
@@ -32,7 +34,6 @@ def run_scene(scene, engines: list[str] | None = None, build_dir: Path | None = 
     The kind's estimate of the run's memory and time is checked first
     (:func:`check_budget`): a run that would exhaust the machine's memory or exceed the time
     limit in force is refused before anything is allocated."""
-    from .. import progress as prog
     if progress and prog.mode() == "quiet":
         prog.configure("auto")
     check_budget(scene, list(engines or scene.engines))
@@ -53,7 +54,6 @@ def run_scene(scene, engines: list[str] | None = None, build_dir: Path | None = 
 def check_budget(scene, engines: list[str], **known) -> dict:
     """The kind's ``estimate(scene, engines, **known)`` checked against the memory and time
     limits (:func:`cuneate.golden.budget.check`; ``BudgetError`` refuses, one line)."""
-    from ...golden import budget
     est = kind_module(scene.kind).estimate(scene, engines, **known)
     budget.check(f"the scene ({est['what']})", est["bytes"], est["seconds"],
                  "fewer trials or neurons, a shorter scene.duration_ms, a lower update rate "
@@ -66,7 +66,6 @@ def agreement(a: list, b: list, dt_ms: float) -> dict:
     trains, spike-count differences, Victor-Purpura distance at q = 5/s
     (:data:`~cuneate.golden.metrics.VP_Q_PER_MS`, the sweep's and the README's) and the
     fraction of spikes within one tick of ``dt_ms``."""
-    from ...golden import metrics
     cnt_a = np.array([len(s) for s in a])
     cnt_b = np.array([len(s) for s in b])
     vp = [metrics.victor_purpura(x, y, metrics.VP_Q_PER_MS) for x, y in zip(a, b)]

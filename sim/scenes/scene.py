@@ -20,9 +20,10 @@ from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
 
+from ..engines.registry import UnknownEngine, check_engine
 from .registry import KINDS, kind_for, kind_module
-from .schema import (EFFECT_NAMES, EFFECT_PARAMS, F, MEMS_EFFECT_PARAMS, NUM, POPULATION,
-                     PROJECTION, RECORDING, SCHEMA, SceneError, Validator)
+from .schema import (EFFECT_NAMES, EFFECT_PARAMS, MEMS_EFFECT_PARAMS, NUM, POPULATION, PROJECTION,
+                     RECORDING, SCHEMA, F, SceneError, Validator)
 
 __all__ = ["SceneError", "Scene", "load_scene", "parse_scene", "default_scene",
            "DEFAULT_SCENE_TOML", "example_path", "example_names"]
@@ -294,22 +295,22 @@ def parse_scene(text: str, source: str = "<scene>", base_dir: Path | None = None
                                     f"ticks, got ratio {ratio:g}")
     if hw["clock_hz"] / hw["update_hz"] < 1:
         V.err("hardware.clock_hz", "must be >= update_hz")
-    from ..engines.registry import UnknownEngine, check_engine
     for i, e in enumerate(sections["run"]["engines"]):
         try:
             check_engine(kind.block, e)
         except UnknownEngine as exc:
             V.err(f"run.engines[{i}]", str(exc))
     if hw["fanout"]:
-        from ..fanout.scene import FANOUT_SCENE_ENGINES
+        from ..fanout.scene import fanout_scene_engines
+        ok = fanout_scene_engines()
         if kind.block != "izhikevich":
             V.err("hardware.fanout", "the channel fan-out feeds afferent scenes' Izhikevich "
                                      "afferents")
         for i, e in enumerate(sections["run"]["engines"]):
-            if e not in FANOUT_SCENE_ENGINES:
+            if e not in ok:
                 V.err(f"run.engines[{i}]", f"engine {e!r} does not run the channel fan-out "
                                            f"(hardware.fanout; engines that do: "
-                                           f"{', '.join(FANOUT_SCENE_ENGINES)})")
+                                           f"{', '.join(ok)})")
     if not sections["run"]["engines"]:
         V.err("run.engines", "must name at least one engine")
     if len(set(sections["run"]["engines"])) != len(sections["run"]["engines"]):

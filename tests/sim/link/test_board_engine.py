@@ -124,7 +124,7 @@ def test_scene_on_the_board_engine_equals_fixed(tmp_path):
 def test_spike_frames_carry_exactly_their_sweeps():
     """Every SPIKES frame from the device holds spikes of its own sweeps only, and the frames'
     sweeps follow each other without a gap (the board's idle cycles between sweeps; the case
-    of ticks as fast as the sweeps is tests/boards/test_uart_driver.py's)."""
+    of ticks as fast as the sweeps is tests/sim/host/test_uart_driver.py's)."""
     from cuneate.hdl.link.codec import FrameDecoder, parse_spikes
     dec, batches = FrameDecoder(), []
 
