@@ -292,6 +292,9 @@ def regmap_markdown(info, resets: dict, bus: dict, name: str) -> str:
     """The map as a markdown document for the block of ``info``."""
     d = regmap_dict(info, resets, bus)
     s = d["streams"]
+
+    def cell(text: str) -> str:
+        return text.replace("|", "\\|")
     lines = [f"# {name}: register map", "",
              f"Block `{info.block}`; register map version {REGMAP_VERSION >> 16}."
              f"{REGMAP_VERSION & 0xFFFF}; {bus['text']}.", "",
@@ -300,9 +303,9 @@ def regmap_markdown(info, resets: dict, bus: dict, name: str) -> str:
     for r in d["registers"]:
         v = (f"`{r['value']:#x}`" if "value" in r else
              f"reset {r['reset']}" if "reset" in r else "")
-        doc = r["doc"] + "".join(
-            f"<br>`[{f['lsb'] + f['width'] - 1}:{f['lsb']}]` {f['name']}: {f['doc']}"
-            if f["width"] > 1 else f"<br>`[{f['lsb']}]` {f['name']}: {f['doc']}"
+        doc = cell(r["doc"]) + "".join(
+            f"<br>`[{f['lsb'] + f['width'] - 1}:{f['lsb']}]` {f['name']}: {cell(f['doc'])}"
+            if f["width"] > 1 else f"<br>`[{f['lsb']}]` {f['name']}: {cell(f['doc'])}"
             for f in r["fields"])
         lines.append(f"| `{r['offset']:#04x}` | {r['name']} | {r['access']} | {v} | {doc} |")
     lines += ["", "Clamp flags: " + (", ".join(f"bit {i} `{k}`" for i, k in
