@@ -32,7 +32,7 @@ __all__ = ["ChannelPlan", "channel_plan", "scene_fanout", "check_fanout_engines"
            "FanoutTransport", "FANOUT_SCENE_ENGINES"]
 
 #: the scene engines that run the fan-out (golden needs none: it integrates the float currents)
-FANOUT_SCENE_ENGINES = ("golden", "fixed", "board")
+FANOUT_SCENE_ENGINES = ("golden", "fixed", "board", "axi")
 
 
 @dataclass
@@ -120,10 +120,10 @@ def check_fanout_engines(scene, engines) -> None:
 
 def fanout_transport(engine: str, plan: ChannelPlan, kw: dict) -> Transport:
     """The transport of a fan-out engine: the fan-out twin before the fixed engine's twin, or
-    the board top with the fan-out."""
+    the board top or the AXI top with the fan-out."""
     from ..izhikevich.engines import make_transport
-    if engine == "board":
-        return make_transport("board", fanout=plan.config, **kw)
+    if engine in ("board", "axi"):
+        return make_transport(engine, fanout=plan.config, **kw)
     return FanoutTransport(make_transport(engine, **kw), plan.config)
 
 
