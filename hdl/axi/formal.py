@@ -34,15 +34,16 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from amaranth import Cat, ClockDomain, Const, Elaboratable, Module, Mux, Signal
+from amaranth import Cat, Const, Module, Mux, Signal
 from amaranth.asserts import AnySeq
 from amaranth.hdl import Fragment
 
 from ..flow.sby import SOLVER
-from ..lib.formal import (ProofResult, assert_all, assume_all, harness_rtlil, run_proof,
-                          signal_named)
+from ..lib.formal import (ClockedHarness, ProofResult, assert_all, assume_all, harness_rtlil,
+                          run_proof, signal_named)
 from ..lib.payload import SPIKES_SETTLE, payload_spec
 from ..lib.regmap import MAP_BYTES, stream_format
+from ..wishbone.formal import PROOFS as WB_PROOFS
 from .lite import SLVERR, AxiLiteRegisters
 from .stream import StreamSpikes, StreamWrites
 
@@ -58,28 +59,12 @@ def proof_info(n_neurons: int = 8):
     return payload_spec(cfg).info
 
 
-class _Harness(Elaboratable):
-    """A harness on a reset-less clock domain (the initial state is the registers' reset
-    values; the induction step starts anywhere)."""
-
-    def __init__(self, dut):
-        self.dut = dut
-        self.cd = ClockDomain("sync", reset_less=True)
-        self.ports = [self.cd.clk]
-
-    def reg(self, m, value, name: str, init: int = 0) -> Signal:
-        """``value`` one cycle late."""
-        r = Signal.like(value, name=name, init=init)
-        m.d.sync += r.eq(value)
-        return r
-
-
 class _StallLoads(StreamSpikes):
     def loadable(self, out):
         return Const(1)
 
 
-class SpikesProof(_Harness):
+class SpikesProof(ClockedHarness):
     """The AXI4-Stream master (see the module docstring)."""
 
     def elaborate(self, platform):
@@ -190,7 +175,7 @@ class _Overwrites(StreamWrites):
         return Const(1)
 
 
-class WritesProof(_Harness):
+class WritesProof(ClockedHarness):
     """The AXI4-Stream slave (see the module docstring)."""
 
     def elaborate(self, platform):
@@ -249,7 +234,7 @@ class _DropsB(AxiLiteRegisters):
         return Const(0)
 
 
-class LiteProof(_Harness):
+class LiteProof(ClockedHarness):
     """The AXI4-Lite slave (see the module docstring)."""
 
     def elaborate(self, platform):
@@ -337,8 +322,7 @@ def _harness(target: str, mutant: str | None):
 
 
 def _table(target: str):
-    from ..wishbone.formal import PROOFS as WB
-    table = PROOFS | WB
+    table = PROOFS | WB_PROOFS
     if target not in table:
         raise ValueError(f"unknown face proof {target!r}; known: {', '.join(table)}")
     return table[target]

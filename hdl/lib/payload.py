@@ -134,7 +134,8 @@ def payload_signature(info: PayloadInfo) -> wiring.Signature:
 class PayloadTwin:
     """The bit-exact model of a payload as a face drives it: :meth:`write` a raw value (in
     effect from the next sweep), :meth:`end_burst` after a burst's last write, :meth:`sweep`
-    runs one sweep and returns the ids that fired, in the order the block sends them."""
+    runs one sweep and returns the ids that fired, in the order the block sends them;
+    :meth:`clamp_flags` the block's sticky clamp flags."""
 
     def write(self, addr: int, raw: int) -> None:
         raise NotImplementedError
@@ -143,6 +144,10 @@ class PayloadTwin:
         """A burst ended (``last``): a block that works on bursts does so now."""
 
     def sweep(self):
+        raise NotImplementedError
+
+    def clamp_flags(self) -> int:
+        """The sticky clamp flags so far, one bit per :attr:`PayloadInfo.clamp_kinds`."""
         raise NotImplementedError
 
 

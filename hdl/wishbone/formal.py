@@ -15,7 +15,7 @@ from __future__ import annotations
 from amaranth import Module, Mux, Signal
 from amaranth.asserts import AnySeq
 
-from ..lib.formal import assert_all, assume_all
+from ..lib.formal import ClockedHarness, assert_all, assume_all
 from ..lib.regmap import MAP_BYTES
 from .bus import WishboneRegisters
 
@@ -27,12 +27,7 @@ class _WritesUnanswered(WishboneRegisters):
         return req & ~self.we
 
 
-def _harness_base():
-    from ..axi.formal import _Harness
-    return _Harness
-
-
-class WishboneProof(_harness_base()):
+class WishboneProof(ClockedHarness):
     """The Wishbone B4 pipelined slave (see the module docstring)."""
 
     def elaborate(self, platform):
