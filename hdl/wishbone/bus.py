@@ -51,10 +51,7 @@ class WishboneRegisters(wiring.Component):
         due = Signal(name="due")              # a request was taken in the last cycle
         bad = Signal(name="refused")
         m.d.sync += [due.eq(self.answered(req)), bad.eq(r.err)]
-        # the write enable read through the register port: Amaranth 0.5 emits a component's
-        # input that drives its output unchanged as one port, leaving the input's own name
-        # undriven in the module's Verilog (Icarus reads it as X)
-        with m.If(req & ~r.w_en):
+        with m.If(req & ~self.we):
             m.d.sync += self.dat_r.eq(r.r_data)
         m.d.comb += [self.ack.eq(due & ~bad & self.cyc), self.err.eq(due & bad & self.cyc)]
         return m

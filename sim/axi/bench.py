@@ -77,6 +77,9 @@ async def face(dut):
     reg = cfg["registers"]
     cocotb.start_soon(Clock(dut.clk, CLOCK_NS, unit="ns").start())
     dut.rst.value = 1
+    # the bus models set their outputs with immediate writes: made at time 0, Icarus 11 never
+    # propagates those nets into the design (the Wishbone bridge saw its request as Z)
+    await RisingEdge(dut.clk)
     bus = _Lite(dut) if cfg["face"] == "axi" else _Wishbone(dut)
     source = AxiStreamSource(AxiStreamBus.from_prefix(dut, "s_axis"), dut.clk, dut.rst,
                              byte_lanes=1)

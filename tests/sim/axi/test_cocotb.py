@@ -6,8 +6,8 @@ block's payload twin (:func:`cuneate.sim.axi.scoreboard.check_face`): every swee
 and its TLAST, the empty sweeps' markers, the constants, every counter, the refusals answered
 with an error, the clamp flags as the twin's (a clamp provoked) and cleared over the bus.
 
-Default lane: the Izhikevich array behind the AXI face on both simulators, the LIF core behind
-the Wishbone face on Verilator (see :func:`test_wishbone_face`). Long lane: the LIF core and the network behind the AXI face, and the
+Default lane: the Izhikevich array behind the AXI face, the LIF core behind the Wishbone face,
+both on both simulators. Long lane: the LIF core and the network behind the AXI face, and the
 channel fan-out in front of the array, the LIF core and the network.
 """
 
@@ -108,11 +108,8 @@ def test_axi_face(simulator, build_root):
 
 
 @pytest.mark.cocotb
-@pytest.mark.parametrize("simulator", ["verilator"])
+@pytest.mark.parametrize("simulator", SIMULATORS)
 def test_wishbone_face(simulator, build_root):
-    """Verilator only: on Icarus 11 the values cocotbext-wishbone's master drives reach the
-    bridge's ports (they read back) but not the logic behind them (its request stays Z), while
-    the same netlist driven from a Verilog bench answers; not yet explained."""
     _check(simulator, "lif", "wishbone", build_root)
 
 
