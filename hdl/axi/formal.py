@@ -34,8 +34,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from amaranth import Cat, Const, Module, Mux, Signal
-from amaranth.asserts import AnySeq
+from amaranth import Cat, Const, Mux, Signal
 from amaranth.hdl import Fragment
 
 from ..flow.sby import SOLVER
@@ -68,15 +67,11 @@ class SpikesProof(ClockedHarness):
     """The AXI4-Stream master (see the module docstring)."""
 
     def elaborate(self, platform):
-        m = Module()
-        m.domains.sync = self.cd
         dut = self.dut
         frag = Fragment.get(dut, platform)
-        m.submodules.dut = frag
+        m = self.module(frag)
         sp, out = dut.spikes, dut.m_axis
-        m.d.comb += [sp.valid.eq(AnySeq(1)), sp.payload.eq(AnySeq(len(sp.payload.as_value()))),
-                     dut.sweep_done.eq(AnySeq(1)), dut.tick.eq(AnySeq(1)),
-                     out.ready.eq(AnySeq(1))]
+        self.free(m, sp.valid, sp.payload.as_value(), dut.sweep_done, dut.tick, out.ready)
         assume_all(m, [~dut.tick | ~dut.sweep_open])
         F = 8 * stream_format(dut.info)["spike_field_bytes"]
         take = sp.valid & sp.ready
@@ -122,7 +117,7 @@ class SpikesProof(ClockedHarness):
         t_index = Signal(n_index, name="ref_index")
         t_sweep = Signal(len(sp.payload.sweep), name="ref_sweep")
         pick = Signal(name="ref_pick")
-        m.d.comb += pick.eq(AnySeq(1))
+        self.free(m, pick)
         spike_beat = shake & ~beat.tuser
         held = signal_named(frag, "held_valid")
         with m.If(take & pick & ~tracking):
@@ -179,15 +174,11 @@ class WritesProof(ClockedHarness):
     """The AXI4-Stream slave (see the module docstring)."""
 
     def elaborate(self, platform):
-        m = Module()
-        m.domains.sync = self.cd
         dut = self.dut
         info = dut.info
-        frag = Fragment.get(dut, platform)
-        m.submodules.dut = frag
+        m = self.module(Fragment.get(dut, platform))
         s, w = dut.s_axis, dut.write
-        m.d.comb += [s.valid.eq(AnySeq(1)), s.payload.eq(AnySeq(len(s.payload.as_value()))),
-                     w.ready.eq(AnySeq(1)), dut.busy.eq(AnySeq(1)), dut.pending.eq(AnySeq(1))]
+        self.free(m, s.valid, s.payload.as_value(), w.ready, dut.busy, dut.pending)
         F = 8 * stream_format(info)["write_field_bytes"]
         fmt = info.value_format
         take = s.valid & s.ready
@@ -202,7 +193,7 @@ class WritesProof(ClockedHarness):
             Signal(fmt.width, name="ref_value")
         t_last = Signal(name="ref_last")
         pick = Signal(name="ref_pick")
-        m.d.comb += pick.eq(AnySeq(1))
+        self.free(m, pick)
         shake = w.valid & w.ready
         with m.If(take & ok & pick & ~tracking):
             m.d.sync += [tracking.eq(1), t_addr.eq(addr), t_value.eq(value),
@@ -238,14 +229,10 @@ class LiteProof(ClockedHarness):
     """The AXI4-Lite slave (see the module docstring)."""
 
     def elaborate(self, platform):
-        m = Module()
-        m.domains.sync = self.cd
-        d = self.dut
-        m.submodules.dut = d
-        r = d.regs
-        for sig in (d.awaddr, d.awvalid, d.wdata, d.wstrb, d.wvalid, d.bready, d.araddr,
-                    d.arvalid, d.rready, r.r_data, r.err):
-            m.d.comb += sig.eq(AnySeq(len(sig)))
+        m = self.module()
+        d, r = self.dut, self.dut.regs
+        self.free(m, d.awaddr, d.awvalid, d.wdata, d.wstrb, d.wvalid, d.bready, d.araddr,
+                  d.arvalid, d.rready, r.r_data, r.err)
         # the master holds a valid request, unchanged, until it is taken
         held = []
         for valid, ready, payload, name in ((d.awvalid, d.awready, d.awaddr, "aw"),

@@ -32,7 +32,7 @@ import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from amaranth import ClockDomain, Elaboratable, Mux, Signal, Value
+from amaranth import ClockDomain, Elaboratable, Module, Mux, Signal, Value
 from amaranth.hdl import Assert, Assume, Fragment
 from amaranth.hdl._ast import AnySeq, Assign, Switch
 
@@ -242,6 +242,19 @@ class ClockedHarness(Elaboratable):
         self.dut = dut
         self.cd = ClockDomain("sync", reset_less=True)
         self.ports = [self.cd.clk]
+
+    def module(self, dut=None):
+        """A module on :attr:`cd` holding ``dut`` (default the harness's) as ``dut``."""
+        m = Module()
+        m.domains.sync = self.cd
+        m.submodules.dut = self.dut if dut is None else dut
+        return m
+
+    @staticmethod
+    def free(m, *signals) -> None:
+        """Each of ``signals`` any value in any cycle (``AnySeq``)."""
+        for sig in signals:
+            m.d.comb += sig.eq(AnySeq(len(sig)))
 
     def reg(self, m, value, name: str, init: int = 0) -> Signal:
         """``value`` one cycle late."""

@@ -12,8 +12,7 @@ answered."""
 
 from __future__ import annotations
 
-from amaranth import Module, Mux, Signal
-from amaranth.asserts import AnySeq
+from amaranth import Mux, Signal
 
 from ..lib.formal import ClockedHarness, assert_all, assume_all
 from ..lib.regmap import MAP_BYTES
@@ -31,13 +30,9 @@ class WishboneProof(ClockedHarness):
     """The Wishbone B4 pipelined slave (see the module docstring)."""
 
     def elaborate(self, platform):
-        m = Module()
-        m.domains.sync = self.cd
-        d = self.dut
-        m.submodules.dut = d
-        r = d.regs
-        for sig in (d.cyc, d.stb, d.we, d.adr, d.dat_w, d.sel, r.r_data, r.err):
-            m.d.comb += sig.eq(AnySeq(len(sig)))
+        m = self.module()
+        d, r = self.dut, self.dut.regs
+        self.free(m, d.cyc, d.stb, d.we, d.adr, d.dat_w, d.sel, r.r_data, r.err)
         assume_all(m, [~d.stb | d.cyc])
         req = d.cyc & d.stb
         top = MAP_BYTES // 4

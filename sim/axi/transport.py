@@ -17,7 +17,6 @@ counter that disagrees with what the host sent and received raises
 
 from __future__ import annotations
 
-import json
 import struct
 import subprocess
 import time
@@ -29,6 +28,7 @@ from ...hdl.axi import AxiTop, face_cycles
 from ...hdl.flow.verilog import verilog_text
 from ...hdl.lib.payload import payload_spec
 from ...hdl.lib.regmap import COUNTERS, MAGIC, register, stream_format
+from ..engines.verilator_fast import compile_harness, quit_harness
 from ..host.transport import SpikeBatch, Transport, TransportError, sweep_count
 
 __all__ = ["AxiTransport", "axi_spec", "AXI_HARNESS"]
@@ -54,7 +54,6 @@ class _Harness:
     """The compiled AXI top in its process (the protocol of ``axi_harness.cpp``)."""
 
     def __init__(self, top: AxiTop, build_root: Path | None):
-        from ..engines.verilator_fast import compile_harness
         field = 8 * stream_format(top.info)["write_field_bytes"]
         t0 = time.perf_counter()
         self.exe = compile_harness(verilog_text(top, TOP), TOP, AXI_HARNESS,
@@ -109,20 +108,7 @@ class _Harness:
         return beats, why == 0
 
     def close(self) -> None:
-        p = self.proc
-        try:
-            p.stdin.write(b"Q")
-            p.stdin.flush()
-            line = p.stdout.readline()
-            self.totals = json.loads(line) if line.strip() else {}
-        except (OSError, ValueError):
-            self.totals = {}
-        finally:
-            try:
-                p.stdin.close()
-            except OSError:
-                pass
-            p.wait()
+        self.totals = quit_harness(self.proc)
 
 
 class AxiTransport(Transport):
