@@ -147,7 +147,6 @@ def cmd_prove_banked(args) -> int:
     write port as the host's (unregistered) and as the write-back's or the deepest core's
     (registered); by default the default core's state memory (2500 words in five banks of
     512)."""
-    import json
     import tempfile
     from ...hdl.izhikevich.formal import FormalError
     from ...hdl.lib.banked_proof import MUTANTS as BANK_MUTANTS
@@ -172,18 +171,26 @@ def cmd_prove_banked(args) -> int:
                                           "banks": -(-depth // bank),
                                           "write_register": registered,
                                           "mutant": args.mutant})
+    return _report(args, records, lambda rec: (
+        f"{rec['seconds']:.1f} s, {rec['words']} words in {rec['banks']} banks of "
+        f"{rec['bank_depth']}, write {'registered' if rec['write_register'] else 'direct'}"),
+        lambda rec: f" in step {rec['step']} ({rec['phase']})")
+
+
+def _report(args, records: list, detail, where) -> int:
+    """Print proof ``records`` (JSON with ``--json``, else one line each: ``detail(rec)`` after
+    the mode and depth, a failure's properties after ``where(rec)``); 0 when every one
+    passed."""
+    import json
     if args.json:
         print(json.dumps(records))
     else:
         for rec in records:
             what = "k-induction" if rec["mode"] == "prove" else "bounded from the start"
             print(f"{rec['property']}: {rec['status'].upper()} ({what}, depth {rec['depth']}, "
-                  f"{rec['seconds']:.1f} s, {rec['words']} words in {rec['banks']} banks of "
-                  f"{rec['bank_depth']}, write {'registered' if rec['write_register'] else 'direct'}"
-                  + (f", mutant {args.mutant}" if args.mutant else "") + ")")
+                  f"{detail(rec)}" + (f", mutant {args.mutant}" if args.mutant else "") + ")")
             if rec["failed"]:
-                print(f"  failed in step {rec['step']} ({rec['phase']}): "
-                      f"{', '.join(rec['failed'])}")
+                print(f"  failed{where(rec)}: {', '.join(rec['failed'])}")
     return 0 if all(rec["status"] == "pass" for rec in records) else 1
 
 
@@ -236,7 +243,6 @@ def cmd_prove_faces(args) -> int:
     """``cuneate prove faces`` (or one face target): each protocol proof, bounded (``--depth``,
     default the target's k) or by k-induction (``--unbounded``); one line per target, exit 0
     when every one passes. A ``--mutant`` selects the target it belongs to."""
-    import json
     import tempfile
     from ...hdl.axi.formal import MUTANTS as AXI_MUTANTS
     from ...hdl.axi.formal import prove_face
@@ -260,17 +266,8 @@ def cmd_prove_faces(args) -> int:
             except FormalError as exc:
                 raise CliError(f"cuneate prove {t}: {exc}") from None
             records.append(r.to_dict() | {"target": t, "mutant": args.mutant})
-    if args.json:
-        print(json.dumps(records))
-    else:
-        for rec in records:
-            what = "k-induction" if rec["mode"] == "prove" else "bounded from the start"
-            print(f"{rec['property']}: {rec['status'].upper()} ({what}, depth {rec['depth']}, "
-                  f"{rec['solver']}, {rec['seconds']:.1f} s"
-                  + (f", mutant {args.mutant}" if args.mutant else "") + ")")
-            if rec["failed"]:
-                print(f"  failed: {', '.join(rec['failed'])}")
-    return 0 if all(rec["status"] == "pass" for rec in records) else 1
+    return _report(args, records, lambda rec: f"{rec['solver']}, {rec['seconds']:.1f} s",
+                   lambda rec: "")
 
 
 def cmd_prove(args) -> int:
