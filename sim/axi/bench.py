@@ -27,6 +27,8 @@ from cocotbext.wishbone.driver import WBOp, WishboneMaster
 from cuneate.sim.engines.bench import bench_config, bench_report
 
 CLOCK_NS = 10
+#: cycles a Wishbone request may wait for its answer
+ACK_PATIENCE = 64
 
 
 def _pauses(rng: random.Random, p: float):
@@ -59,16 +61,17 @@ class _Wishbone:
         self.bus = WishboneMaster(dut, "wb", dut.clk, width=32, timeout=64,
                                   signals_dict=names)
 
-    async def _op(self, op):
-        res = await self.bus.send_cycle([WBOp(*op)])
+    async def _op(self, addr: int, data=None):
+        # an answer missing for ACK_PATIENCE cycles fails the test (never a hang)
+        res = await self.bus.send_cycle([WBOp(addr >> 2, data, acktimeout=ACK_PATIENCE)])
         r = res[0]                       # ack: 1 ACK, 2 ERR, 3 RTY
         return (0 if r.datrd is None else int(r.datrd)), (0 if r.ack == 1 else 2)
 
     async def write(self, addr: int, value: int) -> int:
-        return (await self._op((addr >> 2, int(value))))[1]
+        return (await self._op(addr, int(value)))[1]
 
     async def read(self, addr: int) -> tuple[int, int]:
-        return await self._op((addr >> 2,))
+        return await self._op(addr)
 
 
 @cocotb.test()
