@@ -65,12 +65,13 @@ class FanoutSpec(PayloadSpec):
         return FanoutPayload(self)
 
     def twin(self) -> "_FanoutTwin":
-        return _FanoutTwin(FanoutTwin(self.fanout), self.inner.twin())
+        return _FanoutTwin(FanoutTwin(self.fanout), self.inner.twin(),
+                           len(self.inner.info.clamp_kinds))
 
 
 class _FanoutTwin(PayloadTwin):
-    def __init__(self, fanout: FanoutTwin, inner: PayloadTwin):
-        self.fanout, self.inner = fanout, inner
+    def __init__(self, fanout: FanoutTwin, inner: PayloadTwin, n_inner: int):
+        self.fanout, self.inner, self.n_inner = fanout, inner, n_inner
 
     def write(self, addr: int, raw: int) -> None:
         self.fanout.write(addr, raw)
@@ -81,6 +82,10 @@ class _FanoutTwin(PayloadTwin):
 
     def sweep(self):
         return self.inner.sweep()
+
+    def clamp_flags(self) -> int:
+        """The inner block's flags, the fan-out's above them (the spec's clamp kinds)."""
+        return self.inner.clamp_flags() | int(self.fanout.clamp_sticky) << self.n_inner
 
 
 class FanoutPayload(wiring.Component):

@@ -66,3 +66,6 @@ class _ArrayTwin(PayloadTwin):
 
     def sweep(self) -> np.ndarray:
         return np.flatnonzero(self.model.sweep())
+
+    def clamp_flags(self) -> int:
+        return int(np.bitwise_or.reduce([t.clamp_sticky for t in self.model.twins]))

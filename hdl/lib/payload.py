@@ -15,7 +15,8 @@ A *payload* is a time-multiplexed block seen from outside, as a :class:`wiring.S
 ``tick`` (in), ``busy`` (out), ``sweep_done`` (out)
     A tick starts a sweep; the face holds ticks, and writes meant for the next sweep, while
     ``busy``; ``sweep_done`` pulses once every spike of a sweep has been handed to ``spikes``
-    (a face closes a batch or asserts TLAST on it).
+    (a face closes a batch or asserts TLAST on it); each is offered on ``spikes`` at the latest
+    :data:`SPIKES_SETTLE` cycles after it, or stays offered until it is taken.
 ``clamp_flags`` (out), ``clamp_clear`` (in), ``overflow`` (out), ``overrun`` (out)
     Sticky flags: the clamps that acted, by kind (:attr:`PayloadInfo.clamp_kinds`); a spike
     dropped on a full FIFO; a tick that came while a sweep was still issued.
@@ -37,7 +38,12 @@ from amaranth.lib.wiring import In, Out
 from .config import ConfigError
 
 __all__ = ["PayloadInfo", "PayloadSpec", "PayloadTwin", "payload_signature", "write_layout",
-           "spike_layout", "implements", "payload_spec", "SPECS"]
+           "spike_layout", "implements", "payload_spec", "SPECS", "SPIKES_SETTLE"]
+
+#: cycles after ``sweep_done`` by which every spike of the sweep is offered on ``spikes`` (a
+#: core's spike FIFO, a block RAM, delivers a spike pushed with the sweep's last update a few
+#: cycles later)
+SPIKES_SETTLE = 7
 
 
 @dataclass(frozen=True)
@@ -128,7 +134,8 @@ def payload_signature(info: PayloadInfo) -> wiring.Signature:
 class PayloadTwin:
     """The bit-exact model of a payload as a face drives it: :meth:`write` a raw value (in
     effect from the next sweep), :meth:`end_burst` after a burst's last write, :meth:`sweep`
-    runs one sweep and returns the ids that fired, in the order the block sends them."""
+    runs one sweep and returns the ids that fired, in the order the block sends them;
+    :meth:`clamp_flags` the block's sticky clamp flags."""
 
     def write(self, addr: int, raw: int) -> None:
         raise NotImplementedError
@@ -137,6 +144,10 @@ class PayloadTwin:
         """A burst ended (``last``): a block that works on bursts does so now."""
 
     def sweep(self):
+        raise NotImplementedError
+
+    def clamp_flags(self) -> int:
+        """The sticky clamp flags so far, one bit per :attr:`PayloadInfo.clamp_kinds`."""
         raise NotImplementedError
 
 

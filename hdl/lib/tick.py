@@ -38,26 +38,38 @@ class TickGenerator(wiring.Component):
     into it) and goes, as ``tick`` for one cycle, in the first cycle without: its jitter is
     the hold, the divider keeps its pace (no drift). A tick due while the previous one still
     waits is lost (``overrun`` pulses). ``sweeps_started`` counts the ticks given; ``running``
-    is high while ticks are due (``free``, or ``steps`` left)."""
+    is high while ticks are due (``free``, or ``steps`` left).
 
-    def __init__(self, cycles_per_tick: int):
+    With ``settable`` the divider is the input ``divider`` (cycles from one tick to the next,
+    >= 1; a smaller value takes effect at once) instead of the constant."""
+
+    def __init__(self, cycles_per_tick: int, settable: bool = False):
         self.cycles_per_tick = int(cycles_per_tick)
-        super().__init__({
+        self.settable = bool(settable)
+        members = {
             "hold": In(1), "start": In(1), "stop": In(1), "step": In(1), "step_count": In(32),
             "tick": Out(1), "running": Out(1), "free": Out(1), "steps": Out(32),
             "pending": Out(1), "sweeps_started": Out(32), "overrun": Out(1),
-        })
+        }
+        if self.settable:
+            members["divider"] = In(32, init=self.cycles_per_tick)
+        super().__init__(members)
 
     def elaborate(self, platform):
         m = Module()
         n = self.cycles_per_tick
-        div = Signal(range(n))
         active = self.free | (self.steps != 0)
         m.d.comb += [self.running.eq(active),
                      self.tick.eq(self.pending & ~self.hold)]
-        fire = active & (div == n - 1)
+        if self.settable:
+            div = Signal(32)
+            wrap = div + 1 >= self.divider
+        else:
+            div = Signal(range(n))
+            wrap = div == n - 1
+        fire = active & wrap
         with m.If(active):
-            m.d.sync += div.eq(Mux(div == n - 1, 0, div + 1))
+            m.d.sync += div.eq(Mux(wrap, 0, div + 1))
         with m.If(self.tick):
             m.d.sync += self.sweeps_started.eq(self.sweeps_started + 1)
             with m.If(~self.free & (self.steps != 0)):

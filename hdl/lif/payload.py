@@ -48,3 +48,6 @@ class _LifTwin(PayloadTwin):
 
     def sweep(self) -> np.ndarray:
         return np.flatnonzero(self.model.sweep())
+
+    def clamp_flags(self) -> int:
+        return int(self.model.clamp_sticky)

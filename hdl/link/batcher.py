@@ -21,13 +21,13 @@ from amaranth.lib import data, stream, wiring
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
-from ..lib.payload import spike_layout
+from ..lib.payload import SPIKES_SETTLE, spike_layout
 from .config import LinkConfig
 
 __all__ = ["SpikeBatcher", "batch_layout"]
 
 #: cycles a batch waits after its last sweep's ``sweep_done`` for spikes still on their way
-DRAIN_CYCLES = 7
+DRAIN_CYCLES = SPIKES_SETTLE
 
 
 def batch_layout(lcfg: LinkConfig) -> data.StructLayout:

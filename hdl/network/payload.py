@@ -5,14 +5,17 @@ reports it at."""
 
 from __future__ import annotations
 
+import numpy as np
 from amaranth import Module, Mux
 from amaranth.lib import wiring
 
 from ..izhikevich.config import CLAMP_KINDS
 from ..lib.config import ConfigError
-from ..lib.payload import PayloadInfo, PayloadSpec, implements, payload_signature
+from ..lib.payload import (PayloadInfo, PayloadSpec, PayloadTwin, implements,
+                           payload_signature)
 from .config import NetworkConfig
 from .core import REPORT_SETTLE, AfferentCuneateNetwork
+from .twin import NetworkTwin
 
 __all__ = ["NetworkSpec", "NetworkPayload"]
 
@@ -52,9 +55,27 @@ class NetworkSpec(PayloadSpec):
                               "tick_source='external' (retimed() gives it)")
         return NetworkPayload(self)
 
-    def twin(self):
-        raise ConfigError("the network's payload has no link model (its board runs on the "
-                          "board engine)")
+    def twin(self) -> "_NetworkTwin":
+        return _NetworkTwin(NetworkTwin(self.config))
+
+
+class _NetworkTwin(PayloadTwin):
+    """The network's twin as a payload: a tick's afferent spikes as their ids, its cuneate
+    spikes after them (``n_afferents + j``)."""
+
+    def __init__(self, twin: NetworkTwin):
+        self.model = twin
+
+    def write(self, addr: int, raw: int) -> None:
+        self.model.core.I[int(addr)] = raw
+
+    def sweep(self) -> np.ndarray:
+        aff, cun = self.model.tick()
+        return np.concatenate([np.flatnonzero(aff),
+                               self.model.cfg.n_afferents + np.flatnonzero(cun)])
+
+    def clamp_flags(self) -> int:
+        return int(self.model.core.clamp_sticky | self.model.det.clamp_sticky)
 
 
 class NetworkPayload(wiring.Component):

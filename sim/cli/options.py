@@ -450,6 +450,44 @@ def add_generate_options(g) -> None:
     g.add_argument("--out", required=True, help="output directory")
 
 
+def add_face_option(g) -> None:
+    """``--face``: the block behind one of its faces (:data:`cuneate.hdl.axi.faces.FACES`)."""
+    from ...hdl.axi.faces import FACES
+    g.add_argument("--face", choices=("none",) + tuple(FACES), default="none",
+                   help="none (default): the block alone; " + "; ".join(
+                       f"{k}: {v}" for k, v in FACES.items()) + " (standard port names, the "
+                   "register map in the header and in NAME.regmap.json/.md)")
+
+
+def generate_faced(args, config, block: str, **spec_options) -> int:
+    """``cuneate generate BLOCK --face F``: the block of ``config`` behind face ``F`` in
+    ``--out`` (module ``<name>_<face>``, ``<name>`` the block's ``--name`` or ``block``);
+    prints the files and the face's figures, one line each."""
+    from ...hdl.axi.faces import write_face
+    from ...hdl.lib.config import ConfigError
+    name = f"{getattr(args, 'name', None) or block}_{args.face}"
+    try:
+        res = write_face(output_dir(args.out), config, args.face, name, **spec_options)
+    except ConfigError as exc:
+        raise CliError(f"cuneate generate {block} --face {args.face}: {exc}") from None
+    for f in res["files"]:
+        print(f)
+    d = res["description"]
+    line = (f"{d['payload']['block']} behind the {args.face} face: {d['face_summary']}; "
+            f"{d['payload']['n_written']} values written, {d['payload']['n_spike_ids']} "
+            f"spike ids")
+    if "cycles_per_sweep" in d:
+        line += (f"; a sweep takes {d['cycles_per_sweep']} cycles behind it, the divider "
+                 f"{d['cycles_per_tick']}" + ("" if d["free_running_fits"] else
+                                               f" (free running at {d['update_hz']:g} Hz "
+                                               f"needs a clock of "
+                                               f"{d['cycles_per_sweep'] * d['update_hz'] / 1e6:g}"
+                                               f" MHz, or TICK_DIVIDER >= "
+                                               f"{d['cycles_per_sweep']})"))
+    print(line)
+    return 0
+
+
 def run_ticks(command: str, block: str, args, dt_ms: float, cycles: float, updates: float,
               unit: str = "tick", bytes_per_tick: float = 0.0) -> int:
     """The ticks of ``args.duration_ms`` at ``dt_ms``, refused in one line when shorter than
@@ -516,12 +554,13 @@ def add_rate_options(g, clock_default: float | None, clock_help: str = "") -> No
 
 def add_block_commands(groups, block: str, help: str, duration_ms: float, options=None,
                        simulate=None, generate=None, module: str | None = None,
-                       resources_s: int | None = None):
+                       resources_s: int | None = None, faces: bool = False):
     """``cuneate simulate BLOCK`` (``--engine`` from the engine registry, ``--duration-ms``
     and the run options) and ``cuneate generate BLOCK`` (the generate options, ``--name``
     when the block names its ``module``, ``--resources`` when it offers synthesis figures);
     ``options(parser)`` adds the block's own options to both, ``simulate``/``generate`` are
-    the commands. Returns both parsers for more options."""
+    the commands; ``faces``: ``generate`` takes ``--face`` (a block with a payload). Returns
+    both parsers for more options."""
     s = groups.simulate.add_parser(block, help=help)
     s.add_argument("--engine", choices=engine_choices(block), metavar="ENGINE", default="golden",
                    help="%(choices)s (default golden)")
@@ -530,6 +569,8 @@ def add_block_commands(groups, block: str, help: str, duration_ms: float, option
     add_run_options(s)
     g = groups.generate.add_parser(block, help=help)
     add_generate_options(g)
+    if faces:
+        add_face_option(g)
     if module:
         g.add_argument("--name", type=verilog_name, default=module,
                        help=f"Verilog module name (default {module})")

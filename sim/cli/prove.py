@@ -6,7 +6,9 @@ against its one-tick reference (:mod:`cuneate.hdl.coincidence.formal_core`); ``c
 banked``: a memory in banks of block RAM against its per-cycle contract
 (:mod:`cuneate.hdl.lib.banked_proof`); k-induction with ``--unbounded``; ``cuneate prove
 fanout``: the channel fan-out's one-entry datapath against its specification for every gain and
-sample (:mod:`cuneate.hdl.fanout.formal`)."""
+sample (:mod:`cuneate.hdl.fanout.formal`); ``cuneate prove faces`` (or one of its targets
+``axi-stream-out``, ``axi-stream-in``, ``axi-lite``, ``wishbone``): the bus faces' protocols
+(:mod:`cuneate.hdl.axi.formal`, :mod:`cuneate.hdl.wishbone.formal`)."""
 
 from __future__ import annotations
 
@@ -15,6 +17,8 @@ import json
 import tempfile
 from pathlib import Path
 
+from ...hdl.axi.formal import MUTANTS as AXI_MUTANTS
+from ...hdl.axi.formal import prove_face
 from ...hdl.coincidence import CoincidenceConfig
 from ...hdl.coincidence.formal_core import MUTANTS as DETECTOR_MUTANTS
 from ...hdl.coincidence.formal_core import (coincidence_proof_config, prove_coincidence,
@@ -31,11 +35,15 @@ from ...hdl.lif import LifConfig
 from ...hdl.link.config import link_config
 from ...hdl.link.formal_core import MUTANTS as LINK_MUTANTS
 from ...hdl.link.formal_core import decoder_proof_config, prove_decoder
+from ...hdl.wishbone.formal import PROOFS as WB_PROOFS
 from .. import progress
 from .options import (CliError, CommandGroups, add_quiet_option, positive_float, positive_int,
                       start_progress)
 
 __all__ = ["register", "cmd_prove"]
+
+#: the bus faces' mutants (cuneate prove faces)
+FACE_MUTANTS = tuple(AXI_MUTANTS) + tuple(v[3] for v in WB_PROOFS.values())
 
 
 def _proof_target(args):
@@ -49,6 +57,9 @@ def _proof_target(args):
         "coincidence": (coincidence_proof_config, CoincidenceConfig, prove_coincidence),
         "link": (decoder_proof_config, link_config, prove_decoder),
     }[args.target]
+    if args.mutant in FACE_MUTANTS or args.mutant in {v[3] for v in WB_PROOFS.values()}:
+        raise CliError(f"cuneate prove {args.target}: mutant {args.mutant} is a bus face's "
+                       f"(cuneate prove faces)")
     if args.mutant in BANK_MUTANTS:
         raise CliError(f"cuneate prove {args.target}: mutant {args.mutant} is the banked "
                        f"memory's (cuneate prove banked)")
@@ -166,18 +177,26 @@ def cmd_prove_banked(args) -> int:
                                           "banks": -(-depth // bank),
                                           "write_register": registered,
                                           "mutant": args.mutant})
+    return _report(args, records, lambda rec: (
+        f"{rec['seconds']:.1f} s, {rec['words']} words in {rec['banks']} banks of "
+        f"{rec['bank_depth']}, write {'registered' if rec['write_register'] else 'direct'}"),
+        lambda rec: f" in step {rec['step']} ({rec['phase']})")
+
+
+def _report(args, records: list, detail, where) -> int:
+    """Print proof ``records`` (JSON with ``--json``, else one line each: ``detail(rec)`` after
+    the mode and depth, a failure's properties after ``where(rec)``); 0 when every one
+    passed."""
+    import json
     if args.json:
         print(json.dumps(records))
     else:
         for rec in records:
             what = "k-induction" if rec["mode"] == "prove" else "bounded from the start"
             print(f"{rec['property']}: {rec['status'].upper()} ({what}, depth {rec['depth']}, "
-                  f"{rec['seconds']:.1f} s, {rec['words']} words in {rec['banks']} banks of "
-                  f"{rec['bank_depth']}, write {'registered' if rec['write_register'] else 'direct'}"
-                  + (f", mutant {args.mutant}" if args.mutant else "") + ")")
+                  f"{detail(rec)}" + (f", mutant {args.mutant}" if args.mutant else "") + ")")
             if rec["failed"]:
-                print(f"  failed in step {rec['step']} ({rec['phase']}): "
-                      f"{', '.join(rec['failed'])}")
+                print(f"  failed{where(rec)}: {', '.join(rec['failed'])}")
     return 0 if all(rec["status"] == "pass" for rec in records) else 1
 
 
@@ -218,6 +237,36 @@ def cmd_prove_fanout(args) -> int:
     return 0 if all(rec["status"] == "pass" for rec in records) else 1
 
 
+#: the bus faces' protocol targets (``faces``: every one)
+FACE_TARGETS = ("axi-stream-out", "axi-stream-in", "axi-lite", "wishbone")
+
+
+def cmd_prove_faces(args) -> int:
+    """``cuneate prove faces`` (or one face target): each protocol proof, bounded (``--depth``,
+    default the target's k) or by k-induction (``--unbounded``); one line per target, exit 0
+    when every one passes. A ``--mutant`` selects the target it belongs to."""
+    owners = AXI_MUTANTS | {v[3]: k for k, v in WB_PROOFS.items()}
+    targets = FACE_TARGETS if args.target == "faces" else (args.target,)
+    if args.mutant:
+        if args.mutant not in owners or owners[args.mutant] not in targets:
+            raise CliError(f"cuneate prove {args.target}: mutant {args.mutant} is not its "
+                           f"(its mutants: {', '.join(m for m, t in owners.items() if t in targets)})")
+        targets = (owners[args.mutant],)
+    records = []
+    with tempfile.TemporaryDirectory(prefix="cuneate-prove-") as d:
+        for t in targets:
+            try:
+                r = prove_face(t, Path(args.work_dir or d) / t,
+                               mode="prove" if args.unbounded else "bmc", depth=args.depth,
+                               mutant=args.mutant, timeout_s=args.timeout_s,
+                               solver=args.solver)
+            except FormalError as exc:
+                raise CliError(f"cuneate prove {t}: {exc}") from None
+            records.append(r.to_dict() | {"target": t, "mutant": args.mutant})
+    return _report(args, records, lambda rec: f"{rec['solver']}, {rec['seconds']:.1f} s",
+                   lambda rec: "")
+
+
 def cmd_prove(args) -> int:
     """Every ``cuneate prove``: says while it runs what it checks, the phase and step each
     SymbiYosys run has reached and the time (:mod:`cuneate.sim.progress`; ``-q`` silences)."""
@@ -240,6 +289,8 @@ def cmd_prove(args) -> int:
 
 
 def _cmd_prove(args) -> int:
+    if args.target == "faces" or args.target in FACE_TARGETS:
+        return cmd_prove_faces(args)
     if args.target in ("core", "lif", "coincidence", "link"):
         return cmd_prove_core(args)
     if args.target == "banked":
@@ -286,14 +337,17 @@ def register(groups: CommandGroups) -> None:
     f = groups.root.add_parser("prove", help="SymbiYosys checks of the one-update datapath "
                                "and of the pipelined core")
     f.add_argument("target", nargs="?",
-                   choices=("datapath", "core", "lif", "coincidence", "link", "banked", "fanout"),
+                   choices=("datapath", "core", "lif", "coincidence", "link", "banked", "fanout",
+                            "faces") + FACE_TARGETS,
                    default="datapath",
                    help="datapath (default): one update's range properties; core, lif: the "
                    "pipelined Izhikevich or LIF core equals its one-step datapath; "
                    "coincidence: the detector equals its one-tick reference; link: the host "
                    "link's frame decoder meets the wire format; banked: a memory in banks of "
                    "block RAM meets its per-cycle contract; fanout: the channel fan-out's "
-                   "one-entry datapath meets its specification for every gain and sample")
+                   "one-entry datapath meets its specification for every gain and sample; "
+                   "faces (or axi-stream-out, axi-stream-in, axi-lite, wishbone): the bus "
+                   "faces' protocols")
     f.add_argument("--unbounded", action="store_true",
                    help="core: k-induction (every input sequence of every length)")
     f.add_argument("--depth", type=positive_int, default=None,
@@ -318,7 +372,8 @@ def register(groups: CommandGroups) -> None:
                    help="coincidence: history depth in ticks (default 3)")
     f.add_argument("--mutant",
                    choices=tuple(dict.fromkeys(MUTANTS + DETECTOR_MUTANTS + LINK_MUTANTS
-                                               + BANK_MUTANTS + tuple(FANOUT_MUTANTS))),
+                                               + BANK_MUTANTS + tuple(FANOUT_MUTANTS)
+                                               + FACE_MUTANTS)),
                    default=None, help="core, lif, coincidence, link: build this fault into "
                    "the block (the proof must fail)")
     f.add_argument("--solver", choices=SOLVERS, default=SOLVER)

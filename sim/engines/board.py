@@ -21,30 +21,45 @@ from ..network.engines import NetworkEngine
 from .engine import BlockEngine
 from .registry import implements
 
-__all__ = ["BoardEngine", "BoardIzhikevich", "BoardLif", "BoardNetwork"]
+__all__ = ["FaceEngine", "BoardEngine", "BoardIzhikevich", "BoardLif", "BoardNetwork"]
 
 
-class BoardEngine(BlockEngine):
-    """What the ``board`` engine's blocks share: the transport (``options``: more
-    :class:`~cuneate.sim.link.engines.BoardTransport` keywords: ``port``, ``ahead``,
-    ``corrupt``, ...), a run through it, the line's figures."""
+class FaceEngine(BlockEngine):
+    """What an engine reaching its blocks through a face shares: the transport
+    (:meth:`transport_class`, opened by the caller; ``options``: more keywords of it), the
+    device's own checks, the line's or bus's figures prefixed with the engine's name."""
 
     def __init__(self, name, build_dir=None, progress=None, waves=None, **options):
         super().__init__(name, build_dir, progress, waves)
         self.options = options
 
+    def transport_class(self) -> type:
+        raise NotImplementedError
+
     def transport(self, **more):
-        # the board top's simulation (amaranth.sim, the UART host stack: measured 20 ms) loads
-        # when a board runs, not whenever the registry loads the engines
-        from ..link.engines import BoardTransport
-        return BoardTransport(build_dir=self.build_dir, progress=self.progress,
-                              waves=self.waves, **self.options, **more)
+        return self.transport_class()(build_dir=self.build_dir, progress=self.progress,
+                                      waves=self.waves, **self.options, **more)
 
     def checked_counters(self, transport) -> dict:
         return transport.check()            # the host's refusals and the device's errors
 
     def closed(self, transport, counters) -> dict:
-        return counters | {f"board_{k}": v for k, v in transport.figures().items()}
+        return counters | {f"{self.name}_{k}": v for k, v in transport.figures().items()}
+
+    def fanout_transport(self, fanout):
+        return self.transport(fanout=fanout)
+
+
+class BoardEngine(FaceEngine):
+    """The blocks behind the UART link (``options``: more
+    :class:`~cuneate.sim.link.engines.BoardTransport` keywords: ``port``, ``ahead``,
+    ``corrupt``, ...)."""
+
+    def transport_class(self) -> type:
+        # the board top's simulation (amaranth.sim, the UART host stack: measured 20 ms) loads
+        # when a board runs, not whenever the registry loads the engines
+        from ..link.engines import BoardTransport
+        return BoardTransport
 
 
 @implements("izhikevich", "board", speed=1e5)
@@ -53,9 +68,6 @@ class BoardIzhikevich(BoardEngine, IzhikevichEngine):
     the channel fan-out or as the afferents of the afferent -> cuneate network."""
 
     layer, fanout = "chip", True
-
-    def fanout_transport(self, fanout):
-        return self.transport(fanout=fanout)
 
 
 @implements("lif", "board", speed=1e3)

@@ -27,8 +27,9 @@ from ...golden.fanout import RECTIFY
 from ...hdl.fanout import ConfigError, FanoutConfig, generate_fanout
 from ...hdl.fanout.config import check_table_size
 from ...hdl.lib.fixed import FixedPointError, QFormat
-from ..cli.options import (CliError, CommandGroups, add_block_commands, finite_float, input_file,
-                           output_dir, positive_float, positive_int, run_ticks)
+from ..cli.options import (CliError, CommandGroups, add_block_commands, build_config,
+                           finite_float, generate_faced, input_file, output_dir, positive_float,
+                           positive_int, run_ticks)
 
 __all__ = ["register", "add_fanout_options", "fanout_from_args", "threshold_value"]
 
@@ -279,6 +280,12 @@ def cmd_generate(args) -> int:
         raise CliError("--tick-source: the fan-out has no tick (it runs once per channel "
                        "frame, on start)")
     cfg = fanout_from_args(args)
+    if args.face != "none":              # in front of an Izhikevich core of its afferents
+        from ...hdl.izhikevich import IzhikevichConfig
+        core = build_config(IzhikevichConfig, {"n_neurons": cfg.n_neurons,
+                                               "clock_hz": cfg.clock_hz,
+                                               "tick_source": "external"})
+        return generate_faced(args, core, "fanout", fanout=cfg)
     out = output_dir(args.out)
     files = generate_fanout(out, cfg, name=args.name)
     table = out / f"{args.name}.table.json"
@@ -306,7 +313,8 @@ def _hide(p, dest: str) -> None:
 def register(groups: CommandGroups) -> None:
     s, g = add_block_commands(groups, "fanout", "the channel fan-out (channel samples -> "
                                                 "afferent currents)", 10.0,
-                              add_fanout_options, cmd_simulate, cmd_generate, "channel_fanout")
+                              add_fanout_options, cmd_simulate, cmd_generate, "channel_fanout",
+                              faces=True)
     _hide(s, "spikes")
     _hide(g, "tick_source")
     src = s.add_argument_group("channel samples (one run per sample period)")

@@ -21,7 +21,7 @@ from ...hdl.izhikevich import IzhikevichConfig, generate_izhikevich
 from ...hdl.izhikevich.config import PIPELINE_DEPTH, PIPELINE_STAGES
 from ...hdl.lib.config import MIN_NEURONS
 from ..cli.options import (CliError, CommandGroups, add_block_commands, add_rate_options,
-                           add_waves_options, build_config, finite_float, fmt_time, output_dir,
+                           add_waves_options, build_config, finite_float, fmt_time, generate_faced, output_dir,
                            positive_float, positive_int, run_budget, start_progress,
                            waves_from_args, write_simulate_spikes)
 from ..engines.registry import estimate_seconds
@@ -311,6 +311,8 @@ def cmd_generate(args) -> int:
     sets = [parse_param_set(s) for s in args.param_set] if args.param_set else [PRESETS["RS"]]
     kw = core_kwargs(args, sets, args.neurons) | {"tick_source": args.tick_source}
     cfg = core_from_args(kw)
+    if args.face != "none":
+        return generate_faced(args, cfg, "izhikevich")
     out = output_dir(args.out)
     files = generate_izhikevich(out, config=cfg)
     for f in files:
@@ -323,7 +325,8 @@ def cmd_generate(args) -> int:
 
 
 def register(groups: CommandGroups) -> None:
-    s, g = add_block_commands(groups, "izhikevich", "the Izhikevich core", 1000.0)
+    s, g = add_block_commands(groups, "izhikevich", "the Izhikevich core", 1000.0,
+                              faces=True)
     s.add_argument("--preset", choices=list(PRESETS), default="RS", type=str.upper)
     for k in "abcd":
         s.add_argument(f"--{k}", type=finite_float, default=None,

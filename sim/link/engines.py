@@ -19,7 +19,6 @@ stack over it, or over a programmed board's serial port (``cuneate stream``).
 
 from __future__ import annotations
 
-import json
 import struct
 import subprocess
 import time
@@ -33,7 +32,7 @@ from ...hdl.lib.payload import payload_spec
 from ...hdl.link import LinkConfig, LinkedTop
 from ...hdl.link.config import sweep_cycles
 from ...hdl.link.codec import MAX_FRAME
-from ..engines.verilator_fast import compile_harness
+from ..engines.verilator_fast import compile_harness, quit_harness
 from ..host.transport import SimulatedSerial
 from ..host.uart import UartTransport
 
@@ -279,20 +278,7 @@ class VerilatorSerial(SimulatedSerial):
         if not self.is_open:
             return
         self.is_open = False
-        p = self._proc
-        try:
-            p.stdin.write(b"Q")
-            p.stdin.flush()
-            line = p.stdout.readline()
-            self.totals = json.loads(line) if line.strip() else {}
-        except (OSError, ValueError):
-            self.totals = {}
-        finally:
-            try:
-                p.stdin.close()
-            except OSError:                  # the harness already gone (killed, crashed)
-                pass
-            p.wait()
+        self.totals = quit_harness(self._proc)
 
 
 class BoardTransport(UartTransport):
