@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..lib.config import ConfigError
-from ..lib.core_payload import CorePayload
-from ..lib.payload import PayloadInfo, PayloadSpec, PayloadTwin, implements
+from ..lib.core_payload import CoreSpec
+from ..lib.payload import PayloadInfo, PayloadTwin, implements
 from .array import IzhikevichArray, core_configs
 from .config import CLAMP_KINDS, IzhikevichConfig
 from .core import IzhikevichCore
@@ -17,7 +17,7 @@ __all__ = ["IzhikevichSpec"]
 
 
 @implements(IzhikevichConfig)
-class IzhikevichSpec(PayloadSpec):
+class IzhikevichSpec(CoreSpec):
     """``n_cores`` cores of ``config`` (an :class:`~cuneate.hdl.izhikevich.array
     .IzhikevichArray` when more than one), ``neuron_sets`` one initial parameter set per global
     id when the cores differ (:func:`~cuneate.hdl.izhikevich.array.core_configs`). A sweep
@@ -45,23 +45,12 @@ class IzhikevichSpec(PayloadSpec):
             parts=({"block": "izhikevich_core", "neurons": config.n_neurons,
                     "cores": n_cores},))
 
-    @property
-    def external(self) -> bool:
-        return self.config.tick_source == "external"
+    def options(self) -> dict:
+        return {"n_cores": self.n_cores, "neuron_sets": self.neuron_sets}
 
-    def retimed(self, clock_hz: float | None = None) -> "IzhikevichSpec":
-        kw = self.config.to_kwargs(tick_source="external")
-        if clock_hz is not None:
-            kw["clock_hz"] = clock_hz
-        return IzhikevichSpec(IzhikevichConfig.from_kwargs(kw), self.n_cores, self.neuron_sets)
-
-    def build(self) -> CorePayload:
-        if not self.external:
-            raise ConfigError("a payload's ticks come from its face: the core needs "
-                              "tick_source='external' (retimed() gives it)")
-        core = IzhikevichArray(self.config, self.n_cores, neuron_sets=self.neuron_sets) \
+    def core(self):
+        return IzhikevichArray(self.config, self.n_cores, neuron_sets=self.neuron_sets) \
             if self.n_cores > 1 else IzhikevichCore(self.config)
-        return CorePayload(self, core)
 
     def twin(self) -> "_ArrayTwin":
         return _ArrayTwin(IzhikevichArrayTwin(self.config, self.n_cores,

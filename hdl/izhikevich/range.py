@@ -292,8 +292,8 @@ if kernel_available():
     from numba import njit
 
     from ...golden.izhikevich_kernel import BLOCK as B
-    from ...golden.izhikevich_kernel import _KERNEL as _GOLDEN
-    _block_steps = _GOLDEN["block_steps"]
+    from ...golden.izhikevich_kernel import block_kernel
+    _block_steps = block_kernel()
 
     @njit(nogil=True, cache=True)
     def run(w, st, n, steps, ramps, gper, gthr, gptr, gcols, periods, whole, n_steps, half_k, dt, P,

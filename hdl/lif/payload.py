@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..lib.config import ConfigError
-from ..lib.core_payload import CorePayload
-from ..lib.payload import PayloadInfo, PayloadSpec, PayloadTwin, implements
+from ..lib.core_payload import CoreSpec
+from ..lib.payload import PayloadInfo, PayloadTwin, implements
 from .config import CLAMP_KINDS, LifConfig
 from .core import LifCore
 from .twin import LifTwin
@@ -16,7 +16,7 @@ __all__ = ["LifSpec"]
 
 
 @implements(LifConfig)
-class LifSpec(PayloadSpec):
+class LifSpec(CoreSpec):
     """One LIF core of ``config``; a sweep keeps it busy for ``n_neurons`` cycles."""
 
     def __init__(self, config: LifConfig):
@@ -32,21 +32,8 @@ class LifSpec(PayloadSpec):
             busy_cycles=config.n_neurons, clamp_kinds=CLAMP_KINDS, rounding=config.rounding,
             parts=({"block": "lif_core", "neurons": config.n_neurons},))
 
-    @property
-    def external(self) -> bool:
-        return self.config.tick_source == "external"
-
-    def retimed(self, clock_hz: float | None = None) -> "LifSpec":
-        kw = self.config.to_kwargs(tick_source="external")
-        if clock_hz is not None:
-            kw["clock_hz"] = clock_hz
-        return LifSpec(LifConfig.from_kwargs(kw))
-
-    def build(self) -> CorePayload:
-        if not self.external:
-            raise ConfigError("a payload's ticks come from its face: the core needs "
-                              "tick_source='external' (retimed() gives it)")
-        return CorePayload(self, LifCore(self.config))
+    def core(self) -> LifCore:
+        return LifCore(self.config)
 
     def twin(self) -> "_LifTwin":
         return _LifTwin(LifTwin(self.config))

@@ -6,7 +6,7 @@ link's baud rate, records every byte the device sends on ``tx`` for ``total_cycl
 reports them (hex) with the cycle counts. With ``watch_writes`` it also reports every current
 the link writes toward the core (``[neuron, raw unsigned]`` per cycle the link's ``i_wr_en`` is
 set). The caller decodes the frames and checks them against the protocol model and the
-bit-exact twin (tests/sim/test_link_cocotb.py).
+bit-exact twin (tests/sim/link/test_cocotb.py).
 """
 
 from __future__ import annotations
