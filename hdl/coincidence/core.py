@@ -82,7 +82,8 @@ class CoincidenceDetector(wiring.Component):
 
     **Hooks** (a subclass may override them: the faults a proof must catch,
     :mod:`cuneate.hdl.coincidence.formal_core`): :meth:`history_address` (the ring slot of a
-    delayed tick) and :meth:`memory_write` (the write port the schedule drives). After
+    delayed tick), :meth:`memory_write` (the write port the schedule drives) and
+    :meth:`update_state` (the Izhikevich update stage). After
     elaboration the detector records, for a proof harness, ``memories`` (``{name: Memory}``:
     ``dw_mem``, ``hist_mem``, ``state_mem``) and ``schedule`` (the registers ``target``,
     ``slot`` and ``pending``: the target processed, the ring slot of the tick, the pending
@@ -136,6 +137,11 @@ class CoincidenceDetector(wiring.Component):
         """The write port (``addr``, ``data``, ``en``) through which the schedule writes the
         memory ``name``: ``port`` itself."""
         return port
+
+    @staticmethod
+    def update_state(cfg, vb_sh, vb_th, vb_lo, u_sh, ud_sh, p, m, sel):
+        """The update stage: :func:`~cuneate.hdl.izhikevich.datapath.update_state`."""
+        return update_state(cfg, vb_sh, vb_th, vb_lo, u_sh, ud_sh, p, m, sel)
 
     def elaborate(self, platform):
         cfg, iz = self.cfg, self.cfg.iz
@@ -235,7 +241,7 @@ class CoincidenceDetector(wiring.Component):
                                                  "p", "m", "y_flag")}
         r_xs = [reg(f"r_x{k}", x) for k, x in enumerate(xs)]
         r_if4, r_i4, r_a4 = reg("r_if4", r_if3), reg("r_i4", r_i3), reg("r_a4", r_a3)
-        out = update_state(iz, *(r4[k] for k in ("vb_sh", "vb_th", "vb_lo", "u_sh", "ud_sh",
+        out = self.update_state(iz, *(r4[k] for k in ("vb_sh", "vb_th", "vb_lo", "u_sh", "ud_sh",
                                                  "p", "m")), sel)
         flags = dict(out, current=r_if4, y=r4["y_flag"])
         clamp = clamp_bits_hdl(flags)

@@ -143,11 +143,12 @@ class CoincidenceProof(Elaboratable):
     """Harness of :class:`~cuneate.hdl.coincidence.CoincidenceDetector` (see the module
     docstring); ``mutant`` one of :data:`MUTANTS` or ``None``."""
 
-    def __init__(self, cfg: CoincidenceConfig, mutant: str | None = None):
+    def __init__(self, cfg: CoincidenceConfig, mutant: str | None = None,
+                 detector: type | None = None):
         if mutant is not None and mutant not in MUTANTS:
             raise ValueError(f"unknown mutant {mutant!r}; known: {', '.join(MUTANTS)}")
         self.cfg, self.mutant = cfg, mutant
-        self.detector = DETECTORS.get(mutant, CoincidenceDetector)
+        self.detector = detector or DETECTORS.get(mutant, CoincidenceDetector)
         self.cd = ClockDomain("sync", reset_less=True)
         self.ports = [self.cd.clk]
         self.period = cfg.n_sources + EXTRA_CYCLES
@@ -341,10 +342,12 @@ def coincidence_proof_config(**kwargs) -> CoincidenceConfig:
     return cfg
 
 
-def coincidence_harness(cfg: CoincidenceConfig, mutant: str | None = None) -> str:
+def coincidence_harness(cfg: CoincidenceConfig, mutant: str | None = None,
+                        detector: type | None = None) -> str:
     """RTLIL of the harness (top ``coincidence_eq``), the state and history memories' initial
-    contents removed."""
-    return harness_rtlil(CoincidenceProof(cfg, mutant), "coincidence_eq",
+    contents removed; ``detector``: a subclass of :class:`CoincidenceDetector` to prove
+    instead."""
+    return harness_rtlil(CoincidenceProof(cfg, mutant, detector), "coincidence_eq",
                          ("state_mem", "hist_mem"))
 
 
@@ -356,12 +359,13 @@ def induction_depth(cfg: CoincidenceConfig) -> int:
 def prove_coincidence(cfg: CoincidenceConfig, workdir: Path, mode: str = "prove",
                       depth: int | None = None, mutant: str | None = None,
                       timeout_s: float = 3600, engine: str = "smtbmc",
-                      solver: str = SOLVER) -> ProofResult:
+                      solver: str = SOLVER, detector: type | None = None) -> ProofResult:
     """Prove (``mode="prove"``: k-induction of ``depth`` steps, default
     :func:`induction_depth`) or check to a bound (``mode="bmc"``) that the detector equals its
-    one-tick reference."""
+    one-tick reference; ``detector``: a subclass of :class:`CoincidenceDetector` to prove
+    instead (a fault of its own)."""
     return run_proof("coincidence detector equals one-tick reference",
-                     coincidence_harness(cfg, mutant), workdir, "coincidence_eq", mode,
+                     coincidence_harness(cfg, mutant, detector), workdir, "coincidence_eq", mode,
                      depth or induction_depth(cfg), timeout_s, engine, ABSTRACTIONS, solver)
 
 
@@ -369,10 +373,11 @@ class HistorySlotProof(Elaboratable):
     """:func:`~cuneate.hdl.coincidence.datapath.history_slot` as the detector forms it (a ring
     slot of ``range(depth)``, a delay field of ``delay_bits``) names the ring slot of the delayed
     tick for every slot and every delay below ``depth``: the slot is below ``depth`` and slot +
-    delay is the tick's slot modulo ``depth``."""
+    delay is the tick's slot modulo ``depth``; ``slot``: the function proven (a faulty one: a
+    test of the proof)."""
 
-    def __init__(self, depth: int, delay_bits: int):
-        self.depth, self.delay_bits = depth, delay_bits
+    def __init__(self, depth: int, delay_bits: int, slot=history_slot):
+        self.depth, self.delay_bits, self.slot = depth, delay_bits, slot
         self.cd = ClockDomain("sync", reset_less=True)
         self.ports = [self.cd.clk]
 
@@ -382,7 +387,7 @@ class HistorySlotProof(Elaboratable):
         slot, delay = Signal(range(D), name="slot"), Signal(self.delay_bits, name="delay")
         m.d.comb += [slot.eq(AnySeq(len(slot))), delay.eq(AnySeq(len(delay)))]
         assume_all(m, [slot < D, delay < D])
-        at = history_slot(slot, delay, D)
+        at = self.slot(slot, delay, D)
         assert_all(m, [((at >= 0) & (at < D), "history slot: in the ring"),
                        ((at + delay == slot) | (at + delay == slot + D),
                         "history slot: the delayed tick's")])
@@ -390,10 +395,11 @@ class HistorySlotProof(Elaboratable):
 
 
 def prove_history_slot(cfg: CoincidenceConfig, workdir: Path, timeout_s: float = 600,
-                       solver: str = SOLVER) -> ProofResult:
+                       solver: str = SOLVER, slot=history_slot) -> ProofResult:
     """The history address of ``cfg``'s detector (its ring depth and delay field width) is the
-    delayed tick's slot for every slot and delay: one combinational step, every input."""
-    il = harness_rtlil(HistorySlotProof(cfg.max_delay_ticks, cfg.history_addr_bits),
+    delayed tick's slot for every slot and delay: one combinational step, every input;
+    ``slot``: see :class:`HistorySlotProof`."""
+    il = harness_rtlil(HistorySlotProof(cfg.max_delay_ticks, cfg.history_addr_bits, slot),
                        "history_slot")
     return run_proof("history slot is the delayed tick's", il, workdir, "history_slot", "bmc",
                      1, timeout_s, "smtbmc", [], solver)

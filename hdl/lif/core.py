@@ -59,6 +59,11 @@ class LifCore(SweepCore):
     .bookkeeping.SweepCore`: ``issue``, ``tags``, ``memories``, ``pending_writes``,
     ``counters``) and, with input sources, ``input_spikes`` (``pending``, ``active``: the
     tick's pending and active spike vectors).
+
+    **Hooks** besides :class:`~cuneate.hdl.lib.bookkeeping.SweepCore`'s: the datapath stages
+    :meth:`gather_input`, :meth:`update_state` and :meth:`trace_update` (the datapath's
+    functions); a subclass replaces one - a fault the proof must catch
+    (:mod:`cuneate.hdl.lif.formal_core`).
     """
 
     #: the ports' meanings the blocks' shared ones lack, for the Verilog's header
@@ -79,6 +84,21 @@ class LifCore(SweepCore):
         sig = core_ports(cfg, CLAMP_KINDS, {"upd_v": Out(cfg.V.shape()),
                                             "upd_ref": Out(max(1, cfg.ref_bits))}, extra)
         super().__init__(sig)
+
+    @staticmethod
+    def gather_input(cfg: LifConfig, I, x, w, traces=None):
+        """Stage 3: :func:`~cuneate.hdl.lif.datapath.gather_input`."""
+        return gather_input(cfg, I, x, w, traces)
+
+    @staticmethod
+    def update_state(cfg: LifConfig, v, d, D, ref, sel):
+        """Stage 5: :func:`~cuneate.hdl.lif.datapath.update_state`."""
+        return update_state(cfg, v, d, D, ref, sel)
+
+    @staticmethod
+    def trace_update(cfg: LifConfig, ys, ps):
+        """Stage 5's traces: :func:`~cuneate.hdl.lib.synapses.trace_update`."""
+        return trace_update(cfg, ys, ps)
 
     def elaborate(self, platform):
         cfg = self.cfg
@@ -150,7 +170,7 @@ class LifCore(SweepCore):
             offs = np.cumsum([0] + TW)
             tr3 = [reg(f"tr_{t.name}", tr_rd.data[offs[j]:offs[j + 1]].as_signed(), 3)
                    for j, t in enumerate(cfg.traces)]
-        g = gather_input(cfg, i3, [x3[i] for i in range(F)], ws, tr3)
+        g = self.gather_input(cfg, i3, [x3[i] for i in range(F)], ws, tr3)
         xop = leak_operand(cfg, v3, g["d"], sel3)
         v4, ref4, sel4, i4 = (reg(n, s, 4) for n, s in
                               (("v", v3), ("ref", ref3), ("sel", sel3), ("i", i3)))
@@ -168,7 +188,7 @@ class LifCore(SweepCore):
             tp5 = [reg(f"tp_{t.name}", q, 5) for t, q in zip(cfg.traces,
                                                              trace_products(cfg, ys4))]
             ys5 = [reg(f"y_{t.name}", y, 5) for t, y in zip(cfg.traces, ys4)]
-            tr_new = trace_update(cfg, ys5, tp5)
+            tr_new = self.trace_update(cfg, ys5, tp5)
             tr_out = [Signal(t.T.shape(), name=f"{t.name}_out") for t in cfg.traces]
             m.d.comb += [o.eq(v) for o, v in zip(tr_out, tr_new)]
             m.d.comb += [tr_wr.addr.eq(t5[1]), tr_wr.data.eq(Cat(*tr_out)),
@@ -177,7 +197,7 @@ class LifCore(SweepCore):
                          for t, o in zip(cfg.traces, tr_out)]
         fcur5, fin5 = reg("flag_current", fcur4, 5), reg("flag_input", fin4, 5)
         # --- stage 5: update, write back ------------------------------------------------------
-        s5 = update_state(cfg, v5, p5, d5, ref5, sel5)
+        s5 = self.update_state(cfg, v5, p5, d5, ref5, sel5)
         v_out = Signal(V.shape())
         ref_out = Signal(max(1, R))
         spike = Signal()

@@ -133,10 +133,11 @@ def lif_proof_config(n_neurons: int = 8, **kwargs) -> LifConfig:
                      tick_source="external", **kwargs)
 
 
-def lif_harness(cfg: LifConfig, mutant: str | None = None) -> tuple[str, int]:
+def lif_harness(cfg: LifConfig, mutant: str | None = None,
+                core: type | None = None) -> tuple[str, int]:
     """RTLIL of the harness (top ``lif_eq``), the memories' initial contents removed, and the
-    core's latency."""
-    top = LifCoreProof(cfg, mutant)
+    core's latency; ``core``: a subclass of :class:`LifCore` to prove instead."""
+    top = LifCoreProof(cfg, mutant, core)
     il = harness_rtlil(top, "lif_eq", ("state_mem", "cur_mem", "sel_mem", "weight_mem",
                                        "trace_mem"))
     return il, top.latency
@@ -144,9 +145,10 @@ def lif_harness(cfg: LifConfig, mutant: str | None = None) -> tuple[str, int]:
 
 def prove_lif(cfg: LifConfig, workdir: Path, mode: str = "prove", depth: int | None = None,
               mutant: str | None = None, timeout_s: float = 3600, engine: str = "smtbmc",
-              solver: str = SOLVER) -> ProofResult:
+              solver: str = SOLVER, core: type | None = None) -> ProofResult:
     """Prove (``mode="prove"``: k-induction of ``depth`` steps, default the core's latency + 2)
-    or check to a bound (``mode="bmc"``) that the LIF core equals its one-step reference."""
-    il, latency = lif_harness(cfg, mutant)
+    or check to a bound (``mode="bmc"``) that the LIF core equals its one-step reference;
+    ``core``: a subclass of :class:`LifCore` to prove instead (a fault of its own)."""
+    il, latency = lif_harness(cfg, mutant, core)
     return run_proof("LIF core equals one-step datapath", il, workdir, "lif_eq", mode,
                      depth or latency + 2, timeout_s, engine, ABSTRACTIONS, solver)
