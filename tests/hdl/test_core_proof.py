@@ -4,7 +4,7 @@ each found by a shallow bounded run from the initial state (default lane, second
 
 import pytest
 
-from cuneate.hdl.izhikevich import IzhikevichConfig, datapath
+from cuneate.hdl.izhikevich import IzhikevichConfig, IzhikevichCore, datapath
 from cuneate.hdl.izhikevich.formal_core import (MUTANTS, induction_depth, proof_config,
                                                 prove_core)
 from cuneate.sim.hardcases import record
@@ -41,12 +41,24 @@ def test_the_proof_catches_the_fault(cfg, mutant, tmp_path):
     assert check in r.failed, r
 
 
-def test_a_datapath_fault_in_the_core_is_caught(cfg, tmp_path, v_one_high):
-    """The core built with a faulty last stage (v one LSB high; the reference keeps the true
-    stage functions, bound at import) fails at the tracked neuron's first update: the
-    uninterpreted products do not hide the arithmetic around them."""
-    v_one_high(datapath, "select_step", "v_next")
-    r = prove_core(cfg, tmp_path, mode="bmc", depth=induction_depth(cfg), timeout_s=600)
+def _select_v_one_high(cfg, x):
+    out = dict(datapath.select_step(cfg, x))
+    out["v_next"] = out["v_next"] + 1
+    return out
+
+
+class _VOneHigh(IzhikevichCore):
+    """The core with a faulty last step: v one LSB high."""
+
+    STEPS = IzhikevichCore.STEPS[:-1] + (IzhikevichCore.STEPS[-1].with_fn(_select_v_one_high),)
+
+
+def test_a_datapath_fault_in_the_core_is_caught(cfg, tmp_path):
+    """The core built with a faulty last step (v one LSB high; the reference keeps the true
+    steps) fails at the tracked neuron's first update: the uninterpreted products do not hide
+    the arithmetic around them."""
+    r = prove_core(cfg, tmp_path, mode="bmc", depth=induction_depth(cfg), timeout_s=600,
+                   core=_VOneHigh)
     assert r.status == "fail", r
     assert "tracked_update_upd_v" in r.failed, r
 
