@@ -27,8 +27,9 @@ synapse whose write-back is still in flight is counted in ``hazard_count`` (the 
 schedule never does it). ``busy``: an operation is in flight.
 
 The arithmetic is the stage functions of :mod:`cuneate.hdl.plasticity.datapath` and the
-synaptic traces of :mod:`cuneate.hdl.lib.synapses`. ``observe=True`` (proofs) adds ``obs_addr``
-/ ``obs_word``: a combinational read of any synapse word.
+synaptic traces of :mod:`cuneate.hdl.lib.synapses`; the step table is a ROM. ``observe=True``
+(proofs) adds ``obs_addr`` / ``obs_word``, a combinational read of any synapse word, and
+``obs_steps``, the ROM's every entry.
 """
 
 from __future__ import annotations
@@ -95,7 +96,8 @@ class SynapseStage(wiring.Component):
             "busy": Out(1), "hazard_count": Out(COUNTER_BITS),
         }
         if observe:
-            sig |= {"obs_addr": In(range(max(2, n))), "obs_word": Out(self.word_width)}
+            sig |= {"obs_addr": In(range(max(2, n))), "obs_word": Out(self.word_width),
+                    "obs_steps": Out(len(cfg.step_table) * cfg.step_bits)}
         super().__init__(sig)
         init = [pack((cfg.weights_raw.reshape(-1)[a], 0, 0, 0), fmts) for a in range(n)]
         self.synapses = Memory(shape=unsigned(self.word_width), depth=n, init=init)
@@ -106,10 +108,15 @@ class SynapseStage(wiring.Component):
         cfg = self.cfg
         m = Module()
         m.submodules.synapses = mem = self.synapses
-        m.submodules.steps = rom = self.steps
         fmts = [f for _, f in cfg.synapse_fields]
         rd, wr = mem.read_port(), mem.write_port()
+        m.submodules.steps = rom = self.steps
         rom_rd = rom.read_port()
+        if self.observe:
+            for k in range(len(cfg.step_table)):
+                p = rom.read_port(domain="comb")
+                m.d.comb += [p.addr.eq(k),
+                             self.obs_steps[k * cfg.step_bits:(k + 1) * cfg.step_bits].eq(p.data)]
         if self.observe:
             obs = mem.read_port(domain="comb")
             m.d.comb += [obs.addr.eq(self.obs_addr), self.obs_word.eq(obs.data)]
@@ -131,7 +138,7 @@ class SynapseStage(wiring.Component):
         w, cd, cr, L = unpack(rd.data, fmts)
         C, ys = dp.calcium_input(cfg, cd, cr, w, a_late)
         dq = dp.compensated(cfg, L, a_total)
-        m.d.comb += [rom_rd.addr.eq(dp.step_index(cfg, w, dq)),
+        m.d.comb += [rom_rd.addr.eq(self._step_index(dp.step_index(cfg, w, dq))),
                      self.fetch_valid.eq(a_valid), self.fetch_op.eq(a_op),
                      self.fetch_w.eq(w), self.fetch_l.eq(L),
                      self.contrib.eq(dp.contribution(0, a_spike & (a_op == OPS["integrate"]),
@@ -169,9 +176,10 @@ class SynapseStage(wiring.Component):
             nw.eq(Mux(is_write, c_weight, Mux(stepped, w_new, c_w))),
             ncd.eq(Mux(is_int, cds, Mux(is_write, 0, c_cd))),
             ncr.eq(Mux(is_int, crs, Mux(is_write, 0, c_cr))),
-            nL.eq(Mux(is_int, L_new, 0)),
+            nL.eq(self._new_drive(is_int, L_new, c_L)),
         ]
-        clamp = Cat(is_int & d_low, is_int & d_high, stepped & w_low, stepped & w_high)
+        clamp = self._clamp_bits(Cat(is_int & d_low, is_int & d_high, stepped & w_low,
+                                     stepped & w_high))
         writes = c_valid & (c_op != OPS["read"])
         m.d.comb += [wr.en.eq(self._write_enable(m, writes)), wr.addr.eq(c_addr),
                      wr.data.eq(Cat(nw, ncd, ncr, nL))]
@@ -192,7 +200,20 @@ class SynapseStage(wiring.Component):
             m.d.sync += self.hazard_count.eq(self.hazard_count + 1)
         return m
 
+    # hooks a proof's mutant overrides (the product keeps these)
     def _write_enable(self, m, en):
-        """The write-back's enable (a hook: a proof's mutant overrides it)."""
+        """The write-back's enable."""
         return en
+
+    def _new_drive(self, is_int, L_int, L):
+        """The drive written back: the integrated one, else 0 (a learn or a write)."""
+        return Mux(is_int, L_int, 0)
+
+    def _clamp_bits(self, bits):
+        """The clamp flags of an update."""
+        return bits
+
+    def _step_index(self, index):
+        """The step table's address."""
+        return index
 
