@@ -315,6 +315,12 @@ class PlasticityConfig:
             if any(int(t.max()) == 0 for t in self.step_tables):
                 raise ConfigError(f"the step eta = {p.eta:g} rounds to 0 in a sigmoid table")
         self.step_bits = max(1, int(max(int(t.max()) for t in self.step_tables)).bit_length())
+        biggest = max(abs(x) for x in self.dq_bounds) * max(int(t.max()) for t in
+                                                            self.step_tables)
+        if p.eta > 0 and biggest * 2.0 ** -self.T_frac < 0.5:
+            raise ConfigError(f"the step eta = {p.eta:g} rounds to 0: the largest drive moves a "
+                              f"weight by {biggest * 2.0 ** -self.T_frac:.3g} of its LSB "
+                              f"({self.W})")
         self.table_errors = [float(np.max(np.abs(t * 2.0 ** -self.T_frac - e) / np.maximum(e,
                              1e-300))) if top else 0.0 for t, e in zip(self.step_tables, tables)]
 
