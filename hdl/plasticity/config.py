@@ -103,6 +103,9 @@ class PlasticityConfig:
         bits; the weight bits indexing the sigmoid table.
     operand_width, rounding, max_decay_error
         Multiplier operand width, rounding, largest relative error of a decay constant.
+    plastic
+        ``False``: a layer whose synapses do not learn (each word the weight alone; window
+        ends change nothing): the baseline the cost of learning is measured against.
     """
 
     n_sources: int = 8
@@ -125,6 +128,7 @@ class PlasticityConfig:
     operand_width: int = 18
     rounding: str = "nearest"
     max_decay_error: float = 1e-2
+    plastic: bool = True
 
     iz: IzhikevichConfig = field(init=False, repr=False)
 
@@ -354,7 +358,9 @@ class PlasticityConfig:
     @property
     def synapse_fields(self) -> list[tuple[str, QFormat]]:
         """The synapse word's fields (first at the LSB): weight, the two calcium traces, the
-        drive."""
+        drive (the weight alone when not ``plastic``)."""
+        if not self.plastic:
+            return [("w", self.W)]
         return [("w", self.W), ("c_d", self.calcium[0].T), ("c_r", self.calcium[1].T),
                 ("L", self.L)]
 
@@ -380,7 +386,7 @@ class PlasticityConfig:
                 "drive_frac_bits": int(self.drive_frac_bits),
                 "sigmoid_bits": int(self.sigmoid_bits),
                 "operand_width": int(self.operand_width), "rounding": self.rounding,
-                "max_decay_error": self.max_decay_error}
+                "max_decay_error": self.max_decay_error, "plastic": bool(self.plastic)}
 
     @classmethod
     def from_kwargs(cls, kw: dict) -> "PlasticityConfig":

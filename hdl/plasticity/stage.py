@@ -102,10 +102,12 @@ class SynapseStage(wiring.Component):
         init = [pack((cfg.weights_raw.reshape(-1)[a], 0, 0, 0), fmts) for a in range(n)]
         self.synapses = Memory(shape=unsigned(self.word_width), depth=n, init=init)
         self.steps = Memory(shape=unsigned(cfg.step_bits), depth=len(cfg.step_table),
-                            init=cfg.step_table)
+                            init=cfg.step_table) if cfg.plastic else None
 
     def elaborate(self, platform):
         cfg = self.cfg
+        if not cfg.plastic:
+            return self._elaborate_frozen()
         m = Module()
         m.submodules.synapses = mem = self.synapses
         fmts = [f for _, f in cfg.synapse_fields]
@@ -196,6 +198,46 @@ class SynapseStage(wiring.Component):
         clash = Signal(name="hazard")
         m.d.comb += clash.eq(self.op_valid & Cat(*[v & (ad == self.op_addr)
                                                    for v, ad in pending]).any())
+        with m.If(clash):
+            m.d.sync += self.hazard_count.eq(self.hazard_count + 1)
+        return m
+
+    def _elaborate_frozen(self):
+        """The stage of a layer that does not learn (``plastic=False``, the baseline the cost
+        of learning is measured against): the weight alone, read for the input sum, written by
+        the host; the same ports and timing, every other field 0."""
+        m = Module()
+        m.submodules.synapses = mem = self.synapses
+        rd, wr = mem.read_port(), mem.write_port()
+        m.d.comb += rd.addr.eq(self.op_addr)
+        tags = [(self.op_valid, "valid"), (self.op, "op"), (self.op_addr, "addr"),
+                (self.op_spike, "spike"), (self.op_weight, "weight")]
+        stages = []
+        for k in range(3):
+            regs = {}
+            for value, name in tags:
+                r = Signal(value.shape(), name=f"{'abc'[k]}_{name}")
+                m.d.sync += r.eq(value)
+                regs[name] = r
+            stages.append(regs)
+            tags = [(regs[n], n) for _, n in tags]
+        a, c = stages[0], stages[2]
+        w = rd.data[:self.cfg.W.width]
+        c_w = Signal(self.cfg.W.shape(), name="c_w")
+        b_w = Signal(self.cfg.W.shape(), name="b_w")
+        m.d.sync += [b_w.eq(w), c_w.eq(b_w)]
+        m.d.comb += [self.fetch_valid.eq(a["valid"]), self.fetch_op.eq(a["op"]),
+                     self.fetch_w.eq(w),
+                     self.contrib.eq(dp.contribution(0, a["spike"] &
+                                                     (a["op"] == OPS["integrate"]), w))]
+        is_write = c["op"] == OPS["write"]
+        nw = Mux(is_write, c["weight"], c_w)
+        m.d.comb += [wr.en.eq(c["valid"] & is_write), wr.addr.eq(c["addr"]), wr.data.eq(nw)]
+        m.d.sync += [self.upd_valid.eq(c["valid"]), self.upd_op.eq(c["op"]),
+                     self.upd_addr.eq(c["addr"]), self.upd_w.eq(nw)]
+        m.d.comb += self.busy.eq(Cat(*[st["valid"] for st in stages]).any())
+        clash = self.op_valid & Cat(*[st["valid"] & (st["op"] == OPS["write"]) &
+                                      (st["addr"] == self.op_addr) for st in stages]).any()
         with m.If(clash):
             m.d.sync += self.hazard_count.eq(self.hazard_count + 1)
         return m

@@ -125,7 +125,7 @@ class PlasticityTwin:
         """A window's end: each CN's drives summed, then every synapse's learn operation.
         Returns the step's outputs."""
         total = self.L.sum(axis=1, keepdims=True)
-        out = self.synapses(OPS["learn"], total=total, apply=apply)
+        out = self.synapses(OPS["learn"], total=total, apply=apply and self.cfg.plastic)
         self._take(out)
         self.learns += 1
         return out
@@ -153,6 +153,7 @@ class PlasticityTwin:
         (``(n, M)``, within the window) and ``weights`` after each presentation's step when
         asked by ``snapshot_every``."""
         flags = np.broadcast_to(np.asarray(learn, dtype=bool), (pres.n,)).copy()
+        flags &= bool(self.cfg.plastic)               # a frozen layer's windows change nothing
         if self.kernel == "numba":
             return self._k.run_presentations(self, pres, flags)
         M = self.cfg.n_targets

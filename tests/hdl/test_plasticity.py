@@ -151,3 +151,17 @@ def test_fixed_point_learning_follows_golden():
     assert np.abs(g.weights - f.weights).max() < 0.05 * cfg.rule.w_max
     assert np.array_equal(g.weights > 3.0, f.weights > 3.0)
     assert math.isfinite(g.extra["drive_max"])
+
+
+def test_a_frozen_layer_is_the_learning_one_without_its_steps():
+    """``plastic=False`` (the baseline of the cost of learning): the same spikes as the
+    learning layer's twin with no step applied, and window ends leave every weight."""
+    cfg, tpl = _layer(S=6, M=2, K=3)
+    frozen = PlasticityConfig(**{**cfg.to_kwargs(), "rule": cfg.rule, "plastic": False})
+    assert frozen.synapse_fields == [("w", cfg.W)]
+    pres = presentations(tpl, [0, 1], (0, 25), 0.5, 3.0, 5.0, 4)
+    rtl = run_learning("amaranth", frozen, pres, True)
+    twin = run_learning("fixed", cfg, pres, False)
+    assert twin.spike_cn.size > 0 and np.array_equal(rtl.weights_raw, cfg.weights_raw)
+    for k in ("spike_pres", "spike_tick", "spike_cn"):
+        assert np.array_equal(getattr(rtl, k), getattr(twin, k)), k
