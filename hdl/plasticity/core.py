@@ -58,6 +58,32 @@ __all__ = ["LearningLayer", "learning_verilog", "generate_learning", "synth_reso
 class LearningLayer(wiring.Component):
     """The learning layer as RTL (see the module docstring)."""
 
+    #: the layer's own ports, for the Verilog header
+    PORT_MEANINGS = {
+        "tick": "start a tick (external tick)",
+        "in_source": "its afferent (stamped by the next tick)",
+        "learn": "request a window's end", "learn_apply": "with learn: apply the steps",
+        "learn_done": "pulse: the window's end finished",
+        "w_wr_valid": "host weight write strobe", "w_wr_addr": "synapse written (CN * K + m)",
+        "w_wr_data": "its weight, raw (calcium and drive restart)",
+        "w_wr_ready": "the write is taken (layer idle)",
+        "w_rd_valid": "host weight read strobe", "w_rd_addr": "synapse read (CN * K + m)",
+        "w_rd_ready": "the read is taken (layer idle)",
+        "w_rd_resp_valid": "the read's answer", "w_rd_resp_data": "the weight, raw",
+        "spike_valid": "a CN spiked", "spike_target": "the CN", "spike_tick": "its tick",
+        "upd_target": "its CN",
+        "syn_upd_valid": "a synapse operation leaves the stage",
+        "syn_upd_op": "its operation (integrate, read, learn, write)",
+        "syn_upd_addr": "its synapse (CN * K + m)",
+        "syn_upd_clamp": "the synapse clamps that acted in it (one bit per kind)",
+        "tick_count": "ticks taken", "learn_count": "window ends taken",
+        "merged_count": "input spikes merged (two of a source in one tick)",
+        "overrun_count": "ticks that came while one was processed",
+        "tick_overrun": "sticky: a tick came while one was processed",
+        "learn_overrun_count": "window ends requested while one was pending or running",
+        "hazard_count": "synapse operations issued within the stage's write-back latency",
+    } | {f"clamp_count_{k}": f"{k} clamps counted" for k in CLAMP_KINDS}
+
     def __init__(self, config: PlasticityConfig):
         self.cfg = cfg = config
         M, K, S = cfg.n_targets, cfg.n_synapses, cfg.n_sources
