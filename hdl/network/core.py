@@ -75,6 +75,19 @@ class AfferentCuneateNetwork(wiring.Component):
     tick report, see the module docstring).
     """
 
+    #: the ports' meanings, for the Verilog's header
+    PORT_MEANINGS = {
+        "i_wr_en": "host current write strobe (afferents)", "out_valid": "spike stream: valid",
+        "out_ready": "spike stream: taken", "out_population": "0 afferent, 1 cuneate",
+        "out_index": "the neuron", "out_tick": "its tick", "tick_count": "ticks",
+        "link_count": "afferent spikes passed to the detector",
+        "afferent_spike_count": "afferent spikes", "cuneate_spike_count": "cuneate spikes",
+        "overrun_count": "ticks ignored", "cuneate_overflow_count": "cuneate spikes lost",
+        "afferent_overflow": "sticky: the core's spike FIFO dropped a spike",
+        "merged_count": "events the detector merged (0 by construction)",
+        "clamp_flags": "sticky clamp flags (core and detector)",
+        "tick_open": "a tick's batch is open", "tick_done": "pulse: the tick's batch is closed"}
+
     def __init__(self, config: NetworkConfig):
         self.cfg = cfg = config
         N, M = cfg.n_afferents, cfg.n_targets

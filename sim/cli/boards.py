@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import json
 
-from .options import CliError, CommandGroups, add_quiet_option, output_dir, positive_int
+from .options import (CliError, CommandGroups, add_quiet_option, claim_output, output_dir,
+                      positive_float, positive_int)
 
 __all__ = ["register"]
 
@@ -37,9 +38,10 @@ def cmd_boards(args) -> int:
                 tight = min(x for x in (lim["bram"], lim["multiplier"], lim["fmax"]) if x)
                 print(f"{'':11s} depth {d}: largest {lim['largest']} neurons "
                       f"({lim['cores']} x {lim['per_core']} at {lim['clock_hz'] / 1e6:g} MHz, "
-                      f"{lim['estimate']['BRAM']} block RAMs); bounds: block RAM "
+                      f"{lim['estimate']['BRAM']} block RAMs); bounds in neurons: block RAM "
                       f"{lim['bram']}, multipliers {lim['multiplier']}"
-                      + (f", fmax {lim['fmax']}" if lim["fmax"] else "")
+                      + (f", logic at the measured fmax of {lim['fmax_mhz']:.1f} MHz "
+                         f"{lim['fmax']}" if lim["fmax"] else "")
                       + f" ({100 * lim['largest'] / tight:.0f} % of the tightest)")
     return 0
 
@@ -72,11 +74,12 @@ def cmd_build(args) -> int:
         scene = resolve_scene(args.scene, "cuneate build")
     out = output_dir(args.out)
     try:
-        report = build_target(args.board, out, n_neurons=args.neurons,
-                              clock_hz=args.clock_hz, update_hz=args.update_hz,
-                              bitstream=not args.no_bitstream, seed=args.seed,
-                              pipeline_stages=args.pipeline_stages, scene=scene,
-                              baud=args.baud)
+        with claim_output(out, "cuneate build"):
+            report = build_target(args.board, out, n_neurons=args.neurons,
+                                  clock_hz=args.clock_hz, update_hz=args.update_hz,
+                                  bitstream=not args.no_bitstream, seed=args.seed,
+                                  pipeline_stages=args.pipeline_stages, scene=scene,
+                                  baud=args.baud)
     except ConfigError as exc:
         raise CliError(f"cuneate build: {exc}") from None
     except BuildError as exc:
@@ -136,9 +139,10 @@ def register(groups: CommandGroups) -> None:
                    help="the same as the positional BOARD")
     add_quiet_option(c)
     c.add_argument("--neurons", type=positive_int, default=None)
-    c.add_argument("--clock-hz", type=float, default=None,
+    c.add_argument("--clock-hz", type=positive_float, default=None,
                    help="core clock (must be one of the board's PLL plans)")
-    c.add_argument("--update-hz", type=float, default=None)
+    c.add_argument("--update-hz", type=positive_float, default=None,
+                   help="neuron update rate (default the board's, 16 kHz)")
     c.add_argument("--baud", type=positive_int, default=None,
                    help="UART line rate (default the chosen clock plan's: 3000000 on the ULX3S at "
                         "60 and 90 MHz, 2000000 at 70 MHz); the clock must divide it within "

@@ -161,6 +161,7 @@ def fanout_from_args(args):
     """The :class:`~cuneate.hdl.fanout.FanoutConfig` of the table options (or ``--table``),
     or a one-line refusal naming the option."""
     from ...hdl.fanout import ConfigError, FanoutConfig
+    from ...hdl.fanout.config import check_table_size
     from ...hdl.lib.fixed import FixedPointError, QFormat
     given = [opt for attr, opt in TABLE_OPTIONS if getattr(args, attr) is not None]
     if args.table is not None:
@@ -172,6 +173,10 @@ def fanout_from_args(args):
     lists = [len(getattr(args, a)) for a, _ in PER_AFFERENT if getattr(args, a) is not None]
     longest = max(lists, default=1)
     N = args.afferents or (longest if longest > 1 else DEFAULT_AFFERENTS)
+    try:         # before the table's lists are built: refused by its size, not by memory
+        check_table_size(N, C, args.gain_width or 18, args.sample_width or 16)
+    except ConfigError as exc:
+        raise _refusal(exc) from None
     kw = {"n_channels": C, "channel": [i % C for i in range(N)], "gain": [1.0] * N}
     kw |= _per_afferent(args, N)
     for attr in ("rectify", "sample_width", "sample_max", "gain_width", "max_gain_error",

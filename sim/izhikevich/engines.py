@@ -45,7 +45,7 @@ from ...hdl.izhikevich import (CLAMP_KINDS, IzhikevichConfig, IzhikevichCore,
 from ..engines.amaranth import simulate, write_currents
 from ..engines.registry import block_engines, check_engine
 from ..engines.run import EngineRun, TickUnwrap, times_from_pairs
-from ..host.transport import SpikeBatch, Transport, TransportError
+from ..host.transport import SpikeBatch, Transport, TransportError, sweep_count
 
 __all__ = ["HARDWARE_ENGINES", "EngineRun", "engine_core", "run_engine", "engine_config",
            "run_hardware_engine", "run_cocotb_engine", "run_amaranth_sweeps", "MIN_NEURONS",
@@ -326,7 +326,7 @@ class TwinTransport(_Buffered):
     def run(self, n_ticks: int) -> None:
         t0 = time.perf_counter()
         tw = self.twin
-        for _ in range(int(n_ticks)):
+        for _ in range(sweep_count(n_ticks, self.name)):
             for first, raw in self.pending.pop(self.tick, []):
                 tw.I[first:first + len(raw)] = raw
                 self.cnt["writes"] += 1
@@ -372,7 +372,7 @@ class _Batch(_Buffered):
         self.writes.append((int(tick), int(first), raw))
 
     def run(self, n_ticks: int) -> None:
-        self.tick += int(n_ticks)
+        self.tick += sweep_count(n_ticks, self.name)
 
     def collect(self) -> SpikeBatch:
         if self.tick == self.ran_ticks:

@@ -40,6 +40,10 @@ class F:
     choices: tuple | None = None
     items: type | tuple | None = None       # element type of lists
     doc: str = ""
+    #: the longest text a string key (or a list's string item) takes: names and labels title
+    #: figures and pages, whose layout grows with them (a 100 000-character label took the
+    #: figure layout past 2 GB); paths and descriptions are longer
+    max_len: int = 200
 
 
 NUM = (int, float)
@@ -62,7 +66,7 @@ MEMS_EFFECT_PARAMS = {
 }
 
 SCHEMA: dict = {
-    "scene": {"name": F(str, "scene"), "description": F(str, ""),
+    "scene": {"name": F(str, "scene"), "description": F(str, "", max_len=4000),
               "duration_ms": F(NUM, 700.0, lo=1, hi=600_000),
               "trials": F(int, 10, lo=1, hi=10_000), "seed": F(int, 1, lo=0, hi=2**32 - 1)},
     "sensor": {"kind": F(str, "fbg", choices=("fbg", "taxels", "mems")),
@@ -107,7 +111,7 @@ SCHEMA: dict = {
                  "pulse_start_ms": F(NUM, 50.0, lo=0), "pulse_width_ms": F(NUM, 200.0, lo=1e-3),
                  "pulse_edge_ms": F(NUM, 5.0, lo=0),
                  # recorded
-                 "file": F(str, ""), "time_key": F(str, "Time"),
+                 "file": F(str, "", max_len=4096), "time_key": F(str, "Time"),
                  "data_key": F(str, "DeltaBraggW"), "struct": F(str, ""),
                  "time_unit": F(str, "s", choices=("s", "ms")),
                  "shift_unit": F(str, "nm", choices=("nm", "pm")),
@@ -216,7 +220,7 @@ SCHEMA: dict = {
                  # golden's pair-based STDP on the same protocol, beside AIDP
                  "compare_stdp": F(bool, False)},
     "run": {"engines": F(list, ["golden", "fixed", "verilator"], items=str),
-            "waves": F(str, ""),
+            "waves": F(str, "", max_len=4096),
             "waves_start_tick": F(int, 0, lo=0),
             "waves_ticks": F(int, 100, lo=1, hi=100_000_000)},
 }
@@ -285,6 +289,11 @@ class Validator:
                 self.err(key, f"out of range: {v!r} > {f.hi:g}")
             if f.type is float or f.type == NUM:
                 v = float(v)
+        for i, x in enumerate(v if isinstance(v, list) else [v]):
+            if isinstance(x, str) and len(x) > f.max_len:
+                self.err(key if not isinstance(v, list) else f"{key}[{i}]",
+                         f"{len(x)} characters; at most {f.max_len} (names and labels title "
+                         f"the figures and the report)")
         if f.choices is not None and v not in f.choices:
             self.err(key, f"must be one of {', '.join(map(str, f.choices))}, got {v!r}")
         if isinstance(v, list) and f.items is not None:
