@@ -246,7 +246,7 @@ def simulate_layer(pres: Presentations, w0, layer: LayerParams, rule: str = "aid
     t0 = time.perf_counter()
     if kernel == "numba":
         from .learning_kernel import run_layer
-        res = run_layer(pres, w, layer, rule, p, flags, snapshot_every)
+        res = LayerResult(*run_layer(pres, w, layer, rule, p, flags, snapshot_every))
     elif kernel == "numpy":
         res = _run_numpy(pres, w, layer, rule, p, flags, snapshot_every)
     else:

@@ -137,9 +137,9 @@ def _kernel():
 
 
 def run_layer(pres, w, layer, rule, p, flags, snapshot_every):
-    """Run the compiled loop (see :func:`cuneate.golden.cuneate_layer.simulate_layer`); ``w``
-    is updated in place and returned in the result."""
-    from .cuneate_layer import LayerResult
+    """Run the compiled loop (see :func:`cuneate.golden.cuneate_layer.simulate_layer`);
+    returns the fields of its ``LayerResult`` in order (weights, counts, spike_pres,
+    spike_tick, spike_cn, step, snapshots, drive_max)."""
     run = _kernel()
     src = np.ascontiguousarray(layer.sources, dtype=np.int64)
     M, K = src.shape
@@ -169,5 +169,5 @@ def run_layer(pres, w, layer, rule, p, flags, snapshot_every):
             break
         cap *= 4                      # the spike buffer filled: run again with a larger one
     idx = [0] + [(i + 1) * snapshot_every for i in range(got - 1)]
-    return LayerResult(w_run, counts.copy(), sp[0][:n_sp], sp[1][:n_sp], sp[2][:n_sp], steps,
-                       [(i, snaps[n].copy()) for n, i in enumerate(idx)], drive_max)
+    return (w_run, counts.copy(), sp[0][:n_sp], sp[1][:n_sp], sp[2][:n_sp], steps,
+            [(i, snaps[n].copy()) for n, i in enumerate(idx)], drive_max)

@@ -33,7 +33,7 @@ ANCHOR = "a median of 96 % texture decoding across 25 learning CNs on 10 texture
 # --------------------------------------------------------------------------- validation
 def validate(V, raw: dict, sections: dict, pops: list, projs: list) -> None:
     """Check and complete a learning scene in place; ``V.err`` raises the scene error."""
-    from .texture import _texture
+    from .texture import validated_texture
     from .texture_trials import protocol
     sen, st, lp, dec = (sections[k] for k in ("sensor", "stimulus", "learning", "decoder"))
     if sen["kind"] != "mems":
@@ -43,7 +43,7 @@ def validate(V, raw: dict, sections: dict, pops: list, projs: list) -> None:
         st["textures"] = ["corduroy", "latex", "paper", "bars", "dots"]
     if not st["textures"] or len(st["textures"]) < 2:
         V.err("stimulus.textures", "a layer learns to tell at least two stimuli apart")
-    names = [_texture(V, i, t).name for i, t in enumerate(st["textures"])]
+    names = [validated_texture(V, i, t).name for i, t in enumerate(st["textures"])]
     if len(set(names)) != len(names):
         V.err("stimulus.textures", "names a stimulus twice")
     if sections["scene"]["trials"] != 1 and "trials" in raw.get("scene", {}):

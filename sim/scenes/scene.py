@@ -81,7 +81,8 @@ engines = ["golden", "fixed", "verilator"]
 
 #: what one trial is, by stimulus kind
 TRIAL_NOUNS = {"grasp": "grasp", "slide": "slide", "pulses": "pulse", "recorded": "recording",
-               "ridges": "ridge", "press": "press"}
+               "ridges": "ridge", "press": "press",
+               "learning": "presentation"}
 
 
 @dataclass
