@@ -1,6 +1,6 @@
 """k-induction of the learning stage against its one-operation specification
 (hdl/plasticity/formal_core.py): the unbounded proof, and the faults it must catch, each found
-by a shallow bounded run from the initial state."""
+by a shallow bounded run from the initial state (the long lane: about 45 s of yices)."""
 
 import pytest
 
@@ -21,6 +21,7 @@ def test_every_mutant_has_an_expectation():
     assert set(EXPECTED) == set(MUTANTS)
 
 
+@pytest.mark.long
 def test_the_learning_stage_equals_its_specification_for_every_operation_sequence(tmp_path):
     """k-induction at the stage's latency + 2 (k = 6; about 10 s with yices): base case and
     step both pass, for every sequence of operations, operands and host writes."""
@@ -29,6 +30,7 @@ def test_the_learning_stage_equals_its_specification_for_every_operation_sequenc
     assert r.passed and r.mode == "prove" and r.depth == induction_depth(cfg) == 6, r
 
 
+@pytest.mark.long
 @pytest.mark.parametrize("mutant", sorted(EXPECTED))
 def test_the_stage_proof_catches_the_fault(mutant, tmp_path):
     r = prove_stage(stage_proof_config(), tmp_path, mode="bmc", depth=5, mutant=mutant,

@@ -1,5 +1,5 @@
 """Learning scenes (``stimulus.kind = "learning"``): parsing and refusals, a small run through
-the protocol on golden and fixed with its report; in the release lane the thesis's protocol on
+the protocol on golden and fixed with its report (the long lane); in the release lane the thesis's protocol on
 golden, fixed and Verilator, and the 10-texture version."""
 
 import json
@@ -90,6 +90,7 @@ def test_the_learning_protocol_belongs_to_learning_scenes():
         parse_scene(open(text).read() + "\n[learning]\ncns = 2\n", "t.toml")
 
 
+@pytest.mark.long
 def test_a_small_layer_learns_on_golden_and_fixed_and_reports_it(tmp_path):
     from cuneate.sim.scenes.learning import format_run, write_report
     r = run_scene(_scene())
