@@ -75,6 +75,8 @@ class LearningLayer(wiring.Component):
         "syn_upd_valid": "a synapse operation leaves the stage",
         "syn_upd_op": "its operation (integrate, read, learn, write)",
         "syn_upd_addr": "its synapse (CN * K + m)",
+        "syn_upd_w": "its weight after it (raw)", "syn_upd_cd": "its decay calcium (raw)",
+        "syn_upd_cr": "its rise calcium (raw)", "syn_upd_l": "its learning drive (raw)",
         "syn_upd_clamp": "the synapse clamps that acted in it (one bit per kind)",
         "tick_count": "ticks taken", "learn_count": "window ends taken",
         "merged_count": "input spikes merged (two of a source in one tick)",
