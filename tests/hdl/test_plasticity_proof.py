@@ -2,6 +2,8 @@
 (hdl/plasticity/formal_core.py): the unbounded proof, and the faults it must catch, each found
 by a shallow bounded run from the initial state (the long lane: about 45 s of yices)."""
 
+import json
+
 import pytest
 
 from cuneate.hdl.plasticity.formal_core import (MUTANTS, induction_depth, prove_stage,
@@ -22,12 +24,29 @@ def test_every_mutant_has_an_expectation():
 
 
 @pytest.mark.long
-def test_the_learning_stage_equals_its_specification_for_every_operation_sequence(tmp_path):
-    """k-induction at the stage's latency + 2 (k = 6; about 10 s with yices): base case and
-    step both pass, for every sequence of operations, operands and host writes."""
-    cfg = stage_proof_config()
-    r = prove_stage(cfg, tmp_path, mode="prove", timeout_s=900)
-    assert r.passed and r.mode == "prove" and r.depth == induction_depth(cfg) == 6, r
+def test_the_learning_stage_equals_its_specification_for_every_operation_sequence(capsys):
+    """``cuneate prove plasticity --unbounded``: k-induction at the stage's latency + 2 (k = 6;
+    10-17 s with yices): base case and step both pass, for every sequence of operations,
+    operands and host writes."""
+    from cuneate.sim.cli import main
+    assert main(["-q", "prove", "plasticity", "--unbounded", "--json"]) == 0
+    r = json.loads(capsys.readouterr().out)
+    assert r["status"] == "pass" and r["mode"] == "prove", r
+    assert r["depth"] == induction_depth(stage_proof_config()) == 6 and r["mutant"] is None
+
+
+@pytest.mark.parametrize("argv,message", [
+    (["prove", "plasticity", "--mutant", "wrong_slot"],
+     "cuneate prove plasticity: mutant wrong_slot is not the learning stage's"),
+    (["prove", "core", "--mutant", "stale_drive"],
+     "cuneate prove core: mutant stale_drive is the learning stage's (cuneate prove "
+     "plasticity)"),
+])
+def test_a_mutant_of_another_block_is_refused_in_one_line(argv, message, capsys):
+    from cuneate.sim.cli import main
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and message in err, err
 
 
 @pytest.mark.long
