@@ -8,7 +8,9 @@ banked``: a memory in banks of block RAM against its per-cycle contract
 fanout``: the channel fan-out's one-entry datapath against its specification for every gain and
 sample (:mod:`cuneate.hdl.fanout.formal`); ``cuneate prove faces`` (or one of its targets
 ``axi-stream-out``, ``axi-stream-in``, ``axi-lite``, ``wishbone``): the bus faces' protocols
-(:mod:`cuneate.hdl.axi.formal`, :mod:`cuneate.hdl.wishbone.formal`)."""
+(:mod:`cuneate.hdl.axi.formal`, :mod:`cuneate.hdl.wishbone.formal`); ``cuneate prove
+plasticity``: the learning stage against its one-operation specification
+(:mod:`cuneate.hdl.plasticity.formal_core`)."""
 
 from __future__ import annotations
 
@@ -35,6 +37,8 @@ from ...hdl.lif import LifConfig
 from ...hdl.link.config import link_config
 from ...hdl.link.formal_core import MUTANTS as LINK_MUTANTS
 from ...hdl.link.formal_core import decoder_proof_config, prove_decoder
+from ...hdl.plasticity.formal_core import MUTANTS as STAGE_MUTANTS
+from ...hdl.plasticity.formal_core import prove_stage, stage_proof_config
 from ...hdl.wishbone.formal import PROOFS as WB_PROOFS
 from .. import progress
 from .options import (CliError, CommandGroups, add_quiet_option, positive_float, positive_int,
@@ -66,6 +70,10 @@ def _proof_target(args):
     if args.mutant in FANOUT_MUTANTS:
         raise CliError(f"cuneate prove {args.target}: mutant {args.mutant} is the fan-out's "
                        f"(cuneate prove fanout)")
+    from ...hdl.plasticity.formal_core import MUTANTS as STAGE_MUTANTS
+    if args.mutant in set(STAGE_MUTANTS) - {"skipped_write"}:
+        raise CliError(f"cuneate prove {args.target}: mutant {args.mutant} is the learning "
+                       f"stage's (cuneate prove plasticity)")
     if args.target == "link":
         if args.mutant and args.mutant not in LINK_MUTANTS:
             raise CliError(f"cuneate prove link: mutant {args.mutant} is not the link's (its "
@@ -267,6 +275,36 @@ def cmd_prove_faces(args) -> int:
                    lambda rec: "")
 
 
+def cmd_prove_plasticity(args) -> int:
+    """``cuneate prove plasticity``: the learning stage (2 CNs of 2 synapses, any synapse
+    tracked) against its one-operation specification, bounded (``--depth``, default the
+    induction depth) or, with ``--unbounded``, k-induction; PASS/FAIL as ``prove core``."""
+    if args.mutant and args.mutant not in STAGE_MUTANTS:
+        raise CliError(f"cuneate prove plasticity: mutant {args.mutant} is not the learning "
+                       f"stage's (its mutants: {', '.join(STAGE_MUTANTS)})")
+    cfg = stage_proof_config()
+    with tempfile.TemporaryDirectory(prefix="cuneate-prove-") as d:
+        try:
+            r = prove_stage(cfg, Path(args.work_dir) if args.work_dir else Path(d),
+                            mode="prove" if args.unbounded else "bmc", depth=args.depth,
+                            mutant=args.mutant, timeout_s=args.timeout_s, solver=args.solver)
+        except FormalError as exc:
+            raise CliError(f"cuneate prove plasticity: {exc}") from None
+    size = {"n_targets": cfg.n_targets, "n_synapses": cfg.n_synapses}
+    if args.json:
+        print(json.dumps(r.to_dict() | size | {"mutant": args.mutant}))
+    else:
+        what = "k-induction" if r.mode == "prove" else "bounded from the initial state"
+        print(f"{r.property}: {r.status.upper()} ({what}, depth {r.depth}, {r.engine} "
+              f"{r.solver}, {r.seconds:.1f} s, {cfg.n_targets} CNs x {cfg.n_synapses} "
+              f"synapses" + (f", mutant {args.mutant}" if args.mutant else "") + ")")
+        if r.failed:
+            print(f"  failed in step {r.step} ({r.phase}): {', '.join(r.failed)}")
+        for a in r.abstractions:
+            print(f"  abstraction: {a}")
+    return 0 if r.passed else 1
+
+
 def cmd_prove(args) -> int:
     """Every ``cuneate prove``: says while it runs what it checks, the phase and step each
     SymbiYosys run has reached and the time (:mod:`cuneate.sim.progress`; ``-q`` silences)."""
@@ -297,6 +335,8 @@ def _cmd_prove(args) -> int:
         return cmd_prove_banked(args)
     if args.target == "fanout":
         return cmd_prove_fanout(args)
+    if args.target == "plasticity":
+        return cmd_prove_plasticity(args)
     from ...hdl.izhikevich.formal import prove
     args.preset = args.preset or ["RS"]
     try:
@@ -338,7 +378,7 @@ def register(groups: CommandGroups) -> None:
                                "and of the pipelined core")
     f.add_argument("target", nargs="?",
                    choices=("datapath", "core", "lif", "coincidence", "link", "banked", "fanout",
-                            "faces") + FACE_TARGETS,
+                            "faces") + FACE_TARGETS + ("plasticity",),
                    default="datapath",
                    help="datapath (default): one update's range properties; core, lif: the "
                    "pipelined Izhikevich or LIF core equals its one-step datapath; "
@@ -347,7 +387,8 @@ def register(groups: CommandGroups) -> None:
                    "block RAM meets its per-cycle contract; fanout: the channel fan-out's "
                    "one-entry datapath meets its specification for every gain and sample; "
                    "faces (or axi-stream-out, axi-stream-in, axi-lite, wishbone): the bus "
-                   "faces' protocols")
+                   "faces' protocols; plasticity: the learning stage equals its one-operation "
+                   "specification")
     f.add_argument("--unbounded", action="store_true",
                    help="core: k-induction (every input sequence of every length)")
     f.add_argument("--depth", type=positive_int, default=None,
@@ -373,9 +414,9 @@ def register(groups: CommandGroups) -> None:
     f.add_argument("--mutant",
                    choices=tuple(dict.fromkeys(MUTANTS + DETECTOR_MUTANTS + LINK_MUTANTS
                                                + BANK_MUTANTS + tuple(FANOUT_MUTANTS)
-                                               + FACE_MUTANTS)),
-                   default=None, help="core, lif, coincidence, link: build this fault into "
-                   "the block (the proof must fail)")
+                                               + FACE_MUTANTS + tuple(STAGE_MUTANTS))),
+                   default=None, help="core, lif, coincidence, link, plasticity: build this "
+                   "fault into the block (the proof must fail)")
     f.add_argument("--solver", choices=SOLVERS, default=SOLVER)
     f.add_argument("--preset", action="append", default=None,
                    help="parameter set(s) (repeat for a mix; default RS)")

@@ -82,7 +82,8 @@ engines = ["golden", "fixed", "verilator"]
 
 #: what one trial is, by stimulus kind
 TRIAL_NOUNS = {"grasp": "grasp", "slide": "slide", "pulses": "pulse", "recorded": "recording",
-               "ridges": "ridge", "press": "press"}
+               "ridges": "ridge", "press": "press",
+               "learning": "presentation"}
 
 
 @dataclass
@@ -130,7 +131,7 @@ class Scene:
             return [f"{a:+g} deg" for a in st["ridge_angles_deg"]]
         if st["kind"] == "press":
             return [f"taxel {st['press_taxel']}"]
-        if st["kind"] == "textures":
+        if st["kind"] in ("textures", "learning"):
             return [t if isinstance(t, str) else t["name"] for t in st["textures"]]
         if st["recordings"]:
             return list(dict.fromkeys(r["label"] for r in st["recordings"]))
@@ -343,6 +344,9 @@ def parse_scene(text: str, source: str = "<scene>", base_dir: Path | None = None
     projs = []
     if ridges:
         projs = _projections(V, raw, [p["name"] for p in pops])
+    if raw.get("learning") and kind.name != "learning":
+        V.err("learning", "the learning protocol belongs to learning scenes (stimulus.kind = "
+                          "\"learning\")")
     if kind.name != "afferent":
         kind_module(kind).validate(V, raw, sections, pops, projs)
     for i, p in enumerate(pops):

@@ -79,7 +79,8 @@ def fill_defaults(V, raw: dict, sections: dict) -> None:
         sections["scene"]["duration_ms"] = protocol(sections).duration_ms
 
 
-def _texture(V, i: int, t):
+def validated_texture(V, i: int, t):
+    """The texture named or described by ``stimulus.textures[i]`` (``V.err`` refuses it)."""
     if isinstance(t, dict):
         unknown = set(t) - set(Texture.__dataclass_fields__) - {"like"}
         if unknown or "name" not in t:
@@ -106,7 +107,7 @@ def validate(V, raw: dict, sections: dict, pops: list, projs: list) -> None:
     if st["kind"] == "textures":
         if not st["textures"]:
             V.err("stimulus.textures", "must not be empty")
-        names = [_texture(V, i, t).name for i, t in enumerate(st["textures"])]
+        names = [validated_texture(V, i, t).name for i, t in enumerate(st["textures"])]
         if len(set(names)) != len(names):
             V.err("stimulus.textures", "names a texture twice")
     if hw["fanout"]:
