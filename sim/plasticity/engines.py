@@ -32,12 +32,14 @@ import numpy as np
 
 from ...golden.cuneate_layer import LayerParams, simulate_layer
 from ...hdl.plasticity import CLAMP_KINDS, PlasticityConfig
-from ..engines.registry import block_engines, check_engine
+from ...hdl.plasticity.core import LearningLayer, learning_verilog
+from ...hdl.plasticity.twin import PlasticityTwin
+from ..engines.amaranth import simulate
+from ..engines.engine import BlockEngine
+from ..engines.registry import engine_for, implements
+from .fast import run_fast
 
-__all__ = ["LEARNING_ENGINES", "LearningRun", "run_learning", "golden_layer"]
-
-#: The engines the plasticity block runs on (the registry's list).
-LEARNING_ENGINES = block_engines("plasticity")
+__all__ = ["PlasticityEngine", "LearningRun", "run_learning", "golden_layer"]
 
 
 @dataclass
@@ -89,19 +91,47 @@ def _chunks(n: int, every: int):
 def run_learning(engine: str, cfg: PlasticityConfig, pres, learn=True,
                  snapshot_every: int = 0, build_dir: Path | None = None) -> LearningRun:
     """Run the presentations ``pres`` on ``engine`` from ``cfg``'s initial weights."""
-    check_engine("plasticity", engine)
-    flags = np.broadcast_to(np.asarray(learn, dtype=bool), (pres.n,)).copy()
-    lsb = cfg.W.lsb
-    t0 = time.perf_counter()
-    if engine == "golden":
-        lay = golden_layer(cfg)
-        r = simulate_layer(pres, cfg.weights_real, lay, "aidp", cfg.rule, flags,
+    return engine_for("plasticity", engine, build_dir=build_dir).run(cfg, pres, learn,
+                                                                      snapshot_every)
+
+
+class PlasticityEngine(BlockEngine):
+    """The learning layer on one engine: :meth:`run` a protocol of presentations."""
+
+    block = "plasticity"
+
+    def run(self, cfg: PlasticityConfig, pres, learn=True, snapshot_every: int = 0
+            ) -> LearningRun:
+        """The presentations ``pres`` from ``cfg``'s initial weights, a learn flag per
+        presentation (or one for all), the weights kept every ``snapshot_every``."""
+        flags = np.broadcast_to(np.asarray(learn, dtype=bool), (pres.n,)).copy()
+        t0 = time.perf_counter()
+        run = self.learn(cfg, pres, flags, snapshot_every)
+        run.seconds = time.perf_counter() - t0
+        return run
+
+    def learn(self, cfg, pres, flags, snapshot_every: int) -> LearningRun:
+        """One engine's run (:meth:`run` times it)."""
+        raise NotImplementedError
+
+
+@implements("plasticity", "golden", speed=5e7)
+class PlasticityGolden(PlasticityEngine):
+    """:func:`~cuneate.golden.cuneate_layer.simulate_layer` (float64, AIDP)."""
+
+    def learn(self, cfg, pres, flags, snapshot_every):
+        r = simulate_layer(pres, cfg.weights_real, golden_layer(cfg), "aidp", cfg.rule, flags,
                            snapshot_every)
-        run = LearningRun(engine, r.spike_pres, r.spike_tick, r.spike_cn, r.counts,
-                          r.weights, None, r.snapshots,
-                          extra={"drive_max": r.drive_max, "step": r.step})
-    elif engine == "fixed":
-        from ...hdl.plasticity.twin import PlasticityTwin
+        return LearningRun(self.name, r.spike_pres, r.spike_tick, r.spike_cn, r.counts,
+                           r.weights, None, r.snapshots,
+                           extra={"drive_max": r.drive_max, "step": r.step})
+
+
+@implements("plasticity", "fixed", speed=3e7)
+class PlasticityFixed(PlasticityEngine):
+    """The bit-exact twin (compiled kernel), the weights kept between chunks."""
+
+    def learn(self, cfg, pres, flags, snapshot_every):
         twin = PlasticityTwin(cfg)
         parts, snaps = [], [(0, twin.weights.copy())]
         for a, b in _chunks(pres.n, snapshot_every):
@@ -111,32 +141,32 @@ def run_learning(engine: str, cfg: PlasticityConfig, pres, learn=True,
             if snapshot_every and b < pres.n:
                 snaps.append((b, twin.weights.copy()))
         cat = (lambda k: np.concatenate([p[k] for p in parts]))
-        run = LearningRun(engine, cat("spike_pres"), cat("spike_tick"), cat("spike_cn"),
-                          cat("counts"), twin.weights.copy(), twin.w.copy(), snaps,
-                          dict(twin.clamp_counts))
-    elif engine == "verilator-fast":
-        from .fast import run_fast
-        r = run_fast(cfg, pres, flags, snapshot_every, build_dir)
+        return LearningRun(self.name, cat("spike_pres"), cat("spike_tick"), cat("spike_cn"),
+                           cat("counts"), twin.weights.copy(), twin.w.copy(), snaps,
+                           dict(twin.clamp_counts))
+
+
+@implements("plasticity", "verilator-fast", speed=1e6)
+class PlasticityVerilatorFast(PlasticityEngine):
+    """The Verilog compiled by Verilator with the C++ harness: whole protocols."""
+
+    def learn(self, cfg, pres, flags, snapshot_every):
+        lsb = cfg.W.lsb
+        r = run_fast(cfg, pres, flags, snapshot_every, self.build_dir)
         snaps = [(0, cfg.weights_raw * lsb)] + [((i + 1) * snapshot_every, s * lsb)
                                                  for i, s in enumerate(r["snapshots"])]
-        run = LearningRun(engine, r["spike_pres"], r["spike_tick"], r["spike_cn"],
-                          r["counts"], r["weights"] * lsb, r["weights"], snaps,
-                          r["clamp_counts"], extra={"summary": r["summary"]})
-    else:
+        return LearningRun(self.name, r["spike_pres"], r["spike_tick"], r["spike_cn"],
+                           r["counts"], r["weights"] * lsb, r["weights"], snaps,
+                           r["clamp_counts"], extra={"summary": r["summary"]})
+
+
+class PlasticityRtl(PlasticityEngine):
+    """An HDL simulator tick by tick: the spike pairs, the weights read back through the
+    layer's host port and the clamp counts (:meth:`pairs`)."""
+
+    def learn(self, cfg, pres, flags, snapshot_every):
         by_tick, windows = _schedule(pres, flags)
-        n_ticks = pres.n * pres.n_ticks
-        if engine == "amaranth":
-            pairs, weights, clamps = _run_amaranth(cfg, by_tick, windows, n_ticks)
-        else:
-            from ..engines.cocotb import run_engine_bench
-            from ...hdl.plasticity.core import learning_verilog
-            rep = run_engine_bench(engine, lambda low: learning_verilog(cfg, lowered=low),
-                                   "learning_layer", "plasticity",
-                                   {"layer": cfg.to_kwargs(), "ticks": n_ticks,
-                                    "events": {str(k): v for k, v in by_tick.items()},
-                                    "windows": {str(k): a for k, a in windows.items()}},
-                                   build_dir)
-            pairs, weights, clamps = rep["spikes"], rep["weights"], rep["clamp_counts"]
+        pairs, weights, clamps = self.pairs(cfg, by_tick, windows, pres.n * pres.n_ticks)
         w_raw = np.asarray(weights, dtype=np.int64).reshape(cfg.n_targets, cfg.n_synapses)
         tk = np.asarray([t for t, _ in pairs], dtype=np.int64).reshape(-1)
         cn = np.asarray([j for _, j in pairs], dtype=np.int64).reshape(-1)
@@ -146,10 +176,34 @@ def run_learning(engine: str, cfg: PlasticityConfig, pres, learn=True,
         counts = np.zeros((pres.n, cfg.n_targets), np.int64)
         inside = st < pres.window_ticks
         np.add.at(counts, (sp[inside], cn[inside]), 1)
-        run = LearningRun(engine, sp, st, cn, counts, w_raw * lsb, w_raw,
-                          [(0, cfg.weights_raw * lsb)], dict(clamps))
-    run.seconds = time.perf_counter() - t0
-    return run
+        lsb = cfg.W.lsb
+        return LearningRun(self.name, sp, st, cn, counts, w_raw * lsb, w_raw,
+                           [(0, cfg.weights_raw * lsb)], dict(clamps))
+
+    def pairs(self, cfg, by_tick: dict, windows: dict, n_ticks: int):
+        raise NotImplementedError
+
+
+@implements("plasticity", "amaranth", speed=2e3)
+class PlasticityAmaranth(PlasticityRtl):
+    """The Amaranth simulator on :class:`~cuneate.hdl.plasticity.LearningLayer`."""
+
+    def pairs(self, cfg, by_tick, windows, n_ticks):
+        return _run_amaranth(cfg, by_tick, windows, n_ticks)
+
+
+@implements("plasticity", "icarus", speed=5e3)
+@implements("plasticity", "verilator", speed=3e4)
+class PlasticityCocotb(PlasticityRtl):
+    """cocotb on the generated Verilog (the bench's ``engine`` test)."""
+
+    def pairs(self, cfg, by_tick, windows, n_ticks):
+        rep = self.engine_bench(lambda low: learning_verilog(cfg, lowered=low),
+                                "learning_layer",
+                                {"layer": cfg.to_kwargs(), "ticks": n_ticks,
+                                 "events": {str(k): v for k, v in by_tick.items()},
+                                 "windows": {str(k): a for k, a in windows.items()}})
+        return rep["spikes"], rep["weights"], rep["clamp_counts"]
 
 
 def _schedule(pres, flags):
@@ -164,8 +218,6 @@ def _schedule(pres, flags):
 
 
 def _run_amaranth(cfg: PlasticityConfig, by_tick: dict, windows: dict, n_ticks: int):
-    from ...hdl.plasticity.core import LearningLayer
-    from ..engines.amaranth import simulate
     dut = LearningLayer(cfg)
     pairs, weights, out = [], [], {}
 
