@@ -107,7 +107,9 @@ def test_the_default_configuration_core_equals_the_one_step_datapath(tmp_path):
 
 
 @pytest.mark.long
-@pytest.mark.parametrize("depth", [6, 7, 8, 9])
+# the deepest in CI; the depths between in the release lane (make test-release)
+@pytest.mark.parametrize("depth", [*[pytest.param(d, marks=pytest.mark.release) for d in (6, 7, 8)],
+                                   9])
 def test_every_deeper_pipeline_equals_the_one_step_datapath(depth, tmp_path):
     """k-induction of every deeper pipeline on its smallest core (N = depth + 1: a neuron is
     fetched again as its registered write-back lands - at depths 5-8 its memories are read a

@@ -156,7 +156,7 @@ def test_search_battery_reaches_deeper_than_constant_currents():
     assert r.v_min_search < -210 and r.n_stimuli > 90
 
 
-@pytest.mark.long
+@pytest.mark.release
 def test_long_full_scale_runs_never_clamp():
     """10 s of every preset under the search's extremes (constant ends, flips every 100 ms and
     every 1 ms, and a slow ramp), 64 neurons per preset, compared with golden."""

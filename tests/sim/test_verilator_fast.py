@@ -120,7 +120,7 @@ def _faulty_verilog(cfg, fault, monkeypatch):
 
 
 @pytest.mark.parametrize("fault", [f if f == "flipped-product-bit" else
-                                   pytest.param(f, marks=pytest.mark.long) for f in FAULTS])
+                                   pytest.param(f, marks=pytest.mark.release) for f in FAULTS])
 def test_dump_checker_catches_injected_faults_verilator(
         fault, tmp_path, monkeypatch):
     cfg = flag_config()
