@@ -139,15 +139,21 @@ def build_target(board: str, out: Path, n_neurons: int | None = None,
     if target.get("bitstream") and bitstream:
         from .top import BoardTop
         platform = target["platform"]()
-        top = BoardTop(make_top(), sized["pll"], target.get("uart_tx_enable", False))
+        top = BoardTop(make_top(), sized["pll"], target.get("uart_tx_enable", False),
+                       target.get("status_leds"))
         opts = f"--report {name}.nextpnr.json --timing-allow-fail --seed {seed}"
+        if target.get("nextpnr_freq"):
+            # nextpnr does not derive the clock through this family's PLL: the plan's clock
+            # is its target for every clock (the oscillator's net only feeds the PLL)
+            opts += f" --freq {lcfg.core.clock_hz / 1e6:g}"
         plan = platform.prepare(top, name=name, nextpnr_opts=opts,
                                 **target.get("prepare_opts", {}))
         t0 = time.monotonic()
         try:
             with prog.step(f"{board}: synthesis, place and route, bitstream (yosys, "
                            f"nextpnr-{target['family']}; minutes)"):
-                plan.execute_local(out, env=yowasp_env(target["family"]))
+                plan.execute_local(out, env=yowasp_env(target["family"])
+                                   | target.get("tool_env", {}))
         except Exception as exc:       # the script's failure: name the log to read
             raise BuildError(f"{board} build failed ({exc.__class__.__name__}); see the logs "
                              f"in {out}") from None
@@ -157,6 +163,18 @@ def build_target(board: str, out: Path, n_neurons: int | None = None,
         report["place_route"] = _nextpnr_report(out / f"{name}.nextpnr.json", target,
                                                 lcfg.core.clock_hz, out / f"{name}.json")
         report["timing_met"] = report["place_route"]["timing_met"]
+    if target.get("vivado"):
+        from .top import BoardTop
+        from .vivado import check_tcl, write_project
+        top = BoardTop(make_top(), sized["pll"], False, target.get("status_leds"))
+        files = write_project(target["platform"](), top, out, name)
+        try:
+            check = check_tcl(out, name)
+        except FileNotFoundError as exc:
+            check = {"ok": None, "error": str(exc)}
+        report["vivado_project"] = {"files": files, "tcl_check": check,
+                                    "not_run": "Vivado (synthesis, place and route, "
+                                               "bitstream)"}
     if target.get("synth_family") and bitstream:
         with prog.step(f"{board}: yosys synth_{target['synth_family']} resource estimate"):
             report["yosys_estimate"] = _yosys_estimate(out, f"{name}_core", target)

@@ -78,12 +78,15 @@ class BoardTop(Elaboratable):
     (:class:`~cuneate.hdl.link.LinkedCore`) or a board top's linked blocks (an elaboratable with
     the pins ``rx``, ``tx``, ``running`` and ``overflow``: :class:`~cuneate.hdl.link.LinkedLif`,
     :class:`~cuneate.hdl.link.LinkedNetwork`, :class:`~cuneate.hdl.link.LinkedFanoutCore`,
-    whose ``clamped`` lights a third LED)."""
+    whose ``clamped`` lights a third LED). ``status_leds``: at most that many of those LEDs
+    (a board whose LED pins carry the UART has none)."""
 
-    def __init__(self, linked, pll, uart_tx_enable: bool = False):
+    def __init__(self, linked, pll, uart_tx_enable: bool = False,
+                 status_leds: int | None = None):
         self.linked = LinkedCore(linked) if isinstance(linked, LinkConfig) else linked
         self.pll = pll
         self.uart_tx_enable = uart_tx_enable
+        self.status_leds = status_leds
 
     def elaborate(self, platform):
         m = Module()
@@ -102,7 +105,7 @@ class BoardTop(Elaboratable):
             m.d.comb += en.o.eq(1)
         leds = [linked.running, linked.overflow] + \
             ([linked.clamped] if hasattr(linked, "clamped") else [])
-        for i, sig in enumerate(leds):
+        for i, sig in enumerate(leds[:self.status_leds]):
             m.submodules[f"led{i}"] = led = io.Buffer("o", platform.request("led", i, dir="-"))
             m.d.comb += led.o.eq(sig)
         return m
@@ -110,13 +113,18 @@ class BoardTop(Elaboratable):
 
 def xilinx_estimate_target(name: str, description: str, family: str, device: str,
                            resources: dict, bram_shapes: list, synth_family: str,
-                           bram_cells: dict) -> dict:
+                           bram_cells: dict, platform=None, pll=None, uart: str = "") -> dict:
     """A Verilog-plus-estimate target on a Xilinx device (no open bitstream flow): a 100 MHz
     oscillator, a 40 MHz core clock from the vendor's clock manager (2500 cycles per 16 kHz
     sweep, 20 clocks per bit at 2 Mbaud), 512-bit LUT RAM, 18-bit multipliers;
-    ``resources`` with BRAM in 18 Kbit blocks, ``bram_cells`` the 18 Kbit blocks per cell."""
-    return {"name": name, "description": description, "family": family, "device": device,
-            "clock_plan": ClockPlan(osc_hz=100e6, clock_hz=40e6, update_hz=16e3, baud=2e6),
-            "pll_clocks": [40e6], "resources": resources, "bram_shapes": bram_shapes,
-            "lutram_bits": 512, "dsp_width": 18, "default_neurons": 2400, "bitstream": False,
-            "synth_family": synth_family, "bram_cells": bram_cells}
+    ``resources`` with BRAM in 18 Kbit blocks, ``bram_cells`` the 18 Kbit blocks per cell.
+    With ``platform`` (an amaranth ``XilinxPlatform``) and ``pll`` the build also writes a
+    Vivado project of the board top (:mod:`~cuneate.boards.vivado`)."""
+    t = {"name": name, "description": description, "family": family, "device": device,
+         "clock_plan": ClockPlan(osc_hz=100e6, clock_hz=40e6, update_hz=16e3, baud=2e6),
+         "pll_clocks": [40e6], "resources": resources, "bram_shapes": bram_shapes,
+         "lutram_bits": 512, "dsp_width": 18, "default_neurons": 2400, "bitstream": False,
+         "synth_family": synth_family, "bram_cells": bram_cells}
+    if platform is not None:
+        t.update(platform=platform, pll=pll, vivado=True, uart=uart)
+    return t
