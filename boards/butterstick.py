@@ -17,6 +17,7 @@ from __future__ import annotations
 import math
 
 from amaranth import Elaboratable, Module, Signal
+from amaranth.lib import io
 
 from .pll import ecp5_pll
 from .top import ClockPlan
@@ -53,21 +54,23 @@ class VccioControl(Elaboratable):
         bits = 10
         step = round(vccio_duty(self.vccio) * (1 << bits))
         boot = int(self.clock_hz * (4 * RC_S + 1e-3))
+        m.submodules.pdm = pdm = io.Buffer("o", self.pins.pdm)
+        m.submodules.en = en = io.Buffer("o", self.pins.en)
         for i in range(3):
             acc = Signal(bits + 1, name=f"sd{i}")
             m.d.sync += acc.eq(acc[:bits] + step)
-            m.d.comb += self.pins.pdm.o[i].eq(acc[bits])
+            m.d.comb += pdm.o[i].eq(acc[bits])
         count = Signal(range(boot + 1))
         with m.If(count < boot):
             m.d.sync += count.eq(count + 1)
-        m.d.comb += self.pins.en.o.eq(count == boot)
+        m.d.comb += en.o.eq(count == boot)
         return m
 
 
 def _with_vccio(pll, clock_hz):
     def build(m, platform):
         clk, locked = pll(m, platform)
-        m.submodules.vccio = VccioControl(platform.request("vccio_ctrl", 0), clock_hz)
+        m.submodules.vccio = VccioControl(platform.request("vccio_ctrl", 0, dir="-"), clock_hz)
         return clk, locked
     build.plan = pll.plan
     return build
@@ -102,6 +105,8 @@ TARGET = {
     "resources": {"LUT": 83640, "FF": 83640, "BRAM": 208, "DSP": 156},
     "bram_shapes": [(16384, 1), (8192, 2), (4096, 4), (2048, 9), (1024, 18), (512, 36)],
     "lutram_bits": 512, "dsp_width": 18,
+    # board-build fmax bound (MHz) for the sizing: provisional: the ULX3S's filled board build (ECP5 speed grade 6; this board is grade 8) until this board's largest build is measured
+    "link_fmax_mhz": 80.8,
     "default_neurons": 2500,
     "status_leds": 0,
     "nextpnr_cells": {"LUT": "TRELLIS_COMB", "FF": "TRELLIS_FF", "BRAM": "DP16KD",

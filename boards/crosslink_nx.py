@@ -1,7 +1,16 @@
-"""Lattice CrossLink-NX Evaluation Board (LIFCL-40-9BG400C, Nexus): bitstream with yosys
-``synth_nexus``, nextpnr-nexus and prjoxide. amaranth-boards has no board file for it: the
-platform here states the pins this design uses (Lattice's EVN user guide, FPGA-EB-02036; the
-same pins as LiteX-boards' ``lattice_crosslink_nx_evn`` and prjoxide's EVN examples).
+"""Lattice CrossLink-NX Evaluation Board (LIFCL-40-9BG400C, Nexus): Verilog and estimate; the
+open flow (yosys ``synth_nexus``, nextpnr-nexus, prjoxide) is wired up but does not reach a
+bitstream on this board (below). amaranth-boards has no board file for it: the platform here
+states the pins this design uses (Lattice's EVN user guide, FPGA-EB-02036; the same pins as
+LiteX-boards' ``lattice_crosslink_nx_evn`` and prjoxide's EVN examples).
+
+No bitstream, because no clock reaches the fabric through nextpnr-nexus 0.11: the 12 MHz
+input (L13) packs and places, but the router finds no path from that pad to a global clock
+buffer ("Failed to route arc ... JPADDI_SEIO33_CORE_IOA to ... JCLKI_DCC"); the 125 MHz LVDS
+oscillator's pin (C12) is not in its package database ("constrained to invalid pin"). With a
+board clock on a pin nextpnr-nexus routes to the clock network the flow below is complete:
+yosys 0.70's ``synth_nexus`` output needs :mod:`cuneate.hdl.flow.nexus_carry` between yosys
+and nextpnr (the build runs it), which nextpnr then packs and places.
 
 UART: the FT2232H's second channel (the board's USB port), FPGA F18 (tx) and F16 (rx). As the
 board ships, that channel is not wired to the FPGA: 0-ohm resistors on R15 and R17 connect it,
@@ -62,8 +71,8 @@ PLAN = ClockPlan(osc_hz=12e6, clock_hz=12e6, update_hz=16e3, baud=1.5e6)
 
 TARGET = {
     "name": "crosslink_nx",
-    "description": "Lattice CrossLink-NX Evaluation Board, LIFCL-40-9BG400C: bitstream (yosys, "
-                   "nextpnr-nexus, prjoxide), cores of 734 at the 12 MHz clock",
+    "description": "Lattice CrossLink-NX Evaluation Board, LIFCL-40-9BG400C: Verilog and "
+                   "estimate (nextpnr-nexus routes no board clock), cores of 734 at 12 MHz",
     "family": "nexus", "device": "LIFCL-40-9BG400C",
     "platform": platform,
     "clock_plan": PLAN, "pll": direct(), "pll_clocks": [12e6],
@@ -78,5 +87,6 @@ TARGET = {
                       "DSP": "MULT18_CORE"},
     "uart": "the FT2232H's port B (the board's USB port) on F18 (out) and F16 (in), once R15 "
             "and R17 are fitted and port B is set to UART",
-    "bitstream": True, "loader_board": None, "bitstream_ext": "bit",
+    # the open flow stops at routing the board clock (the module's text)
+    "bitstream": False, "loader_board": None, "bitstream_ext": "bit",
 }

@@ -48,6 +48,8 @@ TARGET = {
     "resources": {"LUT": 24288, "FF": 24288, "BRAM": 56, "DSP": 28},
     "bram_shapes": [(16384, 1), (8192, 2), (4096, 4), (2048, 9), (1024, 18), (512, 36)],
     "lutram_bits": 512, "dsp_width": 18,
+    # board-build fmax bound (MHz) for the sizing: provisional: the ULX3S's filled board build (ECP5 speed grade 6; this board is grade 8) until this board's largest build is measured
+    "link_fmax_mhz": 80.8,
     "default_neurons": 2500,
     "nextpnr_cells": {"LUT": "TRELLIS_COMB", "FF": "TRELLIS_FF", "BRAM": "DP16KD",
                       "DSP": "MULT18X18D"},

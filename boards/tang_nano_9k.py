@@ -43,6 +43,8 @@ TARGET = {
     "resources": {"LUT": 8640, "FF": 6480, "BRAM": 26, "DSP": 20},
     "bram_shapes": [(16384, 1), (8192, 2), (4096, 4), (2048, 9), (1024, 18), (512, 36)],
     "lutram_bits": 64, "dsp_width": 18,
+    # board-build fmax bound (MHz) for the sizing: the 1000-neuron build at 48 MHz, seed 1 (measured; the largest build's three seeds are in benchmarks/boards.md)
+    "link_fmax_mhz": 57.3,
     "default_neurons": 2500,
     "nextpnr_cells": {"LUT": "LUT4", "ALU": "ALU", "FF": "DFF", "BRAM": "BSRAM", "DSP": "MULT18X18"},
     "nextpnr_freq": True,
