@@ -168,8 +168,7 @@ def test_vivado_boards_core_verilog_answers_on_both_simulators(simulator, tmp_pa
     clocks a bit) on the link's cocotb bench: a counters request answered with one intact
     counters frame, the request counted. Icarus 11 runs the same design's yosys-lowered netlist
     (``link_verilog``)."""
-    from cuneate.hdl.flow.verilog import verilog_text
-    from cuneate.hdl.link import LinkedCore
+    from cuneate.hdl.link import link_verilog
     from cuneate.hdl.link.codec import (MSG_COUNTERS, OP_READ_COUNTERS, FrameDecoder,
                                         control_message, encode_frame, parse_counters)
     from cuneate.sim.engines.cocotb import run_cocotb
@@ -179,7 +178,7 @@ def test_vivado_boards_core_verilog_answers_on_both_simulators(simulator, tmp_pa
     src = tmp_path / "cuneate_arty_core.v"
     if simulator == "icarus":
         src = tmp_path / "cuneate_arty_core_lowered.v"
-        src.write_text(verilog_text(LinkedCore(lc), "cuneate_arty_core", lowered=True))
+        src.write_text(link_verilog(lc, "cuneate_arty_core", lowered=True))
     cpb = r["clock_plan"]["clocks_per_bit"]
     frame = encode_frame(control_message(0, OP_READ_COUNTERS))
     run = run_cocotb(simulator, [src], "cuneate_arty_core", "cuneate.sim.link.bench",
