@@ -1,8 +1,9 @@
 """Brian2 on the speed benchmark's work, run in Brian2's own environment (numpy < 2.3).
 
-``python brian2_peer.py TARGET N DURATION_MS`` prints one JSON line: the run time (network
-``run`` only; for ``cpp_standalone`` the time the compiled binary reports, without code
-generation and compilation), updates per second and the spike count. The work: N Izhikevich RS
+``python brian2_peer.py TARGET N DURATION_MS [THREADS]`` prints one JSON line: the run time
+(network ``run`` only; for ``cpp_standalone`` the time the compiled binary reports, without code
+generation and compilation), updates per second, the spike count and Brian2's version.
+``cpp_standalone`` runs on ``THREADS`` OpenMP threads (default: every core). The work: N Izhikevich RS
 neurons, constant currents spread evenly over 0..20 mV/ms, forward Euler, dt = 1/16 ms, from
 v = -65 mV, u = b v (the golden model's start), threshold v >= 30 mV, reset v = c, u += d.
 """
@@ -13,13 +14,18 @@ import tempfile
 import time
 
 
-def main(target: str, n: int, duration_ms: float) -> dict:
+def main(target: str, n: int, duration_ms: float, threads: int | None = None) -> dict:
+    import os
+
+    import brian2
     import numpy as np
     from brian2 import (NeuronGroup, SpikeMonitor, defaultclock, device, ms, prefs, run,
                         set_device)
+    threads = threads or os.cpu_count() or 1
     if target == "cpp_standalone":
         d = tempfile.mkdtemp(prefix="brian2-standalone-")
         set_device("cpp_standalone", directory=d, build_on_run=True)
+        prefs.devices.cpp_standalone.openmp_threads = threads
     else:
         prefs.codegen.target = target
     defaultclock.dt = (1.0 / 16.0) * ms
@@ -41,8 +47,10 @@ def main(target: str, n: int, duration_ms: float) -> dict:
         wall = float(device._last_run_time)
     steps = int(round(duration_ms * 16))
     return {"target": target, "neurons": n, "run_s": wall, "updates_per_s": n * steps / wall,
-            "spikes": int(mon.num_spikes)}
+            "spikes": int(mon.num_spikes), "brian2": brian2.__version__,
+            "threads": threads if target == "cpp_standalone" else 1}
 
 
 if __name__ == "__main__":
-    print(json.dumps(main(sys.argv[1], int(sys.argv[2]), float(sys.argv[3]))))
+    print(json.dumps(main(sys.argv[1], int(sys.argv[2]), float(sys.argv[3]),
+                          int(sys.argv[4]) if len(sys.argv) > 4 else None)))

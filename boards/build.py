@@ -20,7 +20,7 @@ from ..hdl.flow.synth import cell_counts, nextpnr_summary, run_yosys
 from ..hdl.flow.tools import ToolError, yowasp_env
 from ..hdl.flow.verilog import verilog_text
 from ..hdl.lib.config import ConfigError
-from ..hdl.link import LinkedCore
+from ..hdl.link import LinkedTop
 from .scene import scene_request
 from .sizing import size_core
 from .targets import TARGETS
@@ -117,15 +117,13 @@ def build_target(board: str, out: Path, n_neurons: int | None = None,
     request = scene_request(scene, target, baud=baud) if scene is not None else None
     if request is not None and request.kind != "core":
         sized = size_blocks(target, request, clock_hz, pipeline_stages, baud)
-        make_top = sized["top"]
     else:
         sized = _size_cores(target, request, n_neurons, clock_hz, update_hz, depth, baud)
-        make_top = (lambda: LinkedCore(sized["link"]))
     lcfg = sized["link"]
     name = name or f"cuneate_{board}"
     out = Path(out).resolve()
     out.mkdir(parents=True, exist_ok=True)
-    (out / f"{name}_core.v").write_text(verilog_text(make_top(), f"{name}_core"))
+    (out / f"{name}_core.v").write_text(verilog_text(LinkedTop(lcfg), f"{name}_core"))
     report = {"board": board, "device": target["device"], "name": name,
               "neurons": request.neurons if request is not None else lcfg.n_neurons,
               "requested_neurons": sized["requested_neurons"],
@@ -139,7 +137,7 @@ def build_target(board: str, out: Path, n_neurons: int | None = None,
     if target.get("bitstream") and bitstream:
         from .top import BoardTop
         platform = target["platform"]()
-        top = BoardTop(make_top(), sized["pll"], target.get("uart_tx_enable", False),
+        top = BoardTop(lcfg, sized["pll"], target.get("uart_tx_enable", False),
                        target.get("status_leds"))
         opts = f"--report {name}.nextpnr.json --timing-allow-fail --seed {seed}"
         if target.get("nextpnr_freq"):
@@ -166,7 +164,7 @@ def build_target(board: str, out: Path, n_neurons: int | None = None,
     if target.get("vivado"):
         from .top import BoardTop
         from .vivado import check_tcl, write_project
-        top = BoardTop(make_top(), sized["pll"], False, target.get("status_leds"))
+        top = BoardTop(lcfg, sized["pll"], False, target.get("status_leds"))
         files = write_project(target["platform"](), top, out, name)
         try:
             check = check_tcl(out, name)
@@ -187,7 +185,7 @@ def build_target(board: str, out: Path, n_neurons: int | None = None,
 
 def _size_cores(target: dict, request, n_neurons, clock_hz, update_hz, depth: dict,
                 baud=None) -> dict:
-    """The Izhikevich core(s) behind the link (:class:`LinkedCore`): ``n_neurons``, or the
+    """The Izhikevich core(s) behind the link (:class:`LinkedTop`): ``n_neurons``, or the
     afferents of an afferent scene's ``request``."""
     neuron_sets = None
     if request is not None:
@@ -226,7 +224,7 @@ def size_blocks(target: dict, request, clock_hz, pipeline_stages, baud=None) -> 
                        f"{fmax / 1e6:.4g} MHz fmax (fmax limit)")
             continue
         try:
-            lcfg, make_top = request.linked(plan, target, pipeline_stages=depth)
+            lcfg = request.linked(plan, target, pipeline_stages=depth)
         except ConfigError as exc:
             why.append(f"at {plan.clock_hz / 1e6:g} MHz: {exc}")
             continue
@@ -245,7 +243,7 @@ def size_blocks(target: dict, request, clock_hz, pipeline_stages, baud=None) -> 
             if over is not None:
                 why.append(f"at {plan.clock_hz / 1e6:g} MHz: {over}")
                 continue
-        return {"link": lcfg, "top": make_top, "pll": pll, "estimate": est,
+        return {"link": lcfg, "pll": pll, "estimate": est,
                 "requested_neurons": request.neurons,
                 "plan": {"osc_hz": plan.osc_hz, "clock_hz": plan.clock_hz,
                          "update_hz": plan.update_hz, "baud": plan.line_baud,

@@ -11,11 +11,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from amaranth.build import ResourceError
 from amaranth.lib import io
 from amaranth import ClockDomain, ClockSignal, Elaboratable, Module, ResetSignal
 
 from ..hdl.izhikevich.config import ConfigError
-from ..hdl.link import LinkConfig, LinkedCore
+from ..hdl.link import LinkedTop
 
 __all__ = ["xilinx_estimate_target", "ClockPlan", "BoardTop", "MAX_BAUD_ERROR"]
 
@@ -72,18 +73,15 @@ class ClockPlan:
 
 
 class BoardTop(Elaboratable):
-    """``pll(m, platform) -> (clk, locked)`` builds the board's PLL; the rest is common.
+    """``pll(m, platform) -> (clk, locked)`` builds the board's PLL; the rest is common:
+    the block behind the UART face (:class:`~cuneate.hdl.link.LinkedTop` of the link
+    configuration ``lcfg``), its pins on the board's UART, ``running``, ``overflow`` and
+    ``clamped`` on three LEDs (as many as the board has, at most ``status_leds``: a board
+    whose LED pins carry the UART has none)."""
 
-    ``linked`` is the link configuration of the Izhikevich core(s) behind the link
-    (:class:`~cuneate.hdl.link.LinkedCore`) or a board top's linked blocks (an elaboratable with
-    the pins ``rx``, ``tx``, ``running`` and ``overflow``: :class:`~cuneate.hdl.link.LinkedLif`,
-    :class:`~cuneate.hdl.link.LinkedNetwork`, :class:`~cuneate.hdl.link.LinkedFanoutCore`,
-    whose ``clamped`` lights a third LED). ``status_leds``: at most that many of those LEDs
-    (a board whose LED pins carry the UART has none)."""
-
-    def __init__(self, linked, pll, uart_tx_enable: bool = False,
+    def __init__(self, lcfg, pll, uart_tx_enable: bool = False,
                  status_leds: int | None = None):
-        self.linked = LinkedCore(linked) if isinstance(linked, LinkConfig) else linked
+        self.linked = LinkedTop(lcfg)
         self.pll = pll
         self.uart_tx_enable = uart_tx_enable
         self.status_leds = status_leds
@@ -103,12 +101,25 @@ class BoardTop(Elaboratable):
             m.submodules.uart_en = en = io.Buffer("o", platform.request("uart_tx_enable", 0,
                                                                          dir="-"))
             m.d.comb += en.o.eq(1)
-        leds = [linked.running, linked.overflow] + \
-            ([linked.clamped] if hasattr(linked, "clamped") else [])
-        for i, sig in enumerate(leds[:self.status_leds]):
+        leds = [linked.running, linked.overflow, linked.clamped]
+        n_leds = _led_count(platform)
+        if self.status_leds is not None:
+            n_leds = min(n_leds, self.status_leds)
+        for i, sig in enumerate(leds[:n_leds]):
             m.submodules[f"led{i}"] = led = io.Buffer("o", platform.request("led", i, dir="-"))
             m.d.comb += led.o.eq(sig)
         return m
+
+
+def _led_count(platform) -> int:
+    """The LEDs ``platform`` names (``led`` 0, 1, ...)."""
+    n = 0
+    while True:
+        try:
+            platform.lookup("led", n)
+        except ResourceError:
+            return n
+        n += 1
 
 
 def xilinx_estimate_target(name: str, description: str, family: str, device: str,

@@ -10,7 +10,7 @@ Limits
 ------
 * **Memory**: a fraction (:data:`MEMORY_FRACTION`) of what this process can still get: the
   smallest of the memory the kernel reports available (``MemAvailable``), the control group's
-  limit less its usage, and the address-space limit (``ulimit -v``, ``RLIMIT_AS``) less the
+  limit less its usage, and the address-space and data limits (``ulimit -v``, ``ulimit -d``) less the
   address space already mapped.
 * **Time**: none by default (library calls run as long as they need); the command line sets it
   from ``--max-minutes`` for the duration of a command with :func:`limited`.
@@ -99,18 +99,25 @@ def _cgroup_room() -> float:
         return math.inf
 
 
-def _address_space_room() -> float:
-    soft, _ = resource.getrlimit(resource.RLIMIT_AS)
+def _rlimit_room(limit: int, field: str) -> float:
+    """What is left under the soft ``limit`` (``ulimit -v``: the address space, ``VmSize``;
+    ``ulimit -d``: the data segment and private writable mappings, ``VmData``)."""
+    soft, _ = resource.getrlimit(limit)
     if soft == resource.RLIM_INFINITY:
         return math.inf
     try:
         with open("/proc/self/status") as f:
             for line in f:
-                if line.startswith("VmSize:"):
+                if line.startswith(field + ":"):
                     return max(float(soft) - float(line.split()[1]) * 1024, 0.0)
     except OSError:
         pass
     return float(soft)
+
+
+def _address_space_room() -> float:
+    return min(_rlimit_room(resource.RLIMIT_AS, "VmSize"),
+               _rlimit_room(resource.RLIMIT_DATA, "VmData"))
 
 
 def available_memory() -> float:

@@ -205,11 +205,25 @@ class NeuronParams:
     @classmethod
     def from_sets(cls, sets: Sequence[IzhikevichParams], dtype=np.float64) -> "NeuronParams":
         keys = ("a", "b", "c", "d", "A", "B", "C", "u_leak", "v_u")
-        return cls(**{k: np.array([getattr(s, k) for s in sets], dtype=dtype) for k in keys})
+        distinct, index = _distinct(sets)
+        table = np.array([[getattr(s, k) for k in keys] for s in distinct], dtype=dtype)
+        rows = table[index] if len(distinct) > 1 else np.broadcast_to(table, (len(sets), 9))
+        return cls(**{k: np.array(rows[:, j]) for j, k in enumerate(keys)})
 
     def extras(self) -> dict:
         """Keyword arguments of :func:`step` beyond ``a, b, c, d``."""
         return {"A": self.A, "B": self.B, "C": self.C, "u_leak": self.u_leak, "v_u": self.v_u}
+
+
+def _distinct(sets: Sequence[IzhikevichParams]) -> tuple[list, np.ndarray | None]:
+    """The distinct objects of ``sets`` (by identity, in order of appearance) and each
+    entry's index into them (``None`` when all are one object: a set repeated)."""
+    first = sets[0] if len(sets) else None
+    if all(s is first for s in sets):
+        return ([first] if len(sets) else []), None
+    seen: dict = {}
+    index = np.array([seen.setdefault(id(s), (len(seen), s))[0] for s in sets], np.int64)
+    return [s for _, s in seen.values()], index
 
 
 def resolve_params(params, n_neurons: int | None = None, dtype=np.float64):
@@ -321,16 +335,22 @@ def current_schedule(current, n_steps: int, n_neurons: int, dt_ms: float,
     raise ValueError(f"input current must be 0-, 1- or 2-D, got {arr.ndim}-D")
 
 
-def group_spikes(hit_steps, hit_neurons, n_neurons: int) -> list[np.ndarray]:
-    """Group parallel chunks of (update index, neuron index) into one sorted array per neuron."""
-    if not hit_steps:
-        return [np.zeros(0, dtype=np.int64) for _ in range(n_neurons)]
-    ks = np.concatenate(hit_steps)
-    ns = np.concatenate(hit_neurons)
-    order = np.lexsort((ks, ns))
-    ks, ns = ks[order], ns[order]
-    bounds = np.searchsorted(ns, np.arange(n_neurons + 1))
-    return [ks[bounds[i]:bounds[i + 1]].copy() for i in range(n_neurons)]
+def group_spikes(hit_steps, hit_neurons, n_neurons: int, dt_ms: float | None = None):
+    """Group parallel chunks of (update index, neuron index) into one sorted array per neuron
+    (views of one array). With ``dt_ms``, also the spike times ``(k + 1) dt`` per neuron:
+    returns ``(steps, times)``."""
+    from .kernel import by_neuron
+    if hit_steps:
+        ks, bounds = by_neuron(np.concatenate(hit_steps), np.concatenate(hit_neurons),
+                               n_neurons)
+    else:
+        ks, bounds = np.zeros(0, dtype=np.int64), np.zeros(n_neurons + 1, np.int64)
+    edges = list(zip(bounds[:-1].tolist(), bounds[1:].tolist()))
+    steps = [ks[a:b] for a, b in edges]
+    if dt_ms is None:
+        return steps
+    times = (ks + 1) * dt_ms
+    return steps, [times[a:b] for a, b in edges]
 
 
 @dataclass
@@ -394,9 +414,9 @@ def simulate(params="RS", current=10.0, *, duration_ms: float | None = None,
         :func:`step` per update (the reference). Default: ``"numba"`` where it applies.
     threads
         Threads for the compiled loop (neurons are independent); default two (at most the
-        cores) from 2000 neurons on when the current is an array (each thread runs its neurons
-        through every step: measured on 2 cores 1.7x at 10 000 neurons), from 50 000 on when
-        it is a callable (evaluated per step, so the threads meet once per step), else one.
+        cores) when the current is an array, from 512 neurons and 2e6 updates on (each thread
+        runs its blocks of neurons through every step), from 50 000 neurons on when it is a
+        callable (evaluated per step, so the threads meet once per step), else one.
         Per-neuron constants are cheapest as a zero-copy broadcast,
         ``np.broadcast_to(I, (n_steps, n_neurons))``.
 
@@ -425,8 +445,9 @@ def simulate(params="RS", current=10.0, *, duration_ms: float | None = None,
     if n_neurons < 1:
         raise ValueError("n_neurons must be >= 1")
     sets = resolve_param_sets(params, n_neurons)
-    for i, s in enumerate(sets):
+    for s in _distinct(sets)[0]:
         if not s.c < V_TH:
+            i = next(i for i, x in enumerate(sets) if x is s)
             raise ValueError(f"parameter set of neuron {i} {s.label()}: reset c = {s.c:g} mV is "
                              f"not below the threshold v_th = {V_TH:g} mV (the neuron would "
                              f"spike on every update)")
@@ -459,10 +480,9 @@ def simulate(params="RS", current=10.0, *, duration_ms: float | None = None,
         v, u, hit_steps, hit_neurons, v_tr, u_tr = _simulate_numpy(
             prm, v, u, I_of, n_steps, n_neurons, dt_ms, scheme, dtype, record, state_bound,
             progress)
-    steps = group_spikes(hit_steps, hit_neurons, n_neurons)
-    return IzhikevichResult(dt_ms=dt_ms, scheme=scheme, n_steps=n_steps,
-                            spikes_ms=[(s + 1) * dt_ms for s in steps], v=v, u=u,
-                            v_trace=v_tr, u_trace=u_tr, spike_steps=steps)
+    steps, times = group_spikes(hit_steps, hit_neurons, n_neurons, dt_ms)
+    return IzhikevichResult(dt_ms=dt_ms, scheme=scheme, n_steps=n_steps, spikes_ms=times, v=v,
+                            u=u, v_trace=v_tr, u_trace=u_tr, spike_steps=steps)
 
 
 def _simulate_numpy(prm, v, u, I_of, n_steps, n_neurons, dt_ms, scheme, dtype, record,

@@ -97,6 +97,7 @@ class Decoded:
     rows: list = field(default_factory=list)
     n_samples: int = 0
     reason: str = ""
+    noun: str = "grasp"       # what one trial is: grasp, slide, pulse, recording
 
     @property
     def headline(self) -> Protocol | None:
@@ -112,8 +113,8 @@ class Decoded:
         return next((r for r in self.rows if r.name.startswith(name_start)), None)
 
     def to_dict(self) -> dict:
-        return {"headline": "balanced accuracy of the per-grasp decision, grasp-grouped "
-                            "cross-validation",
+        return {"headline": f"balanced accuracy of the per-{self.noun} decision, "
+                            f"{self.noun}-grouped cross-validation",
                 "balanced_accuracy": self.accuracy, "classes": list(self.classes),
                 "features": self.features, "kind": self.kind, "decision": self.decision,
                 "n_samples": self.n_samples, "reason": self.reason,
@@ -211,20 +212,23 @@ def _grouped_decisions(model, X, y, groups, n_trials, folds, seed, decision):
 def decode_trials(spikes_ms, neuron_trial, neuron_grating, trial_class, classes,
                   kind: str = "tree", features: str = "isi", cv_folds: int = 50,
                   max_depth: int = 3, neighbours: int = 3, seed: int = 1, window=None,
-                  decision: str = "soft", permutations: int = 0) -> Decoded:
+                  decision: str = "soft", permutations: int = 0,
+                  noun: str = "grasp") -> Decoded:
     """Decode the grasps' classes from their spike trains with every protocol of the module
-    docstring; returns a :class:`Decoded` (its ``reason`` says why when it cannot decode)."""
+    docstring; returns a :class:`Decoded` (its ``reason`` says why when it cannot decode).
+    ``noun``: what one trial is (a grasp; a slide, a pulse, a recording), in the rows' names
+    and the reasons."""
     from sklearn.model_selection import StratifiedKFold, cross_val_predict
     fn = isi_samples if features == "isi" else trial_features
     X, y, groups = fn(spikes_ms, neuron_trial, neuron_grating, trial_class, window)
     trial_class = np.asarray(trial_class, dtype=object)
-    out = Decoded(list(classes), features, kind, decision, n_samples=int(y.size))
+    out = Decoded(list(classes), features, kind, decision, n_samples=int(y.size), noun=noun)
     present = [c for c in classes if np.any(y == c)]
     grasps = {c: np.unique(groups[y == c]).size for c in present}
     folds = int(min([cv_folds, *grasps.values()])) if grasps else 0
     if len(present) < 2 or folds < 2:
         out.reason = (f"too few samples to cross-validate ({y.size} samples, {len(present)} "
-                      f"classes with data, fewest grasps with samples in a class "
+                      f"classes with data, fewest {noun}s with samples in a class "
                       f"{min(grasps.values(), default=0)})")
         return out
     train = y.size - -(-y.size // folds)            # the smallest training fold (samples)
@@ -235,12 +239,12 @@ def decode_trials(spikes_ms, neuron_trial, neuron_grating, trial_class, classes,
     model = _model(kind, max_depth, neighbours, seed, y.size)
     per_sample, per_grasp = _grouped_decisions(model, X, y, groups, trial_class.size, folds,
                                                seed, decision)
-    grouped_cv = f"StratifiedGroupKFold, {folds} folds on grasps"
-    head = _protocol("grasp-grouped, per grasp", "grasp", grouped_cv, folds, trial_class,
+    grouped_cv = f"StratifiedGroupKFold, {folds} folds on {noun}s"
+    head = _protocol(f"{noun}-grouped, per {noun}", noun, grouped_cv, folds, trial_class,
                      per_grasp, classes)
     out.rows.append(head)
     if features == "isi":
-        out.rows.append(_protocol("grasp-grouped, per ISI", "ISI", grouped_cv, folds, y,
+        out.rows.append(_protocol(f"{noun}-grouped, per ISI", "ISI", grouped_cv, folds, y,
                                   per_sample, classes))
         smallest = min(int(np.count_nonzero(y == c)) for c in present)
         k = int(min(cv_folds, smallest))
@@ -256,7 +260,7 @@ def decode_trials(spikes_ms, neuron_trial, neuron_grating, trial_class, classes,
             perm = rng.permutation(trial_class)
             _, pg = _grouped_decisions(model, X, perm[groups], groups, trial_class.size, folds,
                                        seed, decision)
-            null.append(_protocol("", "grasp", "", folds, perm, pg, classes).balanced_accuracy)
+            null.append(_protocol("", noun, "", folds, perm, pg, classes).balanced_accuracy)
         null = np.asarray(null)
         head.null = {"permutations": int(permutations), "mean": float(null.mean()),
                      "p95": float(np.percentile(null, 95)),

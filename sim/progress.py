@@ -24,7 +24,7 @@ import sys
 import threading
 import time
 
-__all__ = ["configure", "mode", "step", "say", "Step", "HEARTBEAT_S", "callback"]
+__all__ = ["configure", "mode", "step", "say", "Step", "HEARTBEAT_S", "callback", "plural"]
 
 #: Longest silence in ``log`` mode while a step runs (seconds).
 HEARTBEAT_S = 5.0
@@ -34,6 +34,11 @@ _state = {"mode": "quiet", "stream": None, "heartbeat_s": HEARTBEAT_S, "verbose"
           "last_line": 0.0}
 _active: list = []
 _ticker: dict = {"thread": None, "stop": None}
+
+
+def plural(unit: str, n: float) -> str:
+    """``unit`` for ``n`` of it: ``tick`` for 1, ``ticks`` otherwise (``11200 ticks``)."""
+    return unit if n == 1 or not unit or unit.endswith("s") else unit + "s"
 
 
 def configure(mode: str = "auto", stream=None, heartbeat_s: float = HEARTBEAT_S,
@@ -116,7 +121,7 @@ class Step:
         if self.total:
             frac = min(1.0, self.done / self.total)
             s = (f"{self.what} {100 * frac:.0f} % ({self.done:g}/{self.total:g}"
-                 f"{' ' + self.unit if self.unit else ''})")
+                 f"{' ' + plural(self.unit, self.total) if self.unit else ''})")
         else:
             s = self.what
         if self.detail:
@@ -160,7 +165,7 @@ def step(what: str, total: float | None = None, unit: str = ""):
                          file=_stream(), dynamic_ncols=True,
                          bar_format=None if total else "{desc}: {elapsed}{postfix}")
         elif m == "log":
-            _line(what + (f" ({total:g} {unit})" if total else "") + " ...")
+            _line(what + (f" ({total:g} {plural(unit, total)})" if total else "") + " ...")
         _active.append(s)
         if m != "quiet":
             _ensure_ticker()

@@ -11,6 +11,7 @@ engines) and wall time per stage.
 from __future__ import annotations
 
 import html
+import math
 import json
 import re
 from pathlib import Path
@@ -21,7 +22,7 @@ __all__ = ["write_report", "summary_dict", "figure_names", "page_head", "figures
            "pyplot", "html_table", "fmt", "write_page", "DPI", "save_figure",
            "decoding_rows", "DECODING_HEAD", "printable", "format_run", "engine_figures",
            "agreement_html", "ran_html", "files_html", "board_link_html", "block_line",
-           "in_turn_line"]
+           "in_turn_line", "fmt_distinct"]
 
 #: Resolution of every report figure (dots per inch); figures are drawn at their display size.
 DPI = 150
@@ -62,10 +63,12 @@ def figure_names(run) -> list[tuple[str, str]]:
                   (f"isi_{e}.png", f"Inter-spike intervals on {e} per class (the decoder's "
                                    f"samples)")]
         if e in run.decoded and run.decoded[e].accuracy is not None:
+            noun = run.scene.trial_noun
             names.append((f"confusion_{e}.png",
-                          f"Confusion matrices on {e}: per grasp with grasp-grouped "
-                          f"cross-validation (the headline), and the published per-ISI "
-                          f"protocol"))
+                          f"Confusion matrices on {e}: per {noun} with {noun}-grouped "
+                          f"cross-validation (the headline)"
+                          + (", and the published per-ISI protocol"
+                             if run.decoded[e].row("published") else "")))
     return names
 
 
@@ -187,8 +190,8 @@ def summary_dict(run) -> dict:
         "trials": len(run.trial_class), "neurons": len(run.neurons), "ticks": run.n_ticks,
         "dt_ms": run.dt_ms,
         "accuracy": {e: d.accuracy for e, d in run.decoded.items()},
-        "accuracy_is": "balanced accuracy of the per-grasp decision, grasp-grouped "
-                       "cross-validation (chance 1/classes)",
+        "accuracy_is": f"balanced accuracy of the per-{run.scene.trial_noun} decision, "
+                       f"{run.scene.trial_noun}-grouped cross-validation (chance 1/classes)",
         "decoded": {e: d.to_dict() for e, d in run.decoded.items()},
         "agreement": run.agreement, "decode_agreement": run.decode_agreement,
         "saturations": run.saturations,
@@ -271,6 +274,20 @@ def fmt(x, nd=3):
     return "-" if x is None else (f"{x:.{nd}f}" if isinstance(x, float) else str(x))
 
 
+def fmt_distinct(x, nd=3):
+    """A figure in [0, 1] or >= 0 (a fraction, a distance) to the decimals that tell it from 0
+    and 1: exactly 0 and 1 print as ``0`` and ``1``, anything else never rounds to them
+    (0.99975 of spikes within a tick is ``0.99975``, not ``1.000``)."""
+    if x is None:
+        return "-"
+    x = float(x)
+    if x in (0.0, 1.0):
+        return f"{x:g}"
+    gaps = [g for g in (abs(x), abs(1.0 - x)) if g > 0]
+    need = max(nd, 1 - math.floor(math.log10(min(gaps))))
+    return f"{x:.{need}f}"
+
+
 def _pct(x, nd=1):
     return "-" if x is None else f"{100 * x:.{nd}f}"
 
@@ -308,7 +325,8 @@ def files_html(files: dict) -> str:
         for e, x in w["files"].items():
             items.append(f'<li>waveform of {html.escape(e)}: <a href="{html.escape(x["dump"])}">'
                          f'{html.escape(x["dump"])}</a> (GTKWave: <a href="'
-                         f'{html.escape(x["gtkw"])}">{html.escape(x["gtkw"])}</a>)</li>')
+                         f'{html.escape(x["gtkw"])}">{html.escape(x["gtkw"])}</a>; '
+                         f'{html.escape(x.get("time_axis", ""))})</li>')
         items.append(f"<li>waveform window: ticks {w['start_tick']} to "
                      f"{w['start_tick'] + w['ticks'] - 1}{html.escape(w.get('note', ''))}</li>")
     if not items:
@@ -335,21 +353,21 @@ def write_report(run, out: Path) -> Path:
     n_sat = s.get("format_low", 0) + s.get("format_high", 0)
     n_range = s.get("range_low", 0) + s.get("range_high", 0)
     dec = run.scene["decoder"]
+    noun = run.scene.trial_noun
+    published = any(d.row("published") for d in run.decoded.values())
     reports = "".join(
         f"<details><summary>{html.escape(e)}: scikit-learn classification report "
-        f"(per grasp)</summary><pre>{html.escape(d.headline.report_text)}</pre></details>"
+        f"(per {noun})</summary><pre>{html.escape(d.headline.report_text)}</pre></details>"
         for e, d in run.decoded.items() if d.rows)
     prov = summ["provenance"]
     body = f"""<p>Scene: {html.escape(run.scene.source)}. {len(run.trial_class)} trials of
 {len(run.classes)} classes, {len(run.neurons)} neurons, {run.n_ticks} ticks of
 {run.dt_ms:g} ms.</p>
-<h2>Decoding: what the system decides per grasp</h2>
-<p>Headline (first row per engine): every grasp decided by pooling its samples
-({html.escape(dec['decision'])} vote) under <b>grasp-grouped</b> cross-validation (no grasp in
+<h2>Decoding: what the system decides per {noun}</h2>
+<p>Headline (first row per engine): every {noun} decided by pooling its samples
+({html.escape(dec['decision'])} vote) under <b>{noun}-grouped</b> cross-validation (no {noun} in
 its own training set); <b>balanced accuracy</b> = mean per-class recall, chance = 1/classes.
-The last row is the <b>published protocol</b> (ISIs of one grasp in training and test folds),
-kept for comparison; its plain accuracy favours the classes with most ISIs (largest class
-given beside it). Decoder: {html.escape(dec['kind'])} on {html.escape(dec['features'])}
+{_published_note(noun) if published else ""}Decoder: {html.escape(dec['kind'])} on {html.escape(dec['features'])}
 features of {html.escape(summ['decoded_population'])}.</p>
 {html_table(decoding_rows(run.decoded), DECODING_HEAD)}
 <p>{html.escape("; ".join(
@@ -372,8 +390,9 @@ never applied.</p>
 def agreement_html(run) -> str:
     """The engine agreement of an afferent run (and the board's link, when it ran)."""
     rows = [[k, v["spikes_a"], v["spikes_b"], f"{v['identical_trains']}/{v['neurons']}",
-             fmt(v["mean_abs_count_diff"]), v["max_abs_count_diff"],
-             fmt(v["mean_victor_purpura"]), fmt(v["fraction_within_1_tick"])]
+             fmt_distinct(v["mean_abs_count_diff"]), v["max_abs_count_diff"],
+             fmt_distinct(v["mean_victor_purpura"]),
+             fmt_distinct(v["fraction_within_1_tick"])]
             for k, v in run.agreement.items()]
     return f"""<h2>Engine agreement</h2>
 {html_table(rows, ["pair", "spikes A", "spikes B", "identical trains", "mean |count diff|",
@@ -453,6 +472,12 @@ rate, each way:</p>
                    "real time"])}"""
 
 
+def _published_note(noun: str) -> str:
+    return (f"The last row is the <b>published protocol</b> (ISIs of one {noun} in training and "
+            f"test folds), kept for comparison; its plain accuracy favours the classes with most "
+            f"ISIs (largest class given beside it). ")
+
+
 def format_run(run) -> str:
     """The lines ``cuneate run`` prints for an afferent scene run (its summary on the terminal)."""
     scene = run.scene
@@ -462,9 +487,10 @@ def format_run(run) -> str:
     if first is not None:
         h = first.headline
         out.append(f"  decoding {scene['decoder']['population'] or 'every afferent'}: "
-                   f"balanced accuracy of the per-grasp decision ({first.decision} "
-                   f"vote), {h.cv} (chance {100 * h.chance_balanced:.0f} %); published "
-                   f"protocol (per ISI, shuffled k-fold) beside it")
+                   f"balanced accuracy of the per-{scene.trial_noun} decision ({first.decision} "
+                   f"vote), {h.cv} (chance {100 * h.chance_balanced:.0f} %)"
+                   + ("; published protocol (per ISI, shuffled k-fold) beside it"
+                      if first.row("published") else ""))
     for e, t in run.timing["engines_s"].items():
         d = run.decoded.get(e)
         if d is None:
@@ -509,7 +535,7 @@ def format_run(run) -> str:
                       if scene["decoder"]["population"] else ""))
     for k, v in run.agreement.items():
         out.append(f"  {k}: {v['identical_trains']}/{v['neurons']} identical trains, mean "
-                   f"|spike count diff| {v['mean_abs_count_diff']:.2f}")
+                   f"|spike count diff| {fmt_distinct(v['mean_abs_count_diff'])}")
     board = run.counters.get("board") or {}
     if "link_budget" in board:
         from .host.uart import format_budget

@@ -28,6 +28,8 @@ annotated with population, trial, grating, class and neuron index), ready for El
 
 from __future__ import annotations
 
+import zipfile
+import zlib
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -36,6 +38,9 @@ import numpy as np
 __all__ = ["FORMAT", "SpikeFile", "write_spikes", "load_spikes"]
 
 FORMAT = "cuneate-spikes/1"
+#: the arrays a spike file holds (besides ``format``)
+KEYS = ("engine", "times_ms", "neuron", "population", "trial", "grating", "class", "dt_ms",
+        "t_stop_ms")
 
 
 def write_spikes(path, trains_ms, engine: str, t_stop_ms: float, population, trial=None,
@@ -110,12 +115,31 @@ class SpikeFile:
 
 def load_spikes(path, as_neo: bool = False):
     """Read a spike file; a :class:`SpikeFile`, or with ``as_neo`` its
-    :meth:`SpikeFile.to_neo` trains. A file of another format is refused (``ValueError``)."""
-    with np.load(Path(path), allow_pickle=False) as z:
-        fmt = str(z["format"]) if "format" in z.files else None
-        if fmt != FORMAT:
-            raise ValueError(f"{path}: not a {FORMAT} file (format {fmt!r})")
-        f = SpikeFile(str(z["engine"]), z["times_ms"], z["neuron"], z["population"],
-                      z["trial"], z["grating"], z["class"], float(z["dt_ms"]),
-                      float(z["t_stop_ms"]))
+    :meth:`SpikeFile.to_neo` trains. A file of another format, an unreadable or incomplete one,
+    or one whose spikes name neurons outside its table or disagree with its times, is refused
+    (``ValueError`` naming the file; a missing file is ``FileNotFoundError``)."""
+    try:
+        with np.load(Path(path), allow_pickle=False) as z:
+            fmt = str(z["format"]) if "format" in z.files else None
+            if fmt != FORMAT:
+                raise ValueError(f"{path}: not a {FORMAT} file (format {fmt!r})")
+            missing = [k for k in KEYS if k not in z.files]
+            if missing:
+                raise ValueError(f"{path}: a {FORMAT} file without {', '.join(missing)}")
+            f = SpikeFile(str(z["engine"]), z["times_ms"], z["neuron"], z["population"],
+                          z["trial"], z["grating"], z["class"], float(z["dt_ms"]),
+                          float(z["t_stop_ms"]))
+    except (EOFError, zipfile.BadZipFile, zlib.error) as exc:
+        raise ValueError(f"{path}: not a readable spike file ({type(exc).__name__}: "
+                         f"{exc})") from None
+    n = len(f)
+    if f.neuron.shape != f.times_ms.shape:
+        raise ValueError(f"{path}: {f.neuron.size} neuron indices for {f.times_ms.size} spikes")
+    if f.neuron.size and (f.neuron.min() < 0 or f.neuron.max() >= n):
+        bad = int(f.neuron[(f.neuron < 0) | (f.neuron >= n)][0])
+        raise ValueError(f"{path}: a spike of neuron {bad}, outside its table of {n} neurons")
+    for k in ("trial", "grating", "classes"):
+        if getattr(f, k).size != n:
+            raise ValueError(f"{path}: the neuron table's {k} has {getattr(f, k).size} entries "
+                             f"for {n} neurons")
     return f.to_neo() if as_neo else f

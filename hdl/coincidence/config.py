@@ -32,7 +32,7 @@ import numpy as np
 from ...golden import coincidence as gcun
 from ..izhikevich.config import CLAMP_KINDS, IzhikevichConfig
 from ..izhikevich.config import min_neurons as iz_min_neurons
-from ..lib.config import ConfigError, int_bits_for
+from ..lib.config import MAX_BLOCK_RAM_BITS, ConfigError, int_bits_for
 from ..lib.fixed import FixedPointError, QFormat
 from ..lib.synapses import TraceView, trace_spec
 
@@ -45,9 +45,8 @@ TRACE_NAMES = ("xd", "xr")
 CYCLES_PER_TARGET_EXTRA = 8
 
 
-#: The most spike-history bits a detector may hold: the block RAM of the largest supported FPGA
-#: (the ULX3S's ECP5-85F, 208 blocks of 18 Kibit).
-MAX_HISTORY_BITS = 208 * 18 * 1024
+#: The most spike-history bits a detector may hold: the block RAM of the largest supported FPGA.
+MAX_HISTORY_BITS = MAX_BLOCK_RAM_BITS
 
 
 @dataclass

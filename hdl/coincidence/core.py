@@ -79,6 +79,16 @@ class CoincidenceDetector(wiring.Component):
     (sticky, cleared by ``clamp_clear``).
     """
 
+    #: the ports' meanings, for the Verilog's header
+    PORT_MEANINGS = {
+        "spike_valid": "a target spiked (one cycle)", "spike_target": "the target",
+        "spike_tick": "its tick", "upd_target": "the updated target",
+        "upd_xd": "the PSP's decay trace (raw)", "upd_xr": "the PSP's rise trace (raw)",
+        "upd_a": "the input sum of its delayed spikes", "upd_i": "its PSP current (raw)",
+        "upd_tick": "the tick of the update", "tick_count": "ticks", "merged_count":
+        "input events merged (two of a source in one tick)", "overrun_count": "ticks ignored",
+        "tick_overrun": "sticky: a tick came before the last was done"}
+
     def __init__(self, config: CoincidenceConfig):
         self.cfg = cfg = config
         M, S = cfg.n_targets, cfg.n_sources

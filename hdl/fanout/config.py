@@ -24,7 +24,8 @@ It derives:
   (:meth:`FanoutConfig.sample_bound`).
 
 Refused at construction, one line each: a channel index outside ``0 .. n_channels - 1``, a
-non-finite or oversized gain, a gain whose representation error exceeds ``max_gain_error``, a
+non-finite gain or one whose product with the largest sample exceeds float64 (every finite
+product is exact: a gain of 1e18 clamps, flagged), a gain whose representation error exceeds ``max_gain_error``, a
 threshold outside the sample range, an unknown rectification, a table larger than the block
 RAM of the largest supported FPGA, and a run of ``n_neurons + LATENCY`` cycles that does not fit
 one sample period at ``clock_hz``.
@@ -40,18 +41,32 @@ from typing import Sequence
 import numpy as np
 
 from ...golden.fanout import RECTIFY
-from ..lib.config import ConfigError, shared_exponent
+from ..lib.config import MAX_BLOCK_RAM_BITS, ConfigError, shared_exponent
 from ..lib.fixed import FixedPointError, QFormat
 
 __all__ = ["FanoutConfig", "ConfigError", "CLAMP_KINDS", "LATENCY", "MAX_TABLE_BITS",
+           "check_table_size",
            "RECTIFY"]
 
 #: the clamps that can act: the current below / above its format
 CLAMP_KINDS = ("current_low", "current_high")
 #: cycles from issuing an afferent's table read to its current on ``i_wr_*``
 LATENCY = 5
-#: the most table bits a fan-out may hold: the block RAM of the ULX3S's ECP5-85F
-MAX_TABLE_BITS = 208 * 18 * 1024
+#: the most table bits a fan-out may hold: the block RAM of the largest supported FPGA
+MAX_TABLE_BITS = MAX_BLOCK_RAM_BITS
+
+
+def check_table_size(n_neurons: int, n_channels: int, gain_width: int = 18,
+                     sample_width: int = 16) -> int:
+    """The table bits of ``n_neurons`` entries (channel index, gain, threshold, mode, gate), or
+    a :class:`ConfigError` when no supported FPGA holds them: cheap, so a command checks it
+    before building a table of that size."""
+    entry = max(1, (int(n_channels) - 1).bit_length()) + gain_width + sample_width + 3
+    bits = int(n_neurons) * entry
+    if bits > MAX_TABLE_BITS:
+        raise ConfigError(f"the fan-out table of {n_neurons} afferents needs {bits} bits; "
+                          f"the largest supported FPGA holds {MAX_TABLE_BITS}")
+    return bits
 
 
 @dataclass
@@ -147,12 +162,20 @@ class FanoutConfig:
             raise ConfigError(f"sample_max must be > 0, got {self.sample_max!r}")
         self.S = QFormat.for_range(-self.sample_max, self.sample_max, self.sample_width)
         self.I = self.current_format
+        big = int(np.argmax(np.abs(g)))
+        if not math.isfinite(float(g[big]) * self.S.min_value):
+            raise ConfigError(f"the gain of afferent {big}, {float(g[big]):g}, times the "
+                              f"largest sample {-self.S.min_value:g} exceeds float64 (the "
+                              f"golden model's numbers): the gain must be below "
+                              f"{np.finfo(np.float64).max / -self.S.min_value:.4g}")
         self.gains_ = shared_exponent("gain", [float(x) for x in g], self.gain_width,
                                       max_rel_error=self.max_gain_error)
         self.gain_frac = self.gains_[0].frac_bits
         self._thresholds(N)
         self.shift = self.S.frac_bits + self.gain_frac - self.I.frac_bits
-        p_width = self.S.width + 1 + self.gain_width
+        # the rectified sample (|min| needs one bit more) and the full product, as registered
+        self.r_width = self.S.width + 1
+        p_width = self.p_width = self.r_width + self.gain_width
         if self.shift >= p_width:
             raise ConfigError(f"every current would round to 0: the product of a {self.S} "
                               f"sample and the gains ({self.gain_width} bits, largest "
@@ -164,10 +187,7 @@ class FanoutConfig:
         self.entry_fields = (("channel", self.chan_bits), ("gain", self.gain_width),
                              ("theta", self.S.width), ("mode", 2), ("gated", 1))
         self.entry_width = sum(w for _, w in self.entry_fields)
-        if N * self.entry_width > MAX_TABLE_BITS:
-            raise ConfigError(f"the fan-out table of {N} afferents needs "
-                              f"{N * self.entry_width} bits; the largest supported FPGA holds "
-                              f"{MAX_TABLE_BITS}")
+        check_table_size(N, C, self.gain_width, self.S.width)
         self.cycles_per_run = N + LATENCY
         budget = self.clock_hz / self.sample_hz
         if self.cycles_per_run > budget:

@@ -47,6 +47,18 @@ COUNTER_BITS = 32
 class ChannelFanout(wiring.Component):
     """The channel fan-out as RTL (see the module docstring for the schedule and the ports)."""
 
+    #: the ports' meanings, for the Verilog's header (:func:`~cuneate.hdl.flow.verilog
+    #: .verilog_header`)
+    PORT_MEANINGS = {
+        "ch_wr_valid": "channel sample write: valid", "ch_wr_ready": "ready (low during a run)",
+        "ch_wr_addr": "the channel", "ch_wr_data": "its sample, raw in the sample format",
+        "start": "run the table over the samples written", "i_wr_en": "to the core: write",
+        "i_wr_addr": "to the core: the afferent",
+        "i_wr_data": "to the core: its current, raw in the current format",
+        "done": "pulse with a run's last write", "run_count": "runs started",
+        "overrun_count": "starts ignored during a run", "clamp_low_count": "low clamps",
+        "clamp_high_count": "high clamps"}
+
     def __init__(self, cfg: FanoutConfig):
         self.cfg = cfg
         S, I = cfg.S, cfg.I
@@ -108,14 +120,14 @@ class ChannelFanout(wiring.Component):
         s = ch_rd.data.as_signed() if S.signed else ch_rd.data
         r = rectify_gate(s, mode2, gated2, theta2)
         v3, n3 = Signal(), Signal.like(n)
-        r3 = Signal(signed(S.width + 1))
+        r3 = Signal(signed(cfg.r_width))
         g3 = Signal.like(g2)
         m.d.sync += [v3.eq(v2), n3.eq(n2), r3.eq(r), g3.eq(g2)]
 
         # stage 4: the product
         p = product(r3, g3)
         v4, n4 = Signal(), Signal.like(n)
-        p4 = Signal(signed(S.width + 1 + cfg.gain_width))
+        p4 = Signal(signed(cfg.p_width))
         m.d.sync += [v4.eq(v3), n4.eq(n3), p4.eq(p)]
 
         # stage 5: round, clamp (flagged), write the current

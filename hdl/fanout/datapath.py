@@ -7,7 +7,7 @@ stage 5). Formats and the schedule: :class:`~cuneate.hdl.fanout.config.FanoutCon
 
 from __future__ import annotations
 
-from ..lib.fixed import clamp_flagged, round_shift, select
+from ..lib.fixed import round_clamp_flagged, select
 from .config import FanoutConfig
 
 __all__ = ["rectify_gate", "product", "to_current"]
@@ -32,6 +32,8 @@ def product(r, g):
 def to_current(cfg: FanoutConfig, p):
     """The product rounded to the current format and clamped into it: ``(current, below,
     above)``; the flags say when the clamp acted (no clamp is built where the proven range of
-    the rounded product fits the format)."""
-    i = round_shift(p, cfg.shift, cfg.rounding)
-    return clamp_flagged(i, cfg.I.min_raw, cfg.I.max_raw, cfg.I, cfg.i_bounds)
+    the rounded product fits the format). Exact at every gain: where the shared exponent adds
+    bits (a negative ``shift``) the clamp compares the product itself
+    (:func:`~cuneate.hdl.lib.fixed.round_clamp_flagged`)."""
+    return round_clamp_flagged(p, cfg.shift, cfg.rounding, cfg.I.min_raw, cfg.I.max_raw, cfg.I,
+                               cfg.i_bounds)

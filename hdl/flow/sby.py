@@ -11,6 +11,8 @@ step and in which part of a k-induction.
 
 from __future__ import annotations
 
+import contextlib
+import contextvars
 import os
 import re
 import shutil
@@ -22,7 +24,7 @@ from pathlib import Path
 from .tools import ToolError, tool
 
 __all__ = ["FormalError", "run_sby", "signed_bits", "parse_sby_log", "ENGINES", "SOLVER",
-           "SOLVERS"]
+           "SOLVERS", "memory_failure", "reporting", "SbyProgress"]
 
 #: engines a proof may name: ``smtbmc`` (SMT, z3; bmc and k-induction) and ``abc pdr``
 #: (property-directed reachability on the bit-level model; ``prove`` mode only)
@@ -47,6 +49,66 @@ def _venv_path() -> dict:
 
 class FormalError(ToolError):
     """SymbiYosys could not run or did not reach a verdict."""
+
+
+# where the runs of this context report their progress (a callable taking one line of text)
+_sink: contextvars.ContextVar = contextvars.ContextVar("sby_progress", default=None)
+
+
+@contextlib.contextmanager
+def reporting(note):
+    """Within the block, every :func:`run_sby` reads SymbiYosys's output as it comes and
+    calls ``note(text)`` with where the check is: the phase and step of each engine
+    (:class:`SbyProgress`)."""
+    token = _sink.set(note)
+    try:
+        yield
+    finally:
+        _sink.reset(token)
+
+
+class SbyProgress:
+    """Where a SymbiYosys run is, from its output lines: the base case's (or the bounded
+    check's) step counting up to ``depth``, the induction's step counting down from it."""
+
+    _STEP = re.compile(r"engine_\d+(?:\.(basecase|induction))?: .*?"
+                       r"(?:Checking assertions in|Checking assumptions in|Trying induction in) "
+                       r"step (\d+)")
+    _DONE = re.compile(r"engine_\d+(?:\.(basecase|induction))?: Status returned by engine"
+                       r"(?: for (\w+))?: (\w+)")
+
+    def __init__(self, depth: int):
+        self.depth = depth
+        self.base = self.induction = None
+        self.done: dict = {}
+
+    def feed(self, line: str) -> bool:
+        """Read one output line; True when the position changed."""
+        m = self._STEP.search(line)
+        if m:
+            phase, k = m.group(1) or "basecase", int(m.group(2))
+            if phase == "induction":
+                changed, self.induction = self.induction != k, k
+            else:
+                changed, self.base = self.base != k, k
+            return changed
+        m = self._DONE.search(line)
+        if m:
+            self.done[m.group(1) or m.group(2) or "basecase"] = m.group(3)
+            return True
+        return False
+
+    def text(self) -> str:
+        parts = []
+        if "basecase" in self.done:
+            parts.append(f"base case {self.done['basecase']}")
+        elif self.base is not None:
+            parts.append(f"base case step {self.base} of {self.depth}")
+        if "induction" in self.done:
+            parts.append(f"induction {self.done['induction']}")
+        elif self.induction is not None:
+            parts.append(f"induction step {self.induction} (from {self.depth} down to 0)")
+        return "; ".join(parts) or "elaborating"
 
 
 def signed_bits(bits: str) -> int:
@@ -96,17 +158,75 @@ def run_sby(workdir: Path, name: str, il: str, depth: int, timeout_s: float,
     except ToolError as exc:
         raise FormalError(str(exc)) from None
     t0 = time.perf_counter()
-    try:
-        r = subprocess.run([sby, "-f", "--yosys", yosys, "--smtbmc", smtbmc, f"{name}.sby"],
-                           cwd=workdir, capture_output=True, text=True, timeout=timeout_s,
-                           env=env)
-    except subprocess.TimeoutExpired:
-        return "timeout", timeout_s, ""
+    cmd = [sby, "-f", "--yosys", yosys, "--smtbmc", smtbmc, f"{name}.sby"]
+    note = _sink.get()
+    if note is None:
+        try:
+            r = subprocess.run(cmd, cwd=workdir, capture_output=True, text=True,
+                               timeout=timeout_s, env=env)
+        except subprocess.TimeoutExpired:
+            return "timeout", timeout_s, ""
+        out = r.stdout
+    else:
+        out = _run_reporting(cmd, workdir, env, timeout_s, SbyProgress(depth), note)
+        if out is None:
+            return "timeout", timeout_s, ""
     secs = time.perf_counter() - t0
     for verdict, status in (("PASS", "pass"), ("FAIL", "fail"), ("UNKNOWN", "unknown")):
-        if f"DONE ({verdict}" in r.stdout:
-            return status, secs, r.stdout
-    raise FormalError("SymbiYosys did not finish: " + r.stdout.strip()[-400:])
+        if f"DONE ({verdict}" in out:
+            return status, secs, out
+    short = memory_failure(out)
+    if short:
+        from ...golden.budget import available_memory, fmt_bytes
+        raise FormalError(f"the proof ran out of memory ({short}) after {secs:.0f} s; this "
+                          f"process can get about {fmt_bytes(available_memory())} more: free "
+                          f"memory or run it on a larger machine")
+    raise FormalError("SymbiYosys did not finish: " + out.strip()[-400:])
+
+
+def _run_reporting(cmd, workdir, env, timeout_s: float, where: SbyProgress, note):
+    """Run SymbiYosys reading its output line by line, ``note(where.text())`` whenever the
+    position changes; returns the output, or None when ``timeout_s`` passed (the run is
+    stopped)."""
+    import threading
+    proc = subprocess.Popen(cmd, cwd=workdir, stdout=subprocess.PIPE,
+                            stderr=subprocess.STDOUT, text=True, env=env)
+    expired = threading.Event()
+
+    def stop():
+        expired.set()
+        proc.kill()
+    timer = threading.Timer(timeout_s, stop)
+    timer.start()
+    lines = []
+    try:
+        note(where.text())
+        for line in proc.stdout:
+            lines.append(line)
+            if where.feed(line):
+                note(where.text())
+        proc.wait()
+    finally:
+        timer.cancel()
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    return None if expired.is_set() else "".join(lines)
+
+
+#: what a tool of the proof says when memory ran out (the solver killed by the kernel, a
+#: wasm runtime refused its reservation, an allocation that failed)
+_MEMORY = re.compile(r"(Cannot allocate memory|MemoryError|std::bad_alloc|[Oo]ut of memory|"
+                     r"mmap failed to reserve \S+ bytes|returncode=(?:-9|137)\b|Killed)")
+
+
+def memory_failure(log: str) -> str | None:
+    """The first sign in a SymbiYosys log that a tool ran out of memory, or None."""
+    m = _MEMORY.search(log)
+    if m is None:
+        return None
+    where = re.search(r"\] (\w+): [^\n]*" + re.escape(m.group(0)), log)
+    return f"{where.group(1)}: {m.group(0)}" if where else m.group(0)
 
 
 def parse_sby_log(log: str) -> dict:

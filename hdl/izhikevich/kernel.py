@@ -19,14 +19,18 @@ All kernels release the GIL, so :func:`run_sweeps` splits large populations over
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 
-from ..lib.kernel import (INT64_MAX, INT64_MIN, PARALLEL_MIN_NEURONS, available, default_threads,
-                          record, rounding_slots, split_over_threads)
+from ..lib.kernel import (BLOCK, INT64_MAX, INT64_MIN, PARALLEL_MIN_NEURONS, available,
+                          close_block, default_threads, open_block, record, rounding_slots,
+                          split_over_threads)
 from .config import CLAMP_KINDS, IzhikevichConfig
 
 __all__ = ["available", "rounding_slots", "gather_constants", "update_arrays", "run_sweeps",
-           "default_threads", "sweep_inplace", "PARALLEL_MIN_NEURONS", "neuron_update"]
+           "default_threads", "sweep_inplace", "sweep_scratch", "PARALLEL_MIN_NEURONS",
+           "neuron_update", "specialized", "BLOCK"]
 
 # table rows (per parameter set)
 (T_WOFF, T_KA, T_BETA, T_ESH, T_LEAK, T_K0, T_D, T_SA, T_HA, T_ALPHA, T_C) = range(11)
@@ -151,48 +155,109 @@ if available():
             clamp[i] = d
             v_pre[i] = e
 
-    @njit(**_jit)
-    def _sweep_core(v, u, I, sel, tab, sc, flags, totals, uniform):
-        """One sweep in place without stores under branches (so the loop can vectorize):
-        spikes go to ``flags``, clamp counts per kind are added to ``totals`` (kept as
-        scalar reductions here). Returns the number of spikes."""
-        n_spk = 0
-        c0 = c1 = c2 = c3 = c4 = 0
-        for i in range(v.shape[0]):
-            a, b, c, d, _ = neuron_update(v[i], u[i], I[i], 0 if uniform else sel[i], tab, sc)
-            v[i] = a
-            u[i] = b
+    @njit(inline="always", **_jit)
+    def _add_counts(into, c0, c1, c2, c3, c4):
+        into[0] += c0
+        into[1] += c1
+        into[2] += c2
+        into[3] += c3
+        into[4] += c4
+
+    @njit(inline="always", **_jit)
+    def _block_loop(w, flags, n, tab, sc, uniform):
+        """One sweep of the ``n`` neurons of a block held in the scratch ``w`` (rows of
+        ``BLOCK``: v, u, I, set), in place; spikes flagged in ``flags``. Returns the spikes
+        and the clamps per kind (``uniform``: one parameter set, a constant of each loop)."""
+        nh = c0 = c1 = c2 = c3 = c4 = 0
+        for i in range(n):
+            a, b, c, d, _ = neuron_update(w[i], w[BLOCK + i], w[2 * BLOCK + i],
+                                          0 if uniform else w[3 * BLOCK + i], tab, sc)
+            w[i] = a
+            w[BLOCK + i] = b
             flags[i] = c
-            n_spk += c
+            nh += c
             c0 += d & 1
             c1 += (d >> 1) & 1
             c2 += (d >> 2) & 1
             c3 += (d >> 3) & 1
             c4 += (d >> 4) & 1
-        totals[0] = c0
-        totals[1] = c1
-        totals[2] = c2
-        totals[3] = c3
-        totals[4] = c4
+        return nh, c0, c1, c2, c3, c4
+
+    @njit(inline="always", **_jit)
+    def _blocks(v, u, I, sel, tab, sc, k0, k1, b0, kb0, spk_k, spk_n, n_spk, w, flags,
+                fwords, totals, last, k_last):
+        N = v.shape[0]
+        nb = (N + BLOCK - 1) // BLOCK
+        cap = spk_k.shape[0]
+        uniform = len(tab[0]) == 1
+        for blk in range(b0, nb):
+            lo = blk * BLOCK
+            n = min(N, lo + BLOCK) - lo
+            open_block(w, flags, v, u, lo, n)
+            for i in range(n):
+                w[2 * BLOCK + i] = I[lo + i]
+                w[3 * BLOCK + i] = sel[lo + i]
+            for k in range(kb0 if blk == b0 else k0, k1):
+                if cap - n_spk < n:
+                    close_block(w, v, u, lo, n)
+                    return blk, k, n_spk
+                if uniform:             # a constant of each loop: the set index folds away
+                    nh, c0, c1, c2, c3, c4 = _block_loop(w, flags, n, tab, sc, True)
+                else:
+                    nh, c0, c1, c2, c3, c4 = _block_loop(w, flags, n, tab, sc, False)
+                _add_counts(totals, c0, c1, c2, c3, c4)
+                if k == k_last:
+                    _add_counts(last, c0, c1, c2, c3, c4)
+                if nh:
+                    n_spk = record(flags[:(n + 7) // 8 * 8], fwords[:(n + 7) // 8], k, spk_k,
+                                   spk_n, n_spk, lo)
+            close_block(w, v, u, lo, n)
+        return nb, k1, n_spk
+
+    @njit(**_jit)
+    def _sweep_blocks(v, u, I, sel, tab, sc, spike, counts, w, flags, fwords, ks, ns, last):
+        """One sweep of every neuron by the blocked loop; ``spike`` and ``counts`` filled."""
+        counts[:] = 0
+        _, _, n_spk = _blocks(v, u, I, sel, tab, sc, 0, 1, 0, 0, ks, ns, 0, w, flags, fwords,
+                              counts, last, -1)
+        spike[:] = False
+        for j in range(n_spk):
+            spike[ns[j]] = True
         return n_spk
 
     @njit(**_jit)
-    def _run_const(v, u, I, sel, tab, sc, n_sweeps, k0, spk_k, spk_n, n_spk, totals, last,
-                   flags, fwords):
-        """Up to ``n_sweeps`` sweeps with constant currents, in place. Spikes are appended to
-        (spk_k, spk_n) from ``n_spk``; stops early (before a sweep) when the buffer could
-        overflow. Returns (sweeps done, spikes recorded)."""
-        N = v.shape[0]
-        cap = spk_k.shape[0]
-        for j in range(n_sweeps):
-            if cap - n_spk < N:
-                return j, n_spk
-            hits = _sweep_core(v, u, I, sel, tab, sc, flags, last, len(tab[0]) == 1)
-            if hits:
-                n_spk = record(flags, fwords, k0 + j, spk_k, spk_n, n_spk)
-            for k in range(last.shape[0]):
-                totals[k] += last[k]
-        return n_sweeps, n_spk
+    def _run_blocks(v, u, I, sel, tab, sc, k0, k1, b0, kb0, spk_k, spk_n, n_spk, w, flags,
+                    fwords, totals, last, k_last):
+        """Sweeps ``k0 .. k1 - 1`` with constant currents, in place, a block of ``BLOCK``
+        neurons at a time through every sweep (from sweep ``kb0`` for block ``b0``: a
+        resumed call); spikes appended to (spk_k, spk_n) from ``n_spk``, per neuron in sweep
+        order; clamps per kind added to ``totals`` (and to ``last`` in sweep ``k_last``).
+        Stops before a block's sweep when the buffer could overflow: returns (block, sweep,
+        spikes) to resume from, ``(blocks, k1, spikes)`` when done."""
+        return _blocks(v, u, I, sel, tab, sc, k0, k1, b0, kb0, spk_k, spk_n, n_spk, w, flags,
+                       fwords, totals, last, k_last)
+
+
+_SPECIAL: dict = {}
+
+
+def specialized(cfg_consts):
+    """:func:`_run_blocks` compiled for one configuration: its constants are compile-time
+    constants of the loop (shifts by immediates, the rounding, clamps and dt form that the
+    configuration does not use folded away), the same operations otherwise. Compiled on
+    first use (about 2 s) and cached on disk per configuration."""
+    fn = _SPECIAL.get(cfg_consts)
+    if fn is None:
+        tab, sc = cfg_consts             # the closure's only cells: tuples of ints, so the
+                                         # disk cache keys on the configuration's constants
+
+        @njit(**_jit)
+        def run_special(v, u, I, sel, tab_, sc_, k0, k1, b0, kb0, spk_k, spk_n, n_spk, w,
+                        flags, fwords, totals, last, k_last):
+            return _blocks(v, u, I, sel, tab, sc, k0, k1, b0, kb0, spk_k, spk_n, n_spk, w,
+                           flags, fwords, totals, last, k_last)
+        fn = _SPECIAL[cfg_consts] = run_special
+    return fn
 
 
 def update_arrays(cfg_consts, v, u, I, sel):
@@ -206,26 +271,45 @@ def update_arrays(cfg_consts, v, u, I, sel):
     return v_out, u_out, spike, clamp, v_pre
 
 
-def sweep_inplace(cfg_consts, v, u, I, sel, spike, counts) -> int:
-    """One sweep of every neuron in place; ``spike`` (bool) and ``counts`` (per clamp kind)
-    are filled. Returns the number of spikes."""
+def sweep_scratch(n_neurons: int) -> tuple:
+    """The working arrays of :func:`sweep_inplace` for ``n_neurons`` (kept by the caller
+    across sweeps)."""
+    flags = np.zeros(BLOCK, np.bool_)
+    return (np.empty(4 * BLOCK, np.int64), flags, flags.view(np.uint64),
+            np.empty(n_neurons + BLOCK, np.int64), np.empty(n_neurons + BLOCK, np.int64),
+            np.zeros(len(CLAMP_KINDS), np.int64))
+
+
+def sweep_inplace(cfg_consts, v, u, I, sel, spike, counts, scratch=None) -> int:
+    """One sweep of every neuron in place (the blocked loop for one sweep); ``spike`` (bool)
+    and ``counts`` (per clamp kind) are filled. Returns the number of spikes. ``scratch``:
+    :func:`sweep_scratch` of the population, reused across sweeps."""
     tab, sc = cfg_consts
-    return int(_sweep_core(v, u, I, sel, tab, sc, spike, counts, len(tab[0]) == 1))
+    w, flags, fwords, ks, ns, last = scratch or sweep_scratch(v.shape[0])
+    return int(_sweep_blocks(v, u, I, sel, tab, sc, spike, counts, w, flags, fwords, ks, ns,
+                             last))
 
 
 def run_sweeps(cfg_consts, v, u, I, sel, n_sweeps: int, k0: int = 0,
-               threads: int | None = None):
+               threads: int | None = None, special: bool = False):
     """``n_sweeps`` sweeps with constant currents ``I``, in place on ``v``, ``u``.
 
     Returns ``(spike_sweeps, spike_neurons, totals, last)``: every spike as (sweep index from
-    ``k0``, neuron), the clamp counts per kind over the run and in its last sweep. Populations
-    of at least :data:`PARALLEL_MIN_NEURONS` are split over ``threads`` (default
-    :func:`default_threads`) contiguous chunks, each run by the GIL-free kernel.
+    ``k0``, neuron), per neuron in sweep order, the clamp counts per kind over the run and in
+    its last sweep. Neurons run a block of :data:`BLOCK` at a time through every sweep (the
+    block stays in L1, the loop over it vectorizes); the population is split over
+    ``threads`` contiguous chunks, each run by the GIL-free kernel (default: every core, at
+    most 2, from :data:`BLOCK` neurons and 2e6 updates on, else :func:`default_threads`).
+    ``special``: the loop compiled for this configuration (:func:`specialized`).
     """
     tab, sc = cfg_consts
     N = v.shape[0]
     nk = len(CLAMP_KINDS)
-    threads = default_threads(N) if threads is None else max(1, min(int(threads), N))
+    if threads is None:          # each thread its own blocks: from two half blocks on
+        long = N >= BLOCK and N * n_sweeps >= 2_000_000
+        threads = min(os.cpu_count() or 1, 2) if long else default_threads(N)
+    threads = max(1, min(int(threads), N))
+    run = specialized(cfg_consts) if special else _run_blocks
 
     def chunk(lo, hi):
         vv, uu, II, ss = v[lo:hi], u[lo:hi], I[lo:hi], sel[lo:hi]
@@ -233,17 +317,18 @@ def run_sweeps(cfg_consts, v, u, I, sel, n_sweeps: int, k0: int = 0,
         cap = max(4 * n, 1024)
         spk_k, spk_n = np.empty(cap, np.int64), np.empty(cap, np.int64)
         totals, last = np.zeros(nk, np.int64), np.zeros(nk, np.int64)
-        flags = np.zeros((n + 7) // 8 * 8, np.bool_)
-        done, n_spk = 0, 0
-        while done < n_sweeps:
-            d, n_spk = _run_const(vv, uu, II, ss, tab, sc, n_sweeps - done, k0 + done,
-                                  spk_k, spk_n, n_spk, totals, last, flags,
-                                  flags.view(np.uint64))
-            done += d
-            if done < n_sweeps:        # buffer full: grow and go on
-                cap *= 2
-                spk_k = np.resize(spk_k, cap)
-                spk_n = np.resize(spk_n, cap)
-        return spk_k[:n_spk], spk_n[:n_spk] + lo, totals, last
+        w = np.zeros(4 * BLOCK, np.int64)
+        flags = np.zeros(BLOCK, np.bool_)
+        nb = (n + BLOCK - 1) // BLOCK
+        b, k, n_spk = 0, 0, 0
+        while True:
+            b, k, n_spk = run(vv, uu, II, ss, tab, sc, 0, n_sweeps, b, k, spk_k, spk_n, n_spk,
+                              w, flags, flags.view(np.uint64), totals, last, n_sweeps - 1)
+            if b >= nb:
+                break
+            cap *= 2                    # buffer full: grow and go on
+            spk_k = np.resize(spk_k, cap)
+            spk_n = np.resize(spk_n, cap)
+        return spk_k[:n_spk] + k0, spk_n[:n_spk] + lo, totals, last
 
     return split_over_threads(chunk, N, threads if n_sweeps else 1)

@@ -17,6 +17,9 @@ under a battery of stimuli spanning the accepted range ``[I_lo, I_hi]``:
 * linear ramps ``I_lo -> I_hi`` and ``I_hi -> I_lo`` over the run.
 
 The run lasts ``clip(10 / |a|, 400, 3000)`` ms (ten recovery time constants of the slowest set).
+The search runs compiled (numba: each trajectory's Euler steps are golden's operations in
+golden's order, the stimuli generated per step by the same operations as the matrix below,
+so its extremes equal the NumPy loop's to the bit; that loop is kept as the reference).
 The largest ``u`` comes from sustained maximal drive (more current, more spikes, each adding
 ``d``); square waves, steps and ramps were measured not to exceed it. The search's extremes are
 widened by a margin ``0.02 (u_max - u_min) + max(|d|)`` (one recovery jump more than ever seen,
@@ -55,6 +58,7 @@ import numpy as np
 
 from ...golden import budget
 from ...golden import izhikevich as golden
+from ...golden.kernel import available as kernel_available
 
 __all__ = ["SetRange", "RangeSearchError", "reachable_ranges", "stimulus_battery",
            "search_estimate", "SEARCH_STATE_BOUND", "one_step_bound"]
@@ -148,6 +152,9 @@ def stimulus_battery(i_lo: float, i_hi: float, dt_ms: float, n_steps: int):
 SEARCH_BLOCK = 4096
 #: Conservative cost of the search: seconds per step and per trajectory-step (Euler on NumPy).
 SEARCH_S_PER_STEP, SEARCH_S_PER_TRAJECTORY_STEP = 6e-5, 1.5e-6
+#: The same for the compiled search (measured 0.17-0.5 us per step of 94 trajectories on a
+#: loaded 2-core machine: the stimuli's fixed cost per step, then about 1-2 ns a trajectory)
+SEARCH_S_PER_STEP_COMPILED, SEARCH_S_PER_TRAJECTORY_STEP_COMPILED = 3e-7, 4e-9
 
 
 def search_estimate(n_sets: int, n_inits: int, dt_ms: float, duration_ms: float = 3000.0
@@ -157,7 +164,10 @@ def search_estimate(n_sets: int, n_inits: int, dt_ms: float, duration_ms: float 
     3000 ms), before it runs."""
     n_steps = duration_ms / dt_ms
     cols = 100.0 * n_inits
-    seconds = n_steps * (SEARCH_S_PER_STEP + SEARCH_S_PER_TRAJECTORY_STEP * cols)
+    per_step, per_traj = ((SEARCH_S_PER_STEP_COMPILED, SEARCH_S_PER_TRAJECTORY_STEP_COMPILED)
+                          if kernel_available() else
+                          (SEARCH_S_PER_STEP, SEARCH_S_PER_TRAJECTORY_STEP))
+    seconds = n_steps * (per_step + per_traj * cols)
     nbytes = 8.0 * (SEARCH_BLOCK + 16) * cols + 4096.0 * n_sets
     return {"steps": n_steps, "trajectories": cols, "seconds": seconds, "bytes": nbytes}
 
@@ -212,34 +222,20 @@ def _cached(key) -> tuple[SetRange, ...]:
             cols_v0 += [v0] * n_stim
             cols_u0 += [u0] * n_stim
     cols_set = np.asarray(cols_set)
-    n_rep = len(cols_set) // n_stim
-    prm = golden.NeuronParams.from_sets([sets[i] for i in cols_set])
-    extras = prm.extras()
     v = np.asarray(cols_v0, dtype=np.float64)
     u = np.asarray(cols_u0, dtype=np.float64)
-    v_min, u_min, u_max, v_pre_max = v.copy(), u.copy(), u.copy(), v.copy()
-    with np.errstate(over="ignore", invalid="ignore"):
-        for k in range(n_steps):
-            if k % SEARCH_BLOCK == 0:
-                stim = _battery_rows(battery, k, min(k + SEARCH_BLOCK, n_steps), dt, n_steps)
-            I = np.tile(stim[k % SEARCH_BLOCK], n_rep)
-            v, u, _, v_pre = golden.step(v, u, I, prm.a, prm.b, prm.c, prm.d, dt, "euler",
-                                         **extras)
-            bad = ~(np.isfinite(v_pre) & np.isfinite(u) & (np.abs(v_pre) <= SEARCH_STATE_BOUND)
-                    & (np.abs(u) <= SEARCH_STATE_BOUND))
-            if bad.any():
-                j = int(np.flatnonzero(bad)[0])
-                s = sets[cols_set[j]]
-                raise RangeSearchError(
-                    f"parameter set {s.label()} diverges for currents in the accepted range "
-                    f"[{i_lo:g}, {i_hi:g}] mV/ms: under '{names[j % n_stim]}' the state leaves "
-                    f"|v|, |u| <= {SEARCH_STATE_BOUND:g} at t = {(k + 1) * dt:g} ms (dt = "
-                    f"{dt:g} ms); narrow the accepted current range (current_range) or use a "
-                    f"smaller dt")
-            np.minimum(v_min, v, out=v_min)
-            np.minimum(u_min, u, out=u_min)
-            np.maximum(u_max, u, out=u_max)
-            np.maximum(v_pre_max, v_pre, out=v_pre_max)
+    search = _search_compiled if kernel_available() else _search_numpy
+    ext = search(sets, cols_set, v, u, battery, n_steps, dt)
+    if isinstance(ext, tuple) and len(ext) == 2:              # a divergence: (step, column)
+        k, j = ext
+        s = sets[cols_set[j]]
+        raise RangeSearchError(
+            f"parameter set {s.label()} diverges for currents in the accepted range "
+            f"[{i_lo:g}, {i_hi:g}] mV/ms: under '{names[j % n_stim]}' the state leaves "
+            f"|v|, |u| <= {SEARCH_STATE_BOUND:g} at t = {(k + 1) * dt:g} ms (dt = "
+            f"{dt:g} ms); narrow the accepted current range (current_range) or use a "
+            f"smaller dt")
+    v_min, u_min, u_max, v_pre_max = ext
     out = []
     for si, (s, st) in enumerate(zip(sets, inits)):
         sel = cols_set == si
@@ -256,6 +252,185 @@ def _cached(key) -> tuple[SetRange, ...]:
                             float(v_pre_max[sel].max()), u_lo, u_hi,
                             base if proven is None else proven, v_floor))
     return tuple(out)
+
+
+def _search_numpy(sets, cols_set, v, u, battery, n_steps: int, dt: float):
+    """The search by :func:`cuneate.golden.izhikevich.step` over every trajectory per step
+    (the reference loop). Returns the extremes ``(v_min, u_min, u_max, v_pre_max)`` per
+    trajectory, or the first divergence as ``(step, trajectory)``."""
+    n_rep = len(cols_set) // len(battery)
+    prm = golden.NeuronParams.from_sets([sets[i] for i in cols_set])
+    extras = prm.extras()
+    v_min, u_min, u_max, v_pre_max = v.copy(), u.copy(), u.copy(), v.copy()
+    with np.errstate(over="ignore", invalid="ignore"):
+        for k in range(n_steps):
+            if k % SEARCH_BLOCK == 0:
+                stim = _battery_rows(battery, k, min(k + SEARCH_BLOCK, n_steps), dt, n_steps)
+            I = np.tile(stim[k % SEARCH_BLOCK], n_rep)
+            v, u, _, v_pre = golden.step(v, u, I, prm.a, prm.b, prm.c, prm.d, dt, "euler",
+                                         **extras)
+            bad = ~(np.isfinite(v_pre) & np.isfinite(u) & (np.abs(v_pre) <= SEARCH_STATE_BOUND)
+                    & (np.abs(u) <= SEARCH_STATE_BOUND))
+            if bad.any():
+                return k, int(np.flatnonzero(bad)[0])
+            np.minimum(v_min, v, out=v_min)
+            np.minimum(u_min, u, out=u_min)
+            np.maximum(u_max, u, out=u_max)
+            np.maximum(v_pre_max, v_pre, out=v_pre_max)
+    return v_min, u_min, u_max, v_pre_max
+
+
+# the compiled search: stimulus kinds, the rows of its stimuli's constants
+_KINDS = {"const": 0, "step": 1, "square": 2, "ramp": 3}
+(_LO, _HI, _SLOPE, _THR) = range(4)
+_SEARCH: dict = {}
+
+
+if kernel_available():
+    # the compiled search loop (numba) around the golden model's compiled block step; at
+    # module level (not closures), so that numba's disk cache finds it again
+    from numba import njit
+
+    from ...golden.izhikevich_kernel import BLOCK as B
+    from ...golden.izhikevich_kernel import block_kernel
+    _block_steps = block_kernel()
+
+    @njit(nogil=True, cache=True)
+    def run(w, st, n, steps, ramps, gper, gthr, gptr, gcols, periods, whole, n_steps, half_k, dt, P,
+            std_u, vth, bound, flags, rem, quot, state):
+        """Every step of the ``n`` trajectories held in ``w`` (one parameter set ``P``) under
+        their stimuli (constants in ``st``'s rows), generated per step as
+        :func:`_battery_rows` does (same operations, same bits); the extremes kept in ``w``'s
+        rows ``W_P`` on (the block step's ``track``). A stimulus is written when it changes: a
+        square wave's columns (``gcols``, per (period, threshold) group: ``gper``, ``gthr``)
+        when its comparison flips. ``t % p`` is the exact remainder (:func:`math.fmod`'s,
+        ``t >= 0``); for a whole period ``p`` it is ``t - n p`` with the quotient ``n`` kept
+        from step to step (``t`` only grows): ``n p`` is a whole number and ``t - n p``, a
+        multiple of ``t``'s last place no larger than ``max(t, 2 p)``, is representable, so
+        exact. Returns -1, or the first step at which a state left the bound."""
+        for c in range(n):
+            w[2 * B + c] = st[_LO * B + c]
+        for g in range(gper.shape[0]):
+            state[g] = False
+        for k in range(n_steps):
+            t = k * dt
+            for j in range(periods.shape[0]):
+                p = periods[j]
+                if whole[j]:
+                    while t - quot[j] * p >= p:
+                        quot[j] += 1.0
+                    rem[j] = t - quot[j] * p
+                else:
+                    rem[j] = t % p
+            for g in range(gper.shape[0]):
+                up = rem[gper[g]] < gthr[g]
+                if up != state[g] or k == 0:
+                    state[g] = up
+                    for q in range(gptr[g], gptr[g + 1]):
+                        c = gcols[q]
+                        w[2 * B + c] = st[_HI * B + c] if up else st[_LO * B + c]
+            if k == half_k:
+                for c in steps:
+                    w[2 * B + c] = st[_HI * B + c]
+            last = k == n_steps - 1
+            for c in ramps:
+                w[2 * B + c] = st[_HI * B + c] if last else \
+                    float(k) * st[_SLOPE * B + c] + st[_LO * B + c]
+            _, nbad = _block_steps(w, flags, n, P, True, std_u, False, dt, dt, vth, bound, True)
+            if nbad:
+                return k
+        return -1
+
+    _SEARCH["run"] = run
+    _SEARCH["block"] = B
+
+
+def _search_kernel():
+    """The compiled search loop."""
+    return _SEARCH["run"]
+
+
+def _search_compiled(sets, cols_set, v, u, battery, n_steps: int, dt: float,
+                     threads: int | None = None):
+    """:func:`_search_numpy` by the compiled loop: the same operations in the same order per
+    trajectory (so the same extremes to the bit), a parameter set's trajectories in blocks
+    (each kept in L1 and run through every step), the blocks split over ``threads``
+    (default: every core, at most 2)."""
+    import os
+    from concurrent.futures import ThreadPoolExecutor
+
+    from ...golden.izhikevich_kernel import W_P, W_ROWS, W_U, W_V
+    run = _search_kernel()
+    B = _SEARCH["block"]
+    n_stim = len(battery)
+    periods = sorted({a[2] for _, kind, a in battery if kind == "square"})
+    kind = np.array([_KINDS[b[1]] for b in battery], dtype=np.int64)
+    rows = np.zeros((4, n_stim))                   # the stimuli's constants
+    pidx = np.zeros(n_stim, dtype=np.int64)
+    for c, (_, kd, a) in enumerate(battery):
+        if kd == "const":
+            rows[_LO, c] = rows[_HI, c] = a[0]
+        elif kd == "step":
+            rows[_LO, c], rows[_HI, c] = a
+        elif kd == "square":
+            rows[_LO, c], rows[_HI, c], period, duty = a
+            pidx[c], rows[_THR, c] = periods.index(period), duty * period
+        else:
+            rows[_LO, c], rows[_HI, c] = a
+            if n_steps > 1:
+                rows[_SLOPE, c] = (a[1] - a[0]) / (n_steps - 1)
+            else:
+                rows[_HI, c] = a[0]
+    periods = np.array(periods or [1.0])
+    whole = np.array([p == int(p) and n_steps * dt < 2.0 ** 40 for p in periods])
+    n_rep = len(cols_set) // n_stim
+    rows = np.tile(rows, n_rep)
+    kind, pidx = np.tile(kind, n_rep), np.tile(pidx, n_rep)
+    threads = threads or min(os.cpu_count() or 1, 2)
+    jobs = []                                     # (set, first column, columns) of <= B
+    for si, s in enumerate(sets):
+        cols = np.flatnonzero(cols_set == si)
+        parts = max(threads, -(-cols.size // B))
+        edges = np.linspace(cols[0], cols[-1] + 1, parts + 1).astype(int)
+        jobs += [(s, a, b - a) for a, b in zip(edges[:-1], edges[1:]) if b > a]
+
+    def job(j):
+        s, a, n = j
+        P = ((s.a, s.b, s.c, s.d, s.A, s.B, s.C, s.u_leak, s.v_u),)
+        std_u = s.u_leak == 1.0 and s.v_u == 0.0
+        w, st = np.zeros((W_ROWS, B)), np.zeros((4, B))
+        w[W_V, :n], w[W_U, :n] = v[a:a + n], u[a:a + n]
+        w[W_P:W_P + 4, :n] = v[a:a + n], u[a:a + n], u[a:a + n], v[a:a + n]
+        st[:, :n] = rows[:, a:a + n]
+        # the square waves' columns by (period, threshold)
+        sq = np.flatnonzero(kind[a:a + n] == _KINDS["square"]).tolist()
+        keys = sorted({(int(pidx[a + c]), float(st[_THR, c])) for c in sq})
+        members = [[c for c in sq if (pidx[a + c], st[_THR, c]) == key] for key in keys]
+        gptr = np.cumsum([0] + [len(m) for m in members]).astype(np.int64)
+        gcols = np.array([c for m in members for c in m], dtype=np.int64)
+        gper = np.array([p for p, _ in keys], dtype=np.int64)
+        gthr = np.array([t for _, t in keys], dtype=np.float64)
+        kd = kind[a:a + n]
+        k = run(w.reshape(-1), st.reshape(-1), n,
+                np.flatnonzero(kd == _KINDS["step"]), np.flatnonzero(kd == _KINDS["ramp"]),
+                gper, gthr, gptr, gcols, periods, whole, n_steps, n_steps // 2, float(dt), P,
+                std_u, golden.V_TH, SEARCH_STATE_BOUND, np.zeros(B, np.bool_),
+                np.empty(len(periods)), np.zeros(len(periods)), np.zeros(len(keys), np.bool_))
+        if k >= 0:
+            bad = ~((np.abs(w[3, :n]) <= SEARCH_STATE_BOUND)
+                    & (np.abs(w[1, :n]) <= SEARCH_STATE_BOUND))
+            return k, a + int(np.flatnonzero(bad)[0]), None
+        return -1, a, w[W_P:W_P + 4, :n]
+    if len(jobs) == 1:
+        results = [job(jobs[0])]
+    else:
+        with ThreadPoolExecutor(min(threads, len(jobs))) as pool:
+            results = list(pool.map(job, jobs))
+    bad = [(k, c) for k, c, _ in results if k >= 0]
+    if bad:
+        return min(bad)
+    ext = np.concatenate([r[2] for r in results], axis=1)
+    return ext[0], ext[1], ext[2], ext[3]
 
 
 def one_step_bound(cfg, v, u, I, sel=None):

@@ -11,7 +11,11 @@ from ..lib.fixed import check_int64, clamp_report, store_raw, tally_clamps
 from .config import CLAMP_KINDS, IzhikevichConfig
 from .datapath import clamp_bits, one_update
 
-__all__ = ["IzhikevichTwin", "IzhikevichArrayTwin"]
+__all__ = ["IzhikevichTwin", "IzhikevichArrayTwin", "SPECIALIZE_MIN_UPDATES"]
+
+#: A run with constant currents of at least this many updates (neurons x sweeps) takes the
+#: loop compiled for its configuration (the first such run of a configuration compiles it).
+SPECIALIZE_MIN_UPDATES = 10_000_000
 
 
 class IzhikevichTwin:
@@ -38,13 +42,18 @@ class IzhikevichTwin:
         long runs. The default whenever numba is available and ``check`` is off.
 
     ``threads`` (compiled kernel, :meth:`run` with constant currents) splits the population
-    over threads; default: all cores from 2000 neurons on, else one.
+    over threads; default: two cores from 512 neurons and 2e6 updates on (a block each),
+    else one. ``specialize``: such a
+    run's loop compiled for this configuration (its constants folded in:
+    :func:`~cuneate.hdl.izhikevich.kernel.specialized`, about 2x; compiled once per
+    configuration, cached on disk); default from :data:`SPECIALIZE_MIN_UPDATES` updates on.
     """
 
     KERNELS = ("stages", "numba")
 
     def __init__(self, config: IzhikevichConfig | None = None, check: bool = False,
-                 kernel: str | None = None, threads: int | None = None, **kwargs):
+                 kernel: str | None = None, threads: int | None = None,
+                 specialize: bool | None = None, **kwargs):
         from . import kernel as _k
         self.cfg = cfg = config or IzhikevichConfig(**kwargs)
         self.check = check
@@ -56,6 +65,7 @@ class IzhikevichTwin:
             raise ValueError("twin kernel 'numba' needs numba installed")
         self.kernel = kernel
         self.threads = threads
+        self.specialize = specialize
         self._k = _k
         self._consts = _k.gather_constants(cfg)
         self.sel = np.asarray(cfg.neuron_sets, dtype=np.int64)
@@ -64,6 +74,7 @@ class IzhikevichTwin:
         self.I = np.zeros(cfg.n_neurons, dtype=np.int64)
         self._spike = np.zeros(cfg.n_neurons, dtype=bool)
         self._counts = np.zeros(len(CLAMP_KINDS), dtype=np.int64)
+        self._scratch = None
         self.sweeps = 0
         self.clamp_sticky = 0
         self.clamp_counts = {k: 0 for k in CLAMP_KINDS}
@@ -118,8 +129,10 @@ class IzhikevichTwin:
     def sweep(self):
         """Update every neuron once (one tick); returns the boolean spike vector."""
         if self.kernel == "numba":
+            if self._scratch is None:
+                self._scratch = self._k.sweep_scratch(self.cfg.n_neurons)
             self._k.sweep_inplace(self._consts, self.v, self.u, self.I, self.sel, self._spike,
-                                  self._counts)
+                                  self._counts, self._scratch)
             self.sweeps += 1
             self._account(self._counts)
             return self._spike.copy()
@@ -139,6 +152,8 @@ class IzhikevichTwin:
         if const is not None:
             self.set_currents(const)
         if const is not None and self.kernel == "numba":
+            special = self.specialize if self.specialize is not None else \
+                self.cfg.n_neurons * n_sweeps >= SPECIALIZE_MIN_UPDATES
             done = 0
             block = 1000 if progress is not None else max(n_sweeps, 1)
             last = None
@@ -146,7 +161,8 @@ class IzhikevichTwin:
                 todo = min(block, n_sweeps - done)
                 ks, ns, totals, last = self._k.run_sweeps(self._consts, self.v, self.u, self.I,
                                                           self.sel, todo, k0=done,
-                                                          threads=self.threads)
+                                                          threads=self.threads,
+                                                          special=special)
                 hits_k.append(ks)
                 hits_n.append(ns)
                 tally_clamps(self, CLAMP_KINDS, totals)
@@ -168,8 +184,7 @@ class IzhikevichTwin:
                     hits_k.append(np.full(idx.size, k, dtype=np.int64))
                 if progress is not None and (k + 1) % 1000 == 0:
                     progress(k + 1)
-        steps = golden.group_spikes(hits_k, hits_n, self.cfg.n_neurons)
-        return [(s + 1) * self.cfg.dt_ms for s in steps]
+        return golden.group_spikes(hits_k, hits_n, self.cfg.n_neurons, self.cfg.dt_ms)[1]
 
     def clamp_report(self) -> dict:
         """Sticky flags and counts per clamp kind (for reports and ``simulate --json``)."""

@@ -14,8 +14,12 @@ from typing import Sequence
 
 from .fixed import ROUNDINGS, FixedConstant, FixedPointError
 
-__all__ = ["ConfigError", "CoreOptions", "SATURATION", "TICK_SOURCES", "int_bits_for",
+__all__ = ["ConfigError", "CoreOptions", "MAX_BLOCK_RAM_BITS", "SATURATION", "TICK_SOURCES", "int_bits_for",
            "check_delays", "shared_exponent"]
+
+#: The most block-RAM bits a block may ask for: the block RAM of the largest supported FPGA
+#: (the ULX3S's ECP5-85F, 208 blocks of 18 Kibit).
+MAX_BLOCK_RAM_BITS = 208 * 18 * 1024
 
 SATURATION = ("refuse", "flag")
 TICK_SOURCES = ("internal", "external")

@@ -30,7 +30,8 @@ from amaranth.hdl import Const, Mux, Value, ValueCastable, signed, unsigned
 __all__ = [
     "ROUNDINGS", "QFormat", "FixedConstant", "FixedPointError", "is_hdl", "round_shift",
     "round_shift_add",
-    "round_shift_select", "saturate", "narrow", "clamp_flagged", "select", "check_int64",
+    "round_shift_select", "saturate", "narrow", "clamp_flagged", "round_clamp_flagged", "select",
+    "check_int64", "tree_sum",
     "tally_clamps", "clamp_report", "store_raw",
 ]
 
@@ -347,6 +348,50 @@ def clamp_flagged(x, lo: int, hi: int, fmt: QFormat, bounds: tuple[int, int] | N
         return arr, z, z
     below, above = arr < lo, arr > hi
     return np.clip(arr, lo, hi), below, above
+
+
+def round_clamp_flagged(x, shift: int, rounding: str, lo: int, hi: int, fmt: QFormat,
+                        bounds: tuple[int, int] | None = None):
+    """``clamp_flagged(round_shift(x, shift, rounding), lo, hi, fmt, bounds)``, exact at every
+    ``shift`` on both operands, the twin's int64 included (``bounds``: of the rounded value).
+
+    Where bits are added (``shift < 0``) and the clamp can act, ``x`` itself is compared with the
+    levels on its own grid (``x << k > hi`` exactly when ``x > hi >> k``, ``x << k < lo`` when
+    ``x < -((-lo) >> k)``) and only a value inside them is shifted, by at most ``fmt``'s width
+    (a larger shift leaves 0 as the only such value): no intermediate is wider than ``x`` plus
+    that, so nothing can wrap in the twin and no comparator wider than ``x`` is built."""
+    if shift >= 0:
+        return clamp_flagged(round_shift(x, shift, rounding), lo, hi, fmt, bounds)
+    k = -shift
+    if bounds is not None and lo <= bounds[0] <= bounds[1] <= hi:
+        return clamp_flagged(x << k, lo, hi, fmt, bounds)     # proven to fit: no clamp
+    if not fmt.min_raw <= lo <= hi <= fmt.max_raw:
+        raise FixedPointError(f"clamp levels [{lo}, {hi}] are outside {fmt}")
+    lo_x, hi_x = -((-lo) >> k), hi >> k
+    below, above = x < lo_x, x > hi_x
+    k = min(k, fmt.width)
+    if is_hdl(x):
+        inside = Mux(below | above, 0, x) << k
+        v = Mux(above, Const(hi, fmt.shape()), Mux(below, Const(lo, fmt.shape()), inside))
+        v = v[:fmt.width]
+        return (v.as_signed() if fmt.signed else v), below, above
+    arr = np.asarray(x)
+    inside = np.where(below | above, 0, arr) << k
+    return np.where(above, hi, np.where(below, lo, inside)), below, above
+
+
+def tree_sum(terms, zero=0):
+    """The sum of ``terms`` as a balanced tree of two-input adds: exact integers on both kinds
+    of operand (Amaranth grows each sum by a bit), an expression ``log2(n)`` deep instead of
+    ``n`` (a fan-in of thousands elaborates; a chain that deep exceeds Python's recursion
+    limit). ``zero``: the sum of no terms."""
+    terms = list(terms)
+    if not terms:
+        return zero
+    while len(terms) > 1:
+        terms = [terms[i] + terms[i + 1] if i + 1 < len(terms) else terms[i]
+                 for i in range(0, len(terms), 2)]
+    return terms[0]
 
 
 def tally_clamps(twin, kinds, counts) -> None:

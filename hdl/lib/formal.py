@@ -32,13 +32,13 @@ import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from amaranth import Mux, Signal, Value
+from amaranth import ClockDomain, Elaboratable, Module, Mux, Signal, Value
 from amaranth.hdl import Assert, Assume, Fragment
 from amaranth.hdl._ast import AnySeq, Assign, Switch
 
 from ..flow.sby import SOLVER, FormalError, parse_sby_log, run_sby
 
-__all__ = ["UninterpretedProducts", "patched", "signal_named", "delay_line", "free_memories",
+__all__ = ["ClockedHarness", "UninterpretedProducts", "patched", "signal_named", "delay_line", "free_memories",
            "harness_rtlil",
            "ProofResult", "run_proof", "assert_all", "check_id", "assume_all", "FormalError"]
 
@@ -232,6 +232,35 @@ def free_memories(il: str, memids) -> str:
             if n == 0 and bank > 0:
                 break
     return il
+
+
+class ClockedHarness(Elaboratable):
+    """A harness of ``dut`` on a reset-less clock domain (:attr:`cd`; the initial state is the
+    registers' reset values, the induction step starts anywhere); :meth:`reg` delays a value."""
+
+    def __init__(self, dut):
+        self.dut = dut
+        self.cd = ClockDomain("sync", reset_less=True)
+        self.ports = [self.cd.clk]
+
+    def module(self, dut=None):
+        """A module on :attr:`cd` holding ``dut`` (default the harness's) as ``dut``."""
+        m = Module()
+        m.domains.sync = self.cd
+        m.submodules.dut = self.dut if dut is None else dut
+        return m
+
+    @staticmethod
+    def free(m, *signals) -> None:
+        """Each of ``signals`` any value in any cycle (``AnySeq``)."""
+        for sig in signals:
+            m.d.comb += sig.eq(AnySeq(len(sig)))
+
+    def reg(self, m, value, name: str, init: int = 0) -> Signal:
+        """``value`` one cycle late."""
+        r = Signal.like(value, name=name, init=init)
+        m.d.sync += r.eq(value)
+        return r
 
 
 def harness_rtlil(top, name: str, memories=()) -> str:

@@ -14,9 +14,9 @@ import os
 import numpy as np
 
 from ...golden import kernel as gk
-from ...golden.kernel import available, record
+from ...golden.kernel import BLOCK, available, close_block, open_block, record
 
-__all__ = ["available", "record", "rs", "rq", "rounding_slots", "as_tuples", "default_threads",
+__all__ = ["available", "record", "BLOCK", "open_block", "close_block", "rs", "rq", "rounding_slots", "as_tuples", "default_threads",
            "split_over_threads", "trace_table", "trace_step", "PARALLEL_MIN_NEURONS",
            "INT64_MIN", "INT64_MAX", "TR_Y", "TR_K", "TR_P", "N_TRACE_COLS"]
 

@@ -33,7 +33,7 @@ import numpy as np
 
 from ...golden import synapses as gsyn
 from .config import ConfigError, int_bits_for
-from .fixed import FixedConstant, QFormat, narrow, round_shift, select
+from .fixed import FixedConstant, QFormat, narrow, round_shift, select, tree_sum
 
 __all__ = ["TRACE_NAMES", "TraceSpec", "TraceView", "trace_spec", "scale_weights",
            "derive_traces", "derive_cuba_trace", "cuba_input", "CUBA_TRACE", "trace_inputs",
@@ -194,13 +194,9 @@ def cuba_input(cfg, traces, I, acc):
 def trace_inputs(cfg, traces, x, w):
     """Stage 3: ``I_syn`` from the fetched traces and ``y = x + a_T`` for each trace; returns
     ``(I_syn, [y...], acc)`` with ``acc = a_A - a_G`` in weight LSBs."""
-    acc_a, acc_g = 0, 0
-    for i, (xi, wi) in enumerate(zip(x, w)):
-        term = select(xi, wi, 0)
-        if cfg.input_exc[i]:
-            acc_a = acc_a + term
-        else:
-            acc_g = acc_g + term
+    terms = [select(xi, wi, 0) for xi, wi in zip(x, w)]
+    acc_a = tree_sum(t for t, e in zip(terms, cfg.input_exc) if e)
+    acc_g = tree_sum(t for t, e in zip(terms, cfg.input_exc) if not e)
     wsh = cfg.V.frac_bits - cfg.W.frac_bits
     xd_a, xr_a, xd_g, xr_g = traces
     i_syn = (xd_a - xr_a) - (xd_g - xr_g)

@@ -8,7 +8,9 @@
   the state format cannot hold;
 * a fan-in whose weight sum can leave ``input_limit`` (refused, or clamped and flagged with
   ``saturation="flag"``), an accumulator narrower than its fan-in needs;
-* a state format narrower than the proven state range (refused, or flagged ``v_low`` clamp).
+* a state format narrower than the proven state range (refused, or flagged ``v_low`` clamp);
+* a parameter set that is not one, a weight memory no supported FPGA holds, formats wider than
+  the twin's int64 carries, a leak that never acts below threshold (:mod:`.checks`).
 
 The leak is written for both forms as one subtraction of a product::
 
@@ -32,6 +34,8 @@ import numpy as np
 from ...golden import lif as golden
 from ..lib.config import SATURATION, ConfigError, CoreOptions, check_delays, int_bits_for
 from ..lib.fixed import FixedConstant, QFormat
+from .checks import (MAX_OPERAND_WIDTH, MAX_V_FRAC_BITS, MAX_WEIGHT_BITS, LifSet, check_int64,
+                     check_leak, check_weight_memory)
 
 __all__ = ["ConfigError", "LifConfig", "LifSet", "PIPELINE_DEPTH", "CLAMP_KINDS", "FORMS",
            "DECAYS", "SATURATION", "MAX_INPUT_DELAY"]
@@ -42,67 +46,6 @@ FORMS = ("continuous", "discrete")
 DECAYS = ("multiply", "shift")
 _GRID_EPS = 1e-9
 MAX_INPUT_DELAY = 64    #: the longest input delay the core's input history holds (ticks)
-
-
-@dataclass(frozen=True)
-class LifSet:
-    """One parameter set, in the units of its form.
-
-    Continuous: ``tau_m_ms``, ``v_th``, ``v_reset``, ``v_rest`` (mV) and ``t_ref_ms``.
-    Discrete: ``alpha`` (decay per step), ``v_th`` (= ``u_th``, strict threshold), ``v_reset``
-    (= ``u_rest``), ``refractory_steps``; the leak target is 0.
-    """
-
-    v_th: float
-    v_reset: float
-    v_rest: float = 0.0
-    tau_m_ms: float | None = None
-    t_ref_ms: float = 0.0
-    alpha: float | None = None
-    refractory_steps: int = 0
-
-    def to_dict(self) -> dict:
-        return dict(self.__dict__)
-
-    @classmethod
-    def make(cls, spec, form: str) -> "LifSet":
-        if isinstance(spec, LifSet):
-            return spec
-        if not isinstance(spec, dict):
-            raise ConfigError(f"a parameter set is a dict of its values, got {spec!r}")
-        d = dict(spec)
-        if form == "discrete":
-            d.setdefault("alpha", golden.DISCRETE_ALPHA)
-            d["v_th"] = d.pop("u_th", d.get("v_th", golden.DISCRETE_U_TH))
-            d["v_reset"] = d.pop("u_rest", d.get("v_reset", 0.0))
-            d.setdefault("v_rest", 0.0)
-        else:
-            d.setdefault("tau_m_ms", golden.TAU_M_EXC_MS)
-            d.setdefault("v_th", golden.V_TH)
-            d.setdefault("v_reset", golden.V_RESET)
-            d.setdefault("v_rest", golden.V_REST)
-            d.setdefault("t_ref_ms", golden.T_REF_EXC_MS)
-        try:
-            s = cls(**d)
-        except TypeError as exc:
-            raise ConfigError(f"parameter set {spec!r}: {exc}") from None
-        for k, v in s.__dict__.items():
-            if v is not None and not (isinstance(v, (int, float)) and math.isfinite(v)):
-                raise ConfigError(f"parameter set: {k} = {v!r} is not a finite number")
-        if not s.v_reset < s.v_th:
-            raise ConfigError(f"parameter set: reset {s.v_reset:g} must lie below the "
-                              f"threshold {s.v_th:g}")
-        if form == "continuous":
-            if s.tau_m_ms is None or s.tau_m_ms <= 0:
-                raise ConfigError(f"parameter set: tau_m_ms must be > 0, got {s.tau_m_ms!r}")
-            if s.t_ref_ms < 0:
-                raise ConfigError(f"parameter set: t_ref_ms must be >= 0, got {s.t_ref_ms!r}")
-        else:
-            if s.alpha is None or not 0.0 <= s.alpha <= 1.0:
-                raise ConfigError(f"parameter set: alpha must lie in [0, 1], got {s.alpha!r}")
-            if int(s.refractory_steps) != s.refractory_steps or s.refractory_steps < 0:
-                raise ConfigError("parameter set: refractory_steps must be an integer >= 0")
-        return s
 
 
 @dataclass
@@ -177,6 +120,8 @@ class LifConfig(CoreOptions):
         self._derive_inputs()
         self._derive_decay()
         self._derive_state()
+        check_leak(self)
+        check_int64(self)
 
     # ------------------------------------------------------------------------------------------
     def _check_sizes(self):
@@ -203,10 +148,12 @@ class LifConfig(CoreOptions):
             raise ConfigError(f"{N} neurons do not fit one sweep of {self.cycles_per_tick} "
                               f"cycles (clock_hz / update_hz)")
         self.dt_ms = 1000.0 / self.update_hz
-        for k in ("v_frac_bits", "operand_width", "weight_bits"):
+        for k, top in (("v_frac_bits", MAX_V_FRAC_BITS), ("operand_width", MAX_OPERAND_WIDTH),
+                       ("weight_bits", MAX_WEIGHT_BITS)):
             v = getattr(self, k)
-            if not isinstance(v, (int, np.integer)) or v < 2:
-                raise ConfigError(f"{k} must be an integer >= 2, got {v!r}")
+            if not isinstance(v, (int, np.integer)) or not 2 <= v <= top:
+                raise ConfigError(f"{k} must be an integer in 2 .. {top} (the twin holds the "
+                                  f"state, its sums and products in int64), got {v!r}")
         if not 0 < self.max_decay_error < 1:
             raise ConfigError("max_decay_error must lie in (0, 1)")
 
@@ -257,6 +204,7 @@ class LifConfig(CoreOptions):
             if not np.all(np.isfinite(w)):
                 raise ConfigError("weights must be finite")
         self.n_inputs = F = w.shape[1]
+        check_weight_memory(self.n_neurons, F, self.weight_bits)
         self.weights = w
         self.input_delays = check_delays(self.input_delays, F, MAX_INPUT_DELAY, "input")
         self.max_input_delay = max(self.input_delays or [0])
@@ -406,6 +354,12 @@ class LifConfig(CoreOptions):
             pre_hi_all.append(pre + margin)
         self.v_lo_proven, self.v_hi_proven = min(lo_all), max(hi_all)
         need = int_bits_for(self.v_lo_proven, self.v_hi_proven)
+        if need + fv > 60:
+            raise ConfigError(f"the state range [{self.v_lo_proven:.4g}, "
+                              f"{self.v_hi_proven:.4g}] needs {need} integer bits; with {fv} "
+                              f"fraction bits the state exceeds the 60 bits the twin's int64 "
+                              f"holds with its sums (thresholds, resets and inputs of that size "
+                              f"are not a neuron's)")
         self.v_int_bits_derived = need
         if self.v_int_bits is None:
             self.v_int_bits = need

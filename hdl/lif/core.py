@@ -55,6 +55,10 @@ class LifCore(wiring.Component):
     of the format).
     """
 
+    #: the ports' meanings the blocks' shared ones lack, for the Verilog's header
+    PORT_MEANINGS = {"upd_ref": "the update's refractory count",
+                     "upd_acc": "the update's weighted input sum (weight LSBs)"}
+
     def __init__(self, config: LifConfig | None = None, **kwargs):
         self.cfg = cfg = config or LifConfig(**kwargs)
         N, F = cfg.n_neurons, cfg.n_inputs

@@ -41,7 +41,7 @@ from amaranth import Const
 
 from ..lib.datapath import false_like, lookup
 from ..lib.fixed import (QFormat, clamp_flagged, is_hdl, narrow, round_shift, round_shift_select,
-                         select)
+                         select, tree_sum)
 from ..lib.synapses import cuba_input, trace_inputs
 from .config import CLAMP_KINDS, LifConfig
 
@@ -70,9 +70,7 @@ def gather_input(cfg: LifConfig, I, x: Sequence, w: Sequence, traces=None):
         i_syn, ys, acc = trace_inputs(cfg, traces, x, w)
         D = (I << (fv - cfg.I.frac_bits)) + i_syn
     else:
-        acc = 0
-        for xi, wi in zip(x, w):
-            acc = acc + select(xi, wi, 0)
+        acc = tree_sum(select(xi, wi, 0) for xi, wi in zip(x, w))
         if not cfg.n_inputs:
             acc = Const(0, 1) if is_hdl(I) else np.zeros(np.shape(I), dtype=np.int64)
         if cfg.syn_alpha is not None:       # current-based synapse: D = y = x + I + a

@@ -39,6 +39,15 @@ COUNTER_BITS = 32
 class NirNetwork(wiring.Component):
     """The network as RTL (see the module docstring)."""
 
+    #: the ports' meanings, for the Verilog's header
+    PORT_MEANINGS = {
+        "i_wr_layer": "the layer written", "out_valid": "output spike: valid",
+        "out_ready": "output spike: taken", "out_index": "the output neuron",
+        "out_sweep": "its sweep", "out_v_valid": "readout membrane: valid",
+        "out_v_index": "its neuron", "out_v": "its membrane (raw)",
+        "tick_overrun": "ticks that came before the network settled",
+        "in_valid": "an input spike arrives", "in_source": "its input"}
+
     def __init__(self, config: NirNetworkConfig):
         self.cfg = cfg = config
         L = cfg.n_layers

@@ -14,8 +14,13 @@ Exit status and the one error path (:func:`main`):
   a run estimated to exhaust memory or exceed ``--max-minutes`` (:mod:`cuneate.golden.budget`),
   a divergence of a golden model, a loss on a transport, a tool that refuses a user-given name:
   one line on stderr naming the input;
+* 2 also: what the environment refused - a file or folder that cannot be written or read (disk
+  full, no permission, a name too long), memory exhausted: one line naming the path or the
+  resource (:func:`~cuneate.sim.cli.options.environment_failure`);
 * 3: an unanticipated error: one line and "run with --debug for the traceback" (``--debug``,
   anywhere on the command line, or ``CUNEATE_DEBUG=1``, shows it);
+* a closed stdout (``cuneate run --list-examples | head -1``) is not an error: exit 0, the rest
+  of the output dropped;
 * 130: interrupted.
 """
 
@@ -28,7 +33,8 @@ import pkgutil
 import sys
 import warnings
 
-from .options import CliError, CommandGroups, Parser, add_quiet_option, anticipated, one_line
+from .options import (CliError, CommandGroups, Parser, add_quiet_option, anticipated,
+                      environment_failure, one_line)
 
 __all__ = ["main", "build_parser", "COMMAND_MODULES", "CliError", "block_command_modules"]
 
@@ -105,6 +111,42 @@ def _command(args) -> str:
     return " ".join(words)
 
 
+def _close_stdout() -> None:
+    """Point stdout at /dev/null (after a reader closed it), so flushing at exit cannot fail."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError):
+        pass
+
+
+#: options whose value is an output place (left out of the command a file records)
+_OUTPUT_OPTIONS = ("--out", "--build-dir", "--work-dir", "--waves", "--spikes")
+
+
+def command_line(argv) -> str:
+    """``argv`` as the command a generated file records: ``cuneate`` and the arguments, without
+    the output places' options and with input files by their name only (no paths: the same
+    command gives the same bytes wherever it runs)."""
+    from pathlib import Path
+    words, skip = ["cuneate"], False
+    for a in argv:
+        if skip:
+            skip = False
+            continue
+        if a in _OUTPUT_OPTIONS:
+            skip = True
+            continue
+        if a.split("=", 1)[0] in _OUTPUT_OPTIONS:
+            continue
+        try:
+            is_file = len(a) < 4096 and Path(a).is_file()
+        except OSError:
+            is_file = False
+        words.append(Path(a).name if is_file else a)
+    return " ".join(words)
+
+
 def main(argv=None) -> int:
     """Run one command; see the module docstring for the exit status."""
     from ...golden import budget
@@ -117,8 +159,10 @@ def main(argv=None) -> int:
             args = build_parser().parse_args(argv)
             minutes = None if getattr(args, "force", False) else getattr(args, "max_minutes",
                                                                          None)
+            from ...hdl.flow.verilog import made_by
             # the command's time limit; a memory limit set around main (tests) stays
-            with budget.limited(max_minutes=minutes, memory_bytes=budget.limits().memory_bytes):
+            with budget.limited(max_minutes=minutes, memory_bytes=budget.limits().memory_bytes), \
+                    made_by(command_line(argv)):
                 return args.func(args)
         except CliError as exc:
             msg = one_line(str(exc))
@@ -126,8 +170,17 @@ def main(argv=None) -> int:
             return 2
         except KeyboardInterrupt:
             return 130
+        except BrokenPipeError:
+            # the reader closed stdout (``cuneate run --list-examples | head -1``): not an
+            # error; what is left unwritten goes nowhere (also at the interpreter's exit)
+            _close_stdout()
+            return 0
         except Exception as exc:
             command = _command(args)
+            env = environment_failure(exc)
+            if env is not None and not debug:
+                print(f"{command}: {env}", file=sys.stderr)
+                return 2
             if anticipated(exc) and not debug:
                 print(f"{command}: {one_line(str(exc))}", file=sys.stderr)
                 return 2

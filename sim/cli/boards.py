@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import json
 
-from .options import CliError, CommandGroups, add_quiet_option, output_dir, positive_int
+from .options import (CliError, CommandGroups, add_quiet_option, claim_output, output_dir,
+                      positive_float, positive_int)
 
 __all__ = ["register"]
 
@@ -123,11 +124,12 @@ def cmd_build(args) -> int:
         scene = resolve_scene(args.scene, "cuneate build")
     out = output_dir(args.out)
     try:
-        report = build_target(args.board, out, n_neurons=args.neurons,
-                              clock_hz=args.clock_hz, update_hz=args.update_hz,
-                              bitstream=not args.no_bitstream, seed=args.seed,
-                              pipeline_stages=args.pipeline_stages, scene=scene,
-                              baud=args.baud)
+        with claim_output(out, "cuneate build"):
+            report = build_target(args.board, out, n_neurons=args.neurons,
+                                  clock_hz=args.clock_hz, update_hz=args.update_hz,
+                                  bitstream=not args.no_bitstream, seed=args.seed,
+                                  pipeline_stages=args.pipeline_stages, scene=scene,
+                                  baud=args.baud)
     except ConfigError as exc:
         raise CliError(f"cuneate build: {exc}") from None
     except BuildError as exc:
@@ -189,9 +191,10 @@ def register(groups: CommandGroups) -> None:
                    help="the same as the positional BOARD")
     add_quiet_option(c)
     c.add_argument("--neurons", type=positive_int, default=None)
-    c.add_argument("--clock-hz", type=float, default=None,
+    c.add_argument("--clock-hz", type=positive_float, default=None,
                    help="core clock (must be one of the board's PLL plans)")
-    c.add_argument("--update-hz", type=float, default=None)
+    c.add_argument("--update-hz", type=positive_float, default=None,
+                   help="neuron update rate (default the board's, 16 kHz)")
     c.add_argument("--baud", type=positive_int, default=None,
                    help="UART line rate (default the chosen clock plan's: 3000000 on the ULX3S at "
                         "60 and 90 MHz, 2000000 at 70 MHz); the clock must divide it within "

@@ -30,7 +30,12 @@ def cmd_filter_check(args) -> int:
         print(json.dumps(report.to_dict()))
     else:
         print(report.to_text())
-    return 0 if report.stable else 1
+    if not report.stable:       # a bad filter is bad input: exit 2, one line naming it
+        raise CliError(f"cuneate filter check: the filter b = "
+                       f"[{', '.join(f'{x:g}' for x in report.b)}], a = "
+                       f"[{', '.join(f'{x:g}' for x in report.a)}] is unstable: "
+                       f"{report.message}")
+    return 0
 
 
 def register(groups: CommandGroups) -> None:

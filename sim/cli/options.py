@@ -10,14 +10,17 @@ on stderr, exit status 2); nothing else should reach the user as a traceback.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
+import os
 import re
 from dataclasses import dataclass
 from pathlib import Path
 
 from ...golden.budget import fmt_count, fmt_time
 
-__all__ = ["CliError", "Parser", "one_line", "anticipated", "ANTICIPATED", "CommandGroups",
+__all__ = ["CliError", "Parser", "one_line", "anticipated", "ANTICIPATED", "environment_failure",
+           "engine_list", "claim_output", "LOCK_NAME", "INCOMPLETE_NAME", "CommandGroups",
            "finite_float", "positive_float", "positive_int", "nonneg_int", "seed_int",
            "probability", "verilog_name", "output_dir", "input_file", "run_budget",
            "check_estimate", "fmt_time",
@@ -65,6 +68,38 @@ def anticipated(exc: BaseException) -> bool:
         if m is not None and isinstance(exc, tuple(getattr(m, n) for n in names)):
             return True
     return False
+
+
+def engine_list(text: str, where: str) -> list[str]:
+    """A comma-separated engine list as names, refused in one line (``where`` names the option)
+    when it names none (``''``, ``',,,'``) or one twice (``fixed,fixed``)."""
+    names = [e.strip() for e in text.split(",")]
+    if not all(names):
+        raise CliError(f"{where}: {text!r} names an empty engine; give engine names separated "
+                       f"by commas")
+    twice = sorted({e for e in names if names.count(e) > 1})
+    if twice:
+        raise CliError(f"{where}: {text!r} names {twice[0]} twice")
+    return names
+
+
+def environment_failure(exc: BaseException) -> str | None:
+    """One line for what the environment refused, or None: an :class:`OSError` naming a file
+    (disk full, no permission, a read-only file system, a name too long, a file where a
+    folder should be ...) says what failed on which path; a :class:`MemoryError` says that
+    memory ran out and how much this process may still use."""
+    if isinstance(exc, MemoryError):
+        from ...golden.budget import available_memory, fmt_bytes
+        detail = f" ({one_line(str(exc), 160)})" if str(exc) else ""
+        return (f"out of memory{detail}: this process can get about "
+                f"{fmt_bytes(available_memory())} more; free memory or ask for less")
+    if isinstance(exc, OSError) and getattr(exc, "filename", None) is not None:
+        what = exc.strerror or type(exc).__name__
+        name = str(exc.filename)
+        name = name if len(name) <= 120 else name[:117] + "..."
+        other = f" -> {exc.filename2!r}" if getattr(exc, "filename2", None) else ""
+        return f"{what}: {name!r}{other}"
+    return None
 
 
 def one_line(text: str, limit: int = 600) -> str:
@@ -271,13 +306,58 @@ def output_dir(path: str | Path, what: str = "--out") -> Path:
                        f"{exc.strerror or exc}") from None
     if not p.is_dir():
         raise CliError(f"{what} {str(p)!r} is not a directory")
-    probe = p / ".cuneate-write-test"
+    probe = p / f".cuneate-write-test-{os.getpid()}"    # one a process: runs may share p
     try:
         probe.write_text("")
         probe.unlink()
     except OSError as exc:
         raise CliError(f"{what} {str(p)!r}: not writable: {exc.strerror or exc}") from None
     return p
+
+
+#: the lock a run holds on its output folder, and the mark a run leaves until it has finished
+LOCK_NAME, INCOMPLETE_NAME = ".cuneate-lock", "INCOMPLETE"
+
+
+@contextlib.contextmanager
+def claim_output(out: Path, command: str, what: str = "--out"):
+    """Hold the folder ``out`` for one run: a second run into it while this one works is refused
+    in one line naming the first (an advisory lock, ``fcntl.flock`` on ``out/.cuneate-lock``:
+    released when the process ends, however it ends), and ``out/INCOMPLETE`` says that a run
+    is writing; it is removed when the run finishes and stays, saying how the run stopped,
+    when it fails: a report folder never silently mixes two runs, and partial output is
+    marked."""
+    import fcntl
+    import sys
+    import time
+    out = Path(out)
+    fd = os.open(out / LOCK_NAME, os.O_RDWR | os.O_CREAT, 0o644)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        holder = os.read(fd, 400).decode("utf-8", "replace").strip() or "another process"
+        os.close(fd)
+        raise CliError(f"{command}: {what} {str(out)!r} is in use by another run ({holder}); "
+                       f"wait for it to finish or choose another folder") from None
+    started = time.strftime("%Y-%m-%d %H:%M:%S")
+    argv = " ".join(["cuneate", *sys.argv[1:]]) if sys.argv and sys.argv[0] else command
+    os.ftruncate(fd, 0)
+    os.write(fd, f"pid {os.getpid()}, since {started}: {one_line(argv, 200)}\n".encode())
+    marker = out / INCOMPLETE_NAME
+    marker.write_text(f"{command} started {started} (pid {os.getpid()}) is writing here; until "
+                      f"this file is gone the folder may hold partial output.\n")
+    try:
+        yield out
+    except BaseException as exc:
+        reason = "interrupted" if isinstance(exc, KeyboardInterrupt) else \
+            f"stopped by {type(exc).__name__}: {one_line(str(exc), 300)}"
+        marker.write_text(f"{command} started {started} (pid {os.getpid()}) did not finish "
+                          f"({reason}); the files here are partial or from an earlier run.\n")
+        raise
+    else:
+        marker.unlink(missing_ok=True)
+    finally:
+        os.close(fd)
 
 
 def input_file(path: str | Path, what: str) -> Path:
@@ -351,6 +431,44 @@ def add_generate_options(g) -> None:
     g.add_argument("--out", required=True, help="output directory")
 
 
+def add_face_option(g) -> None:
+    """``--face``: the block behind one of its faces (:data:`cuneate.hdl.axi.faces.FACES`)."""
+    from ...hdl.axi.faces import FACES
+    g.add_argument("--face", choices=("none",) + tuple(FACES), default="none",
+                   help="none (default): the block alone; " + "; ".join(
+                       f"{k}: {v}" for k, v in FACES.items()) + " (standard port names, the "
+                   "register map in the header and in NAME.regmap.json/.md)")
+
+
+def generate_faced(args, config, block: str, **spec_options) -> int:
+    """``cuneate generate BLOCK --face F``: the block of ``config`` behind face ``F`` in
+    ``--out`` (module ``<name>_<face>``, ``<name>`` the block's ``--name`` or ``block``);
+    prints the files and the face's figures, one line each."""
+    from ...hdl.axi.faces import write_face
+    from ...hdl.lib.config import ConfigError
+    name = f"{getattr(args, 'name', None) or block}_{args.face}"
+    try:
+        res = write_face(output_dir(args.out), config, args.face, name, **spec_options)
+    except ConfigError as exc:
+        raise CliError(f"cuneate generate {block} --face {args.face}: {exc}") from None
+    for f in res["files"]:
+        print(f)
+    d = res["description"]
+    line = (f"{d['payload']['block']} behind the {args.face} face: {d['face_summary']}; "
+            f"{d['payload']['n_written']} values written, {d['payload']['n_spike_ids']} "
+            f"spike ids")
+    if "cycles_per_sweep" in d:
+        line += (f"; a sweep takes {d['cycles_per_sweep']} cycles behind it, the divider "
+                 f"{d['cycles_per_tick']}" + ("" if d["free_running_fits"] else
+                                               f" (free running at {d['update_hz']:g} Hz "
+                                               f"needs a clock of "
+                                               f"{d['cycles_per_sweep'] * d['update_hz'] / 1e6:g}"
+                                               f" MHz, or TICK_DIVIDER >= "
+                                               f"{d['cycles_per_sweep']})"))
+    print(line)
+    return 0
+
+
 def run_ticks(command: str, block: str, args, dt_ms: float, cycles: float, updates: float,
               unit: str = "tick", bytes_per_tick: float = 0.0) -> int:
     """The ticks of ``args.duration_ms`` at ``dt_ms``, refused in one line when shorter than
@@ -420,12 +538,13 @@ def add_rate_options(g, clock_default: float | None, clock_help: str = "") -> No
 
 def add_block_commands(groups, block: str, help: str, duration_ms: float, options=None,
                        simulate=None, generate=None, module: str | None = None,
-                       resources_s: int | None = None):
+                       resources_s: int | None = None, faces: bool = False):
     """``cuneate simulate BLOCK`` (``--engine`` from the engine registry, ``--duration-ms``
     and the run options) and ``cuneate generate BLOCK`` (the generate options, ``--name``
     when the block names its ``module``, ``--resources`` when it offers synthesis figures);
     ``options(parser)`` adds the block's own options to both, ``simulate``/``generate`` are
-    the commands. Returns both parsers for more options."""
+    the commands; ``faces``: ``generate`` takes ``--face`` (a block with a payload). Returns
+    both parsers for more options."""
     s = groups.simulate.add_parser(block, help=help)
     engines = engine_choices(block)
     s.add_argument("--engine", choices=engines, default="golden",
@@ -435,6 +554,8 @@ def add_block_commands(groups, block: str, help: str, duration_ms: float, option
     add_run_options(s)
     g = groups.generate.add_parser(block, help=help)
     add_generate_options(g)
+    if faces:
+        add_face_option(g)
     if module:
         g.add_argument("--name", type=verilog_name, default=module,
                        help=f"Verilog module name (default {module})")

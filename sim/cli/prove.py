@@ -4,7 +4,11 @@ LIF core against its one-step datapath (:mod:`cuneate.hdl.izhikevich.formal_core
 :mod:`cuneate.hdl.lif.formal_core`); ``cuneate prove coincidence``: the coincidence detector
 against its one-tick reference (:mod:`cuneate.hdl.coincidence.formal_core`); ``cuneate prove
 banked``: a memory in banks of block RAM against its per-cycle contract
-(:mod:`cuneate.hdl.lib.banked_proof`); k-induction with ``--unbounded``."""
+(:mod:`cuneate.hdl.lib.banked_proof`); k-induction with ``--unbounded``; ``cuneate prove
+fanout``: the channel fan-out's one-entry datapath against its specification for every gain and
+sample (:mod:`cuneate.hdl.fanout.formal`); ``cuneate prove faces`` (or one of its targets
+``axi-stream-out``, ``axi-stream-in``, ``axi-lite``, ``wishbone``): the bus faces' protocols
+(:mod:`cuneate.hdl.axi.formal`, :mod:`cuneate.hdl.wishbone.formal`)."""
 
 from __future__ import annotations
 
@@ -34,9 +38,18 @@ def _proof_target(args):
         "link": (decoder_proof_config, link_config, prove_decoder),
     }[args.target]
     from ...hdl.lib.banked_proof import MUTANTS as BANK_MUTANTS
+    from ...hdl.axi.formal import MUTANTS as AXI_MUTANTS
+    from ...hdl.wishbone.formal import PROOFS as WB_PROOFS
+    if args.mutant in AXI_MUTANTS or args.mutant in {v[3] for v in WB_PROOFS.values()}:
+        raise CliError(f"cuneate prove {args.target}: mutant {args.mutant} is a bus face's "
+                       f"(cuneate prove faces)")
     if args.mutant in BANK_MUTANTS:
         raise CliError(f"cuneate prove {args.target}: mutant {args.mutant} is the banked "
                        f"memory's (cuneate prove banked)")
+    from ...hdl.fanout.formal import MUTANTS as FANOUT_MUTANTS
+    if args.mutant in FANOUT_MUTANTS:
+        raise CliError(f"cuneate prove {args.target}: mutant {args.mutant} is the fan-out's "
+                       f"(cuneate prove fanout)")
     if args.target == "link":
         if args.mutant and args.mutant not in LINK_MUTANTS:
             raise CliError(f"cuneate prove link: mutant {args.mutant} is not the link's (its "
@@ -134,7 +147,6 @@ def cmd_prove_banked(args) -> int:
     write port as the host's (unregistered) and as the write-back's or the deepest core's
     (registered); by default the default core's state memory (2500 words in five banks of
     512)."""
-    import json
     import tempfile
     from ...hdl.izhikevich.formal import FormalError
     from ...hdl.lib.banked_proof import MUTANTS as BANK_MUTANTS
@@ -159,29 +171,139 @@ def cmd_prove_banked(args) -> int:
                                           "banks": -(-depth // bank),
                                           "write_register": registered,
                                           "mutant": args.mutant})
+    return _report(args, records, lambda rec: (
+        f"{rec['seconds']:.1f} s, {rec['words']} words in {rec['banks']} banks of "
+        f"{rec['bank_depth']}, write {'registered' if rec['write_register'] else 'direct'}"),
+        lambda rec: f" in step {rec['step']} ({rec['phase']})")
+
+
+def _report(args, records: list, detail, where) -> int:
+    """Print proof ``records`` (JSON with ``--json``, else one line each: ``detail(rec)`` after
+    the mode and depth, a failure's properties after ``where(rec)``); 0 when every one
+    passed."""
+    import json
     if args.json:
         print(json.dumps(records))
     else:
         for rec in records:
             what = "k-induction" if rec["mode"] == "prove" else "bounded from the start"
             print(f"{rec['property']}: {rec['status'].upper()} ({what}, depth {rec['depth']}, "
-                  f"{rec['seconds']:.1f} s, {rec['words']} words in {rec['banks']} banks of "
-                  f"{rec['bank_depth']}, write {'registered' if rec['write_register'] else 'direct'}"
-                  + (f", mutant {args.mutant}" if args.mutant else "") + ")")
+                  f"{detail(rec)}" + (f", mutant {args.mutant}" if args.mutant else "") + ")")
             if rec["failed"]:
-                print(f"  failed in step {rec['step']} ({rec['phase']}): "
-                      f"{', '.join(rec['failed'])}")
+                print(f"  failed{where(rec)}: {', '.join(rec['failed'])}")
     return 0 if all(rec["status"] == "pass" for rec in records) else 1
 
 
+def cmd_prove_fanout(args) -> int:
+    """``cuneate prove fanout``: :func:`~cuneate.hdl.fanout.formal.prove_fanout` on each of its
+    tables (a combinational check: every input at once, so ``--unbounded`` changes nothing);
+    one line per table, exit 0 when every one passes."""
+    import json
+    import tempfile
+    from ...hdl.fanout.formal import MUTANTS as FANOUT_MUTANTS
+    from ...hdl.fanout.formal import FormalError, prove_fanout
+    if args.mutant and args.mutant not in FANOUT_MUTANTS:
+        raise CliError(f"cuneate prove fanout: mutant {args.mutant} is not the fan-out's (its "
+                       f"mutants: {', '.join(FANOUT_MUTANTS)})")
+    with tempfile.TemporaryDirectory(prefix="cuneate-prove-") as d:
+        try:
+            results = prove_fanout(Path(args.work_dir or d), mutant=args.mutant,
+                                   timeout_s=args.timeout_s, solver=args.solver)
+        except FormalError as exc:
+            raise CliError(f"cuneate prove fanout: {exc}") from None
+    records = []
+    for name, cfg, r in results:
+        raw = [c.raw for c in cfg.gains_]
+        records.append(r.to_dict() | {
+            "table": name, "shift": cfg.shift, "rounding": cfg.rounding,
+            "sample_format": str(cfg.S), "current_format": str(cfg.I),
+            "gain_raw_range": [min(raw), max(raw)], "gain_frac_bits": cfg.gain_frac,
+            "clamp_built": cfg.can_clamp, "mutant": args.mutant})
+    if args.json:
+        print(json.dumps(records))
+    else:
+        for rec in records:
+            lo, hi = rec["gain_raw_range"]
+            print(f"{rec['property']}: {rec['status'].upper()} (every sample {rec['sample_format']}"
+                  f" and gain {lo} .. {hi} x 2^{-rec['gain_frac_bits']}, shift {rec['shift']}, "
+                  f"{rec['rounding']}, current {rec['current_format']}, clamp "
+                  f"{'built' if rec['clamp_built'] else 'not built'}; {rec['solver']}, "
+                  f"{rec['seconds']:.1f} s" + (f", mutant {args.mutant}" if args.mutant else "")
+                  + ")")
+            if rec["failed"]:
+                print(f"  failed: {', '.join(rec['failed'])}")
+    return 0 if all(rec["status"] == "pass" for rec in records) else 1
+
+
+#: the bus faces' protocol targets (``faces``: every one)
+FACE_TARGETS = ("axi-stream-out", "axi-stream-in", "axi-lite", "wishbone")
+
+
+def cmd_prove_faces(args) -> int:
+    """``cuneate prove faces`` (or one face target): each protocol proof, bounded (``--depth``,
+    default the target's k) or by k-induction (``--unbounded``); one line per target, exit 0
+    when every one passes. A ``--mutant`` selects the target it belongs to."""
+    import tempfile
+    from ...hdl.axi.formal import MUTANTS as AXI_MUTANTS
+    from ...hdl.axi.formal import prove_face
+    from ...hdl.flow.sby import FormalError
+    from ...hdl.wishbone.formal import PROOFS as WB
+    owners = AXI_MUTANTS | {v[3]: k for k, v in WB.items()}
+    targets = FACE_TARGETS if args.target == "faces" else (args.target,)
+    if args.mutant:
+        if args.mutant not in owners or owners[args.mutant] not in targets:
+            raise CliError(f"cuneate prove {args.target}: mutant {args.mutant} is not its "
+                           f"(its mutants: {', '.join(m for m, t in owners.items() if t in targets)})")
+        targets = (owners[args.mutant],)
+    records = []
+    with tempfile.TemporaryDirectory(prefix="cuneate-prove-") as d:
+        for t in targets:
+            try:
+                r = prove_face(t, Path(args.work_dir or d) / t,
+                               mode="prove" if args.unbounded else "bmc", depth=args.depth,
+                               mutant=args.mutant, timeout_s=args.timeout_s,
+                               solver=args.solver)
+            except FormalError as exc:
+                raise CliError(f"cuneate prove {t}: {exc}") from None
+            records.append(r.to_dict() | {"target": t, "mutant": args.mutant})
+    return _report(args, records, lambda rec: f"{rec['solver']}, {rec['seconds']:.1f} s",
+                   lambda rec: "")
+
+
 def cmd_prove(args) -> int:
+    """Every ``cuneate prove``: says while it runs what it checks, the phase and step each
+    SymbiYosys run has reached and the time (:mod:`cuneate.sim.progress`; ``-q`` silences)."""
+    from ...hdl.flow.sby import reporting
+    from .. import progress
+    from .options import start_progress
     if args.pipeline_stages is not None and args.target != "core":
         raise CliError(f"cuneate prove {args.target}: --pipeline-stages is the Izhikevich "
                        f"core's (cuneate prove core)")
+    import contextlib
+    start_progress(args)
+    what = (f"cuneate prove {args.target}" + (f" {args.property}" if args.target ==
+                                               "datapath" else "")
+            + (" (k-induction)" if getattr(args, "unbounded", False) else ""))
+    with contextlib.ExitStack() as stack:
+        steps = []
+
+        def note(text):                 # the step opens with the first SymbiYosys run, so a
+            if not steps:               # refused argument is still one line on stderr
+                steps.append(stack.enter_context(progress.step(what)))
+            steps[0].note(text)
+        with reporting(note):
+            return _cmd_prove(args)
+
+
+def _cmd_prove(args) -> int:
+    if args.target == "faces" or args.target in FACE_TARGETS:
+        return cmd_prove_faces(args)
     if args.target in ("core", "lif", "coincidence", "link"):
         return cmd_prove_core(args)
     if args.target == "banked":
         return cmd_prove_banked(args)
+    if args.target == "fanout":
+        return cmd_prove_fanout(args)
     import json
     import tempfile
     from ...hdl.izhikevich import ConfigError, IzhikevichConfig
@@ -227,16 +349,24 @@ def register(groups: CommandGroups) -> None:
     from ...hdl.lib.core_proof import MUTANTS
     from ...hdl.link.formal_core import MUTANTS as LINK_MUTANTS
     from ...hdl.lib.banked_proof import MUTANTS as BANK_MUTANTS
+    from ...hdl.fanout.formal import MUTANTS as FANOUT_MUTANTS
+    from ...hdl.axi.formal import MUTANTS as AXI_MUTANTS
+    from ...hdl.wishbone.formal import PROOFS as WB_PROOFS
+    face_mutants = tuple(AXI_MUTANTS) + tuple(v[3] for v in WB_PROOFS.values())
     f = groups.root.add_parser("prove", help="SymbiYosys checks of the one-update datapath "
                                "and of the pipelined core")
     f.add_argument("target", nargs="?",
-                   choices=("datapath", "core", "lif", "coincidence", "link", "banked"),
+                   choices=("datapath", "core", "lif", "coincidence", "link", "banked", "fanout",
+                            "faces") + FACE_TARGETS,
                    default="datapath",
                    help="datapath (default): one update's range properties; core, lif: the "
                    "pipelined Izhikevich or LIF core equals its one-step datapath; "
                    "coincidence: the detector equals its one-tick reference; link: the host "
                    "link's frame decoder meets the wire format; banked: a memory in banks of "
-                   "block RAM meets its per-cycle contract")
+                   "block RAM meets its per-cycle contract; fanout: the channel fan-out's "
+                   "one-entry datapath meets its specification for every gain and sample; "
+                   "faces (or axi-stream-out, axi-stream-in, axi-lite, wishbone): the bus "
+                   "faces' protocols")
     f.add_argument("--unbounded", action="store_true",
                    help="core: k-induction (every input sequence of every length)")
     f.add_argument("--depth", type=positive_int, default=None,
@@ -262,7 +392,8 @@ def register(groups: CommandGroups) -> None:
                    help="coincidence: history depth in ticks (default 3)")
     f.add_argument("--mutant",
                    choices=tuple(dict.fromkeys(MUTANTS + DETECTOR_MUTANTS + LINK_MUTANTS
-                                               + BANK_MUTANTS)),
+                                               + BANK_MUTANTS + tuple(FANOUT_MUTANTS)
+                                               + face_mutants)),
                    default=None, help="core, lif, coincidence, link: build this fault into "
                    "the block (the proof must fail)")
     f.add_argument("--solver", choices=SOLVERS, default=SOLVER)
@@ -278,4 +409,6 @@ def register(groups: CommandGroups) -> None:
     f.add_argument("--timeout-s", type=positive_float, default=1800.0)
     f.add_argument("--work-dir", default=None, help="keep the SymbiYosys files here")
     f.add_argument("--json", action="store_true")
+    from .options import add_quiet_option
+    add_quiet_option(f)
     f.set_defaults(func=cmd_prove, preset=None)

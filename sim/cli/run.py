@@ -13,7 +13,8 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from .options import CliError, CommandGroups, add_max_minutes, output_dir
+from .options import (CliError, CommandGroups, add_max_minutes, claim_output, engine_list,
+                      output_dir)
 
 __all__ = ["register", "cmd_run", "resolve_scene"]
 
@@ -80,8 +81,8 @@ def cmd_run(args) -> int:
         return 0
     scene = resolve_scene(args.scene)
     engines = None
-    if args.engines:
-        engines = [e.strip() for e in args.engines.split(",") if e.strip()]
+    if args.engines is not None:
+        engines = engine_list(args.engines, "cuneate run: --engines")
         for e in engines:
             try:
                 check_engine(KINDS[scene.kind].block, e)
@@ -110,14 +111,16 @@ def cmd_run(args) -> int:
     from ..host.transport import TransportError
     from ..scenes.runner import run_scene
     start_progress(args)
-    try:
-        run = run_scene(scene, engines, build_dir=out / "build", waves=waves, in_turn=in_turn)
-    except (TraceError, GapError, TransportError) as exc:
-        raise CliError(f"cuneate run: {exc}") from None
-    except ValueError as exc:
-        raise CliError(f"cuneate run: {scene.source}: {exc}") from None
-    kind = kind_module(run.kind)
-    page = kind.write_report(run, out)
+    with claim_output(out, "cuneate run"):
+        try:
+            run = run_scene(scene, engines, build_dir=out / "build", waves=waves,
+                            in_turn=in_turn)
+        except (TraceError, GapError, TransportError) as exc:
+            raise CliError(f"cuneate run: {exc}") from None
+        except ValueError as exc:
+            raise CliError(f"cuneate run: {scene.source}: {exc}") from None
+        kind = kind_module(run.kind)
+        page = kind.write_report(run, out)
     if args.json:
         print(json.dumps(kind.summary(run), default=float))
         return 0

@@ -5,9 +5,8 @@ from __future__ import annotations
 
 import math
 
-from .options import (CliError, CommandGroups, add_max_minutes, add_quiet_option, output_dir,
-                      positive_float,
-                      positive_int)
+from .options import (CliError, CommandGroups, add_max_minutes, add_quiet_option, claim_output,
+                      output_dir, positive_float, positive_int)
 
 __all__ = ["register", "cmd_sweep"]
 
@@ -72,14 +71,15 @@ def cmd_sweep(args) -> int:
     izhikevich = block.__name__.endswith(".izhikevich.sweep")
     out = output_dir(args.out)
     start_progress(args)
-    try:
-        rows = run_sweep(pts, spec, out / "cache", scheduler=args.scheduler,
-                         workers=args.workers, repeats=args.repeat,
-                         scheduler_timeout_s=args.scheduler_timeout_s)
-    except ValueError as exc:
-        raise CliError(f"cuneate sweep: {exc}") from None
-    with progress.step("writing the sweep report"):
-        page = write_sweep(rows, spec, out, columns)
+    with claim_output(out, "cuneate sweep"):
+        try:
+            rows = run_sweep(pts, spec, out / "cache", scheduler=args.scheduler,
+                             workers=args.workers, repeats=args.repeat,
+                             scheduler_timeout_s=args.scheduler_timeout_s)
+        except ValueError as exc:
+            raise CliError(f"cuneate sweep: {exc}") from None
+        with progress.step("writing the sweep report"):
+            page = write_sweep(rows, spec, out, columns)
     print(f"error against the reference (spike-count error, mean VP at q = 5/s); within one tick "
           f"of {'Euler' if izhikevich else 'float64'} at the same dt; costs")
     for r in rows:

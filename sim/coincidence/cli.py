@@ -158,11 +158,17 @@ def _input_ticks(args, S: int, dt: float, n_ticks: int) -> list[np.ndarray]:
                 raise CliError(f"--input {text!r} (source {s}): times must be finite and "
                                f">= 0 ms")
             k = np.round(ts / dt)
-            k = np.unique(k[k < n_ticks].astype(np.int64))   # later times never reach a tick
-            out.append(k)
+            late = ts[k >= n_ticks]
+            if late.size:
+                raise CliError(f"--input {text!r} (source {s}): a spike at {late.min():g} ms "
+                               f"falls after the run's last tick ({(n_ticks - 1) * dt:g} ms); "
+                               f"lengthen --duration-ms or leave it out")
+            out.append(np.unique(k.astype(np.int64)))
         return out
     rng = np.random.default_rng(args.seed)
     p = args.input_rate_hz * dt / 1000.0
+    if p < 0:
+        raise CliError(f"--input-rate-hz {args.input_rate_hz:g}: a rate must be >= 0 Hz")
     if p > 1:
         raise CliError(f"--input-rate-hz {args.input_rate_hz:g} exceeds one spike per tick "
                        f"({1000 / dt:g} Hz)")

@@ -87,6 +87,11 @@ class RidgeResult:
     afferent_counts: np.ndarray | None = None
     #: the engine's counters (on ``board``: the link's frames, bytes, losses and cycles)
     counters: dict = field(default_factory=dict)
+    #: the whole run's spike ticks (update ``k`` at tick ``k + 1``; trials in sequence of
+    #: ``ticks_per_trial``): the 4 afferents' and the cuneate neurons'
+    afferent_ticks: list = field(default_factory=list)
+    cuneate_ticks: list = field(default_factory=list)
+    ticks_per_trial: int = 0
 
     def to_dict(self) -> dict:
         return {"engine": self.engine, "angles": self.angles, "accuracy": self.accuracy,
@@ -289,8 +294,8 @@ def ridge_experiment(engine: str = "fixed", spec: RidgeSpec | None = None,
             k = (np.asarray(ks, dtype=np.int64) - 1) // per
             np.add.at(out[:, j], k[k < len(angles)], 1)
         return out
-    counts = per_trial([(np.asarray(sp) / dt).round().astype(np.int64)
-                        for sp in run.spikes_ms], cfg.n_targets)
+    cn_ticks = [(np.asarray(sp) / dt).round().astype(np.int64) for sp in run.spikes_ms]
+    counts = per_trial(cn_ticks, cfg.n_targets)
     aff_counts = per_trial(aff_ticks, 4)
     patterns = [tuple(int(j) for j in np.flatnonzero(c)) for c in counts]
     if table is None:
@@ -307,7 +312,8 @@ def ridge_experiment(engine: str = "fixed", spec: RidgeSpec | None = None,
     decoded = [table.get(p) for p in patterns]
     return RidgeResult(engine, list(spec.angles_deg), angles, patterns, counts, table, acc,
                        run.wall_s, decoded, [not t for t in train], aff_counts,
-                       dict(getattr(run, "counters", None) or {}))
+                       dict(getattr(run, "counters", None) or {}),
+                       [np.asarray(k, dtype=np.int64) for k in aff_ticks], cn_ticks, per)
 
 
 def ridge_comparison(spec: RidgeSpec | None = None, hdl_engines=("verilator",),

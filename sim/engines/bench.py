@@ -8,11 +8,14 @@ from __future__ import annotations
 
 import json
 import os
+import time
 
 import cocotb
 import numpy as np
 from cocotb.clock import Clock
 from cocotb.triggers import FallingEdge, RisingEdge
+
+from .waves import BENCH_CLOCK_NS
 
 __all__ = ["bench_config", "bench_report", "bench_progress", "spikes_then_tick", "CoreBench"]
 
@@ -29,10 +32,19 @@ def bench_report(data: dict) -> None:
         json.dump(data, f, default=float)
 
 
-def bench_progress(config: dict, done: int) -> None:
-    """Tell the caller how far the bench got (the ``progress`` callback of the runner)."""
+#: the shortest interval between two progress reports of a bench (seconds): a bench may call
+#: :func:`bench_progress` every tick, the file is written about twice a second
+PROGRESS_INTERVAL_S = 0.4
+_last_progress = [0.0]
+
+
+def bench_progress(config: dict, done: int, force: bool = False) -> None:
+    """Tell the caller how far the bench got (the ``progress`` callback of the runner), at
+    most every :data:`PROGRESS_INTERVAL_S` unless ``force``."""
     path = config.get("progress_file")
-    if path:
+    now = time.monotonic()
+    if path and (force or now - _last_progress[0] >= PROGRESS_INTERVAL_S):
+        _last_progress[0] = now
         with open(path, "w") as f:
             json.dump({"done": int(done)}, f)
 
@@ -79,7 +91,7 @@ class CoreBench:
 
     async def start(self, idle=()):
         """Start the clock and reset with every host input idle (``idle``: more of them)."""
-        cocotb.start_soon(Clock(self.dut.clk, 10, unit="ns").start())
+        cocotb.start_soon(Clock(self.dut.clk, BENCH_CLOCK_NS, unit="ns").start())
         d = self.dut
         d.rst.value = 1
         for s in (d.i_wr_en, d.sel_wr_en, d.i_wr_addr, d.i_wr_data, d.sel_wr_addr,

@@ -132,6 +132,9 @@ def run_cocotb(simulator: str, sources: list[Path], toplevel: str, test_module: 
         poller = threading.Thread(target=poll, daemon=True)
         poller.start()
     results = build_dir.resolve() / "results.xml"
+    if progress is not None:
+        # the simulator, cocotb and the bench take seconds to start before the first count
+        prog.say(f"{simulator}: starting the simulation of {toplevel} (cocotb)")
     try:
         results = runner.test(test_module=test_module, hdl_toplevel=toplevel,
                               hdl_toplevel_lang="verilog",

@@ -59,6 +59,9 @@ ENGINES: dict[str, Engine] = {e.name: e for e in (
     Engine("board", "rtl", "verilator", True,
            "the board top (UART link + blocks) compiled by Verilator, driven by the host stack "
            "through a simulated serial line"),
+    Engine("axi", "rtl", "verilator", True,
+           "the block behind the AXI face (AXI4-Stream, AXI4-Lite) compiled by Verilator, "
+           "driven by the host's bus transactions (no Python per cycle)"),
 )}
 
 

@@ -32,7 +32,7 @@ import numpy as np
 from ...hdl.izhikevich import CLAMP_KINDS, IzhikevichConfig
 
 __all__ = ["HARNESS_SOURCE", "HarnessError", "HarnessRun", "compile_harness", "build_harness",
-           "run_harness",
+           "run_harness", "quit_harness",
            "raw_cycle_rate", "check_dump", "default_build_root"]
 
 HARNESS_SOURCE = Path(__file__).with_name("harness.cpp")
@@ -129,6 +129,24 @@ def compile_harness(text: str, top: str, source: Path, defines: dict,
             raise HarnessError("verilator build of the harness failed:\n" + "\n".join(tail))
         stamp.write_text(key)
     return exe
+
+
+def quit_harness(proc: subprocess.Popen) -> dict:
+    """End a request-answer harness (the serial and the AXI one): ``Q``, then its one JSON
+    line of totals (``{}`` when it is already gone), then wait for it."""
+    try:
+        proc.stdin.write(b"Q")
+        proc.stdin.flush()
+        line = proc.stdout.readline()
+        return json.loads(line) if line.strip() else {}
+    except (OSError, ValueError):
+        return {}
+    finally:
+        try:
+            proc.stdin.close()
+        except OSError:                  # the harness already gone (killed, crashed)
+            pass
+        proc.wait()
 
 
 def build_harness(cfg: IzhikevichConfig, build_root: Path | None = None,

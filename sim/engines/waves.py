@@ -35,7 +35,7 @@ from pathlib import Path
 
 __all__ = ["Waves", "DPI_SOURCE", "instrument", "cocotb_options", "write_gtkw",
            "WindowedVcd", "port_groups", "stage_registers", "SCOPES", "FORMATS",
-           "DEFAULT_TICKS"]
+           "DEFAULT_TICKS", "SIM_CLOCK_S", "BENCH_CLOCK_NS", "time_axis"]
 
 #: The C++ side of the Verilator window's end (compiled into the cocotb model).
 DPI_SOURCE = Path(__file__).with_name("waves_dpi.cpp")
@@ -43,6 +43,15 @@ DPI_SOURCE = Path(__file__).with_name("waves_dpi.cpp")
 DEFAULT_TICKS = 100
 #: The dump format each RTL engine writes.
 FORMATS = {"amaranth": "vcd", "icarus": "fst", "verilator": "vcd"}
+#: The clock period of the cores' cocotb benches (ns; :class:`~cuneate.sim.engines.bench
+#: .CoreBench` and the Izhikevich benches).
+BENCH_CLOCK_NS = 10
+#: The clock period each RTL engine simulates (seconds): the cocotb benches' clock and the
+#: Amaranth simulator's 1 MHz (:func:`cuneate.sim.engines.amaranth.simulate`). A dump's time
+#: axis runs at this clock, not the configured one; :func:`time_axis` says so wherever a dump
+#: is named.
+SIM_CLOCK_S = {"amaranth": 1e-6, "icarus": BENCH_CLOCK_NS * 1e-9,
+               "verilator": BENCH_CLOCK_NS * 1e-9}
 #: The scope of the core's top module in each engine's dump.
 SCOPES = {"amaranth": "bench.top", "icarus": "{top}", "verilator": "{top}"}
 
@@ -58,6 +67,16 @@ class Waves:
     def path(self, engine: str) -> Path:
         """The dump file of ``engine`` (``<dir>/<engine>.vcd`` or ``.fst``)."""
         return Path(self.dir).resolve() / f"{engine}.{FORMATS[engine]}"
+
+    def within(self, n_ticks: int) -> "Waves":
+        """The window cut to a run of ``n_ticks`` ticks (a window reaching past the run ends
+        with it); ``ValueError`` when it starts after the run's last tick (nothing would be
+        dumped)."""
+        if self.start >= n_ticks:
+            raise ValueError(f"the waveform window starts at tick {self.start}, after the run's "
+                             f"last tick {n_ticks - 1} (ticks 0 .. {n_ticks - 1}); nothing "
+                             f"would be dumped")
+        return Waves(self.dir, self.start, min(self.ticks, n_ticks - self.start))
 
     def covers(self, sweep: int) -> bool:
         """Whether sweep ``sweep`` is inside the window."""
@@ -186,6 +205,16 @@ def stage_registers(verilog: str, top: str) -> dict[int, list[tuple[str, int]]]:
     return {k: sorted(v) for k, v in sorted(out.items())}
 
 
+def time_axis(engine: str, clock_hz: float | None = None) -> str:
+    """What the time axis of ``engine``'s dump means: the simulator's clock period a cycle
+    (not the configured clock's) and a tick being one sweep (``sweep_done``)."""
+    per = SIM_CLOCK_S[engine]
+    text = f"time axis: {per * 1e9:g} ns a clock cycle (the {engine} simulation's clock"
+    if clock_hz:
+        text += f"; the configured clock is {1e9 / clock_hz:.4g} ns"
+    return text + "); a tick is one sweep (sweep_done), so biological time is ticks x dt"
+
+
 def write_gtkw(path: Path, dump: Path, engine: str, verilog: str, top: str) -> Path:
     """Write the GTKWave save file ``path`` for ``dump`` (``engine``'s dump of module ``top``,
     whose Verilog is ``verilog``): ports by group, then the pipeline registers by stage, in
@@ -199,6 +228,7 @@ def write_gtkw(path: Path, dump: Path, engine: str, verilog: str, top: str) -> P
     with open(path, "w") as f:
         g = vcd.gtkw.GTKWSave(f)
         g.comment(f"cuneate: {engine} waveform of {top}; ports, then pipeline registers")
+        g.comment(time_axis(engine))
         g.dumpfile(str(Path(dump).resolve()))
         g.treeopen(scope)
         for title, sigs in port_groups(verilog, top):

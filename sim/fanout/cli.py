@@ -23,7 +23,7 @@ import math
 import numpy as np
 
 from ..cli.options import (CliError, CommandGroups, add_block_commands, finite_float,
-                           input_file, output_dir, positive_float, positive_int, run_ticks)
+                           build_config, generate_faced, input_file, output_dir, positive_float, positive_int, run_ticks)
 
 __all__ = ["register", "add_fanout_options", "fanout_from_args", "threshold_value"]
 
@@ -161,6 +161,7 @@ def fanout_from_args(args):
     """The :class:`~cuneate.hdl.fanout.FanoutConfig` of the table options (or ``--table``),
     or a one-line refusal naming the option."""
     from ...hdl.fanout import ConfigError, FanoutConfig
+    from ...hdl.fanout.config import check_table_size
     from ...hdl.lib.fixed import FixedPointError, QFormat
     given = [opt for attr, opt in TABLE_OPTIONS if getattr(args, attr) is not None]
     if args.table is not None:
@@ -172,6 +173,10 @@ def fanout_from_args(args):
     lists = [len(getattr(args, a)) for a, _ in PER_AFFERENT if getattr(args, a) is not None]
     longest = max(lists, default=1)
     N = args.afferents or (longest if longest > 1 else DEFAULT_AFFERENTS)
+    try:         # before the table's lists are built: refused by its size, not by memory
+        check_table_size(N, C, args.gain_width or 18, args.sample_width or 16)
+    except ConfigError as exc:
+        raise _refusal(exc) from None
     kw = {"n_channels": C, "channel": [i % C for i in range(N)], "gain": [1.0] * N}
     kw |= _per_afferent(args, N)
     for attr in ("rectify", "sample_width", "sample_max", "gain_width", "max_gain_error",
@@ -276,6 +281,12 @@ def cmd_generate(args) -> int:
         raise CliError("--tick-source: the fan-out has no tick (it runs once per channel "
                        "frame, on start)")
     cfg = fanout_from_args(args)
+    if args.face != "none":              # in front of an Izhikevich core of its afferents
+        from ...hdl.izhikevich import IzhikevichConfig
+        core = build_config(IzhikevichConfig, {"n_neurons": cfg.n_neurons,
+                                               "clock_hz": cfg.clock_hz,
+                                               "tick_source": "external"})
+        return generate_faced(args, core, "fanout", fanout=cfg)
     out = output_dir(args.out)
     files = generate_fanout(out, cfg, name=args.name)
     table = out / f"{args.name}.table.json"
@@ -303,7 +314,8 @@ def _hide(p, dest: str) -> None:
 def register(groups: CommandGroups) -> None:
     s, g = add_block_commands(groups, "fanout", "the channel fan-out (channel samples -> "
                                                 "afferent currents)", 10.0,
-                              add_fanout_options, cmd_simulate, cmd_generate, "channel_fanout")
+                              add_fanout_options, cmd_simulate, cmd_generate, "channel_fanout",
+                              faces=True)
     _hide(s, "spikes")
     _hide(g, "tick_source")
     src = s.add_argument_group("channel samples (one run per sample period)")

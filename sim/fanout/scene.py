@@ -12,7 +12,7 @@ every current is 0 as the host-side front end makes it.
 
 Engines: ``fixed`` runs the fan-out twin in front of the Izhikevich twin
 (:class:`FanoutTransport`), ``board`` the board top with the fan-out
-(:class:`~cuneate.hdl.link.LinkedFanoutCore`); ``golden`` integrates the float currents as
+(:class:`~cuneate.hdl.link.LinkedTop`); ``golden`` integrates the float currents as
 without the fan-out, so the fixed engines' difference from golden includes the samples'
 quantization (the fan-out's bound: :meth:`~cuneate.hdl.fanout.FanoutConfig.sample_bound`).
 """
@@ -32,7 +32,7 @@ __all__ = ["ChannelPlan", "channel_plan", "scene_fanout", "check_fanout_engines"
            "FanoutTransport", "FANOUT_SCENE_ENGINES"]
 
 #: the scene engines that run the fan-out (golden needs none: it integrates the float currents)
-FANOUT_SCENE_ENGINES = ("golden", "fixed", "board")
+FANOUT_SCENE_ENGINES = ("golden", "fixed", "board", "axi")
 
 
 @dataclass
@@ -120,17 +120,17 @@ def check_fanout_engines(scene, engines) -> None:
 
 def fanout_transport(engine: str, plan: ChannelPlan, kw: dict) -> Transport:
     """The transport of a fan-out engine: the fan-out twin before the fixed engine's twin, or
-    the board top with the fan-out."""
+    the board top or the AXI top with the fan-out."""
     from ..izhikevich.engines import make_transport
-    if engine == "board":
-        return make_transport("board", fanout=plan.config, **kw)
+    if engine in ("board", "axi"):
+        return make_transport(engine, fanout=plan.config, **kw)
     return FanoutTransport(make_transport(engine, **kw), plan.config)
 
 
 class FanoutTransport(Transport):
     """The fan-out twin in front of another transport (the ``fixed`` engine's twin): channel
     writes set the twin's samples, and each write is followed by a fan-out run whose currents
-    go to ``inner`` for the same sweep, as :class:`~cuneate.hdl.link.LinkedFanoutCore` does
+    go to ``inner`` for the same sweep, as :class:`~cuneate.hdl.link.LinkedTop` does
     on chip. The fan-out's clamp counts join the counters (``fanout_current_low`` /
     ``fanout_current_high``)."""
 

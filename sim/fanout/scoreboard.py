@@ -49,8 +49,10 @@ class FanoutChecker:
         free = ~clamped
         st["golden_violations"] += int((err[free] > bound[free]).sum())
         if free.any():
-            st["golden_max_ratio"] = max(st["golden_max_ratio"],
-                                         float(np.max(err[free] / bound[free])))
+            # an exact current (err 0) uses none of its bound, which may be 0 (no bit dropped)
+            ratio = np.divide(err[free], bound[free], out=np.zeros(int(free.sum())),
+                              where=err[free] > 0)
+            st["golden_max_ratio"] = max(st["golden_max_ratio"], float(np.max(ratio)))
         need = (gold - bound < cfg.I.min_value) | (gold + bound > cfg.I.max_value)
         st["unneeded_clamps"] += int((clamped & ~need).sum())
         st["clamps_low"] += int(below.sum())

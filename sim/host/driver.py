@@ -32,6 +32,7 @@ count received (``spikes == spikes_counted``) and no overflow, overrun or late w
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -71,8 +72,15 @@ class AfferentEncoding:
             raise ValueError(f"mode must be 'FA' or 'SA', got {self.mode!r}")
         if self.mode == "FA" and self.filter is None:
             raise ValueError("an FA afferent needs a filter")
+        for k in ("gain", "unit_pm", "threshold_pm", "fs_hz"):
+            v = getattr(self, k)
+            if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)) \
+                    or not math.isfinite(v):
+                raise ValueError(f"{k} must be a finite number, got {v!r}")
         if not self.unit_pm > 0:
             raise ValueError(f"unit_pm must be > 0, got {self.unit_pm!r}")
+        if not self.fs_hz > 0:
+            raise ValueError(f"fs_hz must be > 0, got {self.fs_hz!r}")
         if self.rectify not in ("positive", "abs", "none"):
             raise ValueError(f"rectify must be positive, abs or none, got {self.rectify!r}")
 
@@ -145,6 +153,8 @@ class FbgDriver:
         self.cfg = config
         self.encodings = list(encodings)
         self.fs_hz = float(fs_hz)
+        if not (math.isfinite(self.fs_hz) and self.fs_hz > 0):
+            raise ValueError(f"fs_hz must be a finite rate > 0 Hz, got {fs_hz!r}")
         ratio = config.update_hz / self.fs_hz
         if abs(ratio - round(ratio)) > 1e-9 or round(ratio) < 1:
             raise ValueError(f"update rate {config.update_hz:g} Hz is not a whole multiple of "
@@ -163,6 +173,12 @@ class FbgDriver:
 
     # ---------------------------------------------------------------- front end
     def fill_gaps(self, d_lambda_nm, offset: int = 0) -> tuple[np.ndarray, int]:
+        kind = np.asarray(d_lambda_nm).dtype.kind
+        if kind not in "iuf":
+            what = {"c": "complex numbers (the imaginary part would be lost)",
+                    "b": "booleans, not shifts"}.get(
+                kind, f"values of type {np.asarray(d_lambda_nm).dtype}")
+            raise ValueError(f"d_lambda holds {what}; give real shifts in nm")
         x = np.array(d_lambda_nm, dtype=np.float64)
         if x.ndim == 1:
             x = x[:, None]

@@ -22,6 +22,8 @@ trace at another rate (resampling is a decision for the user, not the loader).
 from __future__ import annotations
 
 import csv
+import zipfile
+import zlib
 from pathlib import Path
 
 import numpy as np
@@ -120,6 +122,16 @@ def _load_csv(p: Path, time_key: str):
     return a[:, ti], np.delete(a, ti, axis=1)
 
 
+def _reason(exc: Exception, p: Path) -> str:
+    """Why a file could not be read, in a few words (an empty file says so)."""
+    try:
+        if p.stat().st_size == 0:
+            return "the file is empty"
+    except OSError:
+        pass
+    return f"{type(exc).__name__}: {str(exc)[:160] or 'no detail'}"
+
+
 def _numbers(p, a, what: str) -> np.ndarray:
     """``a`` as a real numeric array, or a :class:`TraceError` naming the file and the field
     (a struct, text, or complex values whose imaginary part would be lost)."""
@@ -127,7 +139,9 @@ def _numbers(p, a, what: str) -> np.ndarray:
     if arr.dtype.kind == "c":
         raise TraceError(f"{p}: {what} holds complex values (the imaginary part would be "
                          f"lost); store real shifts")
-    if arr.dtype.kind not in "biuf":
+    if arr.dtype.kind == "b":
+        raise TraceError(f"{p}: {what} holds booleans (true/false), not numbers")
+    if arr.dtype.kind not in "iuf":
         kind = type(a).__name__ if arr.dtype.kind == "O" and arr.ndim == 0 else \
             f"an array of {arr.dtype}"
         raise TraceError(f"{p}: {what} is not numeric (it is {kind})")
@@ -160,16 +174,17 @@ def load_trace(path, time_key: str = "Time", data_key: str = "DeltaBraggW",
                     raise TraceError(f"{p}: needs arrays {time_key!r} and {data_key!r} (has "
                                      f"{', '.join(z.files)})")
                 t, x = z[time_key], z[data_key]
-        except (OSError, ValueError) as exc:
+        except (OSError, ValueError, EOFError, zipfile.BadZipFile, zlib.error) as exc:
             if isinstance(exc, TraceError):
                 raise
-            raise TraceError(f"{p}: not a readable NPZ file: {exc}") from None
+            raise TraceError(f"{p}: not a readable NPZ file ({_reason(exc, p)})") from None
     elif suf == ".mat":
         import scipy.io
         try:
             m = scipy.io.loadmat(p, squeeze_me=True, struct_as_record=False)
-        except (OSError, ValueError, NotImplementedError) as exc:
-            raise TraceError(f"{p}: not a readable MAT file: {exc}") from None
+        except (OSError, ValueError, NotImplementedError, EOFError, TypeError,
+                scipy.io.matlab.MatReadError) as exc:
+            raise TraceError(f"{p}: not a readable MAT file ({_reason(exc, p)})") from None
         src, where = m, "the file"
         if struct:
             src = _get(m, struct, p, "the file")

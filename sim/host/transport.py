@@ -31,7 +31,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["SpikeBatch", "Transport", "TransportError", "COUNTERS", "check_counters",
+__all__ = ["SpikeBatch", "Transport", "TransportError", "sweep_count", "COUNTERS", "check_counters",
            "SimulatedSerial"]
 
 #: The counters every transport reports, and what each counts.
@@ -86,6 +86,19 @@ class SpikeBatch:
         return out
 
 
+def sweep_count(n_ticks, name: str) -> int:
+    """``n_ticks`` as the sweeps a :meth:`Transport.run` advances: an integer >= 0, or a
+    :class:`TransportError` naming the transport (a negative or fractional count is never
+    run as 0 or truncated)."""
+    try:
+        n = int(n_ticks)
+    except (TypeError, ValueError, OverflowError):
+        raise TransportError(f"{name}: cannot run {n_ticks!r} sweeps") from None
+    if n != n_ticks or n < 0:
+        raise TransportError(f"{name}: cannot run {n_ticks!r} sweeps (a whole number >= 0)")
+    return n
+
+
 class Transport(abc.ABC):
     """One way of reaching a core: an engine or a board link."""
 
@@ -102,7 +115,8 @@ class Transport(abc.ABC):
 
     @abc.abstractmethod
     def run(self, n_ticks: int) -> None:
-        """Let the core advance ``n_ticks`` sweeps."""
+        """Let the core advance ``n_ticks`` sweeps (:func:`sweep_count`: refused unless a whole
+        number >= 0)."""
 
     @abc.abstractmethod
     def collect(self) -> SpikeBatch:

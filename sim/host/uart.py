@@ -1,6 +1,6 @@
 """Host side of the UART link: :class:`UartTransport` behind the driver's transport interface.
 
-The transport talks to a :class:`~cuneate.hdl.link.LinkedCore` on a board through pyserial
+The transport talks to a :class:`~cuneate.hdl.link.LinkedTop` on a board through pyserial
 (any ``serial_for_url`` URL: a device path, ``socket://host:port``, ``loop://``), to the
 protocol model (:class:`ModelSerial`, the simulated serial path used by tests and for dry
 runs), or to the gateware in the Amaranth simulator
@@ -40,7 +40,7 @@ from ...hdl.link.codec import (COUNTER_NAMES, FRAME_ERRORS, MSG_COUNTERS, MSG_SP
                               encode_frame, parse_counters, parse_spikes, write_message)
 from ...hdl.link.twin import LinkModel
 from ...hdl.link.codec import MAX_FRAME, MIN_FRAME
-from .transport import SimulatedSerial, SpikeBatch, Transport, TransportError
+from .transport import SimulatedSerial, SpikeBatch, Transport, TransportError, sweep_count
 
 __all__ = ["UartTransport", "ModelSerial", "DEVICE_ERRORS", "HOST_ERRORS", "link_budget",
            "measured_budget", "run_budget", "format_budget", "BUDGET_BAUDS"]
@@ -343,8 +343,7 @@ class UartTransport(Transport):
             self._counts["writes_sent"] += 1
 
     def run(self, n_ticks: int) -> None:
-        if n_ticks < 0:
-            raise TransportError(f"uart: cannot run {n_ticks} sweeps")
+        n_ticks = sweep_count(n_ticks, "uart")
         end = self._ticks + n_ticks
         self._flush_writes(self._ticks)
         at = self._ticks

@@ -40,6 +40,7 @@ from cocotb.triggers import ClockCycles, FallingEdge, RisingEdge
 
 from cuneate.hdl.izhikevich import CLAMP_KINDS, IzhikevichConfig
 from cuneate.sim.engines.bench import CoreBench, bench_config, bench_progress, bench_report
+from cuneate.sim.engines.waves import BENCH_CLOCK_NS
 from cuneate.sim.izhikevich.scoreboard import SweepChecker
 
 
@@ -170,8 +171,7 @@ async def engine(dut):
             for k in CLAMP_KINDS:
                 clamps[k] += int(counters[k].value)
             swept += 1
-            if swept % 1000 == 0:
-                bench_progress(cfgj, swept)
+            bench_progress(cfgj, swept)
         if int(d.spike_valid.value):
             raw = int(d.spike_sweep.value)
             if raw < last_raw:
@@ -203,7 +203,7 @@ async def play(dut):
     n_ticks = int(cfgj["ticks"])
     writes = cfgj["writes"]
     d = dut
-    cocotb.start_soon(Clock(d.clk, 10, unit="ns").start())
+    cocotb.start_soon(Clock(d.clk, BENCH_CLOCK_NS, unit="ns").start())
     d.rst.value = 1
     for s in (d.i_wr_en, d.sel_wr_en, d.i_wr_addr, d.i_wr_data, d.sel_wr_addr, d.sel_wr_data,
               d.clamp_clear, d.tick, d.spike_ready):
@@ -254,8 +254,7 @@ async def play(dut):
                     rep["sweep_tag_mismatches"] += 1
                 await FallingEdge(d.clk)
             d.spike_ready.value = 0
-        if (k + 1) % 1000 == 0:
-            bench_progress(cfgj, k + 1)
+        bench_progress(cfgj, k + 1)
     rep["overflow"] = int(d.spike_overflow.value)
     rep["overrun"] += int(d.overrun.value)
     rep["writes_left"] = len(writes) - w
@@ -279,7 +278,7 @@ async def array_check(dut):
     cfg = make_config(cfgj["core"])
     K, N = int(cfgj["cores"]), cfg.n_neurons
     d = dut
-    cocotb.start_soon(Clock(d.clk, 10, unit="ns").start())
+    cocotb.start_soon(Clock(d.clk, BENCH_CLOCK_NS, unit="ns").start())
     d.rst.value = 1
     for s in (d.i_wr_en, d.sel_wr_en, d.i_wr_addr, d.i_wr_data, d.sel_wr_addr, d.sel_wr_data,
               d.clamp_clear):

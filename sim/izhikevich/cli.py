@@ -14,7 +14,7 @@ import json
 
 from ...golden.budget import fmt_count
 from ..cli.options import (CliError, CommandGroups, add_block_commands, add_rate_options,
-                           add_waves_options, build_config, finite_float, fmt_time, output_dir,
+                           add_waves_options, build_config, finite_float, fmt_time, generate_faced, output_dir,
                            positive_float, positive_int, run_budget, start_progress,
                            waves_from_args, write_simulate_spikes)
 
@@ -223,11 +223,16 @@ def cmd_simulate(args) -> int:
                est["bytes"], f"{n} neuron(s) x {fmt_count(n_sweeps)} updates",
                "reduce --neurons or --duration-ms, pick a faster engine, or pass --force to "
                "run it anyway with a progress bar")
-    from ..engines.waves import FORMATS
+    from ..engines.waves import FORMATS, time_axis
     waves = waves_from_args(args)
     if waves is not None and args.engine not in FORMATS:
         raise CliError(f"--waves: engine {args.engine!r} writes no waveforms (those that do: "
                        f"{', '.join(FORMATS)})")
+    if waves is not None:
+        try:
+            waves = waves.within(n_sweeps)
+        except ValueError as exc:
+            raise CliError(f"--waves-start {waves.start}: {exc}") from None
     build_dir = None
     if not golden_run and args.build_dir:
         build_dir = output_dir(args.build_dir, "--build-dir")
@@ -272,7 +277,8 @@ def cmd_simulate(args) -> int:
     if waves is not None:
         dump = waves.path(args.engine)
         out["waves"] = waves.to_dict() | {"dump": str(dump),
-                                          "gtkw": str(dump.with_suffix(".gtkw"))}
+                                          "gtkw": str(dump.with_suffix(".gtkw")),
+                                          "time_axis": time_axis(args.engine, cfg.clock_hz)}
     if args.spikes:
         out["spike_file"] = str(args.spikes)
     if args.json:
@@ -292,7 +298,8 @@ def cmd_simulate(args) -> int:
                                   if acted else "none acted"))
         if waves is not None:
             print(f"  waves: {out['waves']['dump']} (ticks {waves.start}.."
-                  f"{waves.start + waves.ticks - 1}; GTKWave: {out['waves']['gtkw']})")
+                  f"{waves.start + waves.ticks - 1}; GTKWave: {out['waves']['gtkw']}; "
+                  f"{out['waves']['time_axis']})")
         if args.spikes:
             print(f"  spikes: {args.spikes}")
     return 0
@@ -306,6 +313,8 @@ def cmd_generate(args) -> int:
     sets = [parse_param_set(s) for s in args.param_set] if args.param_set else [PRESETS["RS"]]
     kw = core_kwargs(args, sets, args.neurons) | {"tick_source": args.tick_source}
     cfg = core_from_args(kw)
+    if args.face != "none":
+        return generate_faced(args, cfg, "izhikevich")
     out = output_dir(args.out)
     files = generate_izhikevich(out, config=cfg)
     for f in files:
@@ -319,7 +328,8 @@ def cmd_generate(args) -> int:
 
 def register(groups: CommandGroups) -> None:
     from ...golden.izhikevich import PRESETS, SCHEMES
-    s, g = add_block_commands(groups, "izhikevich", "the Izhikevich core", 1000.0)
+    s, g = add_block_commands(groups, "izhikevich", "the Izhikevich core", 1000.0,
+                              faces=True)
     s.add_argument("--preset", choices=list(PRESETS), default="RS", type=str.upper)
     for k in "abcd":
         s.add_argument(f"--{k}", type=finite_float, default=None,

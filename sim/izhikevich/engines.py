@@ -45,7 +45,7 @@ from ...hdl.izhikevich import (CLAMP_KINDS, IzhikevichConfig, IzhikevichCore,
 from ..engines.amaranth import simulate, write_currents
 from ..engines.registry import block_engines, check_engine
 from ..engines.run import EngineRun, TickUnwrap, times_from_pairs
-from ..host.transport import SpikeBatch, Transport, TransportError
+from ..host.transport import SpikeBatch, Transport, TransportError, sweep_count
 
 __all__ = ["HARDWARE_ENGINES", "EngineRun", "engine_core", "run_engine", "engine_config",
            "run_hardware_engine", "run_cocotb_engine", "run_amaranth_sweeps", "MIN_NEURONS",
@@ -107,12 +107,16 @@ def _run_verilator_fast(cfg, cur, n_sweeps, n, build_dir, progress, waves=None):
             run.clamp_sticky())
 
 
-def _run_board(cfg, cur, n_sweeps, n, build_dir, progress, waves=None):
-    """The board top through its serial line: the currents written once, the sweeps run, the
-    spikes read back and every counter checked. The link carries no clamp counters: none
-    are reported (``None``)."""
+def _run_link(engine):
+    return lambda *a, **kw: _run_board(*a, engine=engine, **kw)
+
+
+def _run_board(cfg, cur, n_sweeps, n, build_dir, progress, waves=None, engine="board"):
+    """A face's top (``board``: through its serial line; ``axi``: its bus): the currents
+    written once, the sweeps run, the spikes read back and every counter checked. The faces
+    carry no clamp counters: none are reported (``None``)."""
     from ..host.transport import check_counters
-    tr = make_transport("board", progress=progress, waves=waves)
+    tr = make_transport(engine, progress=progress, waves=waves)
     try:
         tr.open(cfg)
         raw = np.asarray(cfg.I.to_raw(cur), dtype=np.int64)
@@ -218,7 +222,7 @@ def _cocotb_runner(simulator):
 #: -> (spikes per neuron, clamp counts, sticky flags)`` (``waves``: the RTL engines' window).
 RUNNERS = {"fixed": _run_fixed, "amaranth": _run_amaranth, "icarus": _cocotb_runner("icarus"),
            "verilator": _cocotb_runner("verilator"), "verilator-fast": _run_verilator_fast,
-           "board": _run_board}
+           "board": _run_board, "axi": _run_link("axi")}
 
 
 def run_engine(engine: str, core: dict, currents, duration_ms: float,
@@ -326,7 +330,7 @@ class TwinTransport(_Buffered):
     def run(self, n_ticks: int) -> None:
         t0 = time.perf_counter()
         tw = self.twin
-        for _ in range(int(n_ticks)):
+        for _ in range(sweep_count(n_ticks, self.name)):
             for first, raw in self.pending.pop(self.tick, []):
                 tw.I[first:first + len(raw)] = raw
                 self.cnt["writes"] += 1
@@ -372,7 +376,7 @@ class _Batch(_Buffered):
         self.writes.append((int(tick), int(first), raw))
 
     def run(self, n_ticks: int) -> None:
-        self.tick += int(n_ticks)
+        self.tick += sweep_count(n_ticks, self.name)
 
     def collect(self) -> SpikeBatch:
         if self.tick == self.ran_ticks:
@@ -526,7 +530,13 @@ TRANSPORTS = {
     "verilator": lambda **kw: CocotbTransport("verilator", **kw),
     "verilator-fast": lambda **kw: VerilatorFastTransport(**kw),
     "board": lambda **kw: _board_transport(**kw),
+    "axi": lambda **kw: _axi_transport(**kw),
 }
+
+
+def _axi_transport(build_dir=None, progress=None, waves=None, **kw):
+    from ..axi.transport import AxiTransport
+    return AxiTransport(build_dir=build_dir, progress=progress, waves=waves, **kw)
 
 
 def _board_transport(build_dir=None, progress=None, waves=None, **kw):

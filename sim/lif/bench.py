@@ -186,8 +186,7 @@ async def engine(dut):
                 await step()
             d.i_wr_en.value = 0
         await spikes_then_tick(d, sources, step, bool(cfg.n_inputs))
-        if (k + 1) % 1000 == 0:
-            bench_progress(cfgj, k + 1)
+        bench_progress(cfgj, k + 1)
     for _ in range(N + PIPELINE_DEPTH + cfg.spike_fifo_depth + 4):
         await step()
     sticky = int(d.clamp_flags.value)

@@ -15,7 +15,7 @@ import numpy as np
 
 from ..cli.options import (CliError, CommandGroups, add_block_commands, add_max_minutes,
                            add_rate_options, clamp_summary, engine_choices, finite_float,
-                           input_file, nonneg_int, output_dir, positive_float, positive_int,
+                           generate_faced, input_file, nonneg_int, output_dir, positive_float, positive_int,
                            print_run, probability, run_ticks, seed_int)
 
 __all__ = ["register", "add_lif_options", "lif_kwargs", "lif_from_kwargs"]
@@ -149,6 +149,8 @@ def cmd_generate(args) -> int:
     kw = lif_kwargs(args, args.neurons) | {"tick_source": args.tick_source}
     kw.setdefault("clock_hz", 40e6)
     cfg = lif_from_kwargs(kw)
+    if args.face != "none":
+        return generate_faced(args, cfg, "lif")
     files = generate_lif(output_dir(args.out), cfg)
     for f in files:
         print(f)
@@ -188,7 +190,7 @@ def cmd_quantization(args) -> int:
 
 
 def register(groups: CommandGroups) -> None:
-    s, g = add_block_commands(groups, "lif", "the LIF core", 200.0)
+    s, g = add_block_commands(groups, "lif", "the LIF core", 200.0, faces=True)
     s.add_argument("--current", type=finite_float, nargs="+", default=[25.0],
                    help="host current (mV, or u per step for --form discrete): one value or "
                         "one per neuron")

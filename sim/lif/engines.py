@@ -15,7 +15,7 @@ reports spikes with the golden convention (update ``k`` -> ``(k + 1) dt``):
 ``icarus``, ``verilator``
     cocotb on the generated Verilog (bench :mod:`cuneate.sim.lif.bench`, test ``engine``).
 ``board``
-    The board top :class:`cuneate.hdl.link.LinkedLif` (the core behind the UART link) compiled
+    The board top :class:`cuneate.hdl.link.LinkedTop` (the core behind the UART link) compiled
     by Verilator behind a simulated serial line, driven by the host stack
     (:class:`cuneate.sim.link.engines.BoardTransport`): the currents that change written for
     their sweep, the sweeps stepped, the spike frames read back and every counter checked.
@@ -156,7 +156,7 @@ def current_runs(raw: np.ndarray) -> dict[int, list[tuple[int, np.ndarray]]]:
 
 
 def _run_board(cfg: LifConfig, cur: np.ndarray, inputs, build_dir=None):
-    """The board top (:class:`~cuneate.hdl.link.LinkedLif`) through its serial line; every
+    """The board top (:class:`~cuneate.hdl.link.LinkedTop`) through its serial line; every
     counter of the transport's contract checked. The link carries no clamp counts: none are
     reported (empty), and no input spikes: a program with any is refused."""
     from ..host.transport import check_counters

@@ -44,7 +44,7 @@ async def _start(dut):
     """Clock, reset, inputs idle, the spike stream always read."""
     cocotb.start_soon(Clock(dut.clk, 10, unit="ns").start())
     dut.rst.value = 1
-    for s in (dut.tick, dut.i_wr_en, dut.i_wr_addr, dut.i_wr_data):
+    for s in (dut.tick, dut.i_wr_en, dut.i_wr_addr, dut.i_wr_data, dut.clamp_clear):
         s.value = 0
     dut.out_ready.value = 1
     await RisingEdge(dut.clk)

@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..cli.options import (CliError, CommandGroups, add_block_commands, build_config,
-                           finite_float, nonneg_int, output_dir, positive_int, print_run,
+                           finite_float, generate_faced, nonneg_int, output_dir, positive_int, print_run,
                            run_ticks)
 from ..coincidence.cli import add_coincidence_options, coincidence_kwargs, print_resources
 
@@ -80,6 +80,8 @@ def cmd_simulate_network(args) -> int:
 def cmd_generate_network(args) -> int:
     from ...hdl.network import generate_network, synth_resources
     cfg = _network_from_args(args, clock_default=40e6)
+    if args.face != "none":
+        return generate_faced(args, cfg, "network")
     print_resources(args, cfg, generate_network(output_dir(args.out), cfg, name=args.name),
                     synth_resources)
     print(f"afferent -> cuneate network: {cfg.n_afferents} afferents, {cfg.n_sources} sources "
@@ -104,7 +106,8 @@ def _add_network_options(p) -> None:
 def register(groups: CommandGroups) -> None:
     sn, _ = add_block_commands(groups, "network", "the afferent -> cuneate network", 100.0,
                                _add_network_options, cmd_simulate_network,
-                               cmd_generate_network, "afferent_cuneate_network", 15)
+                               cmd_generate_network, "afferent_cuneate_network", 15,
+                               faces=True)
     sn.add_argument("--current", type=finite_float, nargs="+", default=[20.0],
                     help="afferent currents (mV/ms): one value or one per afferent")
 

@@ -12,7 +12,7 @@ engines, one spike convention for both populations (update of tick ``T`` -> ``(T
     cocotb on its Verilog (bench :mod:`cuneate.sim.network.bench`, test ``engine``; Icarus runs
     the yosys-lowered netlist);
 ``board``
-    the board top :class:`cuneate.hdl.link.LinkedNetwork` (the network behind the UART link)
+    the board top :class:`cuneate.hdl.link.LinkedTop` (the network behind the UART link)
     compiled by Verilator behind a simulated serial line, driven by the host stack
     (:class:`cuneate.sim.link.engines.BoardTransport`): the changed currents written in
     lockstep, spikes of both populations back in SPIKES frames (cuneate neuron ``j`` as id

@@ -138,8 +138,7 @@ async def _run(dut, check: bool):
         while int(dut.busy.value):
             await step()
         await spikes_then_tick(dut, srcs, step, bool(cfg.n_inputs))
-        if (k + 1) % 200 == 0:
-            bench_progress(spec, k + 1)
+        bench_progress(spec, k + 1)
     for _ in range(cfg.settle_cycles + last.spike_fifo_depth + 8):
         await step()
     rep = {"out_spikes": out_spikes, "out_v": out_v, "sweeps": swept,

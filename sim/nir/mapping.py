@@ -29,13 +29,14 @@ worst-case error, how many values saturated or rounded to zero.
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 
 from ...golden.nir import LEAKY, SPIKING, SYNAPTIC, step_constants
 from ...hdl.lib.config import ConfigError
-from ...hdl.lib.fixed import QFormat
+from ...hdl.lib.fixed import FixedPointError, QFormat
 from ...hdl.lif.config import MAX_INPUT_DELAY
 from ...hdl.nir import NirNetworkConfig
 from .graph import GraphChain, NirError
@@ -86,7 +87,7 @@ def _quant(name: str, x: np.ndarray, fmt: QFormat) -> dict:
             "max_rel_error_of_largest": (float(np.abs(q - x).max(initial=0) / np.abs(x).max())
                                          if x.size and np.abs(x).max() > 0 else 0.0),
             "saturated": sat, "zeroed": int(np.count_nonzero((q == 0) & (x != 0))),
-            "values": int(x.size)}
+            "values": int(x.size), "zero": int(np.count_nonzero(x == 0))}
 
 
 def _weight_format(node, W, bits, frac_bits, v_frac) -> QFormat:
@@ -109,16 +110,40 @@ def _weight_format(node, W, bits, frac_bits, v_frac) -> QFormat:
     return fmt
 
 
+def _check_zeroed(name, kind, q: dict, fmt: QFormat) -> None:
+    """Refuse a layer whose every non-zero weight rounds to 0 (it would never see its input);
+    warn, in one line, when more than half of them do."""
+    nz = q["values"] - q.get("zero", 0)
+    if not q["zeroed"] or not nz:
+        return
+    what = (f"{q['zeroed']} of its {nz} non-zero weights round to 0 in {fmt} (LSB "
+            f"{fmt.lsb:.3g}; largest |g W| {max(abs(x) for x in q['range']):.3g})")
+    if q["zeroed"] >= nz:
+        raise NirError(f"node {name!r} ({kind}): every one of its weights rounds to 0: {what}; "
+                       f"the layer would never see its input (raise --v-frac-bits or "
+                       f"--weight-bits)")
+    if 2 * q["zeroed"] > nz:
+        warnings.warn(f"node {name!r} ({kind}): {what}")
+
+
 def _layer_core(li, layer, c, chain, n_src, update_hz, opts, readout):
     """The LIF core keywords of one layer and its report."""
     name, kind, n = layer.name, layer.kind, layer.n_out
     N = max(n, MIN_CORE)
     g = c.g_m * (c.g_s if c.g_s is not None else 1.0)
     # weight_scale "max": the layer's state is scaled by s so that its largest weight is the
-    # weight format's largest integer (symmetric per-tensor INT weights then map exactly)
+    # weight format's largest integer (symmetric per-tensor INT weights then map exactly);
+    # "pow2": weights below one half (the narrowest format's top octave) scale the state up by
+    # the power of two that brings the largest into [1/2, 1), exactly (thresholds, resets,
+    # biases and the initial state scale with it), so that small trained weights keep their
+    # bits instead of rounding to 0; a fixed weight_frac_bits keeps the scale given
     big = float(np.abs(g[:, None] * layer.weight).max(initial=0))
     qmax = 2 ** (opts["weight_bits"] - 1) - 1
-    sc = qmax / big if opts.get("weight_scale") == "max" and big > 0 else 1.0
+    sc = 1.0
+    if opts.get("weight_scale") == "max" and big > 0:
+        sc = qmax / big
+    elif 0 < big < 0.5 and opts.get("weight_frac_bits") is None:
+        sc = 2.0 ** math.floor(math.log2(0.99 / big))
     g = g * sc
     Whw = np.zeros((N, n_src))
     Whw[:n, :layer.n_in] = g[:, None] * layer.weight
@@ -136,6 +161,7 @@ def _layer_core(li, layer, c, chain, n_src, update_hz, opts, readout):
            "core_neurons": N, "inputs": layer.n_in,
            "weights": _quant("weights g W", Whw[:n, :layer.n_in], W),
            "bias": _quant("bias g b (host current)", bias[:n], If)}
+    _check_zeroed(name, kind, rep["weights"], W)
     if kind in SYNAPTIC:
         a_s = np.unique(np.round(c.alpha_s, 12))
         if a_s.size != 1:
@@ -186,8 +212,8 @@ def map_graph(chain: GraphChain, update_hz: float = DEFAULT_UPDATE_HZ, scheme: s
               rounding: str = "nearest", weight_scale: str = "pow2") -> MappedNetwork:
     """Map ``chain`` onto LIF cores at ``update_hz`` (dt = 1 / update_hz) under ``scheme``;
     :class:`NirError` naming the node for what the hardware cannot hold. ``weight_scale``:
-    ``"pow2"`` (the weights' scale a power of two) or ``"max"`` (each layer's state scaled so
-    that its largest weight is the format's largest integer: symmetric per-tensor INT weights
+    ``"pow2"`` (the weights' scale a power of two; weights below 1/2 scale the state up by a power of
+    two, exactly) or ``"max"`` (each layer's state scaled so
     map exactly; the report gives the scale)."""
     if weight_scale not in ("pow2", "max"):
         raise NirError(f"weight_scale must be 'pow2' or 'max', got {weight_scale!r}")
@@ -212,11 +238,11 @@ def map_graph(chain: GraphChain, update_hz: float = DEFAULT_UPDATE_HZ, scheme: s
             c = step_constants(layer, dt, scheme)
         except ValueError as exc:
             raise NirError(str(exc)) from None
-        kw, bias, If, rep = _layer_core(li, layer, c, chain, n_src, update_hz, opts,
-                                        layer.kind not in SPIKING)
         try:
+            kw, bias, If, rep = _layer_core(li, layer, c, chain, n_src, update_hz, opts,
+                                            layer.kind not in SPIKING)
             cfg = LifConfig(**kw)
-        except ConfigError as exc:
+        except FixedPointError as exc:     # ConfigError, and a constant no format holds
             raise NirError(f"node {layer.name!r} ({layer.kind}): {exc}") from None
         rep["decay"] = [{"alpha": 1 - k, "alpha_quantized": 1 - c_.quantized,
                          "abs_error": abs(c_.quantized - k)}

@@ -297,6 +297,11 @@ ENGINES = {e: run_golden if e == "golden" else _run_transport(e)
            for e in block_engines("izhikevich")}
 
 
+def _within(waves, n_ticks: int):
+    """The waveform window cut to the run (``ValueError`` when it starts after it)."""
+    return None if waves is None else waves.within(n_ticks)
+
+
 def waves_request(scene: Scene, waves=None):
     """The waveform window of a run: ``waves`` when given, else the scene's ``run.waves``
     (a directory; relative to the current one), ``run.waves_start_tick`` and
@@ -390,7 +395,8 @@ def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None =
             f"{sat['samples']} samples past the run's end: never applied")
     timing["front_end_s"] = time.perf_counter() - t0
     ctx = {"config": cfg, "driver": drv, "neurons": neurons, "currents": currents, "raw": raw,
-           "n_ticks": n_ticks, "build_dir": build_dir, "waves": waves_request(scene, waves),
+           "n_ticks": n_ticks, "build_dir": build_dir,
+           "waves": _within(waves_request(scene, waves), n_ticks),
            "engine_options": engine_options or {}, "fanout": fan, "layer": layer,
            "layer_spikes": {}}
     turn = None
@@ -473,14 +479,16 @@ def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None =
     if dec["kind"] in ("tree", "knn"):
         for e, sp in spikes.items():
             d_sp, d_trial, d_index = decoded_neurons(dec["population"], sp, neurons, lay, e)
+            noun = scene.trial_noun
             with prog.step(f"decoding {e} ({dec['kind']} on {dec['features']} features of "
-                           f"{dec['population'] or 'every afferent'}, grasp-grouped and "
-                           f"published protocols)"):
+                           f"{dec['population'] or 'every afferent'}, {noun}-grouped"
+                           + (" and published protocols)" if dec["features"] == "isi"
+                              else ")")):
                 decoded[e] = decode_trials(
                     d_sp, d_trial, d_index, trial_class, classes, dec["kind"],
                     dec["features"], dec["cv_folds"], dec["max_depth"], dec["neighbours"],
                     scene["scene"]["seed"], dec["window_ms"], dec["decision"],
-                    dec["permutations"])
+                    dec["permutations"], noun=noun)
     timing["decode_s"] = time.perf_counter() - t0
     agreement = {}
     names = list(spikes)
@@ -514,11 +522,11 @@ def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None =
     files = {}
     wv = ctx["waves"]
     if wv:
-        from ..engines.waves import FORMATS
+        from ..engines.waves import FORMATS, time_axis
         wrote = [e for e in names if e in FORMATS]
         files["waves"] = wv.to_dict() | {
-            "files": {e: {"dump": str(wv.path(e)), "gtkw": str(wv.path(e).with_suffix(".gtkw"))}
-                      for e in wrote},
+            "files": {e: {"dump": str(wv.path(e)), "gtkw": str(wv.path(e).with_suffix(".gtkw")),
+                          "time_axis": time_axis(e, cfg.clock_hz)} for e in wrote},
             "note": "" if wrote else " (no engine of this run writes waveforms: amaranth, "
                                      "icarus or verilator do)"}
     return SceneRun(scene, classes, trial_class, traces, infos, neurons, currents, sat, cfg,

@@ -30,7 +30,7 @@ from __future__ import annotations
 import html
 import json
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -68,7 +68,11 @@ def validate(V, raw: dict, sections: dict, pops: list, projs: list) -> None:
     if cn["encoding"] not in (None, "spikes"):
         V.err(f"population[{ci}].encoding", "a cuneate population is driven by spikes")
     cn["encoding"] = "spikes"
-    cn["preset"] = cn["preset"] or "RS"
+    if cn["preset"] not in (None, "RS"):
+        V.err(f"population[{ci}].preset", f"{cn['preset']!r}: a ridge scene's cuneate neurons "
+                                          f"are the experiment's RS detector (a preset here "
+                                          f"would not be applied); leave it out or write \"RS\"")
+    cn["preset"] = "RS"
     if sorted(cn["inputs"]) != sorted(aff):
         V.err(f"population[{ci}].inputs", f"must name the two afferent populations "
                                           f"{sorted(aff)}")
@@ -190,6 +194,7 @@ class RidgeSceneRun:
     ran: dict
     timing: dict
     kind: str = "ridge"
+    files: dict = field(default_factory=dict)   # "spikes": engine -> file
 
 
 def run(scene, engines=None, build_dir=None, progress=False, log=None):
@@ -230,7 +235,8 @@ def summary(run: RidgeSceneRun) -> dict:
                                    .patterns for e, r in run.results.items()},
             "identical_counts": {e: same_counts(r, next(iter(run.results.values())))
                                  for e, r in run.results.items()},
-            "ran": run.ran, "timing": run.timing, "resolved_scene": run.scene.to_dict()}
+            "ran": run.ran, "timing": run.timing, "spike_files": run.files.get("spikes", {}),
+            "resolved_scene": run.scene.to_dict()}
 
 
 def same_counts(a, b) -> dict:
@@ -258,11 +264,42 @@ def format_run(run: RidgeSceneRun) -> str:
     return "\n".join(out)
 
 
+def write_spike_files(run: RidgeSceneRun, out: Path) -> dict:
+    """``spikes_<engine>.npz`` per engine (:mod:`cuneate.sim.spikes`): per trial the four
+    afferents (SA and FA of the upper sensor, then of the lower: gratings 0, 0, 1, 1) and the
+    cuneate neurons (grating -1), times from the trial's start, its class the ridge angle;
+    returns ``{engine: file}``."""
+    from ..spikes import write_spikes
+    sa, fa = (next(n for n, k in run.scene["stimulus"]["_afferents"].items() if k == kind)
+              for kind in ("SA", "FA"))
+    cn = next(p["name"] for p in run.scene.populations if p["model"] == "cuneate")
+    files = {}
+    for e, r in run.results.items():
+        per, dt = r.ticks_per_trial, 1000.0 / run.scene["hardware"]["update_hz"]
+        trains, pop, trial, grating, cls = [], [], [], [], []
+        for j, angle in enumerate(r.trial_angle):
+            for ticks, p, g in ([*zip(r.afferent_ticks, (sa, fa, sa, fa), (0, 0, 1, 1))]
+                                + [(t, cn, -1) for t in r.cuneate_ticks]):
+                t = np.asarray(ticks, dtype=np.int64)
+                mine = t[(t - 1) // per == j] - j * per
+                trains.append(mine * dt)
+                pop.append(p)
+                trial.append(j)
+                grating.append(g)
+                cls.append(f"{angle:+g} deg")
+        name = f"spikes_{e}.npz"
+        write_spikes(Path(out) / name, trains, e, per * dt, pop, trial, grating, cls, dt)
+        files[e] = name
+    return files
+
+
 def write_report(run: RidgeSceneRun, out: Path) -> Path:
-    """Write ``index.html``, ``run.json`` and one figure per engine into ``out``."""
-    from ..report import DPI, board_link_line, html_table, pyplot, write_page
+    """Write the spike files, ``index.html``, ``run.json`` and one figure per engine into
+    ``out``."""
+    from ..report import DPI, board_link_line, files_html, html_table, pyplot, write_page
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
+    run.files = {"spikes": write_spike_files(run, out)}
     (out / "run.json").write_text(json.dumps(summary(run), indent=2, default=float))
     plt = pyplot()
     figs = []
@@ -312,4 +349,4 @@ sensor, {cn['neurons']} cuneate neurons that differ only in their conduction del
 {cn['dt_ms']:g} ms)</li>
 <li>engines: {html.escape(', '.join(run.results))}</li></ul>
 """
-    return write_page(out, run.scene.name, body, figs)
+    return write_page(out, run.scene.name, body + files_html(run.files), figs)

@@ -79,6 +79,11 @@ engines = ["golden", "fixed", "verilator"]
 """
 
 
+#: what one trial is, by stimulus kind
+TRIAL_NOUNS = {"grasp": "grasp", "slide": "slide", "pulses": "pulse", "recorded": "recording",
+               "ridges": "ridge", "press": "press"}
+
+
 @dataclass
 class Scene:
     """A validated scene: one dictionary per section (defaults filled), populations and
@@ -105,6 +110,12 @@ class Scene:
     @property
     def effects(self) -> list[str]:
         return list(self.sections["sensor"]["effects"])
+
+    @property
+    def trial_noun(self) -> str:
+        """What one trial is, by stimulus kind (a grasp, a slide, a pulse, a recording, a
+        ridge, a press): reports and decoding rows name trials with it."""
+        return TRIAL_NOUNS.get(self.sections["stimulus"]["kind"], "trial")
 
     def classes(self) -> list[str]:
         st = self.sections["stimulus"]

@@ -39,6 +39,10 @@ class F:
     choices: tuple | None = None
     items: type | tuple | None = None       # element type of lists
     doc: str = ""
+    #: the longest text a string key (or a list's string item) takes: names and labels title
+    #: figures and pages, whose layout grows with them (a 100 000-character label took the
+    #: figure layout past 2 GB); paths and descriptions are longer
+    max_len: int = 200
 
 
 NUM = (int, float)
@@ -61,7 +65,7 @@ MEMS_EFFECT_PARAMS = {
 }
 
 SCHEMA: dict = {
-    "scene": {"name": F(str, "scene"), "description": F(str, ""),
+    "scene": {"name": F(str, "scene"), "description": F(str, "", max_len=4000),
               "duration_ms": F(NUM, 700.0, lo=1, hi=600_000),
               "trials": F(int, 10, lo=1, hi=10_000), "seed": F(int, 1, lo=0, hi=2**32 - 1)},
     "sensor": {"kind": F(str, "fbg", choices=("fbg", "taxels", "mems")),
@@ -106,7 +110,7 @@ SCHEMA: dict = {
                  "pulse_start_ms": F(NUM, 50.0, lo=0), "pulse_width_ms": F(NUM, 200.0, lo=1e-3),
                  "pulse_edge_ms": F(NUM, 5.0, lo=0),
                  # recorded
-                 "file": F(str, ""), "time_key": F(str, "Time"),
+                 "file": F(str, "", max_len=4096), "time_key": F(str, "Time"),
                  "data_key": F(str, "DeltaBraggW"), "struct": F(str, ""),
                  "time_unit": F(str, "s", choices=("s", "ms")),
                  "shift_unit": F(str, "nm", choices=("nm", "pm")),
@@ -184,7 +188,7 @@ SCHEMA: dict = {
                 "q_per_s": F(NUM, 5.0, lo=0, hi=1e6),
                 "q_per_mm": F(NUM, None, lo=0, hi=1e6)},
     "run": {"engines": F(list, ["golden", "fixed", "verilator"], items=str),
-            "waves": F(str, ""),
+            "waves": F(str, "", max_len=4096),
             "waves_start_tick": F(int, 0, lo=0),
             "waves_ticks": F(int, 100, lo=1, hi=100_000_000)},
 }
@@ -253,6 +257,11 @@ class Validator:
                 self.err(key, f"out of range: {v!r} > {f.hi:g}")
             if f.type is float or f.type == NUM:
                 v = float(v)
+        for i, x in enumerate(v if isinstance(v, list) else [v]):
+            if isinstance(x, str) and len(x) > f.max_len:
+                self.err(key if not isinstance(v, list) else f"{key}[{i}]",
+                         f"{len(x)} characters; at most {f.max_len} (names and labels title "
+                         f"the figures and the report)")
         if f.choices is not None and v not in f.choices:
             self.err(key, f"must be one of {', '.join(map(str, f.choices))}, got {v!r}")
         if isinstance(v, list) and f.items is not None:

@@ -24,7 +24,7 @@ from __future__ import annotations
 import html
 import json
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -161,6 +161,7 @@ class SkinSceneRun:
     timing: dict
     block: dict
     kind: str = "skin"
+    files: dict = field(default_factory=dict)   # "spikes": engine -> file
 
     @property
     def engines(self) -> list[str]:
@@ -243,6 +244,7 @@ def summary(run: SkinSceneRun) -> dict:
                         for e, r in run.results.items()}
             if run.scene["decoder"]["kind"] == "winner" else {},
             "agreement": run.agreement, "ran": run.ran, "timing": run.timing,
+            "spike_files": run.files.get("spikes", {}),
             "resolved_scene": run.scene.to_dict()}
 
 
@@ -306,11 +308,30 @@ def _figures(run: SkinSceneRun, out: Path) -> list[str]:
     return names
 
 
+def write_spike_files(run: SkinSceneRun, out: Path) -> dict:
+    """``spikes_<engine>.npz`` per engine (:mod:`cuneate.sim.spikes`): one neuron per taxel,
+    its grating the taxel index, the class the pressed taxel; returns ``{engine: file}``."""
+    from ..spikes import write_spikes
+    pop = run.scene.populations[0]["name"]
+    files = {}
+    for e, r in run.results.items():
+        n = len(r.spikes_ms)
+        steps = r.force.shape[0] if r.force is not None else None
+        t_stop = steps * r.dt_ms if steps else max([max(s, default=0.0) for s in r.spikes_ms])
+        name = f"spikes_{e}.npz"
+        write_spikes(Path(out) / name, r.spikes_ms, e, t_stop, [pop] * n, [0] * n,
+                     list(range(n)), [run.scene.classes()[0]] * n, r.dt_ms)
+        files[e] = name
+    return files
+
+
 def write_report(run: SkinSceneRun, out: Path) -> Path:
     """Write ``index.html``, ``run.json`` and figures into ``out``; returns the HTML path."""
-    from ..report import board_link_line, fmt, html_table, write_page
+    from ..report import (board_link_line, files_html, fmt, fmt_distinct, html_table,
+                          write_page)
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
+    run.files = {"spikes": write_spike_files(run, out)}
     (out / "run.json").write_text(json.dumps(summary(run), indent=2, default=float))
     figs = _figures(run, out)
     rows, cols = run.scene["sensor"]["grid"]
@@ -327,8 +348,8 @@ def write_report(run: SkinSceneRun, out: Path) -> Path:
                                                           [f"col {j}" for j in range(cols)])
                     for e, r in run.results.items())
     agr_rows = [[k, v["spikes_a"], v["spikes_b"], f"{v['identical_trains']}/{v['neurons']}",
-                 fmt(v["mean_abs_count_diff"]), v["max_abs_count_diff"],
-                 fmt(v["fraction_within_1_tick"])] for k, v in run.agreement.items()]
+                 fmt_distinct(v["mean_abs_count_diff"]), v["max_abs_count_diff"],
+                 fmt_distinct(v["fraction_within_1_tick"])] for k, v in run.agreement.items()]
     b = run.block
     body = f"""
 <p>Scene: {html.escape(run.scene.source)}. A {rows}x{cols} taxel skin, one LIF neuron per
@@ -354,4 +375,4 @@ taxel; taxel {pressed} (row-major) is pressed.</p>
 {''.join(f"<li>{html.escape(e)}: {html.escape(board_link_line(r.counters))}</li>"
          for e, r in run.results.items() if "board_cycles" in r.counters)}</ul>
 """
-    return write_page(out, run.scene.name, body, figs)
+    return write_page(out, run.scene.name, body + files_html(run.files), figs)

@@ -240,7 +240,7 @@ def test_sizing_gives_each_core_of_an_array_its_own_parameter_sets():
     lc = r["link"]
     assert lc.n_cores == 2 and lc.core.n_neurons == 2500
     assert list(lc.neuron_sets) == sets
-    twins = LinkModel(lc).twin.twins
+    twins = LinkModel(lc).twin.model.twins
     assert [list(t.cfg.neuron_sets) for t in twins] == [sets[:2500], sets[2500:]]
     one = size_core(TARGETS["ulx3s"], n_neurons=100, param_sets=("RS", "FS"),
                     neuron_sets=[1] * 100)["link"]

@@ -115,3 +115,29 @@ def test_threads_progress_and_kernel_choice():
         golden.simulate("RS", 10.0, n_steps=10, scheme="rk4", kernel="numba")
     with pytest.raises(ValueError, match="unknown golden kernel"):
         golden.simulate("RS", 10.0, n_steps=10, kernel="cuda")
+
+
+def test_blocks_partial_block_buffer_growth_and_divergence_order():
+    """Several blocks of neurons (the last partial), mixed sets, a 2-D current with many
+    spikes (the spike buffer grows mid-run): same bits as the reference loop on one and two
+    threads; a later block that diverges at an earlier update is the one named."""
+    from cuneate.golden.izhikevich_kernel import BLOCK
+    n, steps = 2 * BLOCK + 77, 600
+    params = [MIX[(i // 5) % len(MIX)] for i in range(n)]
+    rng = np.random.default_rng(7)
+    cur = rng.uniform(0.0, 60.0, (steps, n))
+    ref = golden.simulate(kernel="numpy", params=params, current=cur, n_steps=steps,
+                          n_neurons=n)
+    assert sum(map(len, ref.spikes_ms)) > 8 * n
+    for threads in (1, 2):
+        assert_same(ref, golden.simulate(kernel="numba", threads=threads, params=params,
+                                         current=cur, n_steps=steps, n_neurons=n))
+    cur = np.full((steps, n), 10.0)
+    cur[300:, 3] = cur[90:, BLOCK + 9] = cur[90:, 2 * BLOCK + 5] = 400000.0
+    kw = dict(params="RS", current=cur, n_neurons=n, n_steps=steps)
+    with pytest.raises(golden.DivergenceError) as e:
+        golden.simulate(kernel="numpy", **kw)
+    for threads in (1, 2):
+        with pytest.raises(golden.DivergenceError) as f:
+            golden.simulate(kernel="numba", threads=threads, **kw)
+        assert str(e.value) == str(f.value) and e.value.neuron == BLOCK + 9

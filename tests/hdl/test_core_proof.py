@@ -73,8 +73,11 @@ def test_cuneate_prove_core_reports_a_caught_fault_as_json(capsys):
 
     from cuneate.sim.cli import main
     rc = main(["prove", "core", "--mutant", "late_host_write", "--depth", "3", "--json"])
-    rec = json.loads(capsys.readouterr().out)
+    out = capsys.readouterr()
+    rec = json.loads(out.out)
     assert rc == 1
+    # what runs is said on stderr (timestamped lines when stderr is not a terminal)
+    assert "cuneate prove core ..." in out.err and "cuneate prove core: done in" in out.err
     assert (rec["status"], rec["mode"], rec["depth"]) == ("fail", "bmc", 3), rec
     assert rec["solver"] == "yices" and rec["n_neurons"] == proof_config().n_neurons, rec
     assert "memory_cur_mem_tracked_word" in rec["failed"], rec
@@ -121,3 +124,24 @@ def test_cuneate_prove_core_takes_the_pipeline_depth(capsys):
     for target in ("lif", "coincidence", "link", "banked", "datapath"):
         assert main(["prove", target, "--pipeline-stages", "9"]) == 2
         assert "--pipeline-stages is the" in capsys.readouterr().err
+
+
+def test_progress_reads_the_phase_and_step_of_a_symbiyosys_run():
+    """The position a running proof reports, from SymbiYosys's own lines: the base case
+    counting up, the induction counting down, each phase's verdict."""
+    from cuneate.hdl.flow.sby import SbyProgress
+    p = SbyProgress(7)
+    assert p.text() == "elaborating"
+    lines = ["SBY 23:12:52 [core_eq] engine_0.basecase: ##   0:00:00  Checking assertions in "
+             "step 2..",
+             "SBY 23:12:52 [core_eq] engine_0.induction: ##   0:00:00  Trying induction in "
+             "step 7..",
+             "SBY 23:12:53 [core_eq] engine_0.induction: ##   0:00:00  Trying induction in "
+             "step 6..",
+             "SBY 23:12:53 [core_eq] engine_0: ##   0:00:00  Checking assertions in step 3.."]
+    assert [p.feed(x) for x in lines] == [True, True, True, True]
+    assert p.text() == "base case step 3 of 7; induction step 6 (from 7 down to 0)"
+    assert not p.feed("SBY 23:12:53 [core_eq] engine_0.basecase: ##   0:00:01  Solving ..")
+    assert p.feed("SBY 23:15:09 [core_eq] engine_0.basecase: Status returned by engine for "
+                  "basecase: pass")
+    assert p.text() == "base case pass; induction step 6 (from 7 down to 0)"

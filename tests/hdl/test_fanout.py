@@ -51,6 +51,8 @@ def test_the_gate_passes_exactly_at_the_threshold_on_the_sample_grid():
     ({"channel": [0, 2, 1]}, "afferent 1 listens to channel 2, outside 0 .. 1"),
     ({"gain": [1.0, 2.0]}, "gain has 2 entries for 3 afferents"),
     ({"gain": [1.0, math.inf, 2.0]}, "gain of afferent 1 is not finite"),
+    ({"gain": [1.0, 1e307, 2.0]}, r"the gain of afferent 1, 1e\+307, times the largest sample "
+                                  "1024 exceeds float64"),
     ({"gain": [1e5, 1.4, 1.0]}, r"gain\[1\] = 1.4 has relative representation error"),
     ({"threshold": [None, 2000.0, None]}, "afferent 1: threshold 2000 is outside"),
     ({"rectify": ["none", "square", "abs"]}, "afferent 1: unknown rectify 'square'"),
@@ -115,3 +117,51 @@ def test_the_kwargs_rebuild_the_same_table():
     cfg = _cfg(rectify="abs", threshold=[None, 2.0, -1.0], rounding="truncate")
     again = FanoutConfig.from_kwargs(cfg.to_kwargs())
     assert again.table() == cfg.table() and again.to_dict() == cfg.to_dict()
+
+
+def _exact_current(cfg, s_raw: int, n: int) -> tuple[int, bool, bool]:
+    """Afferent ``n``'s raw current for the raw sample ``s_raw`` in Python integers (no width):
+    the specification the twin must meet at every gain."""
+    mode, g = cfg.modes_[n], cfg.gains_[n].raw
+    r = s_raw if mode == 0 else max(s_raw, 0) if mode == 1 else abs(s_raw)
+    if cfg.gated_[n] and s_raw < cfg.theta_raw[n]:
+        r = 0
+    p, sh = r * g, cfg.shift
+    x = p << -sh if sh <= 0 else (p + (1 << (sh - 1))) >> sh if cfg.rounding == "nearest" \
+        else p >> sh
+    lo, hi = cfg.I.min_raw, cfg.I.max_raw
+    return min(max(x, lo), hi), x < lo, x > hi
+
+
+@settings(max_examples=80, deadline=None)
+@given(exponent=st.integers(-3, 300), mantissa=st.floats(1.0, 9.99),
+       rounding=st.sampled_from(["nearest", "truncate"]),
+       samples=st.lists(st.integers(-(1 << 15), (1 << 15) - 1), min_size=2, max_size=2))
+def test_the_twin_is_exact_at_every_gain(exponent, mantissa, rounding, samples):
+    """Gains from 1e-3 to 1e300 (the shared exponent then adds up to ~1000 bits to the product):
+    every current equals the unbounded-integer specification, every clamp counted (a gain of
+    1e18 once wrapped in the twin's int64 to the opposite clamp or to 0)."""
+    g = mantissa * 10.0 ** exponent
+    cfg = FanoutConfig(n_channels=2, channel=[0, 1, 0, 1], gain=[g, -g, g / 2, 0.0],
+                       rectify=["none", "abs", "positive", "none"], threshold=[None, None,
+                                                                                 -3.0, None],
+                       rounding=rounding)
+    twin = FanoutTwin(cfg)
+    for c, s in enumerate(samples):
+        twin.write(c, s)
+    cur, below, above = twin.run()
+    want = [_exact_current(cfg, samples[cfg.channels_[n]], n) for n in range(cfg.n_neurons)]
+    assert cur.tolist() == [w[0] for w in want]
+    assert below.tolist() == [w[1] for w in want] and above.tolist() == [w[2] for w in want]
+    assert twin.clamp_counts == {"current_low": sum(w[1] for w in want),
+                                 "current_high": sum(w[2] for w in want)}
+
+
+def test_a_gain_of_1e18_clamps_high_and_counts_it():
+    """The case that wrapped: +1e18 x 3 gave -512 counted as a low clamp."""
+    cfg = FanoutConfig(n_channels=1, channel=[0, 0], gain=[1e18, -1e18])
+    twin = FanoutTwin(cfg)
+    twin.write_samples([3.0])
+    cur, below, above = twin.run()
+    assert cur.tolist() == [cfg.I.max_raw, cfg.I.min_raw]
+    assert above.tolist() == [True, False] and below.tolist() == [False, True]

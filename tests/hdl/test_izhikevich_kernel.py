@@ -176,3 +176,60 @@ def test_checked_mode_uses_the_stage_functions_and_refuses_bad_input():
         IzhikevichTwin(cfg, kernel="cuda")
     with pytest.raises(ValueError, match="parameter-set index"):
         IzhikevichTwin(cfg).update([0], [0], [0], [3])
+
+
+def _several_blocks():
+    n = 2 * kernel.BLOCK + 77                      # the last block partial
+    return IzhikevichConfig(n_neurons=n, clock_hz=16e3 * n, param_sets=("RS", "FS"),
+                            neuron_sets=[(i // 3) % 2 for i in range(n)],
+                            tick_source="external", **FLAG)
+
+
+def test_blocked_run_over_several_blocks_equals_the_stages():
+    """A run of several blocks of neurons (the last partial), two parameter sets, every clamp
+    kind acting and far more spikes than the spike buffer first holds (the run resumes where
+    it stopped): the generic and the specialized loop, on one and on two threads, equal the
+    stage functions (spikes, state, clamp counts, the last sweep's counts)."""
+    cfg = _several_blocks()
+    cur = np.random.default_rng(5).uniform(cfg.I.min_value, cfg.I.max_value, cfg.n_neurons)
+    ref = IzhikevichTwin(cfg, kernel="stages")
+    a = ref.run(cur, 400)
+    assert sum(map(len, a)) > 8 * cfg.n_neurons and ref.clamp_sticky
+    for special, threads in ((False, 1), (True, 2)):
+        fast = IzhikevichTwin(cfg, specialize=special, threads=threads)
+        b = fast.run(cur, 400)
+        assert all(np.array_equal(x, y) for x, y in zip(a, b)), (special, threads)
+        assert np.array_equal(ref.v, fast.v) and np.array_equal(ref.u, fast.u)
+        assert ref.clamp_counts == fast.clamp_counts
+        assert ref.last_sweep_clamps == fast.last_sweep_clamps
+
+
+def test_specialized_loop_equals_the_stages():
+    """The loop compiled with a configuration's constants folded in (per-set constants, mixed
+    shifts, truncation) equals the stage functions (every configuration: the long lane)."""
+    cfg = config("mix-truncate")
+    ref = IzhikevichTwin(cfg, kernel="stages")
+    fast = IzhikevichTwin(cfg, specialize=True)
+    cur = np.linspace(cfg.i_lo, cfg.i_hi, N)
+    a, b = ref.run(cur, 1500), fast.run(cur, 1500)
+    assert sum(map(len, a)) > 0 and all(np.array_equal(x, y) for x, y in zip(a, b))
+    assert np.array_equal(ref.v, fast.v) and np.array_equal(ref.u, fast.u)
+    assert ref.clamp_counts == fast.clamp_counts
+
+
+@pytest.mark.long
+@pytest.mark.parametrize("name", sorted(CONFIGS))
+def test_long_specialized_loop_equals_the_stages_every_config(name):
+    """Every configuration of the property tests, 5000 sweeps over and beyond the accepted
+    currents: the specialized loop equals the stage functions."""
+    cfg = config(name)
+    rng = np.random.default_rng(11)
+    lo, hi = cfg.i_lo, cfg.i_hi
+    cur = np.clip(rng.uniform(lo - 0.1 * (hi - lo), hi + 0.1 * (hi - lo), N),
+                  cfg.I.min_value, cfg.I.max_value)
+    ref = IzhikevichTwin(cfg, kernel="stages")
+    fast = IzhikevichTwin(cfg, specialize=True)
+    a, b = ref.run(cur, 5000), fast.run(cur, 5000)
+    assert all(np.array_equal(x, y) for x, y in zip(a, b))
+    assert np.array_equal(ref.v, fast.v) and np.array_equal(ref.u, fast.u)
+    assert ref.clamp_counts == fast.clamp_counts and ref.clamp_sticky == fast.clamp_sticky

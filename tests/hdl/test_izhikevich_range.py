@@ -8,6 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from cuneate.golden import izhikevich as golden
+from cuneate.golden.behaviours import BEHAVIOURS
 from cuneate.golden.metrics import compare_trains
 from cuneate.hdl.izhikevich import ConfigError, IzhikevichConfig, IzhikevichTwin
 from cuneate.hdl.izhikevich.range import reachable_ranges
@@ -183,3 +184,65 @@ def test_long_full_scale_runs_never_clamp():
               f"differences {np.abs(d).max()}, clamps {twin.clamp_counts}")
         assert twin.clamp_sticky == 0
         assert np.abs(d).max() <= 2
+
+
+BEHAVIOURS_G = BEHAVIOURS["G"].params          # class 1: non-standard A, B, C
+
+
+def _search(search, sets, dt, lo, hi):
+    """reachable_ranges by the given search loop (the cache bypassed)."""
+    from cuneate.hdl.izhikevich import range as rng_mod
+    inits = [((-65.0, golden.to_params(s).b * -65.0),) for s in sets]
+    orig = rng_mod._search_compiled
+    rng_mod._search_compiled = search
+    rng_mod._cached.cache_clear()
+    try:
+        return reachable_ranges([golden.to_params(s) for s in sets], dt, lo, hi, inits, 30.0)
+    finally:
+        rng_mod._search_compiled = orig
+        rng_mod._cached.cache_clear()
+
+
+@pytest.mark.parametrize("sets, dt, lo, hi", [
+    (("RS",), DT, -512.0, I_MAX),
+    (("FS", BEHAVIOURS_G), 0.1, -150.0, 150.0),
+    (("RZ",), 0.05, 0.0, 40.0)])
+def test_compiled_search_returns_the_reference_loops_ranges(sets, dt, lo, hi):
+    """The compiled search gives the NumPy loop's ranges to the bit (every extreme and the
+    stimulus named): standard and non-standard sets, two sets, dt of 1/16, 1/10, 1/20 ms
+    (a square wave of two updates, whole and fractional periods)."""
+    from cuneate.hdl.izhikevich import range as rng_mod
+    ref = _search(rng_mod._search_numpy, sets, dt, lo, hi)
+    new = _search(rng_mod._search_compiled, sets, dt, lo, hi)
+    assert [r.to_dict() for r in new] == [r.to_dict() for r in ref]
+
+
+def test_compiled_search_names_the_same_divergence():
+    """A set that diverges under the accepted currents (dt = 1 ms) is refused with the same
+    message (set, stimulus, time) by both loops."""
+    from cuneate.hdl.izhikevich import range as rng_mod
+    msgs = []
+    for search in (rng_mod._search_numpy, rng_mod._search_compiled):
+        with pytest.raises(rng_mod.RangeSearchError) as e:
+            _search(search, ("RS", "FS"), 1.0, -512.0, I_MAX)
+        msgs.append(str(e.value))
+    assert msgs[0] == msgs[1] and "diverges" in msgs[0]
+
+
+def test_the_worst_accepted_update_rate_builds_in_seconds():
+    """A configuration at the highest update rate the scene schema accepts (10 MHz, dt =
+    1e-4 ms: 5 million search steps) with two parameter sets builds within a generous bound
+    (under a second on an idle 2-core machine; a minute and more before the search was
+    compiled)."""
+    import time
+    from cuneate.hdl.izhikevich import range as rng_mod
+    from cuneate.sim.scenes.schema import SCHEMA
+    rate = SCHEMA["hardware"]["update_hz"].hi
+    rng_mod._cached.cache_clear()
+    t0 = time.perf_counter()
+    cfg = IzhikevichConfig(n_neurons=8, clock_hz=rate * 8, update_hz=rate,
+                           param_sets=("RS", "FS"), neuron_sets=[0, 1] * 4)
+    took = time.perf_counter() - t0
+    print(f"\n{rate:g} Hz, RS + FS: configuration built in {took:.2f} s")
+    assert cfg.dt_ms == 1000.0 / rate and not any(cfg.clamp_can_act.values())
+    assert took < 20.0

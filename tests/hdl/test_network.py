@@ -172,7 +172,7 @@ def test_several_spikes_in_one_tick_at_the_sweep_boundary(n_afferents):
 
 def test_tick_done_comes_once_every_spike_of_the_tick_is_handed_over():
     """The tick report a host link closes its spike batches on: ticks taken only while neither
-    ``busy`` nor ``tick_open`` (as :class:`~cuneate.hdl.link.LinkedNetwork` does), a consumer
+    ``busy`` nor ``tick_open`` (as its payload, :mod:`cuneate.hdl.network.payload`, does), a consumer
     ready one cycle in twenty; at each ``tick_done`` every spike of the ticks taken, afferent and
     cuneate, has been handed over, and none of a later tick. (Without the wait for empty FIFOs,
     or without the settling cycles, spikes are still in a FIFO at ``tick_done``: it fails.)"""

@@ -8,7 +8,9 @@ them once more in a child process under an address-space limit (``ulimit -v``).
 """
 
 import json
+import math
 import os
+import re
 import subprocess
 import sys
 import textwrap
@@ -66,12 +68,45 @@ def recorded(file: str, sensor: str = "") -> str:
     return scene(RECORDED.format(file=file, sensor=sensor))
 
 
+def _npz(**arrays):
+    """A writer of an NPZ file of ``arrays``."""
+    return lambda path: np.savez(path, **arrays)
+
+
+def _truncated_npz(path):
+    np.savez(path, Time=np.arange(60) / 1e3, DeltaBraggW=np.zeros((60, 1)))
+    data = path.read_bytes()
+    path.write_bytes(data[: len(data) // 2])
+
+
+def _nir(n_in: int, n_out: int, weight: float = 0.05, threshold: float = 1.0,
+         tau: float = 0.02):
+    """A writer of a NIR graph: Input -> Affine (every weight ``weight``) -> LIF -> Output."""
+    def write(path):
+        import nir
+        g = nir.NIRGraph(
+            nodes={"input": nir.Input(input_type=np.array([n_in])),
+                   "fc": nir.Affine(weight=np.full((n_out, n_in), weight), bias=np.zeros(n_out)),
+                   "lif": nir.LIF(tau=np.full(n_out, tau), r=np.ones(n_out),
+                                  v_leak=np.zeros(n_out), v_threshold=np.full(n_out, threshold)),
+                   "output": nir.Output(output_type=np.array([n_out]))},
+            edges=[("input", "fc"), ("fc", "lif"), ("lif", "output")])
+        nir.write(path, g)
+    return write
+
+
+def _ridge_with_preset(preset: str) -> str:
+    from cuneate.sim.scenes import example_path
+    text = example_path("ridge_angle").read_text()
+    return text.replace('model = "cuneate"\n', f'model = "cuneate"\npreset = "{preset}"\n')
+
+
 # (id, argv, files {name: text | bytes | callable(path)}, exit status, message fragment)
 CASES = [
     # --- runaways: refused by the estimate, before the first large allocation
     ("scene-10MHz-update", ["run", "{tmp}/s.toml", "--out", "{tmp}/o"],
-     {"s.toml": scene("[hardware]\nupdate_hz = 1e7\nclock_hz = 1e9\n", duration_ms=200)},
-     2, "more than the limit of 60 min"),
+     {"s.toml": scene("[hardware]\nupdate_hz = 1e7\nclock_hz = 1e9\n", duration_ms=200000)},
+     2, "2e+09 ticks on golden) needs about 242 GiB of memory, more than"),
     ("scene-many-long-trials", ["run", "{tmp}/s.toml", "--out", "{tmp}/o"],
      {"s.toml": scene("[hardware]\nclock_hz = 1e9\n", trials=2000, duration_ms=600000)},
      2, "of memory, more than"),
@@ -160,8 +195,8 @@ CASES = [
     ("duration-1e300-no-300-digit-number", ["simulate", "lif", "--duration-ms", "1e300"], {},
      2, "1.6e+301 sweeps"),
     ("range-search-at-10MHz", ["simulate", "izhikevich", "--engine", "fixed", "--clock-hz",
-                               "1e9", "--update-hz", "1e7", "--duration-ms", "1"], {}, 2,
-     "the state-range search (1 parameter set(s), 5e+06 steps"),
+                               "1e13", "--update-hz", "1e10", "--duration-ms", "1"], {}, 2,
+     "the state-range search (1 parameter set(s), 5e+09 steps"),
     ("sweep-reference-without-spikes", ["sweep", "--battery", "yardstick", "--duration-ms",
                                         "0.5", "--update-hz", "4000", "--scheduler", "sync",
                                         "--out", "{tmp}/o"], {}, 2, "has no spike in 0.5 ms"),
@@ -173,7 +208,83 @@ CASES = [
      "a probability must be in [0, 1]"),
     ("lif-negative-probability", ["simulate", "lif", "--input-rate", "-0.5"], {}, 2,
      "a probability must be in [0, 1]"),
+    # --- no estimate before allocating (issue 39, class 2): refused by the estimate
+    ("fanout-1e8-afferents", ["simulate", "fanout", "--afferents", "100000000"], {}, 2,
+     "--afferents: the fan-out table of 100000000 afferents needs 3900000000 bits"),
+    ("nir-1e12-steps", ["simulate", "nir", "{tmp}/g.nir", "--steps", "1000000000000"],
+     {"g.nir": _nir(4, 4)}, 2, "1e+12 steps of"),
+    ("scene-label-100k-chars", ["run", "{tmp}/s.toml", "--out", "{tmp}/o"],
+     {"t.npz": _npz(Time=np.arange(60) / 1e3, DeltaBraggW=np.zeros((60, 1))),
+      "s.toml": recorded("{tmp}/t.npz").replace("[stimulus]\n", "[stimulus]\nlabel = \""
+                                                 + "x" * 100_000 + "\"\n")},
+     2, "stimulus.label: 100000 characters; at most 200"),
+    ("scene-name-5000-chars", ["run", "{tmp}/s.toml", "--out", "{tmp}/o"],
+     {"s.toml": scene("").replace("[scene]\n", "[scene]\nname = \"" + "n" * 5000 + "\"\n")},
+     2, "scene.name: 5000 characters; at most 200"),
+    # --- trained layers too large (class 3): refused with the figure, not a RecursionError
+    ("nir-layer-beyond-the-largest-fpga", ["nir", "import", "{tmp}/g.nir", "--out", "{tmp}/o"],
+     {"g.nir": _nir(1000, 600, 0.01)}, 2,
+     "the weight memory of 600 neurons x 1000 inputs x 8 bits needs 4.8e+06 bits"),
+    ("nir-every-weight-rounds-to-0", ["nir", "import", "{tmp}/g.nir", "--weight-frac-bits",
+                                      "7", "--out", "{tmp}/o"],
+     {"g.nir": _nir(20, 20)}, 2, "every one of its weights rounds to 0"),
+    # --- bad files, values and paths that exited 3 (class 4)
+    ("empty-mat", ["run", "{tmp}/s.toml", "--out", "{tmp}/o"],
+     {"t.mat": b"", "s.toml": recorded("{tmp}/t.mat")}, 2,
+     "t.mat: not a readable MAT file (the file is empty)"),
+    ("empty-npz", ["run", "{tmp}/s.toml", "--out", "{tmp}/o"],
+     {"t.npz": b"", "s.toml": recorded("{tmp}/t.npz")}, 2,
+     "t.npz: not a readable NPZ file (the file is empty)"),
+    ("truncated-npz", ["run", "{tmp}/s.toml", "--out", "{tmp}/o"],
+     {"t.npz": _truncated_npz, "s.toml": recorded("{tmp}/t.npz")}, 2,
+     "t.npz: not a readable NPZ file (BadZipFile"),
+    ("nir-weights-1e300", ["nir", "import", "{tmp}/g.nir", "--out", "{tmp}/o"],
+     {"g.nir": _nir(4, 4, weight=1e300)}, 2, "node 'lif' (LIF): no 8-bit signed format holds"),
+    ("nir-threshold-1e300", ["nir", "import", "{tmp}/g.nir", "--out", "{tmp}/o"],
+     {"g.nir": _nir(4, 4, threshold=1e300)}, 2, "the state exceeds the 60 bits the twin's"),
+    ("prove-work-dir-in-proc", ["prove", "fanout", "--work-dir", "/proc/cuneate-no-dir"], {},
+     2, "'/proc/cuneate-no-dir"),
+    ("prove-work-dir-is-a-file", ["prove", "banked", "--neurons", "8", "--bank-depth", "4",
+                                  "--work-dir", "{tmp}/f"], {"f": "x"}, 2, "Not a directory"),
+    ("scene-argument-5000-chars", ["run", "s" * 5000, "--out", "{tmp}/o"], {}, 2,
+     "File name too long: 'sss"),
+    # --- nonsense that was accepted (class 6)
+    ("coincidence-negative-rate", ["simulate", "coincidence", "--input-rate-hz", "-5",
+                                   "--duration-ms", "5"], {}, 2, "a rate must be >= 0 Hz"),
+    ("boolean-shifts", ["run", "{tmp}/s.toml", "--out", "{tmp}/o"],
+     {"t.npz": _npz(Time=np.arange(60) / 1e3, DeltaBraggW=np.ones((60, 1), dtype=bool)),
+      "s.toml": recorded("{tmp}/t.npz")}, 2, "holds booleans (true/false), not numbers"),
+    ("ridge-cuneate-preset-not-applied", ["run", "{tmp}/s.toml", "--out", "{tmp}/o"],
+     {"s.toml": _ridge_with_preset("FS")}, 2, "population[2].preset: 'FS'"),
+    ("engines-empty", ["run", "{tmp}/s.toml", "--engines", "", "--out", "{tmp}/o"],
+     {"s.toml": scene("")}, 2, "--engines: '' names an empty engine"),
+    ("engines-commas", ["run", "{tmp}/s.toml", "--engines", ",,,", "--out", "{tmp}/o"],
+     {"s.toml": scene("")}, 2, "--engines: ',,,' names an empty engine"),
+    ("engines-twice", ["run", "{tmp}/s.toml", "--engines", "golden,golden", "--out",
+                       "{tmp}/o"], {"s.toml": scene("")}, 2, "names golden twice"),
+    ("build-update-hz-0", ["build", "ulx3s", "--update-hz", "0", "--no-bitstream", "--out",
+                           "{tmp}/o"], {}, 2, "--update-hz: must be > 0"),
+    ("nir-input-of-two-arrays", ["simulate", "nir", "{tmp}/g.nir", "--input", "{tmp}/x.npz"],
+     {"g.nir": _nir(4, 4), "x.npz": _npz(a=np.zeros((5, 4)), b=np.ones((5, 4)))}, 2,
+     "holds 2 arrays (a, b) and none named 'input'"),
+    ("nir-input-rate-above-1", ["simulate", "nir", "{tmp}/g.nir", "--input-rate", "5"],
+     {"g.nir": _nir(4, 4)}, 2, "a probability must be in [0, 1]"),
+    ("nir-1000-bit-weights", ["nir", "import", "{tmp}/g.nir", "--weight-bits", "1000",
+                              "--out", "{tmp}/o"], {"g.nir": _nir(4, 4)}, 2,
+     "weight_bits must be an integer in 2 .. 32"),
+    ("nir-1000-bit-state", ["nir", "import", "{tmp}/g.nir", "--v-frac-bits", "1000",
+                            "--out", "{tmp}/o"], {"g.nir": _nir(4, 4)}, 2,
+     "v_frac_bits must be an integer in 2 .. 40"),
+    # --- misleading output (class 7)
+    ("waves-start-after-the-run", ["simulate", "izhikevich", "--engine", "amaranth",
+                                   "--neurons", "8", "--duration-ms", "1", "--waves", "{tmp}/w",
+                                   "--waves-start", "100000"], {}, 2,
+     "starts at tick 100000, after the run's last tick 15"),
+    ("filter-check-unstable", ["filter", "check", "--b", "1", "--a", "1", "-1.919", "0.91"], {},
+     2, "is unstable: pole z = 1.06"),
     # --- valid input accepted
+    ("nir-export-of-a-shipped-example", ["nir", "export", "examples/skin_3x3.toml", "--out",
+                                         "{tmp}/skin.nir"], {}, 0, ""),
     ("neuron-sets-below-8-neurons", ["simulate", "izhikevich", "--neurons", "3",
                                      "--neuron-sets", "0,0,0", "--duration-ms", "10"], {},
      0, ""),
@@ -192,6 +303,7 @@ def _materialize(tmp_path, argv, files):
     return [a.replace("{tmp}", str(tmp_path)) for a in argv]
 
 
+@pytest.mark.timeout(120)
 @pytest.mark.parametrize("argv, files, status, fragment", [c[1:] for c in CASES],
                          ids=[c[0] for c in CASES])
 def test_bad_input_exits_with_one_line(tmp_path, capsys, argv, files, status, fragment):
@@ -250,7 +362,9 @@ def _rebind(parser, func):
 
 
 RUNAWAYS = [c for c in CASES if c[0] in ("generate-coincidence-1e8-delay",
-                                         "lif-quantization-1e5", "sweep-1e9-ms")]
+                                         "lif-quantization-1e5", "sweep-1e9-ms",
+                                         "fanout-1e8-afferents", "nir-1e12-steps",
+                                         "scene-label-100k-chars")]
 
 
 def test_runaways_refused_under_an_address_space_limit(tmp_path):
@@ -286,10 +400,223 @@ def test_narrow_state_formats_state_their_rounding_and_warn(capsys):
                    "golden model's many-fold"], err
 
 
-def test_input_spike_after_the_run_is_not_a_negative_tick(capsys):
-    """A spike time far beyond the run (1e300 ms) falls after it: no spike at all (it used to
-    wrap to tick -9223372036854775808)."""
+def test_input_spike_after_the_run_is_refused_not_dropped(capsys):
+    """A spike time far beyond the run (1e300 ms) is refused naming it (it once wrapped to tick
+    -9223372036854775808, then was dropped without a word)."""
     rc = main(["simulate", "coincidence", "--input", "1e300", "--input", "", "--input", "",
                "--input", "", "--duration-ms", "1", "--json"])
-    data = json.loads(capsys.readouterr().out)
-    assert rc == 0 and data["spikes_ms"] == [[], [], []]
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and len(err) == 1
+    assert "a spike at 1e+300 ms falls after the run's last tick (0.9375 ms)" in err[0]
+
+
+# --- the API's probe-style inputs (issue 39, class 6): a ValueError (or the transport's error)
+# naming the input, never a silent result
+
+def _spike_file_with_neuron_outside(path):
+    from cuneate.sim.spikes import write_spikes
+    write_spikes(path, [[1.0]], "fixed", 10.0, ["p"])
+    z = dict(np.load(path))
+    z["neuron"] = np.array([5])
+    np.savez(path, **z)
+
+
+def _load_spikes(content):
+    def probe(tmp_path):
+        from cuneate.sim.spikes import load_spikes
+        p = tmp_path / "s.npz"
+        if callable(content):
+            content(p)
+        else:
+            p.write_bytes(content)
+        load_spikes(p)
+    return probe
+
+
+def _driver(**kw):
+    from cuneate.hdl.izhikevich import IzhikevichConfig
+    from cuneate.sim.host.driver import AfferentEncoding, FbgDriver
+    return FbgDriver(IzhikevichConfig(n_neurons=8), [AfferentEncoding(mode="SA")], **kw)
+
+
+def _twin_run(n):
+    def probe(tmp_path):
+        from cuneate.hdl.izhikevich import IzhikevichConfig
+        from cuneate.sim.izhikevich.engines import TwinTransport
+        tr = TwinTransport()
+        tr.open(IzhikevichConfig(n_neurons=8))
+        tr.run(n)
+    return probe
+
+
+API_CASES = [
+    ("load_spikes-empty-file", _load_spikes(b""), ValueError, "not a readable spike file"),
+    ("load_spikes-incomplete", _load_spikes(
+        lambda p: np.savez(p, format=np.array("cuneate-spikes/1"))), ValueError,
+     "a cuneate-spikes/1 file without engine"),
+    ("load_spikes-neuron-outside-its-table", _load_spikes(_spike_file_with_neuron_outside),
+     ValueError, "a spike of neuron 5, outside its table of 1 neurons"),
+    ("AfferentEncoding-nan-gain", lambda tmp_path: __import__(
+        "cuneate.sim.host.driver", fromlist=["x"]).AfferentEncoding(mode="SA", gain=math.nan),
+     ValueError, "gain must be a finite number"),
+    ("AfferentEncoding-inf-gain", lambda tmp_path: __import__(
+        "cuneate.sim.host.driver", fromlist=["x"]).AfferentEncoding(mode="SA", gain=math.inf),
+     ValueError, "gain must be a finite number"),
+    ("FbgDriver-rate-0", lambda tmp_path: _driver(fs_hz=0), ValueError,
+     "fs_hz must be a finite rate > 0 Hz"),
+    ("FbgDriver-complex-shifts", lambda tmp_path: _driver().currents(np.zeros((3, 1)) + 1j),
+     ValueError, "d_lambda holds complex numbers"),
+    ("TwinTransport-negative-sweeps", _twin_run(-5), "TransportError",
+     "fixed: cannot run -5 sweeps"),
+    ("TwinTransport-fractional-sweeps", _twin_run(2.5), "TransportError",
+     "fixed: cannot run 2.5 sweeps"),
+    ("LifConfig-leak-that-never-acts", lambda tmp_path: __import__(
+        "cuneate.hdl.lif", fromlist=["x"]).LifConfig(
+        form="discrete", param_sets=[{"alpha": 1 - 1e-9, "u_th": 1.0}]), "ConfigError",
+     "so it never acts: the neuron would be an IF neuron"),
+]
+
+
+@pytest.mark.parametrize("probe, error, fragment", [c[1:] for c in API_CASES],
+                         ids=[c[0] for c in API_CASES])
+def test_api_bad_input_raises_naming_it(tmp_path, probe, error, fragment):
+    with pytest.raises(Exception) as info:
+        probe(tmp_path)
+    assert (type(info.value).__name__ == error if isinstance(error, str)
+            else isinstance(info.value, error)), info.value
+    assert fragment in str(info.value)
+
+
+def test_frame_decoder_counts_garbage_without_raising():
+    from cuneate.hdl.link.codec import FrameDecoder
+    d = FrameDecoder()
+    rng = np.random.default_rng(3)
+    got = d.feed(rng.integers(0, 256, 65536, dtype=np.uint8).tobytes())
+    assert got == [] and sum(d.errors.values()) > 100
+
+
+# --- environment failures (class 4): one line naming the path or the resource
+
+def test_closed_stdout_is_not_an_error():
+    r = subprocess.run(["bash", "-o", "pipefail", "-c",
+                        f"{sys.executable} -m cuneate.sim.cli run --list-examples | head -1"],
+                       capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0 and r.stderr == "" and r.stdout.startswith("(default: run")
+
+
+@pytest.mark.parametrize("exc, fragment", [
+    (OSError(28, "No space left on device", "/data/out/run.json"),
+     "cuneate simulate izhikevich: No space left on device: '/data/out/run.json'"),
+    (MemoryError("Unable to allocate 21.8 TiB"),
+     "cuneate simulate izhikevich: out of memory (Unable to allocate 21.8 TiB): this process "
+     "can get about"),
+], ids=["disk-full", "memory"])
+def test_environment_failure_is_one_line_naming_it(monkeypatch, capsys, exc, fragment):
+    from cuneate.sim import cli
+
+    def failing(args):
+        raise exc
+    real = cli.build_parser
+    monkeypatch.setattr(cli, "build_parser", lambda: _rebind(real(), failing))
+    assert main(["simulate", "izhikevich", "--duration-ms", "1"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith(fragment), err
+
+
+#: a progress line: its time stamp, then the step
+PROGRESS = re.compile(r"^\[\d\d:\d\d:\d\d\] ")
+
+
+def test_a_proof_out_of_memory_says_so():
+    """SymbiYosys under an address-space limit its tools cannot work in: one line that says
+    memory ran out (it was exit 2 with SymbiYosys's raw ERROR)."""
+    script = textwrap.dedent("""
+        import resource, sys
+        resource.setrlimit(resource.RLIMIT_AS, (1 << 30, 1 << 30))
+        from cuneate.sim.cli import main
+        sys.exit(main(["prove", "banked", "--neurons", "8", "--bank-depth", "4"]))
+    """)
+    r = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                       timeout=300)
+    # the progress lines of the run (time-stamped) stand before the one error line
+    lines = [ln for ln in r.stderr.strip().splitlines() if not PROGRESS.match(ln)]
+    assert r.returncode == 2 and len(lines) == 1, r.stderr[-2000:]
+    assert lines[0].startswith("cuneate prove banked: the proof ran out of memory (")
+
+
+# --- one run folder, one run (class 5)
+
+def test_a_second_run_into_a_folder_in_use_is_refused(tmp_path, capsys):
+    from cuneate.sim.cli.options import claim_output
+    out = tmp_path / "o"
+    out.mkdir()
+    (tmp_path / "s.toml").write_text(scene(""))
+    argv = ["run", str(tmp_path / "s.toml"), "--out", str(out)]
+    with claim_output(out, "cuneate run"):          # a first run, still working
+        assert main(argv) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and "is in use by another run (pid " in err[0], err
+        assert (out / "INCOMPLETE").exists()
+    assert not (out / "INCOMPLETE").exists()        # the first finished
+    assert main(argv) == 0 and not (out / "INCOMPLETE").exists()
+
+
+def test_a_failed_run_leaves_its_folder_marked(tmp_path):
+    from cuneate.sim.cli.options import claim_output
+    with pytest.raises(RuntimeError):
+        with claim_output(tmp_path, "cuneate run"):
+            (tmp_path / "partial.png").write_bytes(b"x")
+            raise RuntimeError("the engine stopped")
+    text = (tmp_path / "INCOMPLETE").read_text()
+    assert "did not finish (stopped by RuntimeError: the engine stopped)" in text
+
+
+# --- output that said what did not happen (class 7)
+
+def test_a_waveform_window_past_the_run_ends_with_it(tmp_path, capsys):
+    rc = main(["simulate", "izhikevich", "--engine", "amaranth", "--neurons", "8",
+               "--duration-ms", "1", "--waves", str(tmp_path), "--waves-ticks", "100000",
+               "--json"])
+    w = json.loads(capsys.readouterr().out)["waves"]
+    assert rc == 0 and (w["start_tick"], w["ticks"]) == (0, 16)      # the run's 16 ticks
+    assert w["time_axis"].startswith("time axis: 1000 ns a clock cycle (the amaranth "
+                                      "simulation's clock; the configured clock is")
+
+
+def test_agreement_figures_tell_a_difference_from_none():
+    from cuneate.sim.report import fmt_distinct
+    assert [fmt_distinct(x) for x in (1.0, 0.0, 0.99975, 1.2e-4, 0.5, None)] == \
+        ["1", "0", "0.99975", "0.00012", "0.500", "-"]
+
+
+def test_boards_bounds_are_labelled_neurons_and_the_fmax_megahertz(capsys):
+    assert main(["boards"]) == 0
+    line = capsys.readouterr().out.splitlines()[1]
+    assert "bounds in neurons: block RAM" in line and "logic at the measured fmax of" in line
+    assert " MHz " in line.split("logic at the measured fmax of")[1]
+
+
+def test_a_decay_near_1_is_printed_to_its_digits(tmp_path, capsys):
+    _nir(4, 4, tau=1e4)(tmp_path / "g.nir")           # alpha = 1 - 1e-8 (was "1 -> 1")
+    assert main(["-q", "nir", "import", str(tmp_path / "g.nir"), "--out",
+                 str(tmp_path / "o")]) == 0
+    assert "decay   1 - 1e-08 -> 1 - 1e-08" in capsys.readouterr().out
+
+
+def test_a_pulse_report_says_only_what_it_computed(tmp_path, capsys):
+    """Per-trial features: no published per-ISI row was computed, so neither the page nor the
+    printed lines speak of one, and trials are pulses, not grasps."""
+    from cuneate.sim.scenes import example_path
+    text = example_path("pulse_amplitudes").read_text().replace("trials = 8", "trials = 4") \
+        .replace("cv_folds = 8", "cv_folds = 4").replace('engines = ["golden", "fixed"]',
+                                                         'engines = ["golden"]')
+    (tmp_path / "s.toml").write_text(text)
+    assert main(["-q", "run", str(tmp_path / "s.toml"), "--out", str(tmp_path / "o")]) == 0
+    out = capsys.readouterr().out
+    page = (tmp_path / "o" / "index.html").read_text()
+    summ = json.loads((tmp_path / "o" / "run.json").read_text())
+    assert "published" not in out and "published protocol" not in page
+    assert "per-pulse decision" in out and "what the system decides per pulse" in page
+    assert "grasp" not in out and "grasp" not in page.split("<h2>What ran")[0]
+    assert summ["accuracy_is"].startswith("balanced accuracy of the per-pulse decision")
+    assert summ["decoded"]["golden"]["protocols"][0]["name"] == "pulse-grouped, per pulse"

@@ -86,10 +86,12 @@ def test_filter_check(capsys):
                                   "-1.9093", "0.9099"])
     assert rc == 0 and "stable" in out.lower()
     # the coefficients as published have a real pole at 1.0627: refused
-    rc, out, _ = run_cli(capsys, ["filter", "check", "--b", "0.045", "0", "-0.045", "--a", "1",
-                                  "-1.919", "0.91", "--json"])
+    rc, out, err = run_cli(capsys, ["filter", "check", "--b", "0.045", "0", "-0.045", "--a",
+                                    "1", "-1.919", "0.91", "--json"])
     data = json.loads(out)
-    assert rc == 1 and data["stable"] is False
+    # a bad filter is bad input: exit 2 (it was 1), the report on stdout, one line naming it
+    assert rc == 2 and data["stable"] is False
+    assert err.strip().splitlines() == [err.strip()] and "is unstable: pole z = 1.06" in err
     assert data["max_radius"] == pytest.approx((1.919 + (1.919**2 - 4 * 0.91) ** 0.5) / 2,
                                                rel=1e-6)
 

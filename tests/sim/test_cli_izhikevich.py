@@ -119,7 +119,7 @@ def test_force_runs_a_long_estimate_with_progress(capsys):
     assert len(json.loads(out)["spikes_ms"]) == 50
     # stderr is not a terminal here: the step is a timestamped line (a bar in a terminal)
     assert re.search(r"^\[\d\d:\d\d:\d\d\] simulating 50 neuron\(s\) on fixed .*\(3200 "
-                     r"sweep\) \.\.\.$", err, re.M), err
+                     r"sweeps\) \.\.\.$", err, re.M), err
 
 
 def test_generate_prints_formats_and_range(capsys, tmp_path):

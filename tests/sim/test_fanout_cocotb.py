@@ -24,27 +24,54 @@ TABLE = dict(n_channels=6, channel=[int(c) for c in _rng.integers(0, 6, N)],
              sample_width=14, sample_max=64.0)
 
 
+def _scoreboard(cfg, simulator, build_dir, runs, **config) -> dict:
+    """The bench's scoreboard on ``cfg``'s Verilog; its report, after the checks every table
+    shares (every current checked, twin exact, golden bounded, no unneeded clamp)."""
+    build_dir.mkdir(parents=True, exist_ok=True)
+    src = build_dir / "channel_fanout.v"
+    src.write_text(fanout_verilog(cfg, lowered=simulator == "icarus"))
+    r = run_cocotb(simulator, [src], "channel_fanout", "cuneate.sim.fanout.bench", build_dir,
+                   config={"fanout": cfg.to_kwargs(), "runs": runs} | config,
+                   testcase="scoreboard").report
+    print(f"\n{simulator}: " + json.dumps(r))
+    assert r["runs_checked"] == runs and r["currents_checked"] == runs * cfg.n_neurons
+    assert r["twin_mismatches"] == r["golden_violations"] == r["unneeded_clamps"] == 0
+    return r
+
+
 @pytest.mark.cocotb
 @pytest.mark.parametrize("simulator", SIMULATORS)
 def test_scoreboard(simulator, build_root):
     cfg = FanoutConfig(**TABLE)
     assert cfg.can_clamp
-    bd = build_root / f"fanout_{simulator}"
-    bd.mkdir(parents=True, exist_ok=True)
-    src = bd / "channel_fanout.v"
-    src.write_text(fanout_verilog(cfg, lowered=simulator == "icarus"))
-    runs = 60
-    r = run_cocotb(simulator, [src], "channel_fanout", "cuneate.sim.fanout.bench", bd,
-                   config={"fanout": cfg.to_kwargs(), "runs": runs, "seed": 7,
-                           "extreme_p": 0.15, "disturb_p": 0.3},
-                   testcase="scoreboard").report
-    print(f"\n{simulator}: " + json.dumps(r))
-    assert r["runs_checked"] == runs and r["currents_checked"] == runs * N
-    assert r["twin_mismatches"] == r["golden_violations"] == r["unneeded_clamps"] == 0
+    r = _scoreboard(cfg, simulator, build_root / f"fanout_{simulator}", 60, seed=7,
+                    extreme_p=0.15, disturb_p=0.3)
     assert 0 < r["golden_max_ratio"] <= 1
     # the bench drove what it must check: clamps both ways, starts during runs, held writes
     assert r["clamps_low"] > 0 and r["clamps_high"] > 0
     assert r["overruns"] > 0 and r["held_cycles"] > 0
+
+
+#: gains of about 1e18 (the shared exponent adds 46 bits to the product, more than the current
+#: holds): every non-zero rectified sample clamps, the sign of gain and sample deciding which
+#: way; the twin once wrapped these in int64 to the opposite clamp or to 0
+WIDE = dict(n_channels=3, channel=[0, 1, 2, 0, 1, 2, 0, 1],
+            gain=[1e18, -1e18, 5e17, -2.5e17, 7.5e17, 1e18, 0.0, -1e18],
+            rectify=["none", "none", "abs", "positive", "none", "abs", "none", "positive"],
+            threshold=[None, 2.0, None, None, -1.0, None, None, None])
+
+
+@pytest.mark.cocotb
+@pytest.mark.parametrize("simulator", SIMULATORS)
+def test_scoreboard_at_gains_of_1e18(simulator, build_root):
+    cfg = FanoutConfig(**WIDE)
+    assert cfg.shift < -cfg.I.width
+    r = _scoreboard(cfg, simulator, build_root / f"fanout_wide_{simulator}", 12, seed=3,
+                    extreme_p=0.2, disturb_p=0.0)
+    # both clamps counted, on the DUT's counters as in the twin (the bench compares them)
+    assert r["clamps_low"] > 0 and r["clamps_high"] > 0
+    assert r["clamp_counts"] == {"current_low": r["clamps_low"],
+                                 "current_high": r["clamps_high"]}
 
 
 @pytest.mark.cocotb

@@ -2,6 +2,7 @@
 
 import json
 
+import numpy as np
 import pytest
 
 from cuneate.sim.scenes import afferent as scene_run
@@ -105,6 +106,16 @@ def test_ridge_scene_on_verilator_equals_fixed(tmp_path, capsys):
     assert summ["engines"]["verilator"]["counts"] == summ["engines"]["fixed"]["counts"]
     assert (out / "ridge_verilator.png").stat().st_size > 1000
     assert "decode accuracy" in capsys.readouterr().out
+    # a spike file per engine (there was none): per trial 4 afferents and 3 cuneate neurons,
+    # the same trains on both engines, the cuneate spikes per trial those of run.json
+    from cuneate.sim.spikes import load_spikes
+    assert summ["spike_files"] == {e: f"spikes_{e}.npz" for e in ("fixed", "verilator")}
+    f, v = (load_spikes(out / f"spikes_{e}.npz") for e in ("fixed", "verilator"))
+    assert len(f) == 2 * 3 * 7 and list(f.population[:7]) == ["sa", "fa", "sa", "fa"] + \
+        ["cn"] * 3 and f.t_stop_ms == 120.0
+    assert all(np.array_equal(a, b) for a, b in zip(f.trains(), v.trains()))
+    per_trial = [[len(t) for t in f.trains()[7 * j + 4: 7 * j + 7]] for j in range(6)]
+    assert per_trial == summ["engines"]["fixed"]["counts"]
 
 
 def test_ridge_report_renders(tmp_path, chromium):

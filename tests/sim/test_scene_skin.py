@@ -168,6 +168,13 @@ def test_cli_runs_the_skin_example(tmp_path, capsys):
     html = (out / "index.html").read_text()
     for fig in ("press.png", "skin_golden.png", "skin_fixed.png"):
         assert (out / fig).stat().st_size > 1000 and fig in html
+    # a spike file per engine (there was none): one neuron per taxel, listed on the page
+    from cuneate.sim.spikes import load_spikes
+    for e in ("golden", "fixed"):
+        f = load_spikes(out / f"spikes_{e}.npz")
+        assert [len(t) for t in f.trains()] == \
+            [c for row in summ["engines"][e]["counts"] for c in row]
+        assert f"spikes_{e}.npz" in html and summ["spike_files"][e] == f"spikes_{e}.npz"
     assert main(["run", "examples/skin_3x3", "--engines", "golden", "--json", "--out",
                  str(tmp_path / "j")]) == 0
     assert json.loads(capsys.readouterr().out)["engines"]["golden"]["winner"] == 4

@@ -95,9 +95,9 @@ def test_log_mode_prints_timestamped_heartbeats():
         progress.configure("quiet")
     lines = buf.getvalue().splitlines()
     assert all(re.match(r"\[\d\d:\d\d:\d\d\] ", x) for x in lines)
-    assert "building the reference (10 point) ..." in lines[0]
+    assert "building the reference (10 points) ..." in lines[0]      # plural (was "point")
     beats = [x for x in lines if "... building the reference 30 %" in x]
-    assert len(beats) >= 2
+    assert len(beats) >= 2 and "(3/10 points)" in beats[0]
     assert "building the reference: done in" in lines[-1]
 
 
@@ -107,3 +107,19 @@ def test_quiet_mode_prints_nothing():
     with progress.step("x"):
         progress.say("y")
     assert buf.getvalue() == ""
+
+
+def test_a_bench_reports_progress_about_twice_a_second(tmp_path):
+    """Called every tick, a bench writes its count at once and then at most every 0.4 s (it
+    wrote every 1000 ticks: a Verilator engine sat at 0 % for its first 1000)."""
+    import json
+    pytest.importorskip("cocotb")
+    from cuneate.sim.engines import bench
+    cfg = {"progress_file": str(tmp_path / "p.json")}
+    bench._last_progress[0] = 0.0
+    bench.bench_progress(cfg, 1)
+    assert json.loads((tmp_path / "p.json").read_text()) == {"done": 1}
+    bench.bench_progress(cfg, 2)                 # within the interval: not written
+    assert json.loads((tmp_path / "p.json").read_text()) == {"done": 1}
+    bench.bench_progress(cfg, 3, force=True)
+    assert json.loads((tmp_path / "p.json").read_text()) == {"done": 3}

@@ -1,5 +1,5 @@
 """Channels in, fanned out on chip into the afferent -> cuneate network: the board top
-:class:`~cuneate.hdl.link.LinkedFanoutNetwork` compiled by Verilator behind the simulated serial
+:class:`~cuneate.hdl.link.LinkedTop` of the fan-out in front of the network compiled by Verilator behind the simulated serial
 line, driven by the host's transport with raw channel samples. The spikes of both populations
 equal a reference built from the twins alone (the fan-out twin's currents into the network's
 twin, each sample in effect from its sweep), the link carried channels, not afferents; a tick
@@ -10,12 +10,13 @@ import numpy as np
 import pytest
 
 from cuneate.hdl.fanout import FanoutConfig, FanoutTwin
-from cuneate.hdl.izhikevich import IzhikevichConfig
+from cuneate.hdl.lib.fixed import QFormat
 from cuneate.hdl.lib.config import ConfigError
-from cuneate.hdl.link import LinkConfig, LinkedFanoutNetwork, LinkedNetwork
+from cuneate.hdl.lib.payload import payload_spec
+from cuneate.hdl.link import LinkConfig, LinkedTop
 from cuneate.hdl.link.codec import MSG_WRITE, FrameDecoder, write_message
 from cuneate.hdl.network import NetworkConfig, NetworkTwin, REPORT_SETTLE
-from cuneate.sim.link.engines import BoardTransport, board_fanout_network_config
+from cuneate.sim.link.engines import BoardTransport, board_link
 from cuneate.sim.link.faults import Recorder
 from host_stream import stream_samples
 
@@ -88,8 +89,10 @@ def test_the_board_with_the_fanout_network_equals_the_twins(ahead):
 
 
 def test_the_board_sizes_a_tick_for_the_writes_the_run_and_the_network():
-    net, lc = board_fanout_network_config(NETWORK, FAN)
-    assert lc.fanout is FAN and lc.n_written == C and lc.current_width == FAN.S.width
+    lc = board_link(NETWORK, fanout=FAN)
+    net = lc.payload.config
+    assert lc.fanout.to_kwargs() | {"clock_hz": 0} == FAN.to_kwargs() | {"clock_hz": 0}
+    assert lc.n_written == C and lc.current_width == FAN.S.width
     assert lc.n_neurons == N and lc.n_spike_ids == N + M and lc.batch_sweeps == 4
     work = net.cycles_needed + REPORT_SETTLE + N + M + C + FAN.cycles_per_run + 16
     assert net.cycles_per_tick >= work
@@ -98,37 +101,34 @@ def test_the_board_sizes_a_tick_for_the_writes_the_run_and_the_network():
     # a fan-out of fewer afferents is padded with idle ones to the network's
     short = FanoutConfig(n_channels=C, channel=[0, 1, 2, 3] * 4, gain=[8.0] * 16,
                          sample_max=4.0, sample_width=12)
-    _, lc = board_fanout_network_config(NETWORK, short)
+    lc = board_link(NETWORK, fanout=short)
     assert lc.fanout.n_neurons == N and lc.fanout.gain[16:] == [0.0] * 4
 
 
 def test_a_fanout_network_refuses_what_it_cannot_join():
-    net, lc = board_fanout_network_config(NETWORK, FAN)
-    ids = N + M
-    with pytest.raises(ConfigError, match="needs a link with a fan-out"):
-        LinkedFanoutNetwork(net, LinkConfig(net.core, spike_ids=ids))
+    lc = board_link(NETWORK, fanout=FAN)
+    net = lc.payload.config
     internal = NetworkConfig(**(net.to_kwargs() | {"tick_source": "internal"}))
     with pytest.raises(ConfigError, match="needs tick_source='external'"):
-        LinkedFanoutNetwork(internal, lc)
-    # the link's core is another than the network's afferent core
-    other = NetworkConfig(**(net.to_kwargs() | {"update_hz": 2e3}))
-    with pytest.raises(ConfigError, match=r"serves its afferent core \(ncfg.core\) alone"):
-        LinkedFanoutNetwork(other, lc)
-    with pytest.raises(ConfigError, match=f"spike_ids = {ids}, not {N}"):
-        LinkedFanoutNetwork(net, LinkConfig(net.core, fanout=FAN))
-    # a fan-out of 16 afferents (its link's core has 16) in front of a network of 20
-    few = FanoutConfig(n_channels=C, channel=[i % C for i in range(16)], gain=[8.0] * 16,
-                       sample_max=4.0, sample_width=12)
-    core16 = IzhikevichConfig(n_neurons=16, clock_hz=net.clock_hz, update_hz=net.update_hz,
-                              tick_source="external")
-    with pytest.raises(ConfigError, match="the fan-out feeds 16 afferents; the network has 20"):
-        LinkedFanoutNetwork(net, LinkConfig(core16, spike_ids=ids, fanout=few))
-    # the network without the fan-out takes currents: a fan-out link is refused, not misread
-    with pytest.raises(ConfigError, match="its board top is LinkedFanoutNetwork"):
-        LinkedNetwork(net, lc)
+        LinkConfig(internal, fanout=FAN)
+    # a fan-out of more afferents than the network's, or of another current format
+    many = FanoutConfig(n_channels=C, channel=[i % C for i in range(24)], gain=[8.0] * 24,
+                        sample_max=4.0, sample_width=12)
+    with pytest.raises(ConfigError, match="the fan-out feeds 24 afferents in .*; the block "
+                                          "behind it takes 20"):
+        payload_spec(net, fanout=many)
+    wide = FanoutConfig(n_channels=C, channel=[0] * 4, gain=[8.0] * 4, sample_max=4.0,
+                        sample_width=12, current_format=QFormat(12, 8))
+    with pytest.raises(ConfigError, match="the fan-out feeds 4 afferents in"):
+        payload_spec(net, fanout=wide)
+    # a fan-out does not feed a fan-out, and an array option is refused for a network
+    with pytest.raises(ConfigError, match="a fan-out feeds a block, not another fan-out"):
+        payload_spec(payload_spec(net, fanout=FAN), fanout=FAN)
+    with pytest.raises(ConfigError, match="a NetworkConfig behind a face takes no n_cores"):
+        payload_spec(net, n_cores=2)
     # every message is one line
     with pytest.raises(ConfigError) as err:
-        LinkedFanoutNetwork(internal, lc)
+        LinkConfig(internal, fanout=FAN)
     assert "\n" not in str(err.value)
 
 
@@ -138,9 +138,9 @@ def test_the_fanout_network_top_elaborates_for_the_ulx3s():
     from cuneate.boards.targets import TARGETS
     from cuneate.boards.top import BoardTop
     t = TARGETS["ulx3s"]
-    net, lc = board_fanout_network_config(NETWORK, FAN)
-    top = LinkedFanoutNetwork(net, lc)
-    plan = t["platform"]().prepare(BoardTop(top, t["pll"], True), name="top")
+    lc = board_link(NETWORK, fanout=FAN)
+    net = lc.payload.config
+    plan = t["platform"]().prepare(BoardTop(lc, t["pll"], True), name="top")
     il, lpf = (plan.files[f"top.{x}"] for x in ("il", "lpf"))
     il, lpf = (f.decode() if isinstance(f, bytes) else f for f in (il, lpf))
     assert "EHXPLLL" in il and "uart_0__rx" in lpf and "uart_0__tx" in lpf
@@ -159,23 +159,23 @@ def test_a_tick_due_during_the_writes_or_the_run_waits_for_the_last_current():
     from cuneate.hdl.link.codec import OP_START, control_message, encode_frame
     P, cpb = 200, 4
     net = NetworkConfig(**(NETWORK.to_kwargs() | {"clock_hz": NETWORK.update_hz * P}))
-    lc = LinkConfig(net.core, clocks_per_bit=cpb, batch_sweeps=16, spike_ids=N + M,
-                    fanout=FAN)
-    dut = LinkedFanoutNetwork(net, lc)
+    net = NetworkConfig(**(net.to_kwargs() | {"tick_source": "external"}))
+    lc = LinkConfig(net, clocks_per_bit=cpb, batch_sweeps=16, fanout=FAN)
+    dut = LinkedTop(lc)
     raw = samples(8, seed=7)
     ticks, runs, spikes, applied = [], [], [], {}
     cyc, first = 0, None
 
     async def tb(ctx):
         nonlocal cyc, first
-        fan, link, nw = dut.fanout, dut.link, dut.network
+        fan, link, nw = dut.payload.fanout, dut.link.payload, dut.payload.inner.network
 
         async def step(n=1):
             nonlocal cyc, first
             for _ in range(n):
                 if ctx.get(link.tick):
                     ticks.append(cyc)
-                if ctx.get(link.i_wr_en) and first is None:
+                if ctx.get(link.write.valid) and first is None:
                     first = cyc
                 if ctx.get(fan.i_wr_en) and ctx.get(fan.i_wr_addr) == N - 1:
                     runs.append((first, cyc))
@@ -240,15 +240,16 @@ def test_the_pty_board_serves_the_fanout_network():
     populations."""
     from cuneate.sim.host.uart import UartTransport
     from cuneate.sim.link.pty import PtyBoard
-    net, lc = board_fanout_network_config(NETWORK, FAN)
+    lc = board_link(NETWORK, fanout=FAN)
+    net = lc.payload.config
     raw = samples(30, seed=4)
     n_ticks = len(raw) * EVERY
     want, _ = reference(raw, n_ticks)
-    board = PtyBoard((net, lc))
+    board = PtyBoard(lc)
     try:
         host = UartTransport(board.path, timeout_s=60.0, batch_sweeps=lc.batch_sweeps,
                              spike_ids=lc.n_spike_ids)
-        host.open(lc.fanout.written(lc.core))
+        host.open(lc.info.writes())
         for k, row in enumerate(raw):
             host.write_currents(k * EVERY, 0, row)
         host.run(n_ticks)

@@ -1,6 +1,6 @@
-"""k-induction of the host link's frame decoder against the wire format's specification
-(hdl/link/formal_core.py): every frame gets its verdict, no accepted write is lost or
-reordered; the faults the proof must catch."""
+"""k-induction of the host link's frame decoder and executor against the wire format's
+specification (hdl/link/formal_core.py): every frame gets its verdict, no accepted write is lost
+or reordered; the faults the proof must catch."""
 
 import pytest
 
@@ -12,7 +12,7 @@ from cuneate.hdl.link.formal_core import (MUTANTS, decoder_proof_config, inducti
 EXPECTED = {
     "wrong_residue": "verdict_crc_errors",                    # a corrupted frame accepted
     "values_swapped": "state_tracked_value_assembled",        # a value stored in the wrong word
-    "value_read_ahead": "writes_the_tracked_value",           # a write carries the next value
+    "value_read_ahead": "state_the_tracked_value_read",       # the next write takes the next value
 }
 FROM_RESET = {
     "wrong_residue": ("verdict_crc_errors", 15),
@@ -26,8 +26,8 @@ def test_every_mutant_has_an_expectation():
 
 
 def test_the_decoder_meets_the_wire_format_for_every_byte_stream(tmp_path):
-    """k-induction (about 20 s with yices): every byte stream of every length, any framing
-    errors, any receive-buffer timing, any core and tick activity."""
+    """k-induction (about 25 s with yices): every byte stream of every length, any receive-
+    buffer timing, any payload back-pressure, any block and tick activity."""
     lcfg = decoder_proof_config()
     r = prove_decoder(lcfg, tmp_path, mode="prove", timeout_s=900)
     assert r.passed and r.mode == "prove" and r.depth == induction_depth(lcfg), r

@@ -1,6 +1,6 @@
 """The host link on Icarus and Verilator: frames in through a UART model, spikes out.
 
-The generated :class:`LinkedCore` Verilog receives host frames from cocotbext-uart. Checked:
+The generated :class:`LinkedTop` Verilog (a core behind the link) receives host frames from cocotbext-uart. Checked:
 the spike frames equal the protocol model's byte for byte and the twin's spikes with a current
 change at its sweep; a corrupted, a truncated, a late, an out-of-range, a runt and an unknown
 frame and a missing sequence number are each counted in the right counter; and a burst that
@@ -43,7 +43,12 @@ def build(lc, build_dir, simulator):
 
 def play(simulator, lc, chunks, total_cycles, build_dir, watch_writes=False):
     src = build(lc, build_dir, simulator)
+    from cuneate.hdl.lib.payload import write_layout
+    layout = write_layout(lc.info)
     cfg = {"clocks_per_bit": CPB, "total_cycles": total_cycles, "watch_writes": watch_writes,
+           "write_layout": {"addr_bits": layout["addr"].width,
+                            "value_offset": layout["value"].offset,
+                            "value_bits": layout["value"].width},
            "chunks": [[bytes(c).hex(), g] for c, g in chunks]}
     run = run_cocotb(simulator, [src], "linked_core", "cuneate.sim.link.bench",
                      build_dir, config=cfg, testcase="play")

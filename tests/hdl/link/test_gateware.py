@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from amaranth.sim import Simulator
 
-from cuneate.hdl.link import LinkedCore, link_config
+from cuneate.hdl.link import LinkedTop, link_config
 from cuneate.hdl.link.codec import (COUNTER_NAMES, MSG_COUNTERS, MSG_SPIKES, OP_READ_COUNTERS, OP_STEP, FrameDecoder, Message,
                                     cobs_encode, control_message, encode_frame, parse_counters,
                                     parse_spikes, write_message)
@@ -23,12 +23,15 @@ def lcfg():
     return link_config(CORE, clocks_per_bit=CPB, batch_sweeps=32, batch_capacity=40)
 
 
-def run_link(chunks, total_cycles, lc):
-    """Send each ``(bytes, gap_cycles)`` chunk over rx; return every byte seen on tx."""
-    dut = LinkedCore(lc)
+def run_uart(lc, chunks, total_cycles=None, tail_cycles=0):
+    """Send each ``(bytes, gap_cycles)`` chunk over rx, 8N1 bit by bit, to the link's
+    ``LinkedTop``; run ``total_cycles`` (or until the chunks and ``tail_cycles`` are done).
+    Returns every byte seen on tx and every ``(neuron, raw current)`` the link wrote toward the
+    core, in order."""
+    dut = LinkedTop(lc)
     sim = Simulator(dut)
     sim.add_clock(1e-6)
-    received = bytearray()
+    received, writes = bytearray(), []
 
     async def host(ctx):
         ctx.set(dut.rx, 1)
@@ -40,13 +43,23 @@ def run_link(chunks, total_cycles, lc):
                     await ctx.tick().repeat(CPB)
             if gap:
                 await ctx.tick().repeat(gap)
+        if tail_cycles:
+            await ctx.tick().repeat(tail_cycles)
+
+    async def watch_writes(ctx):
+        # the write stream's registers change only at clock edges, and the address steps on
+        # every write of a burst: each change with valid set is one write (the core takes
+        # every write offered)
+        w = dut.link.payload.write
+        mask = (1 << lc.current_width) - 1
+        async for valid, p in ctx.changed(w.valid, w.payload):
+            if valid:
+                writes.append((p.addr, p.value & mask))
 
     async def monitor(ctx):
         while True:
-            await ctx.tick()
-            if ctx.get(dut.tx):
-                continue
-            await ctx.tick().repeat(CPB // 2 - 1)
+            await ctx.negedge(dut.tx)
+            await ctx.tick().repeat(CPB // 2)
             b = 0
             for i in range(8):
                 await ctx.tick().repeat(CPB)
@@ -55,10 +68,14 @@ def run_link(chunks, total_cycles, lc):
             assert ctx.get(dut.tx) == 1, "stop bit"
             received.append(b)
 
-    sim.add_testbench(host)
+    sim.add_testbench(host, background=total_cycles is not None)
+    sim.add_testbench(watch_writes, background=True)
     sim.add_testbench(monitor, background=True)
-    sim.run_until(total_cycles * 1e-6)
-    return bytes(received)
+    if total_cycles is None:
+        sim.run()
+    else:
+        sim.run_until(total_cycles * 1e-6)
+    return bytes(received), writes
 
 
 def test_currents_in_spikes_out_and_every_fault_counted():
@@ -85,7 +102,7 @@ def test_currents_in_spikes_out_and_every_fault_counted():
     chunks = [(good[0], 10), (good[1], 10), (good[2], 7000),
               (bad_crc, 20), (truncated, 20), (late, 20), (beyond, 20), (runt, 20),
               (unknown, 20), (other_version, 20), (read, 2000)]
-    out = run_link(chunks, 26000, lc)
+    out, _ = run_uart(lc, chunks, 26000)
 
     dec = FrameDecoder()
     msgs = dec.feed(out)
@@ -136,51 +153,6 @@ def test_currents_in_spikes_out_and_every_fault_counted():
 ERR_CORE = dict(n_neurons=80, clock_hz=16e3 * 96, update_hz=16e3, spike_fifo_depth=16)
 
 
-def run_watching_writes(lc, stream: bytes, tail_cycles: int):
-    """Send ``stream`` over rx; return the bytes seen on tx and every ``(neuron, raw current)``
-    the link wrote toward the core, in order."""
-    dut = LinkedCore(lc)
-    sim = Simulator(dut)
-    sim.add_clock(1e-6)
-    received, writes = bytearray(), []
-    link = dut.link
-
-    async def host(ctx):
-        ctx.set(dut.rx, 1)
-        await ctx.tick().repeat(20)
-        for b in stream:
-            for bit in [0] + [(b >> i) & 1 for i in range(8)] + [1]:
-                ctx.set(dut.rx, bit)
-                await ctx.tick().repeat(CPB)
-        await ctx.tick().repeat(tail_cycles)
-
-    async def watch_writes(ctx):
-        # the write port's registers change only at clock edges, and the address steps on
-        # every write of a burst: each change with the enable set is one write
-        async for en, addr, data in ctx.changed(link.i_wr_en, link.i_wr_addr,
-                                                link.i_wr_data):
-            if en:
-                writes.append((addr, data))
-
-    async def monitor(ctx):
-        while True:
-            await ctx.negedge(dut.tx)
-            await ctx.tick().repeat(CPB // 2)
-            b = 0
-            for i in range(8):
-                await ctx.tick().repeat(CPB)
-                b |= ctx.get(dut.tx) << i
-            await ctx.tick().repeat(CPB)
-            assert ctx.get(dut.tx) == 1, "stop bit"
-            received.append(b)
-
-    sim.add_testbench(host)
-    sim.add_testbench(watch_writes, background=True)
-    sim.add_testbench(monitor, background=True)
-    sim.run()
-    return bytes(received), writes
-
-
 @pytest.mark.parametrize("structured", [True, False], ids=["structured", "sampled"])
 def test_damaged_frames_are_counted_never_accepted(structured):
     """Every damaged frame is refused, every damaged run (a damaged delimiter merges a frame
@@ -202,7 +174,7 @@ def test_damaged_frames_are_counted_never_accepted(structured):
     stream = b"".join(p.wire for p in plan)
     arrived, damaged_runs = plan_outcome(plan)
     n_bad = sum(p.msg is None for p in plan)
-    out, writes = run_watching_writes(lc, stream, 3000)
+    out, writes = run_uart(lc, [(stream, 0)], tail_cycles=3000)
 
     dec = FrameDecoder()
     msgs = dec.feed(out)
@@ -245,7 +217,7 @@ def test_the_link_serves_an_array_of_cores(per_core_sets):
     W = lc.current_width
     good = [encode_frame(write_message(0, 0, 0, cur, W)),
             encode_frame(control_message(1, OP_STEP, 64))]
-    out = run_link([(good[0], 10), (good[1], 6000)], 12000, lc)
+    out, _ = run_uart(lc, [(good[0], 10), (good[1], 6000)], 12000)
     msgs = [m for m in FrameDecoder().feed(out) if m.type == MSG_SPIKES]
     model = LinkModel(lc)
     ref = model.feed(b"".join(good))

@@ -1,5 +1,5 @@
 """The ``board`` engine of the on-chip afferent -> cuneate network: the network behind the UART
-link (:class:`~cuneate.hdl.link.LinkedNetwork`) compiled by Verilator behind a simulated serial
+link (:class:`~cuneate.hdl.link.LinkedTop`) compiled by Verilator behind a simulated serial
 line, driven by the host stack. Both populations' spikes equal the fixed engine's (the
 network's twin), every spike frame carries exactly the spikes of its own sweeps, and the
 ridge-angle scene runs on it."""
@@ -8,12 +8,12 @@ import numpy as np
 import pytest
 
 from cuneate.hdl.izhikevich import ConfigError
-from cuneate.hdl.link import LinkConfig, LinkedNetwork
+from cuneate.hdl.link import LinkConfig
 from cuneate.hdl.link.codec import MAX_FRAME, MSG_SPIKES, FrameDecoder, parse_spikes
 from cuneate.hdl.network import REPORT_SETTLE
 from cuneate.sim.coincidence.experiments import RidgeSpec, afferent_currents, network_config
 from cuneate.sim.host.transport import COUNTERS
-from cuneate.sim.link.engines import BoardTransport, board_network_config
+from cuneate.sim.link.engines import BoardTransport, board_link
 from cuneate.sim.link.faults import Recorder
 from cuneate.sim.network.engines import current_runs, current_writes, run_network
 
@@ -30,7 +30,8 @@ def ridge_currents() -> np.ndarray:
 
 
 def test_the_board_network_link_carries_both_populations_and_one_batch_a_millisecond():
-    net, lc = board_network_config(NETWORK)
+    lc = board_link(NETWORK)
+    net = lc.payload.config
     N, M = NETWORK.n_afferents, NETWORK.n_targets
     # the host writes the afferents; spikes carry afferent and cuneate ids
     assert lc.n_neurons == N and lc.n_spike_ids == N + M
@@ -44,12 +45,12 @@ def test_the_board_network_link_carries_both_populations_and_one_batch_a_millise
     assert net.to_kwargs() | same == NETWORK.to_kwargs() | same
 
 
-def test_a_linked_network_refuses_a_link_that_does_not_fit_it():
-    net, lc = board_network_config(NETWORK)
-    with pytest.raises(ConfigError, match="spike_ids = 9, not 6"):
-        LinkedNetwork(net, LinkConfig(net.core, batch_sweeps=16))
-    with pytest.raises(ConfigError, match="spike_ids must be an integer in 6..65536"):
-        LinkConfig(net.core, spike_ids=4)
+def test_a_network_link_carries_the_ids_of_both_populations():
+    lc = board_link(NETWORK)
+    N, M = NETWORK.n_afferents, NETWORK.n_targets
+    assert lc.info.populations == (("afferent", 0, N), ("cuneate", N, M))
+    # the afferent core alone behind a link carries the afferents' ids only
+    assert LinkConfig(lc.payload.config.core, batch_sweeps=16).n_spike_ids == N
 
 
 def test_board_network_equals_fixed_for_both_populations():

@@ -89,7 +89,7 @@ def test_a_dead_harness_fails_the_host_at_once_and_is_reported_by_the_board():
 def test_cuneate_stream_through_the_pty_board_agrees_with_the_fixed_engine(tmp_path, capsys,
                                                                           fanout):
     """The scene's currents to its core, or (``hardware.fanout``) its channels to the board
-    top with the fan-out (``LinkedFanoutCore``)."""
+    top with the fan-out in front of the core."""
     path = tmp_path / "tiny.toml"
     path.write_text(TINY_SCENE.replace("[hardware]", "[hardware]\nfanout = true").replace(
         '"golden", "fixed", "verilator"', '"golden", "fixed"') if fanout else TINY_SCENE)
@@ -171,9 +171,10 @@ def stream_layered(tmp_path, capsys, text: str):
     fixed and every spike arrived."""
     path = tmp_path / "scene.toml"
     path.write_text(text)
-    net, link = scene_link(load_scene(path))
+    link = scene_link(load_scene(path))
+    net = link.payload.inner.config if link.fanout is not None else link.payload.config
     out = tmp_path / "out"
-    board = PtyBoard((net, link))
+    board = PtyBoard(link)
     try:
         rc = main(["-q", "stream", "ulx3s", "--port", board.path, str(path), "--out",
                    str(out)])
@@ -193,7 +194,7 @@ def stream_layered(tmp_path, capsys, text: str):
 @pytest.mark.long
 def test_cuneate_stream_of_a_scene_with_a_cuneate_layer_agrees_for_both_populations(tmp_path,
                                                                                     capsys):
-    """A cuneate layer on the board (``LinkedNetwork``: currents in, afferent and cuneate
+    """A cuneate layer on the board (the network: currents in, afferent and cuneate
     spikes out in one id space) streamed through the pty: both populations equal fixed."""
     net, link, _, _ = stream_layered(
         tmp_path, capsys, TINY_SCENE.replace("\n[hardware]", LAYER_TOML, 1)
@@ -205,7 +206,7 @@ def test_cuneate_stream_of_a_scene_with_a_cuneate_layer_agrees_for_both_populati
 @pytest.mark.long
 def test_cuneate_stream_plays_the_trials_of_a_one_hand_board_in_turn(tmp_path, capsys):
     """A board built for one of the scene's two grasps (``board_trials = 1``; channels fanned
-    out on chip, a cuneate layer: ``LinkedFanoutNetwork``) streamed in turn through the pty:
+    out on chip, a cuneate layer: the fan-out in front of the network) streamed in turn through the pty:
     the board's core holds one grasp, the host plays the grasps one after another, and both
     populations equal the fixed engine played the same way."""
     net, link, printed, run = stream_layered(

@@ -1,5 +1,5 @@
 """Channels in, fanned out on chip: the board top with the channel fan-out
-(:class:`~cuneate.hdl.link.LinkedFanoutCore`) compiled by Verilator behind the simulated serial
+(:class:`~cuneate.hdl.link.LinkedTop` of the fan-out in front of a core) compiled by Verilator behind the simulated serial
 line, driven by the host's transport with raw channel samples. Its spikes equal a reference
 built from the twins alone (the fan-out twin's currents into the Izhikevich twin, each sample
 in effect from its sweep), and the link carried channels, not afferents."""
@@ -10,8 +10,8 @@ import pytest
 from cuneate.hdl.fanout import FanoutConfig, FanoutTwin
 from cuneate.hdl.izhikevich import IzhikevichConfig, IzhikevichTwin
 from cuneate.hdl.lib.config import ConfigError
-from cuneate.hdl.link import LinkConfig, LinkedFanoutCore, LinkModel
-from cuneate.sim.link.engines import BoardTransport, board_fanout_config
+from cuneate.hdl.link import LinkConfig, LinkModel
+from cuneate.sim.link.engines import BoardTransport, board_link
 from host_stream import stream_samples
 
 N, C = 30, 4
@@ -62,7 +62,7 @@ def test_the_link_model_with_the_fanout_equals_the_twins():
     """The link's behavioural model, fed the host's frames, gives the same spikes."""
     from cuneate.hdl.link.codec import (OP_STEP, FrameDecoder, MSG_SPIKES, control_message,
                                         encode_frame, parse_spikes, write_message)
-    lcfg = board_fanout_config(CORE, FAN)
+    lcfg = board_link(CORE, fanout=FAN)
     model = LinkModel(lcfg)
     raw = samples(12, seed=3)
     wire, seq = bytearray(), 0
@@ -83,7 +83,10 @@ def test_the_link_model_with_the_fanout_equals_the_twins():
 def test_a_fanout_link_refuses_a_core_it_does_not_feed():
     with pytest.raises(ConfigError, match="the fan-out feeds 30 afferents"):
         LinkConfig(IzhikevichConfig(n_neurons=20, tick_source="external"), fanout=FAN)
-    lcfg = board_fanout_config(CORE, FAN)
+    # a core of more neurons than the fan-out's afferents: the rest listen to nothing
+    more = LinkConfig(IzhikevichConfig(n_neurons=40, tick_source="external"), fanout=FAN)
+    assert more.fanout.n_neurons == 40 and more.fanout.gain[N:] == [0.0] * 10
+    lcfg = board_link(CORE, fanout=FAN)
     assert lcfg.n_written == C and lcfg.current_width == FAN.S.width
     assert lcfg.core.cycles_per_tick >= N + FAN.cycles_per_run
     # a sweep too short for a frame's writes and the fan-out's run
@@ -91,9 +94,5 @@ def test_a_fanout_link_refuses_a_core_it_does_not_feed():
                              tick_source="external")
     with pytest.raises(ConfigError, match=f"a sweep of {2 * N + C} cycles cannot hold"):
         LinkConfig(short, fanout=FAN)
-    # the other board tops take currents: a fan-out link is refused, not misread
-    from cuneate.hdl.link import LinkedCore
-    with pytest.raises(ConfigError, match="its board top is LinkedFanoutCore"):
-        LinkedCore(lcfg)
-    with pytest.raises(ConfigError, match="needs a link with a fan-out"):
-        LinkedFanoutCore(board_fanout_config(CORE, FAN).__class__(lcfg.core))
+    # the link's values are channel samples, its ids the core's neurons
+    assert lcfg.info.written == "channel sample" and lcfg.n_spike_ids == N

@@ -13,7 +13,7 @@ from cuneate.hdl.izhikevich import IzhikevichConfig
 from cuneate.hdl.link.codec import MAX_FRAME, MSG_CONTROL, MSG_SPIKES, MSG_WRITE
 from cuneate.sim.host.transport import TransportError
 from cuneate.sim.izhikevich.engines import make_transport
-from cuneate.sim.link.engines import BoardTransport, board_link_config
+from cuneate.sim.link.engines import BoardTransport, board_link
 from cuneate.sim.link.faults import KINDS, OnChunk, OnFrame, corrupt
 from host_stream import assert_contract, held_levels as trace, sa_driver, twin_reference
 
@@ -31,7 +31,7 @@ def reference(x):
 
 
 def test_the_board_link_keeps_a_boards_idle_cycles_and_one_batch_a_millisecond():
-    lc = board_link_config(CORE)
+    lc = board_link(CORE)
     assert lc.core.tick_source == "external" and lc.core.cycles_per_tick >= 24 + 16
     assert lc.batch_sweeps == 4 and lc.clocks_per_bit == 4
     # the largest frame (and its delimiters) leaves within a batch's sweeps on the line
@@ -58,7 +58,7 @@ def test_board_engine_equals_the_twin_with_every_counter_checked(ahead):
     # every byte on the line arrived whole
     assert f["frames_to_device"] == c["frames_sent"] and f["framing_errors"] == 0
     assert f["bytes_to_device"] > 0 and f["bytes_from_device"] > 0
-    assert f["cycles"] >= 60 * 4 * board_link_config(CORE).core.cycles_per_tick
+    assert f["cycles"] >= 60 * 4 * board_link(CORE).core.cycles_per_tick
     assert f["ahead"] == ahead and f["cycles_per_sweep_rate"] >= 1.0
     if ahead:     # the device hardly waits for the host: its writes are already queued
         assert f["cycles_per_sweep_rate"] < 1.1

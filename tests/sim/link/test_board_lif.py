@@ -1,5 +1,5 @@
 """The ``board`` engine of the LIF block: a LIF core behind the UART link
-(:class:`~cuneate.hdl.link.LinkedLif`) compiled by Verilator behind a simulated serial line,
+(:class:`~cuneate.hdl.link.LinkedTop`) compiled by Verilator behind a simulated serial line,
 driven by the host stack. Its spikes equal the fixed engine's (the twin's), every counter of the
 transport's contract holds, every spike frame carries exactly the spikes of its own sweeps, and
 the shipped 3x3 skin scene runs on it with the same spike trains as on ``fixed``."""
@@ -9,13 +9,12 @@ import json
 import numpy as np
 import pytest
 
-from cuneate.hdl.izhikevich import IzhikevichConfig
 from cuneate.hdl.lif import ConfigError, LifConfig
-from cuneate.hdl.link import LinkConfig, LinkedCore, LinkedLif, LinkModel
+from cuneate.hdl.link import LinkConfig
 from cuneate.hdl.link.codec import MAX_FRAME, MSG_SPIKES, FrameDecoder, parse_spikes
 from cuneate.sim.host.transport import COUNTERS
 from cuneate.sim.lif.engines import LifProgram, current_runs, engine_config, run_lif
-from cuneate.sim.link.engines import BoardTransport, board_lif_config
+from cuneate.sim.link.engines import BoardTransport, board_link
 from cuneate.sim.link.faults import Recorder
 
 # nine neurons at 1 kHz as the skin runs them, in two parameter sets (the brief's excitatory
@@ -57,7 +56,7 @@ def test_current_runs_writes_what_changes_as_consecutive_runs():
 
 
 def test_the_board_lif_link_keeps_a_boards_idle_cycles_and_one_batch_a_millisecond():
-    lc = board_lif_config(CORE)
+    lc = board_link(CORE)
     assert isinstance(lc.core, LifConfig) and lc.core.tick_source == "external"
     assert lc.batch_sweeps == 1 and lc.clocks_per_bit == 4
     assert lc.n_neurons == lc.n_spike_ids == 9 and lc.current_width == CORE.I.width == 16
@@ -69,23 +68,13 @@ def test_the_board_lif_link_keeps_a_boards_idle_cycles_and_one_batch_a_milliseco
     assert lc.core.to_kwargs(**same) == CORE.to_kwargs(**same)
 
 
-def test_a_linked_lif_refuses_a_link_that_does_not_fit_it():
-    lc = board_lif_config(CORE)
-    with pytest.raises(ConfigError, match="spike_ids = 9, not 12"):
-        LinkedLif(LinkConfig(lc.core, batch_sweeps=1, spike_ids=12))
-    izh = IzhikevichConfig(n_neurons=16, clock_hz=64e4, update_hz=16e3, tick_source="external")
-    with pytest.raises(ConfigError, match="a link of a LIF core .LifConfig., not of "
-                                          "IzhikevichConfig"):
-        LinkedLif(LinkConfig(izh))
+def test_a_lif_link_refuses_what_a_lif_payload_cannot_be():
+    lc = board_link(CORE)
+    assert lc.info.block == "lif_core" and lc.info.populations == (("neurons", 0, 9),)
     weighted = engine_config({"update_hz": 1000.0, "weights": np.full((9, 2), 0.5)}, 9)
     with pytest.raises(ConfigError, match="no input spikes.*not 2 inputs"):
-        LinkedLif(LinkConfig(weighted))
-    # the Izhikevich core's top and the link's model (on the Izhikevich twin) refuse a LIF link
-    with pytest.raises(ConfigError, match=r"LinkedLif\), not LifConfig"):
-        LinkedCore(lc)
-    with pytest.raises(ConfigError, match="the Izhikevich twin, not a LifConfig core"):
-        LinkModel(lc)
-    with pytest.raises(ConfigError, match="a LIF core is linked alone .n_cores = 1., not 2"):
+        LinkConfig(weighted)
+    with pytest.raises(ConfigError, match="a LifConfig behind a face takes no n_cores"):
         LinkConfig(lc.core, n_cores=2)
     internal = LifConfig.from_kwargs(CORE.to_kwargs(tick_source="internal"))
     with pytest.raises(ConfigError, match="tick_source='external'"):
@@ -106,7 +95,7 @@ def test_board_lif_equals_fixed_with_every_counter_checked():
         "writes": n_writes, "spikes": n_spikes, "spikes_counted": n_spikes, "frames_lost": 0,
         "overflow": 0, "overrun": 0, "late_writes": 0}
     assert c["board_framing_errors"] == 0 and c["board_frames_from_device"] >= cur.shape[0]
-    assert c["board_cycles"] >= cur.shape[0] * board_lif_config(CORE).core.cycles_per_tick
+    assert c["board_cycles"] >= cur.shape[0] * board_link(CORE).core.cycles_per_tick
 
 
 @pytest.mark.parametrize("ahead", [True, False], ids=["writes-ahead", "lockstep"])
@@ -176,4 +165,4 @@ def test_a_discrete_shift_decay_core_on_board_equals_fixed():
     assert all(np.array_equal(a, b) for a, b in zip(ref.spikes_ms, got.spikes_ms))
     assert sum(len(s) for s in ref.spikes_ms) > 1000
     assert got.counters["spikes"] == sum(len(s) for s in ref.spikes_ms)
-    assert got.counters["frames_lost"] == 0 and board_lif_config(cfg).batch_sweeps == 16
+    assert got.counters["frames_lost"] == 0 and board_link(cfg).batch_sweeps == 16
