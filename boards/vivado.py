@@ -36,7 +36,7 @@ foreach cmd $::vivado_commands {
 }
 rename add_files _add_files
 proc add_files {args} {
-    foreach f $args { if {[string index $f 0] ne "-" && ![file exists $f]} { lappend ::missing $f } }
+    foreach f $args { if {$f ne "" && [string index $f 0] ne "-" && ![file exists $f]} { lappend ::missing $f } }
     lappend ::calls add_files
 }
 rename read_xdc _read_xdc
@@ -69,24 +69,27 @@ def write_project(platform, top, out: Path, name: str) -> list[str]:
     return sorted(files)
 
 
-def check_tcl(out: Path, name: str) -> dict:
+def check_tcl(out: Path, name: str, extra_commands=()) -> dict:
     """Run ``name``.tcl (which reads ``name``.xdc) under ``tclsh`` with the Vivado commands
-    stubbed: ``{"ok", "commands", "used", "missing", "error"}``. Raises ``FileNotFoundError``
-    when ``tclsh`` is not installed."""
+    (and ``extra_commands``) stubbed: ``{"ok", "commands", "used", "missing", "error"}``.
+    Raises ``FileNotFoundError`` when ``tclsh`` is not installed."""
     tclsh = shutil.which("tclsh")
     if tclsh is None:
         raise FileNotFoundError("tclsh not found (apt-get install tcl)")
     stub = Path(out) / f"{name}.vivado_stub.tcl"
-    stub.write_text(f"set ::vivado_commands {{{' '.join(VIVADO_COMMANDS)}}}\n" + _STUBS)
+    commands = " ".join(VIVADO_COMMANDS + tuple(extra_commands))
+    stub.write_text(f"set ::vivado_commands {{{commands}}}\n" + _STUBS)
     r = subprocess.run([tclsh, stub.name, f"{name}.tcl"], cwd=out, capture_output=True,
                        text=True, timeout=60)
     stub.unlink()
     lines = r.stdout.strip().splitlines()
-    if r.returncode != 0 or not lines or not lines[0].startswith("ok "):
+    oks = [i for i, x in enumerate(lines) if x.startswith("ok ")]
+    if r.returncode != 0 or not oks:
         return {"ok": False, "error": (lines[-1] if lines else r.stderr.strip())[:300]}
+    printed, lines = lines[:oks[-1]], lines[oks[-1]:]     # what the script printed itself
     missing = [x[8:] for x in lines if x.startswith("missing ")]
     return {"ok": not missing, "commands": int(lines[0].split()[1]), "missing": missing,
-            "used": [x[5:] for x in lines if x.startswith("used ")]}
+            "used": [x[5:] for x in lines if x.startswith("used ")], "printed": printed}
 
 
 if __name__ == "__main__":          # python -m cuneate.boards.vivado DIR NAME

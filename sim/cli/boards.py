@@ -13,6 +13,8 @@ __all__ = ["register"]
 def _output(t: dict) -> str:
     if t.get("bitstream"):
         return "bitstream"
+    if t.get("zynq"):
+        return "Vivado IP + block design + estimate"
     return "Vivado project + estimate" if t.get("vivado") else "Verilog + estimate"
 
 

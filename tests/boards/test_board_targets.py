@@ -75,6 +75,7 @@ def test_limit_table_lists_every_board_with_units_and_one_row_where_depths_agree
     out = {r["name"]: r["output"] for r in js}
     assert out["arty"] == out["nexys4ddr"] == "Vivado project + estimate"
     assert out["atlys"] == "Verilog + estimate" and out["tang_nano_9k"] == "bitstream"
+    assert out["arty_z7"] == out["pynq_z2"] == "Vivado IP + block design + estimate"
 
 
 def test_nexus_carry_inputs_tied_low_are_disconnected():
