@@ -9,7 +9,8 @@ Pinned: LiteX 2024.12 with migen 0.10 (both from PyPI; ``pip install "litex==202
   classic Wishbone, the face's slave pipelined: one request is issued per classic cycle
   (``stb`` held until ``ack`` would be several pipelined requests);
 - the streams through CSRs: ``write_data`` (a write beat's TDATA, LiteX CSR words) and
-  ``write_push`` (writing 1 sends that beat, 3 sends it with TLAST); the spike beats into a
+  ``write_push`` (writing 1 sends that beat, 3 sends it with TLAST; ``write_lost`` counts
+  pushes that replaced a beat not yet taken); the spike beats into a
   FIFO of ``spike_fifo_depth`` read as ``spike_level``, ``spike_data`` (TDATA), ``spike_flags``
   (bit 0 TLAST, bit 1 the empty sweep's marker) and ``spike_pop``; ``spike_lost`` counts
   beats the FIFO could not take (never while the host keeps up: the face holds its stream).
@@ -81,10 +82,16 @@ class CuneatePeripheral:
                 # the write beats: one per push
                 s_valid, s_ready, s_last = Signal(), Signal(), Signal()
                 s_data = Signal(wi)
-                self.sync += If(self.write_push.re, s_valid.eq(1),
-                                s_last.eq(self.write_push.r[1]),
-                                s_data.eq(self.write_data.storage)
-                                ).Elif(s_ready, s_valid.eq(0))
+                self.write_lost = CSRStatus(32, description="pushes that replaced a beat "
+                                                           "the face had not taken")
+                wlost = Signal(32)
+                self.comb += self.write_lost.status.eq(wlost)
+                self.sync += [If(self.write_push.re, s_valid.eq(1),
+                                 s_last.eq(self.write_push.r[1]),
+                                 s_data.eq(self.write_data.storage)
+                                 ).Elif(s_ready, s_valid.eq(0)),
+                              If(self.write_push.re & s_valid & ~s_ready
+                                 & (wlost != 0xFFFFFFFF), wlost.eq(wlost + 1))]
                 # the spike beats into a FIFO the host reads
                 fifo = stream.SyncFIFO([("data", wo), ("last_", 1), ("marker", 1)],
                                        spike_fifo_depth, buffered=False)

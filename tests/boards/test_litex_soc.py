@@ -21,7 +21,7 @@ def test_litex_soc_maps_the_registers_and_the_streams_and_reads_relative_sources
     r = build_soc(_spec(), tmp_path, 50e6)
     csr = json.loads(Path(r["csr_json"]).read_text())
     assert csr["memories"]["cuneate"] == {"base": CUNEATE_BASE, "size": 0x1000, "type": "io"}
-    assert {f"cuneate_{n}" for n in ("write_data", "write_push", "spike_level", "spike_data",
+    assert {f"cuneate_{n}" for n in ("write_data", "write_push", "write_lost", "spike_level", "spike_data",
                                      "spike_flags", "spike_pop", "spike_lost")} \
         <= set(csr["csr_registers"])
     assert csr["constants"]["config_clock_frequency"] == 50_000_000
