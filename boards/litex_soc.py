@@ -150,8 +150,11 @@ def CuneateSoC(spec, verilog_dir: Path, sys_clk_hz: float, baud: int = 115200):
         def __init__(self):
             self.cd_sys = ClockDomain()
             self.pll = pll = ECP5PLL()
-            pll.register_clkin(platform.request("clk25"), 25e6)
+            clk25 = platform.request("clk25")
+            pll.register_clkin(clk25, 25e6)
             pll.create_clkout(self.cd_sys, sys_clk_hz)
+            # nextpnr's target: the oscillator's period (it derives the PLL's output)
+            platform.add_period_constraint(clk25, 1e9 / 25e6)
 
     class _SoC(SoCMini):
         def __init__(self):
