@@ -123,7 +123,8 @@ def build_target(board: str, out: Path, n_neurons: int | None = None,
     name = name or f"cuneate_{board}"
     out = Path(out).resolve()
     out.mkdir(parents=True, exist_ok=True)
-    (out / f"{name}_core.v").write_text(verilog_text(LinkedTop(lcfg), f"{name}_core"))
+    if not target.get("zynq"):          # a Zynq board's block is behind the AXI face (below)
+        (out / f"{name}_core.v").write_text(verilog_text(LinkedTop(lcfg), f"{name}_core"))
     report = {"board": board, "device": target["device"], "name": name,
               "neurons": request.neurons if request is not None else lcfg.n_neurons,
               "requested_neurons": sized["requested_neurons"],
@@ -137,15 +138,21 @@ def build_target(board: str, out: Path, n_neurons: int | None = None,
     if target.get("bitstream") and bitstream:
         from .top import BoardTop
         platform = target["platform"]()
-        top = BoardTop(lcfg, sized["pll"], target.get("uart_tx_enable", False))
+        top = BoardTop(lcfg, sized["pll"], target.get("uart_tx_enable", False),
+                       target.get("status_leds"))
         opts = f"--report {name}.nextpnr.json --timing-allow-fail --seed {seed}"
+        if target.get("nextpnr_freq"):
+            # nextpnr does not derive the clock through this family's PLL: the plan's clock
+            # is its target for every clock (the oscillator's net only feeds the PLL)
+            opts += f" --freq {lcfg.core.clock_hz / 1e6:g}"
         plan = platform.prepare(top, name=name, nextpnr_opts=opts,
                                 **target.get("prepare_opts", {}))
         t0 = time.monotonic()
         try:
             with prog.step(f"{board}: synthesis, place and route, bitstream (yosys, "
                            f"nextpnr-{target['family']}; minutes)"):
-                plan.execute_local(out, env=yowasp_env(target["family"]))
+                plan.execute_local(out, env=yowasp_env(target["family"])
+                                   | target.get("tool_env", {}))
         except Exception as exc:       # the script's failure: name the log to read
             raise BuildError(f"{board} build failed ({exc.__class__.__name__}); see the logs "
                              f"in {out}") from None
@@ -155,9 +162,34 @@ def build_target(board: str, out: Path, n_neurons: int | None = None,
         report["place_route"] = _nextpnr_report(out / f"{name}.nextpnr.json", target,
                                                 lcfg.core.clock_hz, out / f"{name}.json")
         report["timing_met"] = report["place_route"]["timing_met"]
+    if target.get("vivado"):
+        from .top import BoardTop
+        from .vivado import check_tcl, write_project
+        top = BoardTop(lcfg, sized["pll"], False, target.get("status_leds"))
+        files = write_project(target["platform"](), top, out, name)
+        try:
+            check = check_tcl(out, name)
+        except FileNotFoundError as exc:
+            check = {"ok": None, "error": str(exc)}
+        report["vivado_project"] = {"files": files, "tcl_check": check,
+                                    "not_run": "Vivado (synthesis, place and route, "
+                                               "bitstream)"}
+    if target.get("zynq"):
+        from .vivado import check_tcl
+        from .zynq import BD_COMMANDS, write_ip_package
+        ip = write_ip_package(target, lcfg.payload, out, name)
+        try:
+            ip["tcl_check"] = check_tcl(Path(ip["dir"]), f"{name}_bd", BD_COMMANDS)
+        except FileNotFoundError as exc:
+            ip["tcl_check"] = {"ok": None, "error": str(exc)}
+        report["vivado_ip"] = ip
     if target.get("synth_family") and bitstream:
         with prog.step(f"{board}: yosys synth_{target['synth_family']} resource estimate"):
-            report["yosys_estimate"] = _yosys_estimate(out, f"{name}_core", target)
+            if target.get("zynq"):          # the packaged block behind the AXI face
+                report["yosys_estimate"] = _yosys_estimate(Path(ip["dir"]) / "src", name,
+                                                           target)
+            else:
+                report["yosys_estimate"] = _yosys_estimate(out, f"{name}_core", target)
     report["provenance"] = provenance()
     (out / f"{name}.report.json").write_text(json.dumps(report, indent=2, sort_keys=True)
                                              + "\n")
@@ -261,10 +293,19 @@ def format_report(r: dict) -> str:
                  f"{r['core']['n_neurons']}"
                  + (f", pipeline depth {depth}" if depth else "")
                  + f"), {r['core']['clock_hz'] / 1e6:g} MHz, "
-                 f"{r['core']['update_hz'] / 1e3:g} kHz updates, UART "
-                 + (f"{r['link']['baud'] / 1e6:g} Mbaud" if r['link']['baud'] >= 1e6
-                    else f"{r['link']['baud']:.0f} baud ({r['link']['clocks_per_bit']} clocks "
-                         f"a bit)"))
+                 f"{r['core']['update_hz'] / 1e3:g} kHz updates, "
+                 + ("behind the AXI face (no UART)" if "vivado_ip" in r else
+                    "UART " + (f"{r['link']['baud'] / 1e6:g} Mbaud" if r['link']['baud'] >= 1e6
+                               else f"{r['link']['baud']:.0f} baud "
+                                    f"({r['link']['clocks_per_bit']} clocks a bit)")))
+    ip = r.get("vivado_ip")
+    if ip:
+        chk = ip["tcl_check"]
+        lines.append(f"Vivado IP {ip['vlnv']} in {ip['dir']}: component.xml (IP-XACT 1685-2009), "
+                     f"block design {Path(ip['dir']).name[:-3]}_bd.tcl (tclsh with stubs: "
+                     f"{'ok' if chk.get('ok') else chk.get('error') or chk.get('missing')}), "
+                     f"PYNQ driver; streams {ip['streams']['write_tdata_bits']}-bit writes, "
+                     f"{ip['streams']['spike_tdata_bits']}-bit spikes; not run: {ip['not_run']}")
     sc = r.get("scene")
     if sc:
         lines.append("scene blocks: " + "; ".join(_block_line(b) for b in sc["blocks"]))
@@ -278,7 +319,8 @@ def format_report(r: dict) -> str:
         lines += [f"  {x}" for x in sc["link_budget_lines"]]
     est = r.get("estimate") or {}
     if est:
-        lines.append("estimate: " + ", ".join(f"{k} {v}" for k, v in est.items()))
+        lines.append(("sizing estimate (with the UART link's buffers): " if ip else "estimate: ")
+                     + ", ".join(f"{k} {v}" for k, v in est.items()))
     ye = r.get("yosys_estimate")
     if ye:
         lines.append("yosys synth_xilinx estimate (BRAM in 18 Kbit blocks):")

@@ -76,12 +76,15 @@ class BoardTop(Elaboratable):
     """``pll(m, platform) -> (clk, locked)`` builds the board's PLL; the rest is common:
     the block behind the UART face (:class:`~cuneate.hdl.link.LinkedTop` of the link
     configuration ``lcfg``), its pins on the board's UART, ``running``, ``overflow`` and
-    ``clamped`` on three LEDs (as many as the board has)."""
+    ``clamped`` on three LEDs (as many as the board has, at most ``status_leds``: a board
+    whose LED pins carry the UART has none)."""
 
-    def __init__(self, lcfg, pll, uart_tx_enable: bool = False):
+    def __init__(self, lcfg, pll, uart_tx_enable: bool = False,
+                 status_leds: int | None = None):
         self.linked = LinkedTop(lcfg)
         self.pll = pll
         self.uart_tx_enable = uart_tx_enable
+        self.status_leds = status_leds
 
     def elaborate(self, platform):
         m = Module()
@@ -99,7 +102,10 @@ class BoardTop(Elaboratable):
                                                                          dir="-"))
             m.d.comb += en.o.eq(1)
         leds = [linked.running, linked.overflow, linked.clamped]
-        for i, sig in enumerate(leds[:_led_count(platform)]):
+        n_leds = _led_count(platform)
+        if self.status_leds is not None:
+            n_leds = min(n_leds, self.status_leds)
+        for i, sig in enumerate(leds[:n_leds]):
             m.submodules[f"led{i}"] = led = io.Buffer("o", platform.request("led", i, dir="-"))
             m.d.comb += led.o.eq(sig)
         return m
@@ -118,13 +124,18 @@ def _led_count(platform) -> int:
 
 def xilinx_estimate_target(name: str, description: str, family: str, device: str,
                            resources: dict, bram_shapes: list, synth_family: str,
-                           bram_cells: dict) -> dict:
+                           bram_cells: dict, platform=None, pll=None, uart: str = "") -> dict:
     """A Verilog-plus-estimate target on a Xilinx device (no open bitstream flow): a 100 MHz
     oscillator, a 40 MHz core clock from the vendor's clock manager (2500 cycles per 16 kHz
     sweep, 20 clocks per bit at 2 Mbaud), 512-bit LUT RAM, 18-bit multipliers;
-    ``resources`` with BRAM in 18 Kbit blocks, ``bram_cells`` the 18 Kbit blocks per cell."""
-    return {"name": name, "description": description, "family": family, "device": device,
-            "clock_plan": ClockPlan(osc_hz=100e6, clock_hz=40e6, update_hz=16e3, baud=2e6),
-            "pll_clocks": [40e6], "resources": resources, "bram_shapes": bram_shapes,
-            "lutram_bits": 512, "dsp_width": 18, "default_neurons": 2400, "bitstream": False,
-            "synth_family": synth_family, "bram_cells": bram_cells}
+    ``resources`` with BRAM in 18 Kbit blocks, ``bram_cells`` the 18 Kbit blocks per cell.
+    With ``platform`` (an amaranth ``XilinxPlatform``) and ``pll`` the build also writes a
+    Vivado project of the board top (:mod:`~cuneate.boards.vivado`)."""
+    t = {"name": name, "description": description, "family": family, "device": device,
+         "clock_plan": ClockPlan(osc_hz=100e6, clock_hz=40e6, update_hz=16e3, baud=2e6),
+         "pll_clocks": [40e6], "resources": resources, "bram_shapes": bram_shapes,
+         "lutram_bits": 512, "dsp_width": 18, "default_neurons": 2400, "bitstream": False,
+         "synth_family": synth_family, "bram_cells": bram_cells}
+    if platform is not None:
+        t.update(platform=platform, pll=pll, vivado=True, uart=uart)
+    return t

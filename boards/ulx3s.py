@@ -19,36 +19,10 @@ lowest placement seed.
 
 from __future__ import annotations
 
-from amaranth import Instance, Signal
-
+from .pll import ecp5_pll
 from .top import ClockPlan
 
 __all__ = ["TARGET"]
-
-
-def _pll(clki_div: int, clkfb_div: int, clkop_div: int, out_mhz: float):
-    def build(m, platform):
-        clk25 = platform.request(platform.default_clk, dir="-")
-        clk, locked = Signal(name="pll_clk"), Signal(name="pll_locked")
-        m.submodules.pll = Instance(
-            "EHXPLLL",
-            a_FREQUENCY_PIN_CLKI="25", a_FREQUENCY_PIN_CLKOP=f"{out_mhz:g}",
-            a_ICP_CURRENT="12", a_LPF_RESISTOR="8", a_MFG_ENABLE_FILTEROPAMP="1",
-            a_MFG_GMCREF_SEL="2",
-            p_PLLRST_ENA="DISABLED", p_INTFB_WAKE="DISABLED", p_STDBY_ENABLE="DISABLED",
-            p_DPHASE_SOURCE="DISABLED", p_OUTDIVIDER_MUXA="DIVA", p_OUTDIVIDER_MUXB="DIVB",
-            p_OUTDIVIDER_MUXC="DIVC", p_OUTDIVIDER_MUXD="DIVD",
-            p_CLKI_DIV=clki_div, p_CLKOP_ENABLE="ENABLED", p_CLKOP_DIV=clkop_div,
-            p_CLKOP_CPHASE=clkop_div // 2 - 1, p_CLKOP_FPHASE=0, p_FEEDBK_PATH="CLKOP",
-            p_CLKFB_DIV=clkfb_div,
-            i_RST=0, i_STDBY=0, i_CLKI=clk25.io, o_CLKOP=clk, i_CLKFB=clk,
-            i_PHASESEL0=0, i_PHASESEL1=0, i_PHASEDIR=1, i_PHASESTEP=1, i_PHASELOADREG=1,
-            i_PLLWAKESYNC=0, i_ENCLKOP=0, o_LOCK=locked)
-        # no constraint on the output net (the netlist renames it): nextpnr derives the clock's
-        # from the oscillator's through these dividers, and the build report checks it against
-        # the plan's clock
-        return clk, locked
-    return build
 
 
 def platform(device: str = "85F"):
@@ -65,7 +39,7 @@ TARGET = {
     "device": "LFE5U-85F-6BG381C",
     "platform": platform,
     "clock_plan": ClockPlan(osc_hz=25e6, clock_hz=60e6, update_hz=16e3, baud=3e6),
-    "pll": _pll(5, 12, 10, 60.0),
+    "pll": ecp5_pll(25.0, 5, 12, 10),
     "uart_tx_enable": True,
     "bitstream": True,
     "loader_board": "ulx3s",
@@ -76,13 +50,13 @@ TARGET = {
     "default_neurons": 2500,
     "pll_clocks": [60e6, 70e6, 90e6],
     "clock_plans": [(ClockPlan(osc_hz=25e6, clock_hz=60e6, update_hz=16e3, baud=3e6),
-                     _pll(5, 12, 10, 60.0)),
+                     ecp5_pll(25.0, 5, 12, 10)),
                     # 25 MHz / 5 x 14 (VCO 560 MHz): 4375 cycles per sweep; 3 Mbaud would be
                     # 23.3 clocks a bit, so this plan's line runs at 2 Mbaud (35 clocks)
                     (ClockPlan(osc_hz=25e6, clock_hz=70e6, update_hz=16e3, baud=2e6),
-                     _pll(5, 14, 8, 70.0)),
+                     ecp5_pll(25.0, 5, 14, 8)),
                     (ClockPlan(osc_hz=25e6, clock_hz=90e6, update_hz=16e3, baud=3e6),
-                     _pll(5, 18, 6, 90.0))],
+                     ecp5_pll(25.0, 5, 18, 6))],
     # fmax (MHz) of one core by pipeline depth: out of context with its block-RAM and
     # multiplier registers packed, lowest of seeds 1-3 (docs/architecture.md); the
     # TRELLIS_COMB cells of one core and of the link

