@@ -31,6 +31,8 @@ def test_the_history_slot_is_the_ring_index_of_the_delayed_tick():
     assert np.array_equal(history_slot(slot, delay, D), (slot - delay) % D)
 
 
+# the long lane (CI); the wider detector in the release lane
+@pytest.mark.long
 def test_the_detector_equals_its_one_tick_reference_for_every_input_sequence(tmp_path):
     """k-induction at a target's period + 2 (k = 10 for 2 sources; about 20 s with yices):
     base case and step both pass, for every tick, input spike and clamp-clear sequence."""
@@ -39,7 +41,7 @@ def test_the_detector_equals_its_one_tick_reference_for_every_input_sequence(tmp
     assert r.passed and r.mode == "prove" and r.depth == induction_depth(cfg) == 10, r
 
 
-@pytest.mark.long
+@pytest.mark.release
 def test_a_wider_detector_equals_its_one_tick_reference(tmp_path):
     """Three sources, three targets on two parameter sets, a five-tick history, every delay
     from 0 to 4 (k = 11)."""

@@ -30,6 +30,8 @@ def cfg():
     return proof_config()
 
 
+# the long lane (CI), beside the proofs the mutants break
+@pytest.mark.long
 @pytest.mark.parametrize("mutant", sorted(EXPECTED))
 def test_the_proof_catches_the_fault(cfg, mutant, tmp_path):
     """A bounded run from the initial state, just deep enough, finds a counterexample in the

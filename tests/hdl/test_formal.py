@@ -60,6 +60,8 @@ def test_datapath_cannot_wrap(preset, tmp_path):
     assert r["status"] == "pass", r
 
 
+# the long lane (CI): RS here, CH beside it, the other presets in the release lane
+@pytest.mark.long
 def test_the_core_steps_compute_the_four_stage_update(tmp_path):
     """The pipelined steps (the core's and the twin's arithmetic) give the four-stage update's
     v, u, spike and clamp flags for every state of the box and every accepted current; their

@@ -229,11 +229,10 @@ def test_compiled_search_names_the_same_divergence():
     assert msgs[0] == msgs[1] and "diverges" in msgs[0]
 
 
-def test_the_worst_accepted_update_rate_builds_in_seconds():
+def test_the_worst_accepted_update_rate_builds():
     """A configuration at the highest update rate the scene schema accepts (10 MHz, dt =
-    1e-4 ms: 5 million search steps) with two parameter sets builds within a generous bound
-    (under a second on an idle 2-core machine; a minute and more before the search was
-    compiled)."""
+    1e-4 ms: 5 million search steps) with two parameter sets builds, no clamp able to act
+    (its time is a benchmark: under a second on an idle 2-core machine)."""
     import time
     from cuneate.hdl.izhikevich import range as rng_mod
     from cuneate.sim.scenes.schema import SCHEMA
@@ -245,4 +244,3 @@ def test_the_worst_accepted_update_rate_builds_in_seconds():
     took = time.perf_counter() - t0
     print(f"\n{rate:g} Hz, RS + FS: configuration built in {took:.2f} s")
     assert cfg.dt_ms == 1000.0 / rate and not any(cfg.clamp_can_act.values())
-    assert took < 20.0

@@ -113,7 +113,9 @@ def _twin(cfg, currents, n_ticks):
     return aff, cun, sums
 
 
-@pytest.mark.parametrize("tick_mode,ready_p", [("asap", 1.0), ("spaced", 0.3)])
+# spaced ticks under back-pressure in the default lane; ticks as soon as possible in the long
+@pytest.mark.parametrize("tick_mode,ready_p", [pytest.param("asap", 1.0, marks=pytest.mark.long),
+                                               ("spaced", 0.3)])
 def test_rtl_equals_twin_and_every_spike_crosses_the_link_once(tick_mode, ready_p):
     cfg = _cfg()
     # different currents: afferents fire at different sweeps, sometimes together

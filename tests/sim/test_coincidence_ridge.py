@@ -80,8 +80,9 @@ def test_ridge_on_chip_network_on_hdl_simulator(simulator, tmp_path):
 
 @pytest.mark.cocotb
 @pytest.mark.parametrize("simulator", [
-    # the ridge scene runs on Verilator in the default lane (tests/sim/test_scene_ridge.py)
-    pytest.param(s, marks=pytest.mark.long) if s == "verilator" else s for s in SIMULATORS])
+    # the ridge scene runs on Verilator in the default lane (tests/sim/test_scene_ridge.py);
+    # this experiment on both simulators in the long lane
+    pytest.param(s, marks=pytest.mark.long) for s in SIMULATORS])
 def test_ridge_on_hdl_simulator_decodes_like_fixed(simulator, tmp_path):
     cmp = ridge_comparison(RidgeSpec(trials_per_angle=2), hdl_engines=(simulator,),
                            build_dir=str(tmp_path))

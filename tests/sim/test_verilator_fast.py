@@ -119,6 +119,8 @@ def _faulty_verilog(cfg, fault, monkeypatch):
         return izhikevich_verilog(cfg)
 
 
+# the long lane (CI): one fault; the other in the release lane
+@pytest.mark.long
 @pytest.mark.parametrize("fault", [f if f == "flipped-product-bit" else
                                    pytest.param(f, marks=pytest.mark.release) for f in FAULTS])
 def test_dump_checker_catches_injected_faults_verilator(

@@ -153,7 +153,9 @@ def test_currents_in_spikes_out_and_every_fault_counted():
 ERR_CORE = dict(n_neurons=80, clock_hz=16e3 * 96, update_hz=16e3, spike_fifo_depth=16)
 
 
-@pytest.mark.parametrize("structured", [True, False], ids=["structured", "sampled"])
+# the structured damages in the default lane, the random sample in the long lane
+@pytest.mark.parametrize("structured", [True, pytest.param(False, marks=pytest.mark.long)],
+                         ids=["structured", "sampled"])
 def test_damaged_frames_are_counted_never_accepted(structured):
     """Every damaged frame is refused, every damaged run (a damaged delimiter merges a frame
     with the next) counted exactly once, as the split of the stream at its zero bytes says;

@@ -116,7 +116,9 @@ def test_link_round_trip_and_faults(simulator, build_root):
 
 
 @pytest.mark.cocotb
-@pytest.mark.parametrize("simulator", SIMULATORS)
+# Icarus in the default lane, Verilator in the long lane
+@pytest.mark.parametrize("simulator", [pytest.param(s, marks=pytest.mark.long)
+                                       if s == "verilator" else s for s in SIMULATORS])
 def test_link_receive_overflow_is_counted(simulator, build_root):
     """A write waits for sweep 50 while the host keeps sending: the 32-byte receive FIFO
     overflows; the dropped bytes are counted, the frames they broke are counted as framing,
