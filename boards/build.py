@@ -309,8 +309,6 @@ def format_report(r: dict) -> str:
                      f"{rp['outputs_packed']} outputs of {rp['multipliers']} MULT18X18D, "
                      f"{rp['ram_outputs_packed']} read ports of {rp['block_rams']} DP16KD "
                      f"({rp['ffs_removed'] + rp['ram_ffs_removed']} flip-flops removed)")
-    elif pr and r.get("register_packing", False) is None and r["device"].startswith("LFE5"):
-        lines.append("registers not packed (--no-pack-registers)")
     if r.get("bitstream"):
         lines.append(f"bitstream {r['bitstream']}")
     return "\n".join(lines) + "\n"
