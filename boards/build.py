@@ -5,7 +5,10 @@ The amaranth build script is executed in the build directory (the yowasp tools s
 current directory) with ``$YOSYS``, ``$NEXTPNR_ECP5``/``$NEXTPNR_ICE40`` and
 ``$ECPPACK``/``$ICEPACK`` pointing at the yowasp entry points. nextpnr runs with
 ``--timing-allow-fail`` so that a missed clock is reported rather than fatal; the report says
-whether timing met the requested clock.
+whether timing met the requested clock. ECP5 builds pack the flip-flops around the
+multipliers and after the block RAMs into the MULT18X18D and DP16KD registers between yosys
+and nextpnr (:func:`~cuneate.hdl.flow.ecp5_pack.packing_platform`; ``pack_registers=False``
+builds without); the report's ``register_packing`` says what moved.
 """
 
 from __future__ import annotations
@@ -16,6 +19,7 @@ import time
 from collections import Counter
 from pathlib import Path
 
+from ..hdl.flow.ecp5_pack import packing_platform
 from ..hdl.flow.synth import cell_counts, nextpnr_summary, run_yosys
 from ..hdl.flow.tools import ToolError, yowasp_env
 from ..hdl.flow.verilog import verilog_text
@@ -99,7 +103,7 @@ def build_target(board: str, out: Path, n_neurons: int | None = None,
                  clock_hz: float | None = None, update_hz: float | None = None,
                  bitstream: bool = True, seed: int = 1, name: str | None = None,
                  pipeline_stages: int | None = None, scene=None,
-                 baud: float | None = None) -> dict:
+                 baud: float | None = None, pack_registers: bool = True) -> dict:
     """Size the core for ``board``, write its Verilog (``<name>.v`` of the linked core, the
     board top's ``<name>.debug.v``), build the bitstream when the board supports it and
     ``bitstream`` is true, and write ``<name>.report.json`` / ``.txt``. Returns the report.
@@ -107,7 +111,8 @@ def build_target(board: str, out: Path, n_neurons: int | None = None,
     scene's blocks, sized to it (:func:`scene_request`), and the report gives the link's
     budget for it. Raises :class:`~cuneate.hdl.izhikevich.config.ConfigError` for a core the
     device cannot hold or a scene the link cannot carry in real time, and
-    :class:`BuildError` for a failed tool."""
+    :class:`BuildError` for a failed tool. ``pack_registers`` (ECP5 bitstreams): the
+    register packing between yosys and nextpnr (:mod:`~cuneate.hdl.flow.ecp5_pack`)."""
     from ..sim import progress as prog
     from ..sim.provenance import provenance
     if board not in TARGETS:
@@ -132,12 +137,15 @@ def build_target(board: str, out: Path, n_neurons: int | None = None,
               "pipeline_stages": getattr(lcfg.core, "pipeline_stages", None),
               "core": lcfg.core.to_kwargs(), "link": lcfg.to_dict(),
               "clock_plan": sized["plan"], "estimate": sized["estimate"],
-              "bitstream": None, "seed": seed}
+              "bitstream": None, "seed": seed, "register_packing": None}
     if request is not None:
         report["scene"] = request.describe()
     if target.get("bitstream") and bitstream:
         from .top import BoardTop
         platform = target["platform"]()
+        packing = pack_registers and target["family"] == "ecp5"
+        if packing:
+            platform = packing_platform(platform)
         top = BoardTop(lcfg, sized["pll"], target.get("uart_tx_enable", False),
                        target.get("status_leds"))
         opts = f"--report {name}.nextpnr.json --timing-allow-fail --seed {seed}"
@@ -157,6 +165,8 @@ def build_target(board: str, out: Path, n_neurons: int | None = None,
             raise BuildError(f"{board} build failed ({exc.__class__.__name__}); see the logs "
                              f"in {out}") from None
         report["build_seconds"] = round(time.monotonic() - t0, 1)
+        if packing:
+            report["register_packing"] = json.loads((out / f"{name}.pack.json").read_text())
         bit = out / f"{name}.{target['bitstream_ext']}"
         report["bitstream"] = str(bit) if bit.exists() else None
         report["place_route"] = _nextpnr_report(out / f"{name}.nextpnr.json", target,
@@ -335,6 +345,12 @@ def format_report(r: dict) -> str:
             lines += [f"fmax of clock {clk}: {_mhz(f)} MHz" for clk, f in per_clock.items()]
         lines.append(f"fmax {_mhz(pr['min_fmax_mhz'])} MHz, requested {pr['requested_mhz']:g} MHz: "
                      f"timing {'met' if pr['timing_met'] else 'NOT met'}")
+    rp = r.get("register_packing")
+    if rp:
+        lines.append(f"registers packed: {rp['inputs_packed']} multiplier input ports and "
+                     f"{rp['outputs_packed']} outputs of {rp['multipliers']} MULT18X18D, "
+                     f"{rp['ram_outputs_packed']} read ports of {rp['block_rams']} DP16KD "
+                     f"({rp['ffs_removed'] + rp['ram_ffs_removed']} flip-flops removed)")
     if r.get("bitstream"):
         lines.append(f"bitstream {r['bitstream']}")
     return "\n".join(lines) + "\n"

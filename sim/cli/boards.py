@@ -134,7 +134,8 @@ def cmd_build(args) -> int:
                                   clock_hz=args.clock_hz, update_hz=args.update_hz,
                                   bitstream=not args.no_bitstream, seed=args.seed,
                                   pipeline_stages=args.pipeline_stages, scene=scene,
-                                  baud=args.baud)
+                                  baud=args.baud,
+                                  pack_registers=not args.no_pack_registers)
     except ConfigError as exc:
         raise CliError(f"cuneate build: {exc}") from None
     except BuildError as exc:
@@ -206,5 +207,9 @@ def register(groups: CommandGroups) -> None:
     add_pipeline_option(c)
     c.add_argument("--no-bitstream", action="store_true",
                    help="Verilog and estimate only (no place and route)")
+    c.add_argument("--no-pack-registers", action="store_true",
+                   help="ECP5: leave the multipliers' and block RAMs' registers in the fabric "
+                        "(by default they move into the MULT18X18D and DP16KD between yosys "
+                        "and nextpnr)")
     c.add_argument("--json", action="store_true")
     c.set_defaults(func=cmd_build)

@@ -142,6 +142,8 @@ def test_ulx3s_bitstream_meets_60mhz(tmp_path):
     pr = r["place_route"]
     assert pr["resources"]["DSP"]["used"] == 4
     assert pr["resources"]["BRAM"]["used"] <= r["estimate"]["BRAM"]
+    # packed by default: the multipliers' registers in the MULT18X18D
+    assert r["register_packing"]["outputs_packed"] > 0
     assert pr["timing_met"], pr["fmax_mhz"]
     print("\n" + (tmp_path / "cuneate_ulx3s.report.txt").read_text())
 
@@ -162,6 +164,7 @@ def test_ulx3s_filled_with_cores_meets_timing(tmp_path):
     pr = r["place_route"]
     assert pr["resources"]["DSP"]["used"] == 40
     assert pr["resources"]["BRAM"]["used"] <= r["estimate"]["BRAM"] <= 208
+    assert r["register_packing"]["outputs_packed"] > 0          # packed by default
     assert r["timing_met"] and not text.startswith("TIMING NOT MET"), pr["fmax_mhz"]
 
 
