@@ -130,7 +130,9 @@ def whole_hand_slice():
                                     'engines = ["fixed", "board"]'), "whole_hand_slice.toml")
 
 
-@pytest.mark.long
+# the release lane: the fan-out on board equals fixed spike for spike in CI
+# (test_fixed_and_board_run_the_fanout_spike_for_spike); this is the whole hand's size
+@pytest.mark.release
 def test_the_whole_hand_slice_on_board_equals_fixed():
     run = afferent.run(whole_hand_slice())
     a, b = run.spikes["fixed"], run.spikes["board"]
