@@ -35,6 +35,8 @@ sticky in ``clamp_flags`` (``clamp_clear``).
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 from amaranth import Cat, Const, Module, Mux, Signal, unsigned
 from amaranth.lib import wiring
 from amaranth.lib.memory import Memory
@@ -124,25 +126,47 @@ class LearningLayer(wiring.Component):
         return max(1, int(cfg.weights_raw.shape[1] * cfg.w_max_raw).bit_length())
 
     def elaborate(self, platform):
-        cfg, iz = self.cfg, self.cfg.iz
-        M, K, S = cfg.n_targets, cfg.n_synapses, cfg.n_sources
-        lat = cfg.latency_ticks
+        """The stages in order: memories, input spikes, interneuron, the CN being processed,
+        the synapse stage's operations, the CN update, the control FSM, clamps."""
+        cfg = self.cfg
         m = Module()
         m.submodules.stage = stage = SynapseStage(cfg)
-        # ---- memories: the source table, the CNs' state
+        n = SimpleNamespace(stage=stage)
+        self._memories(m, n)
+        n.tick = tick_strobe(m, cfg, getattr(self, "tick", None))
+        self._input_spikes(m, n)
+        self._interneuron(m, n)
+        self._cn_fetch(m, n)
+        learn_pending, learn_apply = Signal(), Signal()
+        total = Signal(cfg.total_bits, name="total")
+        host_rd = Signal(name="host_rd_inflight")
+        n.learn_pending, n.learn_apply, n.total, n.host_rd = (learn_pending, learn_apply, total,
+                                                              host_rd)
+        self._stage_operations(m, n)
+        self._cn_update(m, n)
+        self._control(m, n)
+        self._synapse_updates_and_clamps(m, n)
+        return m
+
+    def _memories(self, m, n):
+        """The source table (``M K`` entries) and the CNs' state words (``v, u, E``)."""
+        cfg, iz = self.cfg, self.cfg.iz
+        M, K, S = cfg.n_targets, cfg.n_synapses, cfg.n_sources
         src_bits = max(1, (S - 1).bit_length())
         m.submodules.src_mem = src_mem = Memory(shape=unsigned(src_bits), depth=M * K,
                                                 init=[int(x) for x in cfg.src.reshape(-1)])
-        tf = [f for _, f in cfg.target_fields]
+        n.tf = tf = [f for _, f in cfg.target_fields]
         init = [pack((iz.v_init_raw[j], iz.u_init_raw[j], 0), tf) for j in range(M)]
         m.submodules.cn_mem = cn_mem = Memory(shape=unsigned(sum(f.width for f in tf)), depth=M,
                                               init=init)
         src_rd = src_mem.read_port()
         cn_rd, cn_wr = cn_mem.read_port(), cn_mem.write_port()
+        n.src_rd, n.cn_rd, n.cn_wr = src_rd, cn_rd, cn_wr
 
-        tick = tick_strobe(m, cfg, getattr(self, "tick", None))
-
-        # ---- pending input spikes, the delayed words
+    def _input_spikes(self, m, n):
+        """Pending input spikes (merges counted), the stamp of a tick taken while idle (a tick
+        while busy is an overrun), the delayed spike words."""
+        S, lat = self.cfg.n_sources, self.cfg.latency_ticks
         pending, onehot = Signal(S), Signal(S)
         m.d.comb += onehot.eq(Mux(self.in_valid, Const(1, S) << self.in_source, 0))
         ticks = Signal(COUNTER_BITS)
@@ -151,7 +175,8 @@ class LearningLayer(wiring.Component):
         shift = [Signal(S, name=f"delayed{k}") for k in range(lat)]
         n_spk = Signal(range(S + 1), name="n_spk")
         idle, take = Signal(), Signal()
-        m.d.comb += take.eq(tick & idle)
+        n.ticks, n.cur, n.late, n.n_spk, n.idle = ticks, cur, late, n_spk, idle
+        m.d.comb += take.eq(n.tick & idle)
         with m.If(take):
             m.d.sync += [pending.eq(onehot), cur.eq(pending),
                          late.eq(shift[lat - 1] if lat else pending),
@@ -163,60 +188,66 @@ class LearningLayer(wiring.Component):
             m.d.sync += pending.eq(pending | onehot)
             with m.If(self.in_valid & pending.bit_select(self.in_source, 1)):
                 m.d.sync += self.merged_count.eq(self.merged_count + 1)
-        with m.If(tick & ~idle):
+        with m.If(n.tick & ~idle):
             m.d.sync += [self.tick_overrun.eq(1), self.overrun_count.eq(self.overrun_count + 1)]
 
-        # ---- the interneuron (two prologue cycles)
-        H = Signal(cfg.inh.T.shape(), name="H")
-        inh = Signal(cfg.I_full.shape(), name="inh")
-        inh_now, y_h = dp.interneuron(cfg, H, n_spk)
-        (ph,) = trace_products(cfg.hview, [y_h])
-        r_yh = Signal(y_h.shape(), name="r_yh")
-        r_ph = Signal(ph.shape(), name="r_ph")
+    def _interneuron(self, m, n):
+        """The interneuron's inhibition and trace (its two prologue cycles' operands)."""
+        cfg = self.cfg
+        n.H = Signal(cfg.inh.T.shape(), name="H")
+        n.inh = Signal(cfg.I_full.shape(), name="inh")
+        n.inh_now, n.y_h = dp.interneuron(cfg, n.H, n.n_spk)
+        (n.ph,) = trace_products(cfg.hview, [n.y_h])
+        n.r_yh = Signal(n.y_h.shape(), name="r_yh")
+        n.r_ph = Signal(n.ph.shape(), name="r_ph")
 
-        # ---- the CN being processed
-        tgt = Signal(range(max(2, M)), name="tgt")
-        base = Signal(range(max(2, M * K)), name="base")       # tgt * K
-        syn_m = Signal(range(K + 1), name="syn_m")
-        word = cn_rd.data
-        v0, u0, e0 = unpack(word, tf)
-        m.d.comb += cn_rd.addr.eq(tgt)
-        i_now, y_e = dp.net_drive(cfg, e0, inh, 0)
-        z_now = dp.main_calcium(cfg, i_now)
-        acc = Signal(self._acc_bits(), name="acc")
-        src_now = src_rd.data
+    def _cn_fetch(self, m, n):
+        """The CN being processed: its index, synapse counter, fetched state and input sum."""
+        cfg = self.cfg
+        M, K = cfg.n_targets, cfg.n_synapses
+        n.tgt = Signal(range(max(2, M)), name="tgt")
+        n.base = Signal(range(max(2, M * K)), name="base")       # tgt * K
+        n.syn_m = Signal(range(K + 1), name="syn_m")
+        n.v0, n.u0, n.e0 = unpack(n.cn_rd.data, n.tf)
+        m.d.comb += n.cn_rd.addr.eq(n.tgt)
+        i_now, _ = dp.net_drive(cfg, n.e0, n.inh, 0)
+        n.z_now = dp.main_calcium(cfg, i_now)
+        n.acc = Signal(self._acc_bits(), name="acc")
+        n.src_now = n.src_rd.data
 
-        # ---- the learn pass
-        learn_pending, learn_apply = Signal(), Signal()
-        total = Signal(cfg.total_bits, name="total")
-        host_rd = Signal(name="host_rd_inflight")
-
-        # ---- stage operation defaults
+    def _stage_operations(self, m, n):
+        """The synapse stage's operation defaults (an integrate on the current synapse), what
+        its fetches add to the CN's sum and the window's total, the host read's answer."""
+        stage = n.stage
         m.d.comb += [stage.op_valid.eq(0), stage.op.eq(OPS["integrate"]),
-                     stage.op_addr.eq(base + syn_m), stage.op_spike.eq(0),
-                     stage.op_late.eq(0), stage.op_z.eq(z_now), stage.op_total.eq(total),
-                     stage.op_apply.eq(learn_apply), stage.op_weight.eq(self.w_wr_data),
-                     src_rd.addr.eq(base + syn_m + 1)]
+                     stage.op_addr.eq(n.base + n.syn_m), stage.op_spike.eq(0),
+                     stage.op_late.eq(0), stage.op_z.eq(n.z_now), stage.op_total.eq(n.total),
+                     stage.op_apply.eq(n.learn_apply), stage.op_weight.eq(self.w_wr_data),
+                     n.src_rd.addr.eq(n.base + n.syn_m + 1)]
         with m.If(stage.fetch_valid & (stage.fetch_op == OPS["integrate"])):
-            m.d.sync += acc.eq(dp.contribution(acc, 1, stage.contrib))
-        with m.If(stage.fetch_valid & (stage.fetch_op == OPS["read"]) & ~host_rd):
-            m.d.sync += total.eq(total + stage.fetch_l)
-        m.d.sync += [host_rd.eq(0), self.w_rd_resp_valid.eq(host_rd & stage.fetch_valid),
+            m.d.sync += n.acc.eq(dp.contribution(n.acc, 1, stage.contrib))
+        with m.If(stage.fetch_valid & (stage.fetch_op == OPS["read"]) & ~n.host_rd):
+            m.d.sync += n.total.eq(n.total + stage.fetch_l)
+        m.d.sync += [n.host_rd.eq(0), self.w_rd_resp_valid.eq(n.host_rd & stage.fetch_valid),
                      self.w_rd_resp_data.eq(stage.fetch_w)]
 
-        # ---- the CN update (four cycles)
-        sel = lookup(cfg.target_sets_, tgt)
+    def _cn_update(self, m, n):
+        """The CN update's four register stages (the Izhikevich core's stage functions and the
+        excitatory trace); sets ``n.v_new``, ``n.u_new``, ``n.out``, ``n.cn_clamp`` and the
+        fourth stage's registers."""
+        cfg, iz = self.cfg, self.cfg.iz
+        sel = lookup(cfg.target_sets_, n.tgt)
 
         def reg(name, value):
             s = Signal(value.shape(), name=name)
             m.d.sync += s.eq(value)
             return s
-        i_c, y_ec = dp.net_drive(cfg, e0, inh, acc)
-        s2 = operands(iz, v0, u0, i_c, sel)
+        i_c, y_ec = dp.net_drive(cfg, n.e0, n.inh, n.acc)
+        s2 = operands(iz, n.v0, n.u0, i_c, sel)
         r_i, r_ye = reg("r_i", s2["i"]), reg("r_ye", y_ec)
-        r_ifull, r_inh = reg("r_ifull", i_c), reg("r_inh", inh)
+        r_ifull, r_inh = reg("r_ifull", i_c), reg("r_inh", n.inh)
         r2 = {k: reg(f"r2_{k}", s2[k]) for k in ("wq", "vq", "x", "i_flag")}
-        r_v, r_u, r_a = reg("r_v", v0), reg("r_u", u0), reg("r_a", acc)
+        r_v, r_u, r_a = reg("r_v", n.v0), reg("r_u", n.u0), reg("r_a", n.acc)
         (pe,) = trace_products(cfg.eview, [r_ye])
         s3 = multiply1(iz, r2["wq"], r2["vq"], r2["x"], r_u, sel)
         r_pe, r_ye3 = reg("r_pe", pe), reg("r_ye3", r_ye)
@@ -228,111 +259,133 @@ class LearningLayer(wiring.Component):
         s4 = multiply2(iz, r3["q"], r3["bvp"], r3["uy"], r_wq3, r_v3, r_u3, r3["x"], sel)
         r4 = {k: reg(f"r4_{k}", s4[k]) for k in ("vb_sh", "vb_th", "vb_lo", "u_sh", "ud_sh",
                                                  "p", "m", "y_flag")}
-        r_e4, r_if4, r_a4 = reg("r_e4", e_new), reg("r_if4", r_if3), reg("r_a4", r_a3)
-        r_i4, r_inh4 = reg("r_ifull4", r_if3b), reg("r_inh4", r_inh3)
-        out = update_state(iz, *(r4[k] for k in ("vb_sh", "vb_th", "vb_lo", "u_sh", "ud_sh",
-                                                 "p", "m")), sel)
+        n.r_e4, r_if4, n.r_a4 = reg("r_e4", e_new), reg("r_if4", r_if3), reg("r_a4", r_a3)
+        n.r_i4, n.r_inh4 = reg("r_ifull4", r_if3b), reg("r_inh4", r_inh3)
+        n.out = out = update_state(iz, *(r4[k] for k in ("vb_sh", "vb_th", "vb_lo", "u_sh",
+                                                         "ud_sh", "p", "m")), sel)
         cn_flags = dict(out, current=r_if4, y=r4["y_flag"])
-        cn_clamp = Cat(*[cn_flags[k] for k in CN_CLAMP_KINDS])
+        n.cn_clamp = Cat(*[cn_flags[k] for k in CN_CLAMP_KINDS])
         v_new, u_new = Signal(iz.V.shape()), Signal(iz.U.shape())
         m.d.comb += [v_new.eq(out["v"]), u_new.eq(out["u"])]
+        n.v_new, n.u_new = v_new, u_new
 
-        # ---- control
-        m.d.comb += [idle.eq(0), cn_wr.en.eq(0), self.w_wr_ready.eq(0), self.w_rd_ready.eq(0)]
+    def _control(self, m, n):
+        """The learn request (overruns counted) and the FSM: idle (host port), a tick's
+        states, a window end's states."""
+        m.d.comb += [n.idle.eq(0), n.cn_wr.en.eq(0), self.w_wr_ready.eq(0),
+                     self.w_rd_ready.eq(0)]
         m.d.sync += [self.upd_valid.eq(0), self.spike_valid.eq(0), self.learn_done.eq(0)]
         with m.If(self.learn):
-            with m.If(learn_pending | ~idle):
+            with m.If(n.learn_pending | ~n.idle):
                 m.d.sync += self.learn_overrun_count.eq(self.learn_overrun_count + 1)
             with m.Else():
-                m.d.sync += [learn_pending.eq(1), learn_apply.eq(self.learn_apply)]
+                m.d.sync += [n.learn_pending.eq(1), n.learn_apply.eq(self.learn_apply)]
         with m.FSM():
-            with m.State("IDLE"):
-                m.d.comb += idle.eq(1)
-                with m.If(tick):
-                    m.next = "PRO1"
-                with m.Elif(learn_pending & ~stage.busy & ~self.learn):
-                    m.d.sync += [learn_pending.eq(0), tgt.eq(0), base.eq(0), syn_m.eq(0),
-                                 total.eq(0)]
-                    m.next = "LSUM"
-                    with m.If(~learn_apply):
-                        m.next = "LSTEP"
-                with m.Elif(~stage.busy & ~self.learn):
-                    m.d.comb += [self.w_wr_ready.eq(1),
-                                 self.w_rd_ready.eq(~self.w_wr_valid),
-                                 stage.op_addr.eq(Mux(self.w_wr_valid, self.w_wr_addr,
-                                                      self.w_rd_addr))]
-                    with m.If(self.w_wr_valid):
-                        m.d.comb += [stage.op_valid.eq(1), stage.op.eq(OPS["write"])]
-                    with m.Elif(self.w_rd_valid):
-                        m.d.comb += [stage.op_valid.eq(1), stage.op.eq(OPS["read"])]
-                        m.d.sync += host_rd.eq(1)
-            with m.State("PRO1"):
-                m.d.sync += [inh.eq(inh_now), r_yh.eq(y_h), r_ph.eq(ph)]
-                m.next = "PRO2"
-            with m.State("PRO2"):
-                (h_new,) = trace_update(cfg.hview, [r_yh], [r_ph])
-                m.d.sync += [H.eq(h_new), tgt.eq(0), base.eq(0), syn_m.eq(0)]
+            self._idle_state(m, n)
+            self._tick_states(m, n)
+            self._learn_states(m, n)
+        m.d.comb += self.busy.eq(~n.idle | n.learn_pending)
+
+    def _idle_state(self, m, n):
+        """IDLE: a tick starts, else a pending window end, else the host's write or read."""
+        stage = n.stage
+        with m.State("IDLE"):
+            m.d.comb += n.idle.eq(1)
+            with m.If(n.tick):
+                m.next = "PRO1"
+            with m.Elif(n.learn_pending & ~stage.busy & ~self.learn):
+                m.d.sync += [n.learn_pending.eq(0), n.tgt.eq(0), n.base.eq(0), n.syn_m.eq(0),
+                             n.total.eq(0)]
+                m.next = "LSUM"
+                with m.If(~n.learn_apply):
+                    m.next = "LSTEP"
+            with m.Elif(~stage.busy & ~self.learn):
+                m.d.comb += [self.w_wr_ready.eq(1),
+                             self.w_rd_ready.eq(~self.w_wr_valid),
+                             stage.op_addr.eq(Mux(self.w_wr_valid, self.w_wr_addr,
+                                                  self.w_rd_addr))]
+                with m.If(self.w_wr_valid):
+                    m.d.comb += [stage.op_valid.eq(1), stage.op.eq(OPS["write"])]
+                with m.Elif(self.w_rd_valid):
+                    m.d.comb += [stage.op_valid.eq(1), stage.op.eq(OPS["read"])]
+                    m.d.sync += n.host_rd.eq(1)
+
+    def _tick_states(self, m, n):
+        """A tick: two interneuron cycles, then per CN its fetch, one synapse per cycle, the
+        last synapse and the four update cycles (U4 writes the state back and reports)."""
+        cfg, stage = self.cfg, n.stage
+        M, K = cfg.n_targets, cfg.n_synapses
+        tgt, base, syn_m = n.tgt, n.base, n.syn_m
+        with m.State("PRO1"):
+            m.d.sync += [n.inh.eq(n.inh_now), n.r_yh.eq(n.y_h), n.r_ph.eq(n.ph)]
+            m.next = "PRO2"
+        with m.State("PRO2"):
+            (h_new,) = trace_update(cfg.hview, [n.r_yh], [n.r_ph])
+            m.d.sync += [n.H.eq(h_new), tgt.eq(0), base.eq(0), syn_m.eq(0)]
+            m.next = "FETCH"
+        with m.State("FETCH"):
+            m.d.comb += n.src_rd.addr.eq(base)
+            m.d.sync += [syn_m.eq(0), n.acc.eq(0)]
+            m.next = "ACC"
+        with m.State("ACC"):
+            m.d.comb += [stage.op_valid.eq(1), stage.op.eq(OPS["integrate"]),
+                         stage.op_spike.eq(n.cur.bit_select(n.src_now, 1)),
+                         stage.op_late.eq(n.late.bit_select(n.src_now, 1))]
+            m.d.sync += syn_m.eq(syn_m + 1)
+            with m.If(syn_m == K - 1):
+                m.next = "LAST"
+        for state, nxt in (("LAST", "U1"), ("U1", "U2"), ("U2", "U3"), ("U3", "U4")):
+            with m.State(state):
+                m.next = nxt
+        with m.State("U4"):
+            m.d.comb += [n.cn_wr.en.eq(1), n.cn_wr.addr.eq(tgt),
+                         n.cn_wr.data.eq(Cat(n.v_new, n.u_new, n.r_e4))]
+            m.d.sync += [
+                self.upd_valid.eq(1), self.upd_target.eq(tgt), self.upd_v.eq(n.v_new),
+                self.upd_u.eq(n.u_new), self.upd_e.eq(n.r_e4), self.upd_i.eq(n.r_i4),
+                self.upd_inh.eq(n.r_inh4), self.upd_a.eq(n.r_a4),
+                self.upd_spike.eq(n.out["spike"]), self.upd_clamp.eq(n.cn_clamp),
+                self.upd_tick.eq(n.ticks), self.spike_valid.eq(n.out["spike"]),
+                self.spike_target.eq(tgt), self.spike_tick.eq(n.ticks)]
+            with m.If(tgt == M - 1):
+                m.d.sync += n.ticks.eq(n.ticks + 1)
+                m.next = "IDLE"
+            with m.Else():
+                m.d.sync += [tgt.eq(tgt + 1), base.eq(base + K), syn_m.eq(0)]
                 m.next = "FETCH"
-            with m.State("FETCH"):
-                m.d.comb += src_rd.addr.eq(base)
-                m.d.sync += [syn_m.eq(0), acc.eq(0)]
-                m.next = "ACC"
-            with m.State("ACC"):
-                m.d.comb += [stage.op_valid.eq(1), stage.op.eq(OPS["integrate"]),
-                             stage.op_spike.eq(cur.bit_select(src_now, 1)),
-                             stage.op_late.eq(late.bit_select(src_now, 1))]
-                m.d.sync += syn_m.eq(syn_m + 1)
-                with m.If(syn_m == K - 1):
-                    m.next = "LAST"
-            with m.State("LAST"):
-                m.next = "U1"
-            with m.State("U1"):
-                m.next = "U2"
-            with m.State("U2"):
-                m.next = "U3"
-            with m.State("U3"):
-                m.next = "U4"
-            with m.State("U4"):
-                m.d.comb += [cn_wr.en.eq(1), cn_wr.addr.eq(tgt),
-                             cn_wr.data.eq(Cat(v_new, u_new, r_e4))]
-                m.d.sync += [
-                    self.upd_valid.eq(1), self.upd_target.eq(tgt), self.upd_v.eq(v_new),
-                    self.upd_u.eq(u_new), self.upd_e.eq(r_e4), self.upd_i.eq(r_i4),
-                    self.upd_inh.eq(r_inh4), self.upd_a.eq(r_a4),
-                    self.upd_spike.eq(out["spike"]), self.upd_clamp.eq(cn_clamp),
-                    self.upd_tick.eq(ticks), self.spike_valid.eq(out["spike"]),
-                    self.spike_target.eq(tgt), self.spike_tick.eq(ticks)]
+
+    def _learn_states(self, m, n):
+        """A window's end, per CN: its drives read into the total (with ``learn_apply``), then
+        a learn operation on each synapse."""
+        cfg, stage = self.cfg, n.stage
+        M, K = cfg.n_targets, cfg.n_synapses
+        tgt, base, syn_m = n.tgt, n.base, n.syn_m
+        with m.State("LSUM"):                   # read the CN's drives into the total
+            m.d.comb += [stage.op_valid.eq(1), stage.op.eq(OPS["read"])]
+            m.d.sync += syn_m.eq(syn_m + 1)
+            with m.If(syn_m == K - 1):
+                m.next = "LWAIT"
+        with m.State("LWAIT"):                  # the last drive enters the total
+            m.d.sync += syn_m.eq(0)
+            m.next = "LSTEP"
+        with m.State("LSTEP"):                  # the steps
+            m.d.comb += [stage.op_valid.eq(1), stage.op.eq(OPS["learn"])]
+            m.d.sync += syn_m.eq(syn_m + 1)
+            with m.If(syn_m == K - 1):
+                m.d.sync += [syn_m.eq(0), n.total.eq(0)]
                 with m.If(tgt == M - 1):
-                    m.d.sync += ticks.eq(ticks + 1)
+                    m.d.sync += [self.learn_done.eq(1),
+                                 self.learn_count.eq(self.learn_count + 1)]
                     m.next = "IDLE"
                 with m.Else():
-                    m.d.sync += [tgt.eq(tgt + 1), base.eq(base + K), syn_m.eq(0)]
-                    m.next = "FETCH"
-            with m.State("LSUM"):                   # read the CN's drives into the total
-                m.d.comb += [stage.op_valid.eq(1), stage.op.eq(OPS["read"])]
-                m.d.sync += syn_m.eq(syn_m + 1)
-                with m.If(syn_m == K - 1):
-                    m.next = "LWAIT"
-            with m.State("LWAIT"):                  # the last drive enters the total
-                m.d.sync += syn_m.eq(0)
-                m.next = "LSTEP"
-            with m.State("LSTEP"):                  # the steps
-                m.d.comb += [stage.op_valid.eq(1), stage.op.eq(OPS["learn"])]
-                m.d.sync += syn_m.eq(syn_m + 1)
-                with m.If(syn_m == K - 1):
-                    m.d.sync += [syn_m.eq(0), total.eq(0)]
-                    with m.If(tgt == M - 1):
-                        m.d.sync += [self.learn_done.eq(1),
-                                     self.learn_count.eq(self.learn_count + 1)]
-                        m.next = "IDLE"
-                    with m.Else():
-                        m.d.sync += [tgt.eq(tgt + 1), base.eq(base + K)]
-                        m.next = "LSUM"
-                        with m.If(~learn_apply):
-                            m.next = "LSTEP"
-        m.d.comb += self.busy.eq(~idle | learn_pending)
+                    m.d.sync += [tgt.eq(tgt + 1), base.eq(base + K)]
+                    m.next = "LSUM"
+                    with m.If(~n.learn_apply):
+                        m.next = "LSTEP"
 
-        # ---- the synapses' updates, clamps
+    def _synapse_updates_and_clamps(self, m, n):
+        """The synapse stage's updates out; every clamp (CN and synapse) sticky and counted."""
+        stage = n.stage
         m.d.comb += [self.syn_upd_valid.eq(stage.upd_valid), self.syn_upd_op.eq(stage.upd_op),
                      self.syn_upd_addr.eq(stage.upd_addr), self.syn_upd_w.eq(stage.upd_w),
                      self.syn_upd_cd.eq(stage.upd_cd), self.syn_upd_cr.eq(stage.upd_cr),
@@ -347,7 +400,6 @@ class LearningLayer(wiring.Component):
             cnt = getattr(self, f"clamp_count_{k}")
             with m.If(flags[b]):
                 m.d.sync += cnt.eq(cnt + 1)
-        return m
 
 
 def learning_verilog(cfg: PlasticityConfig, name: str = "learning_layer",
