@@ -92,7 +92,7 @@ def test_engines_that_do_not_run_the_fanout_are_refused(tmp_path, capsys):
                      "--out", str(tmp_path / "o")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert err == [f"cuneate run: {p}: hardware.fanout: engine 'verilator' does not run the "
-                   f"channel fan-out (engines that do: golden, fixed, board)"]
+                   f"channel fan-out (engines that do: golden, fixed, board, axi)"]
 
 
 def test_the_whole_hand_streams_channels_not_afferents():
