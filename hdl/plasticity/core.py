@@ -44,6 +44,7 @@ from ..flow.synth import synthesize_flows
 from ..flow.verilog import verilog_text, write_block
 from ..izhikevich import multiply1, multiply2, operands, update_state
 from ..lib.datapath import lookup
+from ..lib.fsm import wait_states
 from ..lib.synapses import trace_products, trace_update
 from ..lib.tick import tick_strobe
 from . import datapath as dp
@@ -284,14 +285,7 @@ class LearningLayer(wiring.Component):
                 m.d.sync += syn_m.eq(syn_m + 1)
                 with m.If(syn_m == K - 1):
                     m.next = "LAST"
-            with m.State("LAST"):
-                m.next = "U1"
-            with m.State("U1"):
-                m.next = "U2"
-            with m.State("U2"):
-                m.next = "U3"
-            with m.State("U3"):
-                m.next = "U4"
+            wait_states(m, "LAST", "U1", "U2", "U3", "U4")
             with m.State("U4"):
                 m.d.comb += [cn_wr.en.eq(1), cn_wr.addr.eq(tgt),
                              cn_wr.data.eq(Cat(v_new, u_new, r_e4))]
