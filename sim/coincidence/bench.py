@@ -32,7 +32,7 @@ from cocotb.triggers import FallingEdge, RisingEdge
 
 from cuneate.hdl.coincidence import CoincidenceConfig
 from cuneate.sim.coincidence.scoreboard import CoincidenceChecker
-from cuneate.sim.engines.bench import bench_config, bench_report
+from cuneate.sim.engines.bench import bench_config, bench_report, spikes_then_tick
 
 
 async def start_bench(dut):
@@ -132,14 +132,7 @@ async def engine(dut):
     stream, clamp_words = [], []
     t0 = time.perf_counter()
     for k in range(n_ticks):
-        for s in by_tick.get(k, []):
-            dut.in_valid.value = 1
-            dut.in_source.value = int(s)
-            await FallingEdge(dut.clk)
-        dut.in_valid.value = 0
-        dut.tick.value = 1
-        await FallingEdge(dut.clk)
-        dut.tick.value = 0
+        await spikes_then_tick(dut, by_tick.get(k, []), lambda: FallingEdge(dut.clk), True)
         while True:
             await FallingEdge(dut.clk)
             if int(dut.spike_valid.value):

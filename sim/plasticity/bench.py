@@ -24,7 +24,7 @@ from cocotb.clock import Clock
 from cocotb.triggers import FallingEdge, RisingEdge
 
 from cuneate.hdl.plasticity import CLAMP_KINDS, OPS, PlasticityConfig
-from cuneate.sim.engines.bench import bench_config, bench_progress, bench_report
+from cuneate.sim.engines.bench import bench_config, bench_progress, bench_report, spikes_then_tick
 from cuneate.sim.plasticity.scoreboard import CN_FIELDS, SYN_FIELDS, LearningChecker
 
 SIGNED_CN = {"v", "u", "e", "i", "inh"}
@@ -130,14 +130,9 @@ async def scoreboard(dut):
         for _ in range(rng.randrange(0, 2 * S)):
             if rng.random() < p_event:
                 s = rng.randrange(S)
-                dut.in_valid.value, dut.in_source.value = 1, s
                 merged += s in events
                 events.append(s)
-                await step(dut, mon)
-        dut.in_valid.value = 0
-        dut.tick.value = 1
-        await step(dut, mon)
-        dut.tick.value = 0
+        await spikes_then_tick(dut, events, lambda: step(dut, mon), True)
         await settle(dut, mon)
         syn, cn, seen, cn_seen = mon.take()
         if seen[OPS["integrate"]] != M * K or cn_seen != M:
@@ -204,13 +199,7 @@ async def engine(dut):
     await start_bench(dut)
     t0 = time.perf_counter()
     for k in range(n_ticks):
-        for s in by_tick.get(k, []):
-            dut.in_valid.value, dut.in_source.value = 1, int(s)
-            await step(dut, mon)
-        dut.in_valid.value = 0
-        dut.tick.value = 1
-        await step(dut, mon)
-        dut.tick.value = 0
+        await spikes_then_tick(dut, by_tick.get(k, []), lambda: step(dut, mon), True)
         await settle(dut, mon)
         if k in windows:
             await window_end(dut, mon, windows[k])
