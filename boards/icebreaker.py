@@ -42,5 +42,4 @@ TARGET = open_flow_target(
     # 16-bit saturating error counters and a 256-byte receive FIFO: logic cells are the limit
     link_defaults={"counter_width": 16, "rx_fifo_depth": 256},
     loader_board="ice40_generic",
-    prepare_opts={"synth_opts": "-dsp"},      # map the products to SB_MAC16
-    bitstream_ext="bin")
+    prepare_opts={"synth_opts": "-dsp"})      # map the products to SB_MAC16

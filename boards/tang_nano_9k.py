@@ -37,5 +37,5 @@ TARGET = open_flow_target(
     amaranth_board("tang_nano_9k", "TangNano9kPlatform", himbaechel_gowin), PLANS,
     {"LUT": 8640, "FF": 6480, "BRAM": 26, "DSP": 20},
     # board-build fmax bound (MHz) for the sizing: the 1000-neuron build at 48 MHz, seed 1 (measured; the largest build's three seeds are in benchmarks/boards.md)
-    link_fmax_mhz=57.3, loader_board="tangnano9k", bitstream_ext="fs",
+    link_fmax_mhz=57.3, loader_board="tangnano9k",
     uart="the BL702's USB serial port (pins 17 tx, 18 rx)")

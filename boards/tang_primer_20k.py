@@ -27,5 +27,5 @@ TARGET = open_flow_target(
     amaranth_board("tang_primer_20k", "TangPrimer20kDockPlatform", himbaechel_gowin), PLANS,
     {"LUT": 20736, "FF": 15552, "BRAM": 46, "DSP": 48},
     # board-build fmax bound (MHz) for the sizing: provisional: the GW1NR-9's measured board-build fmax (the GW2A-18 C8 is the faster family member) until this board's largest build is measured
-    link_fmax_mhz=57.3, loader_board="tangprimer20k", bitstream_ext="fs",
+    link_fmax_mhz=57.3, loader_board="tangprimer20k",
     uart="the Dock's USB debugger's serial port (pins M11 tx, T13 rx)")

@@ -132,11 +132,11 @@ _OPEN_FAMILIES = {
     "ecp5": {"lutram_bits": 512, "dsp_width": 18,
              "nextpnr_cells": {"LUT": "TRELLIS_COMB", "FF": "TRELLIS_FF", "BRAM": "DP16KD",
                                "DSP": "MULT18X18D"}},
-    "gowin": {"lutram_bits": 64, "dsp_width": 18, "nextpnr_freq": True,
+    "gowin": {"lutram_bits": 64, "dsp_width": 18, "nextpnr_freq": True, "bitstream_ext": "fs",
               "nextpnr_cells": {"LUT": "LUT4", "ALU": "ALU", "FF": "DFF", "BRAM": "BSRAM",
                                 "DSP": "MULT18X18"}},
     # a logic cell holds a LUT4 and a flip-flop: the netlist's counts of each, of the LCs
-    "ice40": {"lutram_bits": 0, "dsp_width": 16,
+    "ice40": {"lutram_bits": 0, "dsp_width": 16, "bitstream_ext": "bin",
               "bram_shapes": [(256, 16), (512, 8), (1024, 4), (2048, 2)],
               "nextpnr_cells": {"LC": "ICESTORM_LC", "BRAM": "ICESTORM_RAM",
                                 "DSP": "ICESTORM_DSP"},
@@ -158,14 +158,14 @@ def oscillator_plans(osc_mhz: float, *plans) -> list:
 def open_flow_target(name: str, description: str, family: str, device: str, platform,
                      plans: list, resources: dict, **options) -> dict:
     """A target built by the open flow of ``family`` (:data:`_OPEN_FAMILIES`): ``plans`` its
-    :func:`oscillator_plans`, the first the default; 18 Kbit block RAMs unless the family states
-    its own, 2500 neurons by default,
-    a ``.bit`` bitstream; ``options`` add to or override any of these."""
+    :func:`oscillator_plans`, the first the default; 18 Kbit block RAMs and a ``.bit``
+    bitstream unless the family states its own, 2500 neurons by default; ``options`` add to or
+    override any of these."""
     t = {"name": name, "description": description, "family": family, "device": device,
          "platform": platform, "clock_plan": plans[0][0], "pll": plans[0][1],
          "clock_plans": plans, "pll_clocks": [p.clock_hz for p, _ in plans],
-         "resources": resources, "bram_shapes": BRAM18_SHAPES, **_OPEN_FAMILIES[family],
-         "default_neurons": 2500, "bitstream": True, "bitstream_ext": "bit"}
+         "resources": resources, "bram_shapes": BRAM18_SHAPES, "default_neurons": 2500,
+         "bitstream": True, "bitstream_ext": "bit", **_OPEN_FAMILIES[family]}
     t.update(options)
     return t
 
