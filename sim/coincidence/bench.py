@@ -27,23 +27,15 @@ import time
 
 import cocotb
 import numpy as np
-from cocotb.clock import Clock
-from cocotb.triggers import FallingEdge, RisingEdge
+from cocotb.triggers import FallingEdge
 
 from cuneate.hdl.coincidence import CoincidenceConfig
 from cuneate.sim.coincidence.scoreboard import CoincidenceChecker
-from cuneate.sim.engines.bench import bench_config, bench_report, spikes_then_tick
+from cuneate.sim.engines.bench import bench_config, bench_report, spikes_then_tick, start_in_reset
 
 
 async def start_bench(dut):
-    cocotb.start_soon(Clock(dut.clk, 10, unit="ns").start())
-    dut.rst.value = 1
-    for s in (dut.tick, dut.in_valid, dut.in_source, dut.clamp_clear):
-        s.value = 0
-    await RisingEdge(dut.clk)
-    await RisingEdge(dut.clk)
-    await FallingEdge(dut.clk)
-    dut.rst.value = 0
+    await start_in_reset(dut, (dut.tick, dut.in_valid, dut.in_source, dut.clamp_clear))
 
 
 UPDATE_FIELDS = ("v", "u", "xd", "xr", "a", "i", "spike", "clamp")

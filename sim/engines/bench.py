@@ -17,7 +17,8 @@ from cocotb.triggers import FallingEdge, RisingEdge
 
 from .waves import BENCH_CLOCK_NS
 
-__all__ = ["bench_config", "bench_report", "bench_progress", "spikes_then_tick", "CoreBench"]
+__all__ = ["bench_config", "bench_report", "bench_progress", "start_in_reset", "spikes_then_tick",
+           "CoreBench"]
 
 
 def bench_config() -> dict:
@@ -47,6 +48,21 @@ def bench_progress(config: dict, done: int, force: bool = False) -> None:
         _last_progress[0] = now
         with open(path, "w") as f:
             json.dump({"done": int(done)}, f)
+
+
+async def start_in_reset(dut, idle=(), ready=()) -> None:
+    """Start the bench clock, hold reset for two rising edges with the inputs ``idle`` at 0 and
+    ``ready`` at 1, and release it after the next falling edge."""
+    cocotb.start_soon(Clock(dut.clk, BENCH_CLOCK_NS, unit="ns").start())
+    dut.rst.value = 1
+    for s in idle:
+        s.value = 0
+    for s in ready:
+        s.value = 1
+    await RisingEdge(dut.clk)
+    await RisingEdge(dut.clk)
+    await FallingEdge(dut.clk)
+    dut.rst.value = 0
 
 
 async def spikes_then_tick(dut, sources, step, has_inputs: bool) -> None:

@@ -22,23 +22,16 @@ import random
 import time
 
 import cocotb
-from cocotb.clock import Clock
-from cocotb.triggers import FallingEdge, RisingEdge
+from cocotb.triggers import FallingEdge
 
 from cuneate.hdl.fanout import LATENCY, FanoutConfig
-from cuneate.sim.engines.bench import bench_config, bench_report
+from cuneate.sim.engines.bench import bench_config, bench_report, start_in_reset
 from cuneate.sim.fanout.scoreboard import FanoutChecker
 
 
 async def start_bench(dut):
-    cocotb.start_soon(Clock(dut.clk, 10, unit="ns").start())
-    dut.rst.value = 1
-    for s in (dut.ch_wr_valid, dut.ch_wr_addr, dut.ch_wr_data, dut.start, dut.clamp_clear):
-        s.value = 0
-    await RisingEdge(dut.clk)
-    await RisingEdge(dut.clk)
-    await FallingEdge(dut.clk)
-    dut.rst.value = 0
+    await start_in_reset(dut, (dut.ch_wr_valid, dut.ch_wr_addr, dut.ch_wr_data, dut.start,
+                               dut.clamp_clear))
 
 
 class Watch:

@@ -20,11 +20,11 @@ import time
 
 import cocotb
 import numpy as np
-from cocotb.clock import Clock
-from cocotb.triggers import FallingEdge, RisingEdge
+from cocotb.triggers import FallingEdge
 
 from cuneate.hdl.plasticity import CLAMP_KINDS, OPS, PlasticityConfig
-from cuneate.sim.engines.bench import bench_config, bench_progress, bench_report, spikes_then_tick
+from cuneate.sim.engines.bench import (bench_config, bench_progress, bench_report, spikes_then_tick,
+                                       start_in_reset)
 from cuneate.sim.plasticity.scoreboard import CN_FIELDS, SYN_FIELDS, LearningChecker
 
 SIGNED_CN = {"v", "u", "e", "i", "inh"}
@@ -32,16 +32,9 @@ SIGNED_SYN = {"cd", "cr", "l"}
 
 
 async def start_bench(dut):
-    cocotb.start_soon(Clock(dut.clk, 10, unit="ns").start())
-    dut.rst.value = 1
-    for s in (dut.tick, dut.in_valid, dut.in_source, dut.learn, dut.learn_apply,
-              dut.w_wr_valid, dut.w_wr_addr, dut.w_wr_data, dut.w_rd_valid, dut.w_rd_addr,
-              dut.clamp_clear):
-        s.value = 0
-    await RisingEdge(dut.clk)
-    await RisingEdge(dut.clk)
-    await FallingEdge(dut.clk)
-    dut.rst.value = 0
+    await start_in_reset(dut, (dut.tick, dut.in_valid, dut.in_source, dut.learn,
+                               dut.learn_apply, dut.w_wr_valid, dut.w_wr_addr, dut.w_wr_data,
+                               dut.w_rd_valid, dut.w_rd_addr, dut.clamp_clear))
 
 
 class Monitor:
