@@ -31,7 +31,8 @@ from cocotb.triggers import FallingEdge
 
 from cuneate.hdl.coincidence import CoincidenceConfig
 from cuneate.sim.coincidence.scoreboard import CoincidenceChecker
-from cuneate.sim.engines.bench import bench_config, bench_report, spikes_then_tick, start_in_reset
+from cuneate.sim.engines.bench import (bench_config, bench_report, bench_verdict, spikes_then_tick,
+                                       start_in_reset)
 
 
 async def start_bench(dut):
@@ -109,9 +110,7 @@ async def scoreboard(dut):
     report = checker.stats | {"izhikevich": checker.iz.stats.to_dict(), "cycles": cycles,
                               "cycles_per_s": cycles / wall, "spikes": len(stream),
                               "merged": merged, "events": sum(map(len, events_of.values()))}
-    bench_report(report)
-    fails = checker.failures() + extra
-    assert not fails, "; ".join(fails)
+    bench_verdict(report, checker.failures() + extra)
 
 
 @cocotb.test()

@@ -17,8 +17,8 @@ from cocotb.triggers import FallingEdge, RisingEdge
 
 from .waves import BENCH_CLOCK_NS
 
-__all__ = ["bench_config", "bench_report", "bench_progress", "start_in_reset", "spikes_then_tick",
-           "CoreBench"]
+__all__ = ["bench_config", "bench_report", "bench_verdict", "bench_progress", "start_in_reset",
+           "spikes_then_tick", "CoreBench"]
 
 
 def bench_config() -> dict:
@@ -31,6 +31,12 @@ def bench_report(data: dict) -> None:
     """Hand ``data`` back to the caller as the run's report."""
     with open(os.environ["CUNEATE_BENCH_REPORT"], "w") as f:
         json.dump(data, f, default=float)
+
+
+def bench_verdict(report: dict, failures: list) -> None:
+    """Hand back ``report`` (:func:`bench_report`), then fail the bench naming every failure."""
+    bench_report(report)
+    assert not failures, "; ".join(failures)
 
 
 #: the shortest interval between two progress reports of a bench (seconds): a bench may call

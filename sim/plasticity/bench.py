@@ -23,8 +23,8 @@ import numpy as np
 from cocotb.triggers import FallingEdge
 
 from cuneate.hdl.plasticity import CLAMP_KINDS, OPS, PlasticityConfig
-from cuneate.sim.engines.bench import (bench_config, bench_progress, bench_report, spikes_then_tick,
-                                       start_in_reset)
+from cuneate.sim.engines.bench import (bench_config, bench_progress, bench_report, bench_verdict,
+                                       spikes_then_tick, start_in_reset)
 from cuneate.sim.plasticity.scoreboard import CN_FIELDS, SYN_FIELDS, LearningChecker
 
 SIGNED_CN = {"v", "u", "e", "i", "inh"}
@@ -176,9 +176,7 @@ async def scoreboard(dut):
                               "clamp_counts": dict(tw.clamp_counts),
                               "weights_changed": int(np.count_nonzero(
                                   tw.w != cfg.weights_raw))}
-    bench_report(report)
-    fails = checker.failures() + problems
-    assert not fails, "; ".join(fails)
+    bench_verdict(report, checker.failures() + problems)
 
 
 @cocotb.test()
