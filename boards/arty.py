@@ -11,12 +11,15 @@ clamp on LD4-LD6.
 
 from __future__ import annotations
 
+from .platforms import amaranth_board
 from .pll import xilinx_mmcm
 from .top import xilinx_estimate_target
 
-__all__ = ["TARGET", "artix7_target"]
+__all__ = ["TARGET", "artix7_target", "ARTIX7_100T"]
 
 ARTIX7_SHAPES = [(32768, 1), (16384, 2), (8192, 4), (4096, 9), (2048, 18), (1024, 36)]
+#: the XC7A100T's resources (BRAM in 18 Kbit blocks)
+ARTIX7_100T = {"LUT": 63400, "FF": 126800, "BRAM": 270, "DSP": 240}
 
 
 def artix7_target(name: str, description: str, device: str, resources: dict, platform,
@@ -28,12 +31,8 @@ def artix7_target(name: str, description: str, device: str, resources: dict, pla
         pll=xilinx_mmcm(100.0, 1, 10, 25), uart=uart)
 
 
-def platform():
-    from amaranth_boards.arty_a7 import ArtyA7_35Platform
-    return ArtyA7_35Platform()
-
-
 TARGET = artix7_target(
     "arty", "Digilent Arty A7-35T, Xilinx Artix-7: Vivado project and yosys estimate",
-    "XC7A35TICSG324-1L", {"LUT": 20800, "FF": 41600, "BRAM": 100, "DSP": 90}, platform,
+    "XC7A35TICSG324-1L", {"LUT": 20800, "FF": 41600, "BRAM": 100, "DSP": 90},
+    amaranth_board("arty_a7", "ArtyA7_35Platform"),
     "the board's FT2232HQ USB-serial (D10 out, A9 in)")

@@ -8,12 +8,10 @@ gives the PS its DDR and MIO preset when installed.
 
 from __future__ import annotations
 
-from .zynq import zynq_target
+from .zynq import zynq7020_target
 
 __all__ = ["TARGET"]
 
-TARGET = zynq_target(
+TARGET = zynq7020_target(
     "arty_z7", "Digilent Arty Z7-20, Xilinx Zynq-7020: Vivado IP, block design, PYNQ driver "
-    "and yosys estimate", "XC7Z020-1CLG400C", "xc7z020clg400-1",
-    {"LUT": 53200, "FF": 106400, "BRAM": 280, "DSP": 220},
-    "digilentinc.com:arty-z7-20:part0:1.1", "FCLK_CLK0 40 MHz; AXI DMA on HP0, registers on GP0")
+    "and yosys estimate", "digilentinc.com:arty-z7-20:part0:1.1")

@@ -20,7 +20,7 @@ from amaranth import Elaboratable, Module, Signal
 from amaranth.lib import io
 
 from .pll import ecp5_pll
-from .top import ClockPlan
+from .top import open_flow_target, oscillator_plans
 
 __all__ = ["TARGET", "VccioControl", "vccio_duty"]
 
@@ -86,32 +86,15 @@ def platform():
     return p
 
 
-def _plan(mhz, baud, pll):
-    return ClockPlan(osc_hz=30e6, clock_hz=mhz * 1e6, update_hz=16e3, baud=baud), \
-        _with_vccio(pll, mhz * 1e6)
+PLANS = oscillator_plans(30.0, (60, 3e6, _with_vccio(ecp5_pll(30.0, 1, 2, 10), 60e6)),
+                         (80, 2e6, _with_vccio(ecp5_pll(30.0, 3, 8, 8), 80e6)),
+                         (90, 3e6, _with_vccio(ecp5_pll(30.0, 1, 3, 6), 90e6)))
 
-
-PLANS = [_plan(60, 3e6, ecp5_pll(30.0, 1, 2, 10)), _plan(80, 2e6, ecp5_pll(30.0, 3, 8, 8)),
-         _plan(90, 3e6, ecp5_pll(30.0, 1, 3, 6))]
-
-TARGET = {
-    "name": "butterstick",
-    "description": "ButterStick r1.0, Lattice ECP5 LFE5UM5G-85F speed grade 8: bitstream "
-                   "(yosys, nextpnr-ecp5, ecppack); UART through an adapter on SYZYGY 0",
-    "family": "ecp5", "device": "LFE5UM5G-85F-8BG381C",
-    "platform": platform,
-    "clock_plan": PLANS[0][0], "pll": PLANS[0][1],
-    "clock_plans": PLANS, "pll_clocks": [p.clock_hz for p, _ in PLANS],
-    "resources": {"LUT": 83640, "FF": 83640, "BRAM": 208, "DSP": 156},
-    "bram_shapes": [(16384, 1), (8192, 2), (4096, 4), (2048, 9), (1024, 18), (512, 36)],
-    "lutram_bits": 512, "dsp_width": 18,
+TARGET = open_flow_target(
+    "butterstick", "ButterStick r1.0, Lattice ECP5 LFE5UM5G-85F speed grade 8: bitstream "
+    "(yosys, nextpnr-ecp5, ecppack); UART through an adapter on SYZYGY 0", "ecp5",
+    "LFE5UM5G-85F-8BG381C", platform, PLANS, {"LUT": 83640, "FF": 83640, "BRAM": 208, "DSP": 156},
     # board-build fmax bound (MHz) for the sizing: provisional: the ULX3S's filled board build (ECP5 speed grade 6; this board is grade 8) until this board's largest build is measured
-    "link_fmax_mhz": 80.8,
-    "default_neurons": 2500,
-    "status_leds": 0,
-    "nextpnr_cells": {"LUT": "TRELLIS_COMB", "FF": "TRELLIS_FF", "BRAM": "DP16KD",
-                      "DSP": "MULT18X18D"},
-    "uart": "no USB-serial on the board: a 3.3 V USB-UART adapter on SYZYGY port 0, S0 (FPGA "
-            "G2, out) and S1 (FPGA J3, in); the board's gateware powers the bank at 3.3 V",
-    "bitstream": True, "loader_board": None, "bitstream_ext": "bit",
-}
+    link_fmax_mhz=80.8, status_leds=0, loader_board=None,
+    uart="no USB-serial on the board: a 3.3 V USB-UART adapter on SYZYGY port 0, S0 (FPGA "
+         "G2, out) and S1 (FPGA J3, in); the board's gateware powers the bank at 3.3 V")

@@ -30,7 +30,7 @@ from __future__ import annotations
 import sys
 
 from .pll import direct
-from .top import ClockPlan
+from .top import open_flow_target, oscillator_plans
 
 __all__ = ["TARGET", "platform"]
 
@@ -67,26 +67,15 @@ def platform():
     return CrossLinkNXEvnPlatform()
 
 
-PLAN = ClockPlan(osc_hz=12e6, clock_hz=12e6, update_hz=16e3, baud=1.5e6)
-
-TARGET = {
-    "name": "crosslink_nx",
-    "description": "Lattice CrossLink-NX Evaluation Board, LIFCL-40-9BG400C: Verilog and "
-                   "estimate (nextpnr-nexus routes no board clock), cores of 734 at 12 MHz",
-    "family": "nexus", "device": "LIFCL-40-9BG400C",
-    "platform": platform,
-    "clock_plan": PLAN, "pll": direct(), "pll_clocks": [12e6],
-    # LIFCL-40: 39600 LUT4 and flip-flops, 84 EBR of 18 Kbit, 56 18x18 multipliers (the two
-    # 512 Kbit LRAMs are not counted by the sizing)
-    "resources": {"LUT": 39600, "FF": 39600, "BRAM": 84, "DSP": 56},
-    "bram_shapes": [(16384, 1), (8192, 2), (4096, 4), (2048, 9), (1024, 18), (512, 36)],
-    "lutram_bits": 64, "dsp_width": 18,
-    "default_neurons": 734,
-    "tool_env": {"PYTHON": sys.executable},
-    "nextpnr_cells": {"LUT": "OXIDE_COMB", "FF": "OXIDE_FF", "BRAM": "OXIDE_EBR",
-                      "DSP": "MULT18_CORE"},
-    "uart": "the FT2232H's port B (the board's USB port) on F18 (out) and F16 (in), once R15 "
-            "and R17 are fitted and port B is set to UART",
+# LIFCL-40: 39600 LUT4 and flip-flops, 84 EBR of 18 Kbit, 56 18x18 multipliers (the two
+# 512 Kbit LRAMs are not counted by the sizing)
+TARGET = open_flow_target(
+    "crosslink_nx", "Lattice CrossLink-NX Evaluation Board, LIFCL-40-9BG400C: Verilog and "
+    "estimate (nextpnr-nexus routes no board clock), cores of 734 at 12 MHz", "nexus",
+    "LIFCL-40-9BG400C", platform, oscillator_plans(12.0, (12, 1.5e6, direct())),
+    {"LUT": 39600, "FF": 39600, "BRAM": 84, "DSP": 56},
+    default_neurons=734, tool_env={"PYTHON": sys.executable}, loader_board=None,
+    uart="the FT2232H's port B (the board's USB port) on F18 (out) and F16 (in), once R15 "
+         "and R17 are fitted and port B is set to UART",
     # the open flow stops at routing the board clock (the module's text)
-    "bitstream": False, "loader_board": None, "bitstream_ext": "bit",
-}
+    bitstream=False)

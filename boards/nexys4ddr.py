@@ -5,17 +5,12 @@ plan: the 100 MHz oscillator (E3) through an ``MMCME2_BASE`` to 40 MHz (as the A
 
 from __future__ import annotations
 
-from .arty import artix7_target
+from .arty import ARTIX7_100T, artix7_target
+from .platforms import amaranth_board
 
 __all__ = ["TARGET"]
 
-
-def platform():
-    from amaranth_boards.nexys4ddr import Nexys4DDRPlatform
-    return Nexys4DDRPlatform()
-
-
 TARGET = artix7_target(
     "nexys4ddr", "Digilent Nexys 4 DDR, Xilinx Artix-7 100T: Vivado project and yosys estimate",
-    "XC7A100TCSG324-1", {"LUT": 63400, "FF": 126800, "BRAM": 270, "DSP": 240}, platform,
+    "XC7A100TCSG324-1", ARTIX7_100T, amaranth_board("nexys4ddr", "Nexys4DDRPlatform"),
     "the board's FT2232HQ USB-serial (D4 out, C4 in)")

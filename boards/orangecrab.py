@@ -13,7 +13,7 @@ cycles, 32 clocks a bit). Running, overflow and clamp on the RGB LED's red, gree
 from __future__ import annotations
 
 from .pll import ecp5_pll
-from .top import ClockPlan
+from .top import open_flow_target, oscillator_plans
 
 __all__ = ["TARGET"]
 
@@ -30,30 +30,15 @@ def platform():
     return p
 
 
-def _plan(mhz, pll):
-    return ClockPlan(osc_hz=48e6, clock_hz=mhz * 1e6, update_hz=16e3, baud=3e6), pll
+PLANS = oscillator_plans(48.0, (60, 3e6, ecp5_pll(48.0, 4, 5, 10)),
+                         (72, 3e6, ecp5_pll(48.0, 2, 3, 8)),
+                         (96, 3e6, ecp5_pll(48.0, 1, 2, 6)))
 
-
-PLANS = [_plan(60, ecp5_pll(48.0, 4, 5, 10)), _plan(72, ecp5_pll(48.0, 2, 3, 8)),
-         _plan(96, ecp5_pll(48.0, 1, 2, 6))]
-
-TARGET = {
-    "name": "orangecrab",
-    "description": "OrangeCrab r0.2, Lattice ECP5 LFE5U-25F speed grade 8: bitstream (yosys, "
-                   "nextpnr-ecp5, ecppack); UART through an adapter on the Feather header",
-    "family": "ecp5", "device": "LFE5U-25F-8MG285C",
-    "platform": platform,
-    "clock_plan": PLANS[0][0], "pll": PLANS[0][1],
-    "clock_plans": PLANS, "pll_clocks": [p.clock_hz for p, _ in PLANS],
-    "resources": {"LUT": 24288, "FF": 24288, "BRAM": 56, "DSP": 28},
-    "bram_shapes": [(16384, 1), (8192, 2), (4096, 4), (2048, 9), (1024, 18), (512, 36)],
-    "lutram_bits": 512, "dsp_width": 18,
+TARGET = open_flow_target(
+    "orangecrab", "OrangeCrab r0.2, Lattice ECP5 LFE5U-25F speed grade 8: bitstream (yosys, "
+    "nextpnr-ecp5, ecppack); UART through an adapter on the Feather header", "ecp5",
+    "LFE5U-25F-8MG285C", platform, PLANS, {"LUT": 24288, "FF": 24288, "BRAM": 56, "DSP": 28},
     # board-build fmax bound (MHz) for the sizing: provisional: the ULX3S's filled board build (ECP5 speed grade 6; this board is grade 8) until this board's largest build is measured
-    "link_fmax_mhz": 80.8,
-    "default_neurons": 2500,
-    "nextpnr_cells": {"LUT": "TRELLIS_COMB", "FF": "TRELLIS_FF", "BRAM": "DP16KD",
-                      "DSP": "MULT18X18D"},
-    "uart": "no USB-serial on the board: a 3.3 V USB-UART adapter on the Feather header's TX "
-            "(FPGA M18, out) and RX (FPGA N17, in) pins",
-    "bitstream": True, "loader_board": "orangecrab", "bitstream_ext": "bit",
-}
+    link_fmax_mhz=80.8, loader_board="orangecrab",
+    uart="no USB-serial on the board: a 3.3 V USB-UART adapter on the Feather header's TX "
+         "(FPGA M18, out) and RX (FPGA N17, in) pins")

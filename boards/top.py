@@ -18,7 +18,8 @@ from amaranth import ClockDomain, ClockSignal, Elaboratable, Module, ResetSignal
 from ..hdl.izhikevich.config import ConfigError
 from ..hdl.link import LinkedTop
 
-__all__ = ["xilinx_estimate_target", "ClockPlan", "BoardTop", "MAX_BAUD_ERROR"]
+__all__ = ["xilinx_estimate_target", "open_flow_target", "oscillator_plans", "ClockPlan",
+           "BoardTop", "MAX_BAUD_ERROR", "BRAM18_SHAPES"]
 
 
 #: the largest relative error of a board's line rate against the rate asked for (the UART
@@ -120,6 +121,53 @@ def _led_count(platform) -> int:
         except ResourceError:
             return n
         n += 1
+
+
+#: the aspect ratios of an 18 Kbit block RAM (ECP5 DP16KD, Gowin BSRAM, Nexus EBR, Spartan-6)
+BRAM18_SHAPES = [(16384, 1), (8192, 2), (4096, 4), (2048, 9), (1024, 18), (512, 36)]
+
+#: what a family's open flow (yosys, nextpnr) fixes: LUT RAM bits, multiplier width, nextpnr's
+#: cell names for the build report, and whether nextpnr takes the clock as ``--freq``
+_OPEN_FAMILIES = {
+    "ecp5": {"lutram_bits": 512, "dsp_width": 18,
+             "nextpnr_cells": {"LUT": "TRELLIS_COMB", "FF": "TRELLIS_FF", "BRAM": "DP16KD",
+                               "DSP": "MULT18X18D"}},
+    "gowin": {"lutram_bits": 64, "dsp_width": 18, "nextpnr_freq": True, "bitstream_ext": "fs",
+              "nextpnr_cells": {"LUT": "LUT4", "ALU": "ALU", "FF": "DFF", "BRAM": "BSRAM",
+                                "DSP": "MULT18X18"}},
+    # a logic cell holds a LUT4 and a flip-flop: the netlist's counts of each, of the LCs
+    "ice40": {"lutram_bits": 0, "dsp_width": 16, "bitstream_ext": "bin",
+              "bram_shapes": [(256, 16), (512, 8), (1024, 4), (2048, 2)],
+              "nextpnr_cells": {"LC": "ICESTORM_LC", "BRAM": "ICESTORM_RAM",
+                                "DSP": "ICESTORM_DSP"},
+              "netlist_cells": {"per": "ICESTORM_LC",
+                                "count": {"LUT": "SB_LUT4", "FF": "SB_DFF"}}},
+    "nexus": {"lutram_bits": 64, "dsp_width": 18,
+              "nextpnr_cells": {"LUT": "OXIDE_COMB", "FF": "OXIDE_FF", "BRAM": "OXIDE_EBR",
+                                "DSP": "MULT18_CORE"}},
+}
+
+
+def oscillator_plans(osc_mhz: float, *plans) -> list:
+    """``(ClockPlan, pll)`` pairs from ``(clock_mhz, baud, pll)`` triples: an oscillator of
+    ``osc_mhz`` and a 16 kHz sweep."""
+    return [(ClockPlan(osc_hz=osc_mhz * 1e6, clock_hz=mhz * 1e6, update_hz=16e3, baud=baud), pll)
+            for mhz, baud, pll in plans]
+
+
+def open_flow_target(name: str, description: str, family: str, device: str, platform,
+                     plans: list, resources: dict, **options) -> dict:
+    """A target built by the open flow of ``family`` (:data:`_OPEN_FAMILIES`): ``plans`` its
+    :func:`oscillator_plans`, the first the default; 18 Kbit block RAMs and a ``.bit``
+    bitstream unless the family states its own, 2500 neurons by default; ``options`` add to or
+    override any of these."""
+    t = {"name": name, "description": description, "family": family, "device": device,
+         "platform": platform, "clock_plan": plans[0][0], "pll": plans[0][1],
+         "clock_plans": plans, "pll_clocks": [p.clock_hz for p, _ in plans],
+         "resources": resources, "bram_shapes": BRAM18_SHAPES, "default_neurons": 2500,
+         "bitstream": True, "bitstream_ext": "bit", **_OPEN_FAMILIES[family]}
+    t.update(options)
+    return t
 
 
 def xilinx_estimate_target(name: str, description: str, family: str, device: str,

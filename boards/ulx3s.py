@@ -20,9 +20,9 @@ lowest placement seed.
 from __future__ import annotations
 
 from .pll import ecp5_pll
-from .top import ClockPlan
+from .top import open_flow_target, oscillator_plans
 
-__all__ = ["TARGET"]
+__all__ = ["TARGET", "PLANS"]
 
 
 def platform(device: str = "85F"):
@@ -31,42 +31,22 @@ def platform(device: str = "85F"):
             "45F": ulx3s.ULX3S_45F_Platform, "85F": ulx3s.ULX3S_85F_Platform}[device]()
 
 
-TARGET = {
-    "name": "ulx3s",
-    "description": "ULX3S, Lattice ECP5 LFE5U-85F speed grade 6: bitstream (yosys, nextpnr-ecp5, "
-                   "ecppack)",
-    "family": "ecp5",
-    "device": "LFE5U-85F-6BG381C",
-    "platform": platform,
-    "clock_plan": ClockPlan(osc_hz=25e6, clock_hz=60e6, update_hz=16e3, baud=3e6),
-    "pll": ecp5_pll(25.0, 5, 12, 10),
-    "uart_tx_enable": True,
-    "bitstream": True,
-    "loader_board": "ulx3s",
+#: 25 MHz / 5 x 14 (VCO 560 MHz): 4375 cycles per sweep; 3 Mbaud would be 23.3 clocks a bit, so
+#: the 70 MHz plan's line runs at 2 Mbaud (35 clocks)
+PLANS = oscillator_plans(25.0, (60, 3e6, ecp5_pll(25.0, 5, 12, 10)),
+                         (70, 2e6, ecp5_pll(25.0, 5, 14, 8)), (90, 3e6, ecp5_pll(25.0, 5, 18, 6)))
+
+TARGET = open_flow_target(
+    "ulx3s", "ULX3S, Lattice ECP5 LFE5U-85F speed grade 6: bitstream (yosys, nextpnr-ecp5, "
+    "ecppack)", "ecp5", "LFE5U-85F-6BG381C", platform, PLANS,
     # device resources for sizing and percentages (LFE5U-85F)
-    "resources": {"LUT": 83640, "FF": 83640, "BRAM": 208, "DSP": 156},
-    "bram_shapes": [(16384, 1), (8192, 2), (4096, 4), (2048, 9), (1024, 18), (512, 36)],
-    "lutram_bits": 512, "dsp_width": 18,
-    "default_neurons": 2500,
-    "pll_clocks": [60e6, 70e6, 90e6],
-    "clock_plans": [(ClockPlan(osc_hz=25e6, clock_hz=60e6, update_hz=16e3, baud=3e6),
-                     ecp5_pll(25.0, 5, 12, 10)),
-                    # 25 MHz / 5 x 14 (VCO 560 MHz): 4375 cycles per sweep; 3 Mbaud would be
-                    # 23.3 clocks a bit, so this plan's line runs at 2 Mbaud (35 clocks)
-                    (ClockPlan(osc_hz=25e6, clock_hz=70e6, update_hz=16e3, baud=2e6),
-                     ecp5_pll(25.0, 5, 14, 8)),
-                    (ClockPlan(osc_hz=25e6, clock_hz=90e6, update_hz=16e3, baud=3e6),
-                     ecp5_pll(25.0, 5, 18, 6))],
+    {"LUT": 83640, "FF": 83640, "BRAM": 208, "DSP": 156},
+    uart_tx_enable=True, loader_board="ulx3s",
     # fmax (MHz) of one core by pipeline depth: out of context with its block-RAM and
     # multiplier registers packed, lowest of seeds 1-3 (docs/architecture.md); the
     # TRELLIS_COMB cells of one core and of the link
-    "fmax_mhz": {5: 109.4, 8: 134.6, 9: 163.4},
+    fmax_mhz={5: 109.4, 8: 134.6, 9: 163.4},
     # the fmax of a filled board build (the link and 10 cores of 4096 at depth 5, 194 of 208
     # block RAMs, lowest of seeds 1-3): the bound for any build, since the out-of-context core
     # fmax above does not see the block RAMs spread over the filled device
-    "link_fmax_mhz": 80.8,
-    "logic_per_core": 1900, "logic_link": 3000,
-    "nextpnr_cells": {"LUT": "TRELLIS_COMB", "FF": "TRELLIS_FF", "BRAM": "DP16KD",
-                      "DSP": "MULT18X18D"},
-    "bitstream_ext": "bit",
-}
+    link_fmax_mhz=80.8, logic_per_core=1900, logic_link=3000)

@@ -37,7 +37,7 @@ from ..hdl.lib.config import ConfigError
 from ..hdl.lib.regmap import MAP_BYTES, WORD_BITS
 from .top import xilinx_estimate_target
 
-__all__ = ["zynq_target", "write_ip_package", "IP_VENDOR", "IP_LIBRARY", "IP_VERSION",
+__all__ = ["zynq_target", "zynq7020_target", "write_ip_package", "IP_VENDOR", "IP_LIBRARY", "IP_VERSION",
            "SPIRIT", "BD_COMMANDS"]
 
 SPIRIT = "http://www.spiritconsortium.org/XMLSchema/SPIRIT/1685-2009"
@@ -55,6 +55,14 @@ BD_COMMANDS = (
     "connect_bd_intf_net", "assign_bd_address", "validate_bd_design", "save_bd_design",
     "make_wrapper", "get_files", "get_board_parts", "generate_target", "write_hw_platform",
     "reset_run", "current_project", "current_fileset")
+
+
+def zynq7020_target(name: str, description: str, board_part: str) -> dict:
+    """A Zynq-7020 (XC7Z020-1CLG400C) board (:func:`zynq_target`) whose PS clocks the PL from
+    FCLK_CLK0 and moves the data with an AXI DMA on HP0."""
+    return zynq_target(name, description, "XC7Z020-1CLG400C", "xc7z020clg400-1",
+                       {"LUT": 53200, "FF": 106400, "BRAM": 280, "DSP": 220}, board_part,
+                       "FCLK_CLK0 40 MHz; AXI DMA on HP0, registers on GP0")
 
 
 def zynq_target(name: str, description: str, device: str, part: str, resources: dict,

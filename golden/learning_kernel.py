@@ -21,6 +21,8 @@ def _kernel():
         return _KERNEL["run"]
     from numba import njit
 
+    from .kernel import record_presentation
+
     @njit(nogil=True, cache=True)
     def run(ev_t, ev_s, off, n_ticks, win, src, S, w, flags, rule, dt, ks, g, iz, rp,
             snap_every, snaps, steps, counts, sp_p, sp_k, sp_j):
@@ -94,16 +96,9 @@ def _kernel():
                         x[i] = (x[i] + s[i]) * rp[0]
                     for j in range(M):
                         y[j] = (y[j] + hit[j]) * rp[1]
-                for j in range(M):
-                    if hit[j]:
-                        if n_sp == sp_p.shape[0]:
-                            return -1, n_snap, drive_max
-                        sp_p[n_sp] = q
-                        sp_k[n_sp] = k
-                        sp_j[n_sp] = j
-                        n_sp += 1
-                        if k < win:
-                            counts[q, j] += 1
+                n_sp = record_presentation(hit, M, q, k, win, sp_p, sp_k, sp_j, n_sp, counts)
+                if n_sp < 0:
+                    return -1, n_snap, drive_max
             if rule == 1:
                 for j in range(M):
                     tot = 0.0

@@ -50,6 +50,7 @@ from ..flow.synth import synthesize_flows
 from ..flow.verilog import verilog_text, write_block
 from ..izhikevich import multiply1, multiply2, operands, update_state
 from ..lib.datapath import lookup
+from ..lib.fsm import wait_states
 from ..lib.synapses import trace_products, trace_update
 from ..lib.tick import tick_strobe
 from .config import CLAMP_KINDS, CoincidenceConfig
@@ -265,12 +266,7 @@ class CoincidenceDetector(wiring.Component):
                     m.d.sync += src.eq(src + 1)
                 with m.If(vC & lastC):
                     m.next = "U1"
-            with m.State("U1"):
-                m.next = "U2"
-            with m.State("U2"):
-                m.next = "U3"
-            with m.State("U3"):
-                m.next = "U4"
+            wait_states(m, "U1", "U2", "U3", "U4")
             with m.State("U4"):
                 m.d.comb += [st_wr.en.eq(1), st_wr.addr.eq(tgt),
                              st_wr.data.eq(Cat(v_new, u_new, r_xs[0], r_xs[1]))]

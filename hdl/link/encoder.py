@@ -16,6 +16,7 @@ from amaranth.lib import stream, wiring
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
+from ..lib.fsm import wait_states
 from .batcher import batch_layout
 from .codec import (COUNTER_NAMES, CRC_BYTES, CRC_INIT, HEADER_BYTES, MAX_FRAME, MSG_COUNTERS,
                     MSG_SPIKES, SPIKE_HEADER, VERSION)
@@ -143,10 +144,7 @@ class FrameEncoder(wiring.Component):
                     m.next = "SCAN"
             # COBS encoder: find the block [start, p), emit p - start + 1, then the block
             # (code = p - start + 1 kept as p advances: no subtractor before the decisions)
-            with m.State("SCAN"):
-                m.next = "SCAN_RD"
-            with m.State("SCAN_RD"):
-                m.next = "SCAN_CHK"
+            wait_states(m, "SCAN", "SCAN_RD", "SCAN_CHK")
             with m.State("SCAN_CHK"):
                 with m.If((p < L) & (tdat != 0) & (code != 255)):
                     m.d.sync += [p.eq(p + 1), code.eq(code + 1)]

@@ -54,6 +54,7 @@ def gather_constants(cfg) -> tuple:
 if available():
     from numba import njit
 
+    from ...golden.kernel import record_presentation
     from ..izhikevich.kernel import neuron_update as _iz_neuron
     from ..lib.kernel import rq as _rq
     from ..lib.kernel import trace_step
@@ -69,7 +70,6 @@ if available():
         M, K = w.shape
         S = delayed.shape[1]
         lat = sc[S_LAT]
-        cap = sp_p.shape[0]
         n_sp = 0
         s = np.zeros(S, np.bool_)
         late = np.zeros(S, np.bool_)
@@ -134,16 +134,10 @@ if available():
                     spike_words[j] = r[2]
                 totals[5] += c0
                 totals[6] += c1
-                for j in range(M):
-                    if spike_words[j]:
-                        if n_sp == cap:
-                            return -1
-                        sp_p[n_sp] = q
-                        sp_k[n_sp] = k
-                        sp_j[n_sp] = j
-                        n_sp += 1
-                        if k < win:
-                            counts[q, j] += 1
+                n_sp = record_presentation(spike_words, M, q, k, win, sp_p, sp_k, sp_j, n_sp,
+                                           counts)
+                if n_sp < 0:
+                    return -1
                 state[1] += 1
             # the window's end
             for j in range(M):

@@ -9,7 +9,9 @@ from __future__ import annotations
 import numpy as np
 
 from ..izhikevich import IzhikevichTwin
+from ..lib.events import SpikeEvents
 from ..lib.fixed import tally_clamps
+from ..lib.kernel import choose_kernel
 from ..lib.synapses import trace_products, trace_update
 from . import datapath as dp
 from .config import CLAMP_KINDS, CN_CLAMP_KINDS, OPS, SYNAPSE_CLAMP_KINDS, PlasticityConfig
@@ -17,7 +19,7 @@ from .config import CLAMP_KINDS, CN_CLAMP_KINDS, OPS, SYNAPSE_CLAMP_KINDS, Plast
 __all__ = ["PlasticityTwin"]
 
 
-class PlasticityTwin:
+class PlasticityTwin(SpikeEvents):
     """Bit-exact NumPy model of :class:`~cuneate.hdl.plasticity.LearningLayer`.
 
     State: the synapses' ``w``, ``cd``, ``cr``, ``L`` (``(M, K)`` raw), the CNs' ``v``, ``u``,
@@ -33,11 +35,7 @@ class PlasticityTwin:
                  **kwargs):
         from . import kernel as _k
         self.cfg = cfg = config or PlasticityConfig(**kwargs)
-        if kernel is not None and kernel not in self.KERNELS:
-            raise ValueError(f"unknown twin kernel {kernel!r}; known: {', '.join(self.KERNELS)}")
-        if kernel == "numba" and not _k.available():
-            raise ValueError("twin kernel 'numba' needs numba installed")
-        self.kernel = kernel or ("numba" if _k.available() else "stages")
+        self.kernel = choose_kernel(kernel, self.KERNELS)
         self._k = _k
         M, K, S = cfg.n_targets, cfg.n_synapses, cfg.n_sources
         self.iz = IzhikevichTwin(cfg.iz, kernel="stages")
@@ -81,17 +79,6 @@ class PlasticityTwin:
         tally_clamps(self, CLAMP_KINDS, [0] * len(CN_CLAMP_KINDS) + counts)
 
     # --------------------------------------------------------------------------- inputs
-    def spike_in(self, sources) -> None:
-        """Input spike events (source indices) before the next tick."""
-        for s in np.atleast_1d(np.asarray(sources, dtype=np.int64)):
-            if not 0 <= s < self.cfg.n_sources:
-                raise ValueError(f"spike source {int(s)} is outside 0 .. "
-                                 f"{self.cfg.n_sources - 1}")
-            self.events += 1
-            if self.pending[s]:
-                self.merged += 1
-            self.pending[s] = True
-
     def tick(self) -> np.ndarray:
         """Stamp the pending spikes and run one tick; returns the CNs' spike vector."""
         cfg = self.cfg

@@ -29,7 +29,7 @@ from ...hdl.flow.verilog import verilog_text
 from ...hdl.lib.payload import payload_spec
 from ...hdl.lib.regmap import COUNTERS, MAGIC, register, stream_format
 from ..engines.verilator_fast import compile_harness, quit_harness
-from ..host.transport import SpikeBatch, Transport, TransportError, sweep_count
+from ..host.transport import SpikeBatch, Transport, TransportError, queue_write, sweep_count
 
 __all__ = ["AxiTransport", "axi_spec", "AXI_HARNESS"]
 
@@ -168,15 +168,8 @@ class AxiTransport(Transport):
 
     # -- transport interface -----------------------------------------------------------------
     def write_currents(self, tick: int, first: int, raw) -> None:
-        raw = np.asarray(raw, dtype=np.int64).ravel()
-        N = self.info.n_written
-        if tick < self._ticks:
-            raise TransportError(f"axi: write for sweep {tick} but the core has run to sweep "
-                                 f"{self._ticks}: it would be applied late")
-        if first < 0 or first + raw.size > N:
-            raise TransportError(f"axi: write of values {first}..{first + raw.size - 1} "
-                                 f"outside the block's {N}")
-        self._queued.setdefault(int(tick), []).append((int(first), raw))
+        queue_write(self._queued, "axi", tick, self._ticks, first, raw, self.info.n_written,
+                    "values", "block")
 
     def _step_to(self, end: int) -> None:
         """Step the device from the sweep it stands at to ``end`` and take the beats."""

@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 
 __all__ = ["Engine", "BlockEngines", "ENGINES", "BLOCKS", "implements", "block_engines",
            "check_engine", "engine", "engine_for", "implementation", "estimate_seconds",
-           "UnknownEngine"]
+           "refuse_engines_outside", "UnknownEngine"]
 
 
 class UnknownEngine(ValueError):
@@ -155,6 +155,15 @@ def check_engine(block: str, name: str) -> Engine:
         raise UnknownEngine(f"unknown engine {name!r} (the {block} block runs on: "
                             f"{', '.join(supported)})")
     return ENGINES[name]
+
+
+def refuse_engines_outside(engines, ok, where: str, what: str) -> None:
+    """Refuse (one line, naming ``where``) the first of ``engines`` not in ``ok``, the engines
+    that run ``what``."""
+    bad = [e for e in engines if e not in ok]
+    if bad:
+        raise ValueError(f"{where}: engine {bad[0]!r} does not run the {what} (engines that "
+                         f"do: {', '.join(ok)})")
 
 
 def engine(name: str) -> Engine:

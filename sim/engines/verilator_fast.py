@@ -38,6 +38,8 @@ __all__ = ["HARNESS_SOURCE", "HarnessError", "HarnessRun", "compile_harness", "b
            "raw_cycle_rate", "check_dump", "default_build_root"]
 
 HARNESS_SOURCE = Path(__file__).with_name("harness.cpp")
+#: the batch harnesses' shared part, written beside a harness that includes it
+BATCH_HEADER = Path(__file__).with_name("batch_harness.h")
 TOP = "izhikevich_core"
 ARRAY_TOP = "izhikevich_array"
 
@@ -97,8 +99,10 @@ def compile_harness(text: str, top: str, source: Path, defines: dict,
     class ``prefix``, by default ``V<top>``) linked with the C++ harness ``source``, compiled
     with ``-D`` ``defines``; cached under ``build_root`` by the Verilog, the harness and the
     defines; ``includes`` (name -> text) are files the harness includes, written beside the
-    Verilog. Returns its path."""
+    Verilog (with :data:`BATCH_HEADER` when the harness includes it). Returns its path."""
     src = Path(source).read_bytes()
+    if f'"{BATCH_HEADER.name}"'.encode() in src:
+        includes = {BATCH_HEADER.name: BATCH_HEADER.read_text(), **(includes or {})}
     prefix = prefix or f"V{top}"
     flags = " ".join(f"-D{k}={v}" for k, v in sorted(defines.items()))
     extra = "".join(f"{k}\0{v}\0" for k, v in sorted((includes or {}).items()))

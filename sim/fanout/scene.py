@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...hdl.fanout import FanoutConfig
-from ..engines.registry import block_engines, engine_for, implementation
+from ..engines.registry import block_engines, engine_for, implementation, refuse_engines_outside
 from ..host.driver import FbgDriver
 from ..host.transport import Transport
 from .engines import FanoutTransport
@@ -120,11 +120,7 @@ def check_fanout_engines(scene, engines) -> None:
     """Refuse (one line) an engine of ``engines`` that does not run the scene's fan-out."""
     if not scene["hardware"]["fanout"]:
         return
-    ok = fanout_scene_engines()
-    bad = [e for e in engines if e not in ok]
-    if bad:
-        raise ValueError(f"hardware.fanout: engine {bad[0]!r} does not run the channel "
-                         f"fan-out (engines that do: {', '.join(ok)})")
+    refuse_engines_outside(engines, fanout_scene_engines(), "hardware.fanout", "channel fan-out")
 
 
 def fanout_transport(engine: str, plan: ChannelPlan, kw: dict) -> Transport:

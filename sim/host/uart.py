@@ -40,7 +40,8 @@ from ...hdl.link.codec import (COUNTER_NAMES, FRAME_ERRORS, MAX_FRAME, MIN_FRAME
                                current_bytes, encode_frame, parse_counters, parse_spikes,
                                write_message)
 from ...hdl.link.twin import LinkModel
-from .transport import SimulatedSerial, SpikeBatch, Transport, TransportError, sweep_count
+from .transport import (SimulatedSerial, SpikeBatch, Transport, TransportError, queue_write,
+                        sweep_count)
 
 __all__ = ["UartTransport", "ModelSerial", "DEVICE_ERRORS", "HOST_ERRORS", "link_budget",
            "measured_budget", "run_budget", "format_budget", "BUDGET_BAUDS"]
@@ -313,15 +314,7 @@ class UartTransport(Transport):
 
     # -- transport interface -----------------------------------------------------------------
     def write_currents(self, tick: int, first: int, raw) -> None:
-        raw = np.asarray(raw, dtype=np.int64).ravel()
-        N = self.cfg.n_neurons
-        if tick < self._ticks:
-            raise TransportError(f"uart: write for sweep {tick} but the core has run to sweep "
-                                 f"{self._ticks}: it would be applied late")
-        if first < 0 or first + raw.size > N:
-            raise TransportError(f"uart: write of neurons {first}..{first + raw.size - 1} "
-                                 f"outside the core's {N}")
-        self._queued.setdefault(int(tick), []).append((int(first), raw))
+        queue_write(self._queued, "uart", tick, self._ticks, first, raw, self.cfg.n_neurons)
 
     def _flush_writes(self, tick: int):
         """Send the writes for ``tick`` once the device is known to stand at it (its spike

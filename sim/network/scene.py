@@ -46,7 +46,8 @@ from ...hdl.lib.config import ConfigError
 from ...hdl.network import NetworkConfig
 from ...hdl.network.config import SWEEP_EXTRA
 from ..coincidence.engines import run_coincidence
-from ..engines.registry import block_engines, estimate_seconds, implementation
+from ..engines.registry import (block_engines, estimate_seconds, implementation,
+                                refuse_engines_outside)
 
 __all__ = ["CuneateLayer", "layer_engines", "validate_layer", "scene_layer", "layer_network",
            "layer_config", "run_layer", "check_layer_engines", "layer_estimate"]
@@ -291,11 +292,7 @@ def check_layer_engines(scene, engines) -> None:
     """Refuse (one line) an engine of ``engines`` that does not run the scene's cuneate layer."""
     if not any(p["model"] == "cuneate" for p in scene.populations):
         return
-    ok = layer_engines()
-    bad = [e for e in engines if e not in ok]
-    if bad:
-        raise ValueError(f"population model \"cuneate\": engine {bad[0]!r} does not run the "
-                         f"cuneate layer (engines that do: {', '.join(ok)})")
+    refuse_engines_outside(engines, layer_engines(), 'population model "cuneate"', "cuneate layer")
 
 
 def run_layer(engine: str, layer: CuneateLayer, afferent_ms: list, n_ticks: int):

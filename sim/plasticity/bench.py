@@ -20,11 +20,11 @@ import time
 
 import cocotb
 import numpy as np
-from cocotb.clock import Clock
-from cocotb.triggers import FallingEdge, RisingEdge
+from cocotb.triggers import FallingEdge
 
 from cuneate.hdl.plasticity import CLAMP_KINDS, OPS, PlasticityConfig
-from cuneate.sim.engines.bench import bench_config, bench_progress, bench_report
+from cuneate.sim.engines.bench import (bench_config, bench_progress, bench_report, bench_verdict,
+                                       spikes_then_tick, start_in_reset)
 from cuneate.sim.plasticity.scoreboard import CN_FIELDS, SYN_FIELDS, LearningChecker
 
 SIGNED_CN = {"v", "u", "e", "i", "inh"}
@@ -32,16 +32,9 @@ SIGNED_SYN = {"cd", "cr", "l"}
 
 
 async def start_bench(dut):
-    cocotb.start_soon(Clock(dut.clk, 10, unit="ns").start())
-    dut.rst.value = 1
-    for s in (dut.tick, dut.in_valid, dut.in_source, dut.learn, dut.learn_apply,
-              dut.w_wr_valid, dut.w_wr_addr, dut.w_wr_data, dut.w_rd_valid, dut.w_rd_addr,
-              dut.clamp_clear):
-        s.value = 0
-    await RisingEdge(dut.clk)
-    await RisingEdge(dut.clk)
-    await FallingEdge(dut.clk)
-    dut.rst.value = 0
+    await start_in_reset(dut, (dut.tick, dut.in_valid, dut.in_source, dut.learn,
+                               dut.learn_apply, dut.w_wr_valid, dut.w_wr_addr, dut.w_wr_data,
+                               dut.w_rd_valid, dut.w_rd_addr, dut.clamp_clear))
 
 
 class Monitor:
@@ -130,14 +123,9 @@ async def scoreboard(dut):
         for _ in range(rng.randrange(0, 2 * S)):
             if rng.random() < p_event:
                 s = rng.randrange(S)
-                dut.in_valid.value, dut.in_source.value = 1, s
                 merged += s in events
                 events.append(s)
-                await step(dut, mon)
-        dut.in_valid.value = 0
-        dut.tick.value = 1
-        await step(dut, mon)
-        dut.tick.value = 0
+        await spikes_then_tick(dut, events, lambda: step(dut, mon), True)
         await settle(dut, mon)
         syn, cn, seen, cn_seen = mon.take()
         if seen[OPS["integrate"]] != M * K or cn_seen != M:
@@ -188,9 +176,7 @@ async def scoreboard(dut):
                               "clamp_counts": dict(tw.clamp_counts),
                               "weights_changed": int(np.count_nonzero(
                                   tw.w != cfg.weights_raw))}
-    bench_report(report)
-    fails = checker.failures() + problems
-    assert not fails, "; ".join(fails)
+    bench_verdict(report, checker.failures() + problems)
 
 
 @cocotb.test()
@@ -204,13 +190,7 @@ async def engine(dut):
     await start_bench(dut)
     t0 = time.perf_counter()
     for k in range(n_ticks):
-        for s in by_tick.get(k, []):
-            dut.in_valid.value, dut.in_source.value = 1, int(s)
-            await step(dut, mon)
-        dut.in_valid.value = 0
-        dut.tick.value = 1
-        await step(dut, mon)
-        dut.tick.value = 0
+        await spikes_then_tick(dut, by_tick.get(k, []), lambda: step(dut, mon), True)
         await settle(dut, mon)
         if k in windows:
             await window_end(dut, mon, windows[k])

@@ -15,22 +15,7 @@
 //   weights.bin  int64 weights read back through the host port, M * K per snapshot: every
 //                N presentations with --snap N (and always after the last)
 //   summary.json cycles, wall time, cycles/s, counters, clamp counts per kind
-#include <chrono>
-#include <cstdint>
-#include <cstdio>
-#include <cstdlib>
-#include <cstring>
-#include <memory>
-#include <string>
-#include <vector>
-
-#include "Vtop.h"
-#include "verilated.h"
-
-static void die(const char* msg) {
-    std::fprintf(stderr, "harness: %s\n", msg);
-    std::exit(2);
-}
+#include "batch_harness.h"
 
 int main(int argc, char** argv) {
     if (argc < 3) die("usage: harness <schedule.bin> <out_dir> [--snap N]");
@@ -40,47 +25,34 @@ int main(int argc, char** argv) {
         if (!std::strcmp(argv[a], "--snap") && a + 1 < argc) snap = std::atoll(argv[++a]);
         else die("unknown argument");
     }
-    FILE* f = std::fopen(sched_path.c_str(), "rb");
-    if (!f) die("cannot open the schedule");
     int64_t hdr[7];
-    if (std::fread(hdr, sizeof(int64_t), 7, f) != 7) die("short schedule header");
+    FILE* f = open_schedule(sched_path, hdr, 7);
     const int64_t M = hdr[0], K = hdr[1], S = hdr[2], n_pres = hdr[3], n_ticks = hdr[4],
                   win = hdr[5], n_ev = hdr[6];
     if (M < 1 || K < 1 || S < 1 || n_pres < 0 || n_ticks < 0 || win < 0 || n_ev < 0)
         die("bad schedule header");
     std::vector<int64_t> off(n_pres + 1), flags(n_pres), ev_t(n_ev), ev_s(n_ev);
-    if (std::fread(off.data(), 8, n_pres + 1, f) != (size_t)(n_pres + 1) ||
-        std::fread(flags.data(), 8, n_pres, f) != (size_t)n_pres ||
-        std::fread(ev_t.data(), 8, n_ev, f) != (size_t)n_ev ||
-        std::fread(ev_s.data(), 8, n_ev, f) != (size_t)n_ev)
+    if (!read_values(f, off.data(), n_pres + 1) || !read_values(f, flags.data(), n_pres) ||
+        !read_values(f, ev_t.data(), n_ev) || !read_values(f, ev_s.data(), n_ev))
         die("short schedule");
     std::fclose(f);
 
-    auto ctx = std::make_unique<VerilatedContext>();
-    ctx->commandArgs(1, argv);
-    auto top = std::make_unique<Vtop>(ctx.get());
-    long long cycles = 0, stream = 0;
+    Clocked h(argv);
+    Vtop* top = h.top.get();
+    long long stream = 0;
     std::vector<int64_t> spk;
     spk.reserve(1 << 16);
-    FILE* fs = std::fopen((out_dir + "/spikes.bin").c_str(), "wb");
-    FILE* fw = std::fopen((out_dir + "/weights.bin").c_str(), "wb");
-    if (!fs || !fw) die("cannot write the outputs");
+    FILE* fs = open_output(out_dir, "spikes.bin");
+    FILE* fw = open_output(out_dir, "weights.bin");
     int64_t pres = 0, first_tick = 0;
     auto cycle = [&]() {
-        top->clk = 0;
-        top->eval();
-        top->clk = 1;
-        top->eval();
-        ++cycles;
+        h.cycle();
         if (top->spike_valid) {
             spk.push_back(pres);
             spk.push_back((int64_t)top->spike_tick - first_tick);
             spk.push_back((int64_t)top->spike_target);
             ++stream;
-            if (spk.size() >= (3u << 16)) {
-                std::fwrite(spk.data(), 8, spk.size(), fs);
-                spk.clear();
-            }
+            spill(spk, fs, 3u << 16);
         }
     };
     auto settle = [&]() {
@@ -89,7 +61,6 @@ int main(int argc, char** argv) {
         while (top->busy) cycle();
         for (int i = 0; i < 6; ++i) cycle();
     };
-    top->rst = 1;
     top->tick = 0;
     top->in_valid = 0;
     top->learn = 0;
@@ -97,10 +68,7 @@ int main(int argc, char** argv) {
     top->w_wr_valid = 0;
     top->w_rd_valid = 0;
     top->clamp_clear = 0;
-    cycle();
-    cycle();
-    top->rst = 0;
-    cycles = 0;
+    h.leave_reset();
     std::vector<int64_t> wbuf(M * K);
     auto read_weights = [&]() {
         for (int64_t a = 0; a < M * K; ++a) {
@@ -118,9 +86,9 @@ int main(int argc, char** argv) {
             }
             if (!got) die("no response to a weight read");
         }
-        std::fwrite(wbuf.data(), 8, wbuf.size(), fw);
+        std::fwrite(wbuf.data(), sizeof(int64_t), wbuf.size(), fw);
     };
-    auto t0 = std::chrono::steady_clock::now();
+    h.start_clock();
     for (pres = 0; pres < n_pres; ++pres) {
         first_tick = (int64_t)top->tick_count;
         int64_t e = off[pres];
@@ -145,19 +113,18 @@ int main(int argc, char** argv) {
         if (snap > 0 && (pres + 1) % snap == 0 && pres + 1 < n_pres) read_weights();
     }
     read_weights();
-    double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    std::fwrite(spk.data(), 8, spk.size(), fs);
+    double wall = h.wall_s();
+    spill(spk, fs);
     std::fclose(fs);
     std::fclose(fw);
-    FILE* fj = std::fopen((out_dir + "/summary.json").c_str(), "w");
-    if (!fj) die("cannot write summary.json");
+    FILE* fj = open_output(out_dir, "summary.json", "w");
     std::fprintf(fj,
                  "{\"cycles\": %lld, \"wall_s\": %.6f, \"cycles_per_s\": %.1f, "
                  "\"stream_spikes\": %lld, \"tick_count\": %lld, \"learn_count\": %lld, "
                  "\"merged_count\": %lld, \"overrun_count\": %lld, "
                  "\"learn_overrun_count\": %lld, \"hazard_count\": %lld, "
                  "\"clamp_counts\": [%lld, %lld, %lld, %lld, %lld, %lld, %lld, %lld, %lld]}\n",
-                 cycles, wall, wall > 0 ? cycles / wall : 0.0, stream,
+                 h.cycles, wall, wall > 0 ? h.cycles / wall : 0.0, stream,
                  (long long)top->tick_count, (long long)top->learn_count,
                  (long long)top->merged_count, (long long)top->overrun_count,
                  (long long)top->learn_overrun_count, (long long)top->hazard_count,

@@ -6,7 +6,7 @@ import pytest
 from cuneate.golden import coincidence as gcun
 from cuneate.hdl.coincidence import (CoincidenceConfig, CoincidenceDetector, CoincidenceTwin,
                                  ConfigError)
-from cuneate.sim.engines.amaranth import simulate
+from cuneate.sim.engines.amaranth import simulate, spikes_then_tick
 
 DELAYS = [[0, 3, 1, 0], [2, 0, 0, 5], [7, 7, 0, 0]]
 
@@ -72,14 +72,7 @@ def _rtl_run(cfg, schedule, overrun_at=()):
 
     async def tb(ctx):
         for k, events in enumerate(schedule):
-            for s in events:
-                ctx.set(dut.in_valid, 1)
-                ctx.set(dut.in_source, int(s))
-                await ctx.tick()
-            ctx.set(dut.in_valid, 0)
-            ctx.set(dut.tick, 1)
-            await ctx.tick()
-            ctx.set(dut.tick, 0)
+            await spikes_then_tick(ctx, dut, events, ctx.tick, True)
             if k in overrun_at:
                 await ctx.tick()
                 ctx.set(dut.tick, 1)             # a tick while the last one is processed

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from cuneate.hdl.network import AfferentCuneateNetwork, ConfigError, NetworkConfig, NetworkTwin
-from cuneate.sim.engines.amaranth import simulate
+from cuneate.sim.engines.amaranth import simulate, write_currents
 
 DET = dict(n_sources=4, n_targets=3, delays_ticks=[[0, 0, 3, 3], [0, 0, 0, 0], [3, 3, 0, 0]],
            max_delay_ticks=8, weights=[[6.0] * 4] * 3)
@@ -49,13 +49,7 @@ def _rtl(cfg, currents, n_ticks, tick_mode="asap", ready_p=1.0, seed=0):
     rec = {"stream": [], "events": [], "det_rows": [], "go_with_event": 0}
 
     async def tb(ctx):
-        raw = cfg.core.I.to_raw(np.asarray(currents))
-        for i, r in enumerate(raw):
-            ctx.set(dut.i_wr_en, 1)
-            ctx.set(dut.i_wr_addr, i)
-            ctx.set(dut.i_wr_data, int(r))
-            await ctx.tick()
-        ctx.set(dut.i_wr_en, 0)
+        await write_currents(ctx, dut, cfg.core.I.to_raw(np.asarray(currents)))
         cyc = 0
         while True:
             if tick_mode == "asap":
@@ -188,13 +182,7 @@ def test_tick_done_comes_once_every_spike_of_the_tick_is_handed_over():
     rec = {"handed": [], "bad": [], "done": 0, "open_at_done": 0}
 
     async def tb(ctx):
-        raw = cfg.core.I.to_raw(np.asarray(currents))
-        for i, r in enumerate(raw):
-            ctx.set(dut.i_wr_en, 1)
-            ctx.set(dut.i_wr_addr, i)
-            ctx.set(dut.i_wr_data, int(r))
-            await ctx.tick()
-        ctx.set(dut.i_wr_en, 0)
+        await write_currents(ctx, dut, cfg.core.I.to_raw(np.asarray(currents)))
         while rec["done"] < n:
             taken = ctx.get(dut.tick_count)
             ctx.set(dut.tick, int(taken < n and not ctx.get(dut.busy)

@@ -10,6 +10,7 @@ import pytest
 from cuneate.sim import cli
 from cuneate.sim.scenes import run_scene
 from cuneate.sim.scenes.scene import SceneError, example_path, load_scene, parse_scene
+from scene_text import scene_with
 
 SMALL = """
 [scene]
@@ -51,9 +52,7 @@ engines = ["golden", "fixed"]
 
 
 def _scene(text=SMALL, **subs):
-    for a, b in subs.items():
-        text = text.replace(a, b)
-    return parse_scene(text, "t.toml")
+    return scene_with(text, **subs)
 
 
 def test_the_example_is_the_thesis_protocol():

@@ -11,11 +11,11 @@ import pytest
 
 from cuneate.hdl.lif import ConfigError, LifConfig
 from cuneate.hdl.link import LinkConfig
-from cuneate.hdl.link.codec import MAX_FRAME, MSG_SPIKES, FrameDecoder, parse_spikes
+from cuneate.hdl.link.codec import MAX_FRAME, parse_spikes
 from cuneate.sim.host.transport import COUNTERS
 from cuneate.sim.lif.engines import LifProgram, current_runs, engine_config, run_lif
-from cuneate.sim.link.engines import BoardTransport, board_link
-from cuneate.sim.link.faults import Recorder
+from cuneate.sim.link.engines import board_link
+from host_stream import board_spike_frames
 
 # nine neurons at 1 kHz as the skin runs them, in two parameter sets (the brief's excitatory
 # and inhibitory cells: refractory periods of 2 and 1 ticks)
@@ -106,19 +106,8 @@ def test_every_spike_frame_carries_exactly_its_own_sweeps_spikes(ahead):
     n = cur.shape[0]
     ref = run_lif("fixed", CORE, LifProgram(cur))
     want = {(int(round(t / ref.dt_ms)) - 1, i) for i, s in enumerate(ref.spikes_ms) for t in s}
-    rec = Recorder()
-    tr = BoardTransport(corrupt=rec, ahead=ahead)
-    tr.open(CORE)
-    try:
-        for k, runs in current_runs(np.asarray(CORE.I.to_raw(cur), np.int64)).items():
-            for first, raw in runs:
-                tr.write_currents(k, first, raw)
-        tr.run(n)
-        tr.collect()
-        tr.check()
-    finally:
-        tr.close()
-    frames = [m for m in FrameDecoder().feed(bytes(rec.data)) if m.type == MSG_SPIKES]
+    frames = board_spike_frames(CORE, current_runs(np.asarray(CORE.I.to_raw(cur), np.int64)), n,
+                                ahead=ahead)
     covered, got = 0, set()
     for m in frames:
         dropped, sweeps, spikes = parse_spikes(m)

@@ -9,13 +9,13 @@ import pytest
 
 from cuneate.hdl.izhikevich import ConfigError
 from cuneate.hdl.link import LinkConfig
-from cuneate.hdl.link.codec import MAX_FRAME, MSG_SPIKES, FrameDecoder, parse_spikes
+from cuneate.hdl.link.codec import MAX_FRAME, parse_spikes
 from cuneate.hdl.network import REPORT_SETTLE
 from cuneate.sim.coincidence.experiments import RidgeSpec, afferent_currents, network_config
 from cuneate.sim.host.transport import COUNTERS
-from cuneate.sim.link.engines import BoardTransport, board_link
-from cuneate.sim.link.faults import Recorder
+from cuneate.sim.link.engines import board_link
 from cuneate.sim.network.engines import current_runs, current_writes, run_network
+from host_stream import board_spike_frames
 
 SPEC = RidgeSpec(trials_per_angle=1)
 NETWORK = network_config(SPEC)
@@ -83,19 +83,8 @@ def test_every_spike_frame_carries_exactly_its_own_sweeps_spikes():
     N = NETWORK.n_afferents
     ref = run_network("fixed", NETWORK, cur)
     want = {(int(round(t / ref.dt_ms)) - 1, i) for i, s in enumerate(ref.spikes_ms) for t in s}
-    rec = Recorder()
-    tr = BoardTransport(corrupt=rec)
-    tr.open(NETWORK)
-    try:
-        for k, w in current_writes(NETWORK, cur).items():
-            for first, raw in current_runs(w):
-                tr.write_currents(k, first, raw)
-        tr.run(n)
-        tr.collect()
-        tr.check()
-    finally:
-        tr.close()
-    frames = [m for m in FrameDecoder().feed(bytes(rec.data)) if m.type == MSG_SPIKES]
+    runs = {k: current_runs(w) for k, w in current_writes(NETWORK, cur).items()}
+    frames = board_spike_frames(NETWORK, runs, n)
     covered, got, at_batch_end = 0, set(), 0
     for m in frames:
         dropped, sweeps, spikes = parse_spikes(m)
