@@ -96,7 +96,9 @@ def _pairs():
 
 def test_every_block_with_engines_has_a_tiny_run():
     block_engines("izhikevich")                  # every implementation loaded
-    assert set(BLOCKS) == set(RUNS)
+    # the plasticity block's engines run presentation protocols into their own record
+    # (LearningRun): tests/hdl/test_plasticity.py holds each against the twin
+    assert set(BLOCKS) == set(RUNS) | {"plasticity"}
     for block, decl in BLOCKS.items():
         assert decl.engines == tuple(e for e in ENGINES if e in decl.engines)
         for e in decl.engines:
