@@ -30,10 +30,9 @@ from ...hdl.izhikevich.range import search_estimate
 from ...hdl.lib.config import MIN_NEURONS
 from ...hdl.lib.fixed import QFormat
 from .. import progress as prog
-from ..decode import decode_trials, decoded_neurons
 from ..engines.registry import ENGINES as ENGINE_TRAITS
 from ..engines.registry import block_engines, engine_for, estimate_seconds
-from ..engines.waves import FORMATS, Waves
+from ..engines.waves import FORMATS, Waves, wave_files
 from ..fanout.scene import channel_plan, check_fanout_engines, scene_fanout
 from ..host.driver import AfferentEncoding, FbgDriver
 from ..izhikevich.engines import engine_core
@@ -42,7 +41,7 @@ from ..report import format_run as fmt_run
 from ..report import front_end_detail, summary_dict
 from ..report import write_report as write
 from ..spikes import write_spikes
-from .runner import agreement as train_agreement
+from .runner import decode_engines, decoders_agreement, engines_agreement
 from .scene import Scene
 from .stimulus import synthesize
 
@@ -402,16 +401,16 @@ def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None =
         _board_link_budget(scene, ctx, counters, ran_sp, cfg.update_hz)
     timing["engines_s"] = {e: results[e][2] for e in names}
     lay = _run_cuneate_layer(layer, ctx, names, ran_sp, turn, len(traces), timing)
-    decoded = _decode_engines(scene, spikes, neurons, lay, trial_class, classes, timing)
-    agreement = _engines_agreement(spikes, lay, cfg.dt_ms)
-    dec_agree = _decoders_agreement(decoded, scene["decoder"]["tolerance"])
+    decoded = decode_engines(scene, spikes, neurons, lay, trial_class, classes, timing)
+    agreement = engines_agreement(spikes, lay, cfg.dt_ms)
+    dec_agree = decoders_agreement(decoded, scene["decoder"]["tolerance"])
     ran = {"effects": list(effect_counts) if effect_counts else
            ([] if scene["stimulus"]["kind"] == "recorded" else ["strain"]),
            "effect_counts": effect_counts, "blocks": blocks, "engines": list(spikes),
            "front_end": sorted({f"{e.mode}" for e in neurons.encoding}),
            "front_end_detail": front_end_detail(scene, neurons),
            "stimulus": scene["stimulus"]["kind"]} | ({"in_turn": turn.describe()} if turn else {})
-    files = _wave_files(ctx["waves"], list(spikes), cfg.clock_hz)
+    files = wave_files(ctx["waves"], list(spikes), cfg.clock_hz)
     return SceneRun(scene, classes, trial_class, traces, infos, neurons, currents, sat, cfg,
                     cfg.dt_ms, n_ticks, spikes, counters, decoded, agreement, ran, timing,
                     dec_agree, files=files, layer=lay)
@@ -533,76 +532,6 @@ def _run_cuneate_layer(layer, ctx: dict, names: list, ran_sp: dict, turn, n_tria
         lay["spikes"] = {e: turn.unfold(s, layer.per_trial) for e, s in lay["spikes"].items()}
     timing["layer_s"] = time.perf_counter() - t0
     return lay
-
-
-def _decode_engines(scene: Scene, spikes: dict, neurons, lay: dict, trial_class, classes,
-                    timing: dict) -> dict:
-    """Each engine's spikes decoded (the afferent decoders, "tree" and "knn"; none else)."""
-    t0 = time.perf_counter()
-    dec = scene["decoder"]
-    decoded = {}
-    if dec["kind"] in ("tree", "knn"):
-        for e, sp in spikes.items():
-            d_sp, d_trial, d_index = decoded_neurons(dec["population"], sp, neurons, lay, e)
-            noun = scene.trial_noun
-            with prog.step(f"decoding {e} ({dec['kind']} on {dec['features']} features of "
-                           f"{dec['population'] or 'every afferent'}, {noun}-grouped"
-                           + (" and published protocols)" if dec["features"] == "isi"
-                              else ")")):
-                decoded[e] = decode_trials(
-                    d_sp, d_trial, d_index, trial_class, classes, dec["kind"],
-                    dec["features"], dec["cv_folds"], dec["max_depth"], dec["neighbours"],
-                    scene["scene"]["seed"], dec["window_ms"], dec["decision"],
-                    dec["permutations"], noun=noun)
-    timing["decode_s"] = time.perf_counter() - t0
-    return decoded
-
-
-def _engines_agreement(spikes: dict, lay: dict, dt_ms: float) -> dict:
-    """Each engine's spike trains against the reference ("fixed" if it ran, else the first
-    engine), the afferents' and the cuneate layer's."""
-    agreement = {}
-    names = list(spikes)
-    ref = "fixed" if "fixed" in spikes else None
-    for e in names:
-        if e == ref:
-            continue
-        other = ref or names[0]
-        if e == other:
-            continue
-        agreement[f"{e} vs {other}"] = train_agreement(spikes[e], spikes[other], dt_ms)
-        if lay:
-            agreement[f"{lay['population']}: {e} vs {other}"] = train_agreement(
-                lay["spikes"][e], lay["spikes"][other], dt_ms)
-    return agreement
-
-
-def _decoders_agreement(decoded: dict, tol: float) -> dict:
-    """Each engine's decoding accuracy against golden's, within ``decoder.tolerance``."""
-    dec_agree = {}
-    if "golden" in decoded:
-        for e, d in decoded.items():
-            g = decoded["golden"]
-            if e == "golden" or d.accuracy is None or g.accuracy is None:
-                continue
-            diff = abs(d.accuracy - g.accuracy)
-            dec_agree[f"{e} vs golden"] = {"difference": diff, "tolerance": tol,
-                                           "within": bool(diff <= tol)}
-    return dec_agree
-
-
-def _wave_files(wv, names: list, clock_hz: float) -> dict:
-    """The waveform dumps the run's engines wrote (``{}`` without a waveform window)."""
-    files = {}
-    if wv:
-        from ..engines.waves import FORMATS, time_axis
-        wrote = [e for e in names if e in FORMATS]
-        files["waves"] = wv.to_dict() | {
-            "files": {e: {"dump": str(wv.path(e)), "gtkw": str(wv.path(e).with_suffix(".gtkw")),
-                          "time_axis": time_axis(e, clock_hz)} for e in wrote},
-            "note": "" if wrote else " (no engine of this run writes waveforms: amaranth, "
-                                     "icarus or verilator do)"}
-    return files
 
 
 # --------------------------------------------------------------------------- results

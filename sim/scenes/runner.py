@@ -1,20 +1,25 @@
 """Running a scene of any kind, and what every kind compares between engines.
 
 :func:`run_scene` looks the scene's kind up in the registry (:mod:`cuneate.sim.scenes.registry`)
-and runs it with the kind's module; :func:`agreement` compares two engines' spike trains.
+and runs it with the kind's module; :func:`agreement` compares two engines' spike trains,
+:func:`engines_agreement` every engine's with the reference's, :func:`decode_engines` decodes
+each engine's spikes and :func:`decoders_agreement` holds their accuracies to golden's.
 """
 
 from __future__ import annotations
 
+import time
 from pathlib import Path
 
 import numpy as np
 
 from ...golden import budget, metrics
 from .. import progress as prog
+from ..decode import decode_trials, decoded_neurons
 from .registry import kind_module
 
-__all__ = ["run_scene", "agreement", "kind_of", "check_budget"]
+__all__ = ["run_scene", "agreement", "kind_of", "check_budget", "decode_engines",
+           "engines_agreement", "decoders_agreement"]
 
 
 def kind_of(run_or_scene) -> str:
@@ -78,3 +83,59 @@ def agreement(a: list, b: list, dt_ms: float) -> dict:
             "mean_victor_purpura": float(np.mean(vp)) if vp else 0.0,
             "victor_purpura_q_per_s": 1000.0 * metrics.VP_Q_PER_MS,
             "fraction_within_1_tick": float(np.mean(within)) if within else None}
+
+
+def engines_agreement(spikes: dict, lay: dict, dt_ms: float) -> dict:
+    """Each engine's spike trains against the reference ("fixed" if it ran, else the first
+    engine), the afferents' and the cuneate layer's."""
+    out = {}
+    names = list(spikes)
+    ref = "fixed" if "fixed" in spikes else None
+    for e in names:
+        if e == ref:
+            continue
+        other = ref or names[0]
+        if e == other:
+            continue
+        out[f"{e} vs {other}"] = agreement(spikes[e], spikes[other], dt_ms)
+        if lay:
+            out[f"{lay['population']}: {e} vs {other}"] = agreement(
+                lay["spikes"][e], lay["spikes"][other], dt_ms)
+    return out
+
+
+def decoders_agreement(decoded: dict, tol: float) -> dict:
+    """Each engine's decoding accuracy against golden's, within ``decoder.tolerance``."""
+    dec_agree = {}
+    if "golden" in decoded:
+        for e, d in decoded.items():
+            g = decoded["golden"]
+            if e == "golden" or d.accuracy is None or g.accuracy is None:
+                continue
+            diff = abs(d.accuracy - g.accuracy)
+            dec_agree[f"{e} vs golden"] = {"difference": diff, "tolerance": tol,
+                                           "within": bool(diff <= tol)}
+    return dec_agree
+
+
+def decode_engines(scene, spikes: dict, neurons, lay: dict, trial_class, classes,
+                   timing: dict) -> dict:
+    """Each engine's spikes decoded (the afferent decoders, "tree" and "knn"; none else)."""
+    t0 = time.perf_counter()
+    dec = scene["decoder"]
+    decoded = {}
+    if dec["kind"] in ("tree", "knn"):
+        for e, sp in spikes.items():
+            d_sp, d_trial, d_index = decoded_neurons(dec["population"], sp, neurons, lay, e)
+            noun = scene.trial_noun
+            with prog.step(f"decoding {e} ({dec['kind']} on {dec['features']} features of "
+                           f"{dec['population'] or 'every afferent'}, {noun}-grouped"
+                           + (" and published protocols)" if dec["features"] == "isi"
+                              else ")")):
+                decoded[e] = decode_trials(
+                    d_sp, d_trial, d_index, trial_class, classes, dec["kind"],
+                    dec["features"], dec["cv_folds"], dec["max_depth"], dec["neighbours"],
+                    scene["scene"]["seed"], dec["window_ms"], dec["decision"],
+                    dec["permutations"], noun=noun)
+    timing["decode_s"] = time.perf_counter() - t0
+    return decoded
