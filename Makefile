@@ -20,14 +20,14 @@ demo: setup
 test: setup
 	mkdir -p build
 	$(VENV)/bin/python -m pytest -n $(JOBS) -m "not long and not release and not benchmark and not crosscheck" \
-	    --junitxml=build/junit.xml $(PYTEST_ARGS)
+	    --durations=30 --junitxml=build/junit.xml $(PYTEST_ARGS)
 	$(VENV)/bin/python scripts/check_simulators_ran.py build/junit.xml
 
 # Place and route, long runs and sweeps: real instances of each long kind.
 test-long: setup
 	mkdir -p build
 	$(VENV)/bin/python -m pytest -n $(JOBS) -m "long and not release and not crosscheck" \
-	    --junitxml=build/junit-long.xml $(PYTEST_ARGS)
+	    --durations=30 --junitxml=build/junit-long.xml $(PYTEST_ARGS)
 
 # Outside CI: what only re-measures (multi-seed fmax, the filled-device builds, proofs at sizes
 # already proven). Run it when you change those areas; its last result is recorded under

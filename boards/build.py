@@ -5,7 +5,10 @@ The amaranth build script is executed in the build directory (the yowasp tools s
 current directory) with ``$YOSYS``, ``$NEXTPNR_ECP5``/``$NEXTPNR_ICE40`` and
 ``$ECPPACK``/``$ICEPACK`` pointing at the yowasp entry points. nextpnr runs with
 ``--timing-allow-fail`` so that a missed clock is reported rather than fatal; the report says
-whether timing met the requested clock.
+whether timing met the requested clock. ECP5 builds pack the flip-flops around the
+multipliers and after the block RAMs into the MULT18X18D and DP16KD registers between yosys
+and nextpnr (:func:`~cuneate.hdl.flow.ecp5_pack.packing_platform`; ``pack_registers=False``
+builds without); the report's ``register_packing`` says what moved.
 """
 
 from __future__ import annotations
@@ -16,11 +19,12 @@ import time
 from collections import Counter
 from pathlib import Path
 
+from ..hdl.flow.ecp5_pack import packing_platform
 from ..hdl.flow.synth import cell_counts, nextpnr_summary, run_yosys
 from ..hdl.flow.tools import ToolError, yowasp_env
 from ..hdl.flow.verilog import verilog_text
 from ..hdl.lib.config import ConfigError
-from ..hdl.link import LinkedCore
+from ..hdl.link import LinkedTop
 from .scene import scene_request
 from .sizing import size_core
 from .targets import TARGETS
@@ -99,7 +103,7 @@ def build_target(board: str, out: Path, n_neurons: int | None = None,
                  clock_hz: float | None = None, update_hz: float | None = None,
                  bitstream: bool = True, seed: int = 1, name: str | None = None,
                  pipeline_stages: int | None = None, scene=None,
-                 baud: float | None = None) -> dict:
+                 baud: float | None = None, pack_registers: bool = True) -> dict:
     """Size the core for ``board``, write its Verilog (``<name>.v`` of the linked core, the
     board top's ``<name>.debug.v``), build the bitstream when the board supports it and
     ``bitstream`` is true, and write ``<name>.report.json`` / ``.txt``. Returns the report.
@@ -107,7 +111,8 @@ def build_target(board: str, out: Path, n_neurons: int | None = None,
     scene's blocks, sized to it (:func:`scene_request`), and the report gives the link's
     budget for it. Raises :class:`~cuneate.hdl.izhikevich.config.ConfigError` for a core the
     device cannot hold or a scene the link cannot carry in real time, and
-    :class:`BuildError` for a failed tool."""
+    :class:`BuildError` for a failed tool. ``pack_registers`` (ECP5 bitstreams): the
+    register packing between yosys and nextpnr (:mod:`~cuneate.hdl.flow.ecp5_pack`)."""
     from ..sim import progress as prog
     from ..sim.provenance import provenance
     if board not in TARGETS:
@@ -117,15 +122,14 @@ def build_target(board: str, out: Path, n_neurons: int | None = None,
     request = scene_request(scene, target, baud=baud) if scene is not None else None
     if request is not None and request.kind != "core":
         sized = size_blocks(target, request, clock_hz, pipeline_stages, baud)
-        make_top = sized["top"]
     else:
         sized = _size_cores(target, request, n_neurons, clock_hz, update_hz, depth, baud)
-        make_top = (lambda: LinkedCore(sized["link"]))
     lcfg = sized["link"]
     name = name or f"cuneate_{board}"
     out = Path(out).resolve()
     out.mkdir(parents=True, exist_ok=True)
-    (out / f"{name}_core.v").write_text(verilog_text(make_top(), f"{name}_core"))
+    if not target.get("zynq"):          # a Zynq board's block is behind the AXI face (below)
+        (out / f"{name}_core.v").write_text(verilog_text(LinkedTop(lcfg), f"{name}_core"))
     report = {"board": board, "device": target["device"], "name": name,
               "neurons": request.neurons if request is not None else lcfg.n_neurons,
               "requested_neurons": sized["requested_neurons"],
@@ -133,33 +137,69 @@ def build_target(board: str, out: Path, n_neurons: int | None = None,
               "pipeline_stages": getattr(lcfg.core, "pipeline_stages", None),
               "core": lcfg.core.to_kwargs(), "link": lcfg.to_dict(),
               "clock_plan": sized["plan"], "estimate": sized["estimate"],
-              "bitstream": None, "seed": seed}
+              "bitstream": None, "seed": seed, "register_packing": None}
     if request is not None:
         report["scene"] = request.describe()
     if target.get("bitstream") and bitstream:
         from .top import BoardTop
         platform = target["platform"]()
-        top = BoardTop(make_top(), sized["pll"], target.get("uart_tx_enable", False))
+        packing = pack_registers and target["family"] == "ecp5"
+        if packing:
+            platform = packing_platform(platform)
+        top = BoardTop(lcfg, sized["pll"], target.get("uart_tx_enable", False),
+                       target.get("status_leds"))
         opts = f"--report {name}.nextpnr.json --timing-allow-fail --seed {seed}"
+        if target.get("nextpnr_freq"):
+            # nextpnr does not derive the clock through this family's PLL: the plan's clock
+            # is its target for every clock (the oscillator's net only feeds the PLL)
+            opts += f" --freq {lcfg.core.clock_hz / 1e6:g}"
         plan = platform.prepare(top, name=name, nextpnr_opts=opts,
                                 **target.get("prepare_opts", {}))
         t0 = time.monotonic()
         try:
             with prog.step(f"{board}: synthesis, place and route, bitstream (yosys, "
                            f"nextpnr-{target['family']}; minutes)"):
-                plan.execute_local(out, env=yowasp_env(target["family"]))
+                plan.execute_local(out, env=yowasp_env(target["family"])
+                                   | target.get("tool_env", {}))
         except Exception as exc:       # the script's failure: name the log to read
             raise BuildError(f"{board} build failed ({exc.__class__.__name__}); see the logs "
                              f"in {out}") from None
         report["build_seconds"] = round(time.monotonic() - t0, 1)
+        if packing:
+            report["register_packing"] = json.loads((out / f"{name}.pack.json").read_text())
         bit = out / f"{name}.{target['bitstream_ext']}"
         report["bitstream"] = str(bit) if bit.exists() else None
         report["place_route"] = _nextpnr_report(out / f"{name}.nextpnr.json", target,
                                                 lcfg.core.clock_hz, out / f"{name}.json")
         report["timing_met"] = report["place_route"]["timing_met"]
+    if target.get("vivado"):
+        from .top import BoardTop
+        from .vivado import check_tcl, write_project
+        top = BoardTop(lcfg, sized["pll"], False, target.get("status_leds"))
+        files = write_project(target["platform"](), top, out, name)
+        try:
+            check = check_tcl(out, name)
+        except FileNotFoundError as exc:
+            check = {"ok": None, "error": str(exc)}
+        report["vivado_project"] = {"files": files, "tcl_check": check,
+                                    "not_run": "Vivado (synthesis, place and route, "
+                                               "bitstream)"}
+    if target.get("zynq"):
+        from .vivado import check_tcl
+        from .zynq import BD_COMMANDS, write_ip_package
+        ip = write_ip_package(target, lcfg.payload, out, name)
+        try:
+            ip["tcl_check"] = check_tcl(Path(ip["dir"]), f"{name}_bd", BD_COMMANDS)
+        except FileNotFoundError as exc:
+            ip["tcl_check"] = {"ok": None, "error": str(exc)}
+        report["vivado_ip"] = ip
     if target.get("synth_family") and bitstream:
         with prog.step(f"{board}: yosys synth_{target['synth_family']} resource estimate"):
-            report["yosys_estimate"] = _yosys_estimate(out, f"{name}_core", target)
+            if target.get("zynq"):          # the packaged block behind the AXI face
+                report["yosys_estimate"] = _yosys_estimate(Path(ip["dir"]) / "src", name,
+                                                           target)
+            else:
+                report["yosys_estimate"] = _yosys_estimate(out, f"{name}_core", target)
     report["provenance"] = provenance()
     (out / f"{name}.report.json").write_text(json.dumps(report, indent=2, sort_keys=True)
                                              + "\n")
@@ -169,7 +209,7 @@ def build_target(board: str, out: Path, n_neurons: int | None = None,
 
 def _size_cores(target: dict, request, n_neurons, clock_hz, update_hz, depth: dict,
                 baud=None) -> dict:
-    """The Izhikevich core(s) behind the link (:class:`LinkedCore`): ``n_neurons``, or the
+    """The Izhikevich core(s) behind the link (:class:`LinkedTop`): ``n_neurons``, or the
     afferents of an afferent scene's ``request``."""
     neuron_sets = None
     if request is not None:
@@ -208,7 +248,7 @@ def size_blocks(target: dict, request, clock_hz, pipeline_stages, baud=None) -> 
                        f"{fmax / 1e6:.4g} MHz fmax (fmax limit)")
             continue
         try:
-            lcfg, make_top = request.linked(plan, target, pipeline_stages=depth)
+            lcfg = request.linked(plan, target, pipeline_stages=depth)
         except ConfigError as exc:
             why.append(f"at {plan.clock_hz / 1e6:g} MHz: {exc}")
             continue
@@ -227,7 +267,7 @@ def size_blocks(target: dict, request, clock_hz, pipeline_stages, baud=None) -> 
             if over is not None:
                 why.append(f"at {plan.clock_hz / 1e6:g} MHz: {over}")
                 continue
-        return {"link": lcfg, "top": make_top, "pll": pll, "estimate": est,
+        return {"link": lcfg, "pll": pll, "estimate": est,
                 "requested_neurons": request.neurons,
                 "plan": {"osc_hz": plan.osc_hz, "clock_hz": plan.clock_hz,
                          "update_hz": plan.update_hz, "baud": plan.line_baud,
@@ -263,10 +303,19 @@ def format_report(r: dict) -> str:
                  f"{r['core']['n_neurons']}"
                  + (f", pipeline depth {depth}" if depth else "")
                  + f"), {r['core']['clock_hz'] / 1e6:g} MHz, "
-                 f"{r['core']['update_hz'] / 1e3:g} kHz updates, UART "
-                 + (f"{r['link']['baud'] / 1e6:g} Mbaud" if r['link']['baud'] >= 1e6
-                    else f"{r['link']['baud']:.0f} baud ({r['link']['clocks_per_bit']} clocks "
-                         f"a bit)"))
+                 f"{r['core']['update_hz'] / 1e3:g} kHz updates, "
+                 + ("behind the AXI face (no UART)" if "vivado_ip" in r else
+                    "UART " + (f"{r['link']['baud'] / 1e6:g} Mbaud" if r['link']['baud'] >= 1e6
+                               else f"{r['link']['baud']:.0f} baud "
+                                    f"({r['link']['clocks_per_bit']} clocks a bit)")))
+    ip = r.get("vivado_ip")
+    if ip:
+        chk = ip["tcl_check"]
+        lines.append(f"Vivado IP {ip['vlnv']} in {ip['dir']}: component.xml (IP-XACT 1685-2009), "
+                     f"block design {Path(ip['dir']).name[:-3]}_bd.tcl (tclsh with stubs: "
+                     f"{'ok' if chk.get('ok') else chk.get('error') or chk.get('missing')}), "
+                     f"PYNQ driver; streams {ip['streams']['write_tdata_bits']}-bit writes, "
+                     f"{ip['streams']['spike_tdata_bits']}-bit spikes; not run: {ip['not_run']}")
     sc = r.get("scene")
     if sc:
         lines.append("scene blocks: " + "; ".join(_block_line(b) for b in sc["blocks"]))
@@ -280,7 +329,8 @@ def format_report(r: dict) -> str:
         lines += [f"  {x}" for x in sc["link_budget_lines"]]
     est = r.get("estimate") or {}
     if est:
-        lines.append("estimate: " + ", ".join(f"{k} {v}" for k, v in est.items()))
+        lines.append(("sizing estimate (with the UART link's buffers): " if ip else "estimate: ")
+                     + ", ".join(f"{k} {v}" for k, v in est.items()))
     ye = r.get("yosys_estimate")
     if ye:
         lines.append("yosys synth_xilinx estimate (BRAM in 18 Kbit blocks):")
@@ -295,6 +345,12 @@ def format_report(r: dict) -> str:
             lines += [f"fmax of clock {clk}: {_mhz(f)} MHz" for clk, f in per_clock.items()]
         lines.append(f"fmax {_mhz(pr['min_fmax_mhz'])} MHz, requested {pr['requested_mhz']:g} MHz: "
                      f"timing {'met' if pr['timing_met'] else 'NOT met'}")
+    rp = r.get("register_packing")
+    if rp:
+        lines.append(f"registers packed: {rp['inputs_packed']} multiplier input ports and "
+                     f"{rp['outputs_packed']} outputs of {rp['multipliers']} MULT18X18D, "
+                     f"{rp['ram_outputs_packed']} read ports of {rp['block_rams']} DP16KD "
+                     f"({rp['ffs_removed'] + rp['ram_ffs_removed']} flip-flops removed)")
     if r.get("bitstream"):
         lines.append(f"bitstream {r['bitstream']}")
     return "\n".join(lines) + "\n"

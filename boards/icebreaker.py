@@ -1,17 +1,19 @@
 """iCEBreaker (Lattice iCE40UP5K): bitstream with yosys (``synth_ice40 -dsp``), nextpnr-ice40
 and icepack, for a core sized to the device: 16-bit multiplier operands (one SB_MAC16 per
-product), 16-bit saturating link counters, 700 neurons by default at 12 MHz straight from the
-oscillator (750 cycles per 16 kHz sweep; 8 clocks per bit at 1.5 Mbaud). The measured fmax of
+product), 16-bit saturating link counters, 734 neurons by default (the largest the sizing
+accepts) at 12 MHz straight from the oscillator (750 cycles per 16 kHz sweep; 8 clocks per bit
+at 1.5 Mbaud). The measured fmax of
 this datapath on the UP5K (about 15 MHz) rules out the 24 MHz PLL plan (``_pll``: DIVR 0,
 DIVF 63, DIVQ 5) that would allow 1484 neurons.
 """
 
 from __future__ import annotations
 
-from amaranth import Const, Instance, Signal
-from amaranth.lib import io
+from amaranth import Instance, Signal
 
-from .top import ClockPlan
+from .platforms import amaranth_board
+from .pll import direct
+from .top import open_flow_target, oscillator_plans
 
 __all__ = ["TARGET"]
 
@@ -28,41 +30,16 @@ def _pll(m, platform):
     return clk, locked
 
 
-def _direct(m, platform):
-    clk12 = platform.request(platform.default_clk, dir="-")
-    m.submodules.clk_buf = buf = io.Buffer("i", clk12)
-    return buf.i, Const(1)
-
-
-def platform():
-    from amaranth_boards.icebreaker import ICEBreakerPlatform
-    return ICEBreakerPlatform()
-
-
-TARGET = {
-    "name": "icebreaker",
-    "description": "iCEBreaker, Lattice iCE40UP5K: bitstream (yosys, nextpnr-ice40, icepack), "
-                   "16-bit operands, 700 neurons at 12 MHz",
-    "family": "ice40", "device": "iCE40UP5K-SG48",
-    "platform": platform,
+TARGET = open_flow_target(
+    "icebreaker", "iCEBreaker, Lattice iCE40UP5K: bitstream (yosys, nextpnr-ice40, icepack), "
+    "16-bit operands, 734 neurons at 12 MHz", "ice40", "iCE40UP5K-SG48",
+    amaranth_board("icebreaker", "ICEBreakerPlatform"),
     # the 16-bit datapath places at about 15 MHz on the UP5K: the 12 MHz oscillator clocks the
     # core directly (750 cycles per 16 kHz sweep, 8 clocks per bit at 1.5 Mbaud); the 24 MHz
     # PLL plan (_pll) stays available for a faster datapath
-    "clock_plan": ClockPlan(osc_hz=12e6, clock_hz=12e6, update_hz=16e3, baud=1.5e6),
-    "pll": _direct,
-    "pll_clocks": [12e6],
-    "resources": {"LUT": 5280, "FF": 5280, "BRAM": 30, "DSP": 8},
-    "bram_shapes": [(256, 16), (512, 8), (1024, 4), (2048, 2)],
-    "lutram_bits": 0, "dsp_width": 16,
-    "default_neurons": 700,
-    "core_defaults": {"operand_width": 16},
+    oscillator_plans(12.0, (12, 1.5e6, direct())), {"LUT": 5280, "FF": 5280, "BRAM": 30, "DSP": 8},
+    default_neurons=734, core_defaults={"operand_width": 16},
     # 16-bit saturating error counters and a 256-byte receive FIFO: logic cells are the limit
-    "link_defaults": {"counter_width": 16, "rx_fifo_depth": 256},
-    "nextpnr_cells": {"LC": "ICESTORM_LC", "BRAM": "ICESTORM_RAM", "DSP": "ICESTORM_DSP"},
-    # a logic cell holds a LUT4 and a flip-flop: the netlist's counts of each, of the LCs
-    "netlist_cells": {"per": "ICESTORM_LC", "count": {"LUT": "SB_LUT4", "FF": "SB_DFF"}},
-    "bitstream": True,
-    "loader_board": "ice40_generic",
-    "prepare_opts": {"synth_opts": "-dsp"},      # map the products to SB_MAC16
-    "bitstream_ext": "bin",
-}
+    link_defaults={"counter_width": 16, "rx_fifo_depth": 256},
+    loader_board="ice40_generic",
+    prepare_opts={"synth_opts": "-dsp"})      # map the products to SB_MAC16

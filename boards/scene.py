@@ -1,25 +1,24 @@
 """What a board built for a scene holds (``cuneate build BOARD SCENE``): the scene's blocks
 behind the host link, sized to it, and the link's budget for streaming it in real time.
 
-By scene kind:
+Every board top is :class:`~cuneate.hdl.link.LinkedTop`: the scene's blocks' payload behind
+the UART face. By scene kind:
 
 ``afferent``
-    the Izhikevich afferents behind the link (:class:`~cuneate.hdl.link.LinkedCore`, an array of
-    cores when one does not hold them); with the channel fan-out (``hardware.fanout``) one core
-    fed by the fan-out (:class:`~cuneate.hdl.link.LinkedFanoutCore`): the host streams the
-    channels, the table on chip makes the afferents' currents. ``hardware.board_trials`` (for
+    the Izhikevich afferents behind the link (an array of cores when one does not hold them);
+    with the channel fan-out (``hardware.fanout``) one core fed by the fan-out: the host
+    streams the channels, the table on chip makes the afferents' currents. ``hardware.board_trials`` (for
     instance 1 for the whole hand: one hand's gratings) builds the board for that many of the
     scene's trials (the engines lay every trial side by side on one core; a physical hand
     presents one grasp at a time); ``cuneate stream`` plays the trials in turn on it
     (:mod:`cuneate.sim.scenes.in_turn`). A scene with a cuneate layer
     (:mod:`cuneate.sim.network.scene`) gets the afferent -> cuneate network instead of the
     bare core, its detector holding the
-    layer of the trials on board (:class:`~cuneate.hdl.link.LinkedFanoutNetwork` behind the
-    fan-out, :class:`~cuneate.hdl.link.LinkedNetwork` without it);
+    layer of the trials on board (behind the fan-out when the scene streams channels);
 ``ridge``
-    the afferent -> cuneate network (:class:`~cuneate.hdl.link.LinkedNetwork`);
+    the afferent -> cuneate network;
 ``skin``
-    the LIF core (:class:`~cuneate.hdl.link.LinkedLif`).
+    the LIF core.
 
 The budget is the worst case: every value the host writes changes every sample (a ridge
 scene's currents every sweep), every neuron fires at 200 Hz. A scene the board's link cannot
@@ -46,8 +45,9 @@ class BoardRequest:
     """A scene's board: ``kind`` (``core``, ``fanout``, ``network``, ``lif``), the neurons the
     board holds, the blocks (one description each), the link's budget, and for ``core`` the core
     keywords the sizing takes (:func:`~cuneate.boards.sizing.size_core`); for the other kinds
-    ``linked(plan, target, pipeline_stages)`` returns ``(link config, board top factory)`` at a
-    clock plan. ``update_hz``: the blocks' sweep rate."""
+    ``linked(plan, target, pipeline_stages)`` returns the link configuration at a clock plan
+    (:func:`~cuneate.boards.sizing.target_link`; the board top is its
+    :class:`~cuneate.hdl.link.LinkedTop`). ``update_hz``: the blocks' sweep rate."""
 
     kind: str
     neurons: int
@@ -115,23 +115,6 @@ def scene_request(scene, target: dict, real_time: bool = True,
                                                                          real_time, baud)
 
 
-def _sweep_holds(plan, busy: int, what: str) -> None:
-    """Refuse a sweep too short for ``busy`` cycles of a block's work and the link's idle
-    cycles."""
-    from ..hdl.link.config import LINK_IDLE_CYCLES
-    if plan.cycles_per_tick < busy + LINK_IDLE_CYCLES:
-        raise ConfigError(f"a sweep of {plan.cycles_per_tick} cycles cannot hold {what}'s "
-                          f"{busy} cycles of work and the link's {LINK_IDLE_CYCLES} idle ones")
-
-
-def _link(target: dict, core, plan, **kw):
-    from .sizing import target_link
-    from ..hdl.link import LinkConfig
-    base = target_link(target, core, plan)
-    return LinkConfig(core, clocks_per_bit=base.clocks_per_bit, batch_sweeps=base.batch_sweeps,
-                      **target.get("link_defaults", {}), **kw)
-
-
 def _afferent(scene, target: dict, real_time: bool = True,
               baud: float | None = None) -> BoardRequest:
     from ..sim.scenes.afferent import build_neurons, n_driven, scene_core
@@ -163,18 +146,16 @@ def _afferent(scene, target: dict, real_time: bool = True,
                   len(neurons), real_time, baud)
 
     def linked(plan, target, pipeline_stages=5):
-        from .sizing import target_core
+        from .sizing import target_core, target_link
         from ..hdl.fanout import FanoutConfig
-        from ..hdl.link import LinkedFanoutCore
-        from ..sim.izhikevich.engines import MIN_NEURONS
+        from ..hdl.lib.config import MIN_NEURONS
         n = max(len(neurons), MIN_NEURONS)      # a core's fewest neurons, as the engines pad
         kw = {k: v for k, v in core.items() if k != "update_hz"}
         kw["neuron_sets"] = list(core["neuron_sets"]) + [0] * (n - len(neurons))
         kw["pipeline_stages"] = pipeline_stages
         cfg = target_core(target, kw, n, plan.clock_hz, plan.update_hz)
-        f = FanoutConfig.from_kwargs(fan.to_kwargs() | {"clock_hz": plan.clock_hz}).padded(n)
-        lcfg = _link(target, cfg, plan, fanout=f)
-        return lcfg, lambda: LinkedFanoutCore(lcfg)
+        f = FanoutConfig.from_kwargs(fan.to_kwargs() | {"clock_hz": plan.clock_hz})
+        return target_link(target, cfg, plan, fanout=f)
     req.linked = linked
     return req
 
@@ -184,7 +165,7 @@ def _layered(scene, target: dict, neurons, core: dict, trials: dict, block: dict
     """The board of an afferent scene with a cuneate layer: the network of the trials on board
     (their afferents on one core, their cuneate neurons on the detector), behind the channel
     fan-out when the scene streams channels."""
-    from ..sim.izhikevich.engines import MIN_NEURONS, engine_core
+    from ..sim.izhikevich.engines import engine_core
     from ..sim.network.scene import layer_network, scene_layer
     k, fs = trials["trials_on_board"], scene["sensor"]["sample_rate_hz"]
     base = engine_core(core, len(neurons))          # the engines' core: the layer's sources
@@ -216,26 +197,18 @@ def _layered(scene, target: dict, neurons, core: dict, trials: dict, block: dict
                       n_spikes, real_time, baud)
 
     def linked(plan, target, pipeline_stages=None):
+        from .sizing import target_link
         from ..hdl.fanout import FanoutConfig
         from ..hdl.izhikevich.config import PIPELINE_DEPTH
-        from ..hdl.link import LinkedFanoutNetwork, LinkedNetwork
-        from ..hdl.network import REPORT_SETTLE
         if pipeline_stages not in (None, PIPELINE_DEPTH):
             raise ConfigError(f"the network's afferent core has {PIPELINE_DEPTH} stages "
                               f"(--pipeline-stages sets a bare core's)")
         net = layer_network(base, layer.delays, layer.weights, layer.preset,
                             clock_hz=plan.clock_hz,
                             cuneate_fifo_depth=max(16, layer.n_targets))
-        busy = net.cycles_needed + REPORT_SETTLE + n_spikes
-        if fan is None:
-            _sweep_holds(plan, busy, "the network")
-            lcfg = _link(target, net.core, plan, spike_ids=n_spikes)
-            return lcfg, lambda: LinkedNetwork(net, lcfg)
-        f = FanoutConfig.from_kwargs(fan.to_kwargs() | {"clock_hz": plan.clock_hz}).padded(
-            max(len(neurons), MIN_NEURONS))
-        _sweep_holds(plan, busy + f.n_channels + f.cycles_per_run, "the fan-out and the network")
-        lcfg = _link(target, net.core, plan, spike_ids=n_spikes, fanout=f)
-        return lcfg, lambda: LinkedFanoutNetwork(net, lcfg)
+        f = None if fan is None else \
+            FanoutConfig.from_kwargs(fan.to_kwargs() | {"clock_hz": plan.clock_hz})
+        return target_link(target, net, plan, fanout=f)
     req.linked = linked
     return req
 
@@ -253,7 +226,6 @@ def _scene_fanout(scene, k: int):
 
 def _ridge(scene, target: dict, real_time: bool = True,
            baud: float | None = None) -> BoardRequest:
-    from ..hdl.network import NetworkConfig
     from ..sim.coincidence.experiments import network_config
     from ..sim.scenes.ridge import spec_of
     net = network_config(spec_of(scene))
@@ -267,21 +239,14 @@ def _ridge(scene, target: dict, real_time: bool = True,
                   n_spikes, real_time, baud)
 
     def linked(plan, target, pipeline_stages=None):
-        from ..hdl.link import LinkedNetwork
-        from ..hdl.network import REPORT_SETTLE
-        cfg = NetworkConfig(**(net.to_kwargs() | {"clock_hz": plan.clock_hz}))
-        # a tick's work, the report's settling and one spike of every neuron drained (as the
-        # board engine sizes it: board_network_config), and the link's idle cycles
-        _sweep_holds(plan, cfg.cycles_needed + REPORT_SETTLE + n_spikes, "the network")
-        lcfg = _link(target, cfg.core, plan, spike_ids=n_spikes)
-        return lcfg, lambda: LinkedNetwork(cfg, lcfg)
+        from .sizing import target_link
+        return target_link(target, net, plan)
     req.linked = linked
     return req
 
 
 def _skin(scene, target: dict, real_time: bool = True,
           baud: float | None = None) -> BoardRequest:
-    from ..hdl.lif import LifConfig
     from ..sim.lif.engines import engine_config
     from ..sim.scenes.skin import core_keywords
     rows, cols = scene["sensor"]["grid"]
@@ -294,10 +259,7 @@ def _skin(scene, target: dict, real_time: bool = True,
     _check_budget(req, target, "currents", n, base.I.width, hw["update_hz"], n, real_time, baud)
 
     def linked(plan, target, pipeline_stages=None):
-        from ..hdl.link import LinkedLif
-        _sweep_holds(plan, base.n_neurons, "the LIF core")
-        cfg = LifConfig.from_kwargs(base.to_kwargs() | {"clock_hz": plan.clock_hz})
-        lcfg = _link(target, cfg, plan)
-        return lcfg, lambda: LinkedLif(lcfg)
+        from .sizing import target_link
+        return target_link(target, base, plan)
     req.linked = linked
     return req

@@ -19,7 +19,8 @@ import math
 
 from ..hdl.izhikevich.config import ConfigError, IzhikevichConfig
 from ..hdl.lib.banked import bank_shape
-from ..hdl.link.config import LINK_IDLE_CYCLES, LinkConfig
+from ..hdl.lib.payload import payload_spec
+from ..hdl.link.config import LINK_IDLE_CYCLES, LinkConfig, sweep_cycles
 from ..hdl.link.codec import HEADER_BYTES, MAX_FRAME
 from .top import ClockPlan
 
@@ -52,9 +53,8 @@ def _core_memories(cfg: IzhikevichConfig, n: int) -> list:
 
 
 def _link_memories(lcfg: LinkConfig) -> list:
-    cfg = lcfg.core
     return [(lcfg.rx_fifo_depth, 8), (2 * lcfg.batch_capacity, 24), (MAX_FRAME, 8),
-            ((MAX_FRAME - HEADER_BYTES - 2) // lcfg.current_bytes + 1, cfg.I.width)]
+            ((MAX_FRAME - HEADER_BYTES - 2) // lcfg.current_bytes + 1, lcfg.current_width)]
 
 
 def count_blocks(mems, target: dict) -> int:
@@ -198,13 +198,21 @@ def _width_config(target: dict, **core_kwargs) -> IzhikevichConfig:
     return target_core(target, core_kwargs, 16, 16 * 16e3, 16e3)
 
 
-def target_link(target: dict, core: IzhikevichConfig, plan: ClockPlan,
-                 n_cores: int = 1, neuron_sets=None) -> LinkConfig:
-    """The link for ``n_cores`` cores of ``core`` at ``plan`` (one spike batch a millisecond;
-    ``neuron_sets``: each global id's initial parameter set, for an array)."""
-    return LinkConfig(core, clocks_per_bit=plan.clocks_per_bit,
-                      batch_sweeps=max(1, int(round(plan.update_hz / 1000))), n_cores=n_cores,
-                      neuron_sets=neuron_sets, **target.get("link_defaults", {}))
+def target_link(target: dict, block, plan: ClockPlan, **spec) -> LinkConfig:
+    """The link for ``block`` (a configuration or payload spec, with the spec's options: an
+    array's ``n_cores`` and ``neuron_sets``, a ``fanout`` in front) at ``plan``: the block at
+    the plan's clock, its ticks from the link, one spike batch a millisecond; refused (one
+    line) when a sweep cannot hold the block's work and the link's idle cycles
+    (:func:`~cuneate.hdl.link.config.sweep_cycles`)."""
+    p = payload_spec(block, **spec)          # its work a tick does not depend on the clock
+    need = sweep_cycles(p.info)
+    if plan.cycles_per_tick < need:
+        raise ConfigError(f"a sweep of {plan.cycles_per_tick} cycles cannot hold the "
+                          f"{p.info.block}'s {p.info.busy_cycles} cycles of work and the "
+                          f"link's {LINK_IDLE_CYCLES} idle ones")
+    return LinkConfig(p.retimed(plan.clock_hz), clocks_per_bit=plan.clocks_per_bit,
+                      batch_sweeps=max(1, int(round(plan.update_hz / 1000))),
+                      **target.get("link_defaults", {}))
 
 
 def size_plan(target: dict, N: int, pipeline_stages: int = 5, plans=None, **core_kwargs):
@@ -268,7 +276,7 @@ def size_core(target: dict, n_neurons: int | None = None, clock_hz: float | None
             core_kwargs["neuron_sets"] = sets
     core = target_core(target, core_kwargs, n, plan.clock_hz, plan.update_hz)
     lcfg = target_link(target, core, plan, n_cores=k,
-                       neuron_sets=sets if sets is not None and k > 1 else None)
+                       **({"neuron_sets": sets} if sets is not None and k > 1 else {}))
     return {"link": lcfg, "estimate": estimate(lcfg, target), "pll": pll,
             "requested_neurons": N, "pipeline_stages": depth,
             "plan": {"osc_hz": plan.osc_hz, "clock_hz": plan.clock_hz,

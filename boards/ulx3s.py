@@ -19,36 +19,10 @@ lowest placement seed.
 
 from __future__ import annotations
 
-from amaranth import Instance, Signal
+from .pll import ecp5_pll
+from .top import open_flow_target, oscillator_plans
 
-from .top import ClockPlan
-
-__all__ = ["TARGET"]
-
-
-def _pll(clki_div: int, clkfb_div: int, clkop_div: int, out_mhz: float):
-    def build(m, platform):
-        clk25 = platform.request(platform.default_clk, dir="-")
-        clk, locked = Signal(name="pll_clk"), Signal(name="pll_locked")
-        m.submodules.pll = Instance(
-            "EHXPLLL",
-            a_FREQUENCY_PIN_CLKI="25", a_FREQUENCY_PIN_CLKOP=f"{out_mhz:g}",
-            a_ICP_CURRENT="12", a_LPF_RESISTOR="8", a_MFG_ENABLE_FILTEROPAMP="1",
-            a_MFG_GMCREF_SEL="2",
-            p_PLLRST_ENA="DISABLED", p_INTFB_WAKE="DISABLED", p_STDBY_ENABLE="DISABLED",
-            p_DPHASE_SOURCE="DISABLED", p_OUTDIVIDER_MUXA="DIVA", p_OUTDIVIDER_MUXB="DIVB",
-            p_OUTDIVIDER_MUXC="DIVC", p_OUTDIVIDER_MUXD="DIVD",
-            p_CLKI_DIV=clki_div, p_CLKOP_ENABLE="ENABLED", p_CLKOP_DIV=clkop_div,
-            p_CLKOP_CPHASE=clkop_div // 2 - 1, p_CLKOP_FPHASE=0, p_FEEDBK_PATH="CLKOP",
-            p_CLKFB_DIV=clkfb_div,
-            i_RST=0, i_STDBY=0, i_CLKI=clk25.io, o_CLKOP=clk, i_CLKFB=clk,
-            i_PHASESEL0=0, i_PHASESEL1=0, i_PHASEDIR=1, i_PHASESTEP=1, i_PHASELOADREG=1,
-            i_PLLWAKESYNC=0, i_ENCLKOP=0, o_LOCK=locked)
-        # no constraint on the output net (the netlist renames it): nextpnr derives the clock's
-        # from the oscillator's through these dividers, and the build report checks it against
-        # the plan's clock
-        return clk, locked
-    return build
+__all__ = ["TARGET", "PLANS"]
 
 
 def platform(device: str = "85F"):
@@ -57,42 +31,22 @@ def platform(device: str = "85F"):
             "45F": ulx3s.ULX3S_45F_Platform, "85F": ulx3s.ULX3S_85F_Platform}[device]()
 
 
-TARGET = {
-    "name": "ulx3s",
-    "description": "ULX3S, Lattice ECP5 LFE5U-85F speed grade 6: bitstream (yosys, nextpnr-ecp5, "
-                   "ecppack)",
-    "family": "ecp5",
-    "device": "LFE5U-85F-6BG381C",
-    "platform": platform,
-    "clock_plan": ClockPlan(osc_hz=25e6, clock_hz=60e6, update_hz=16e3, baud=3e6),
-    "pll": _pll(5, 12, 10, 60.0),
-    "uart_tx_enable": True,
-    "bitstream": True,
-    "loader_board": "ulx3s",
+#: 25 MHz / 5 x 14 (VCO 560 MHz): 4375 cycles per sweep; 3 Mbaud would be 23.3 clocks a bit, so
+#: the 70 MHz plan's line runs at 2 Mbaud (35 clocks)
+PLANS = oscillator_plans(25.0, (60, 3e6, ecp5_pll(25.0, 5, 12, 10)),
+                         (70, 2e6, ecp5_pll(25.0, 5, 14, 8)), (90, 3e6, ecp5_pll(25.0, 5, 18, 6)))
+
+TARGET = open_flow_target(
+    "ulx3s", "ULX3S, Lattice ECP5 LFE5U-85F speed grade 6: bitstream (yosys, nextpnr-ecp5, "
+    "ecppack)", "ecp5", "LFE5U-85F-6BG381C", platform, PLANS,
     # device resources for sizing and percentages (LFE5U-85F)
-    "resources": {"LUT": 83640, "FF": 83640, "BRAM": 208, "DSP": 156},
-    "bram_shapes": [(16384, 1), (8192, 2), (4096, 4), (2048, 9), (1024, 18), (512, 36)],
-    "lutram_bits": 512, "dsp_width": 18,
-    "default_neurons": 2500,
-    "pll_clocks": [60e6, 70e6, 90e6],
-    "clock_plans": [(ClockPlan(osc_hz=25e6, clock_hz=60e6, update_hz=16e3, baud=3e6),
-                     _pll(5, 12, 10, 60.0)),
-                    # 25 MHz / 5 x 14 (VCO 560 MHz): 4375 cycles per sweep; 3 Mbaud would be
-                    # 23.3 clocks a bit, so this plan's line runs at 2 Mbaud (35 clocks)
-                    (ClockPlan(osc_hz=25e6, clock_hz=70e6, update_hz=16e3, baud=2e6),
-                     _pll(5, 14, 8, 70.0)),
-                    (ClockPlan(osc_hz=25e6, clock_hz=90e6, update_hz=16e3, baud=3e6),
-                     _pll(5, 18, 6, 90.0))],
+    {"LUT": 83640, "FF": 83640, "BRAM": 208, "DSP": 156},
+    uart_tx_enable=True, loader_board="ulx3s",
     # fmax (MHz) of one core by pipeline depth: out of context with its block-RAM and
     # multiplier registers packed, lowest of seeds 1-3 (docs/architecture.md); the
     # TRELLIS_COMB cells of one core and of the link
-    "fmax_mhz": {5: 109.4, 8: 134.6, 9: 163.4},
+    fmax_mhz={5: 109.4, 8: 134.6, 9: 163.4},
     # the fmax of a filled board build (the link and 10 cores of 4096 at depth 5, 194 of 208
     # block RAMs, lowest of seeds 1-3): the bound for any build, since the out-of-context core
     # fmax above does not see the block RAMs spread over the filled device
-    "link_fmax_mhz": 80.8,
-    "logic_per_core": 1900, "logic_link": 3000,
-    "nextpnr_cells": {"LUT": "TRELLIS_COMB", "FF": "TRELLIS_FF", "BRAM": "DP16KD",
-                      "DSP": "MULT18X18D"},
-    "bitstream_ext": "bit",
-}
+    link_fmax_mhz=80.8, logic_per_core=1900, logic_link=3000)

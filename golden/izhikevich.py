@@ -47,6 +47,7 @@ import numpy as np
 from .kernel import available as kernel_available
 
 __all__ = [
+    "spike_times", "spike_ticks",
     "A", "B", "C", "V_TH", "V0", "SCHEMES", "DEFAULT_DT_MS", "STATE_BOUND",
     "IzhikevichParams", "PRESETS", "DivergenceError", "IzhikevichResult", "NeuronParams",
     "to_params", "resolve_param_sets", "resolve_params", "derivatives", "step", "simulate", "current_schedule", "group_spikes",
@@ -335,6 +336,18 @@ def current_schedule(current, n_steps: int, n_neurons: int, dt_ms: float,
     raise ValueError(f"input current must be 0-, 1- or 2-D, got {arr.ndim}-D")
 
 
+def spike_times(ticks, dt_ms: float) -> np.ndarray:
+    """The spike times (ms) of the updates of ticks (steps) ``ticks``: ``(k + 1) dt``, in the
+    order given (the one tick-to-time conversion of every model, twin and engine)."""
+    return (np.asarray(ticks, dtype=np.float64) + 1) * dt_ms
+
+
+def spike_ticks(times_ms, dt_ms: float) -> np.ndarray:
+    """The ticks whose updates made the spikes at ``times_ms`` (the inverse of
+    :func:`spike_times`)."""
+    return np.rint(np.asarray(times_ms, dtype=np.float64) / dt_ms).astype(np.int64) - 1
+
+
 def group_spikes(hit_steps, hit_neurons, n_neurons: int, dt_ms: float | None = None):
     """Group parallel chunks of (update index, neuron index) into one sorted array per neuron
     (views of one array). With ``dt_ms``, also the spike times ``(k + 1) dt`` per neuron:
@@ -349,7 +362,7 @@ def group_spikes(hit_steps, hit_neurons, n_neurons: int, dt_ms: float | None = N
     steps = [ks[a:b] for a, b in edges]
     if dt_ms is None:
         return steps
-    times = (ks + 1) * dt_ms
+    times = spike_times(ks, dt_ms)
     return steps, [times[a:b] for a, b in edges]
 
 

@@ -13,8 +13,8 @@ from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
-__all__ = ["available", "record", "split_over_threads", "thread_slices", "by_neuron", "BLOCK",
-           "open_block", "close_block"]
+__all__ = ["available", "record", "record_presentation", "split_over_threads", "thread_slices",
+           "by_neuron", "BLOCK", "open_block", "close_block"]
 
 #: neurons a compiled loop keeps in L1 and takes through every step of a run at a time: their
 #: state and inputs in one scratch array of rows ``BLOCK`` long (constant row offsets, so the
@@ -48,6 +48,23 @@ if numba is not None:
                         spk_n[n_spk] = offset + i
                         n_spk += 1
         return n_spk
+
+    @njit(nogil=True, cache=True, inline="always")
+    def record_presentation(hit, M, q, k, win, sp_p, sp_k, sp_j, n_sp, counts):
+        """Append the targets ``j < M`` with ``hit[j]`` as spikes of presentation ``q``'s tick
+        ``k`` to ``(sp_p, sp_k, sp_j)`` from position ``n_sp``, counting those of ticks before
+        ``win`` in ``counts[q, j]``; returns the new count, -1 once the buffers are full."""
+        for j in range(M):
+            if hit[j]:
+                if n_sp == sp_p.shape[0]:
+                    return -1
+                sp_p[n_sp] = q
+                sp_k[n_sp] = k
+                sp_j[n_sp] = j
+                n_sp += 1
+                if k < win:
+                    counts[q, j] += 1
+        return n_sp
 
     @njit(nogil=True, cache=True, inline="always")
     def open_block(w, flags, v, u, lo, n):

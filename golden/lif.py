@@ -65,7 +65,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .validate import finite_array, number
-from .izhikevich import current_schedule, group_spikes
+from .izhikevich import current_schedule, group_spikes, spike_times
 from .synapses import (AMPA, GABA, LATENCY_MS, NORMALIZATIONS, DiffExpSynapse, ExpTraces,
                        diff_exp_kernel, diff_exp_peak_time, synaptic_current)
 
@@ -257,7 +257,7 @@ class _Membranes:
     def result(self, n_steps, v_tr, i_exc=None, i_inh=None) -> LIFResult:
         steps = group_spikes(self.hit_steps, self.hit_neurons, self.n)
         return LIFResult(dt_ms=self.dt, scheme=self.scheme, n_steps=n_steps,
-                         spikes_ms=[(s + 1) * self.dt for s in steps], spike_steps=steps,
+                         spikes_ms=[spike_times(s, self.dt) for s in steps], spike_steps=steps,
                          v=self.v, v_trace=v_tr, i_exc_trace=i_exc, i_inh_trace=i_inh)
 
 

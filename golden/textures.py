@@ -34,6 +34,17 @@ flat, fine roughness of nanometres: the ridges seen through it lie below its sur
 (a fractal of about ten micrometres); three polymers differing by friction - latex (high, static
 well above kinetic: stick-slip), bioskin (medium), the low-friction cover of a game controller
 (a fine matte roughness).
+
+Shapes (:data:`SHAPES`, family ``shape``): raised features of height ``A`` on a flat plastic
+plate, each with a plateau and smooth edges (``e`` = 0.2 mm): at a distance ``d`` from a
+feature's centre line (bars) or centre (dots) of half-width ``r = f/2`` (``f`` =
+``feature_mm``)::
+
+    h = A s((r + e/2 - d) / e),    s(x) = smoothstep(clip(x, 0, 1))
+
+``bars``: parallel bars across ``u`` (the ``angle_deg`` coordinates as for textiles) every
+``period_u_mm``; ``dots``: a square lattice of pitches ``period_u_mm`` x ``period_v_mm`` in
+``(u, v)``. The specimen draws the pattern's phase and its roughness as for textiles.
 """
 
 from __future__ import annotations
@@ -45,7 +56,7 @@ import numpy as np
 
 from .validate import number
 
-__all__ = ["Texture", "TEXTURES", "Surface", "surface", "fractal_field", "texture"]
+__all__ = ["Texture", "TEXTURES", "SHAPES", "Surface", "surface", "fractal_field", "texture"]
 
 
 @dataclass(frozen=True)
@@ -70,17 +81,22 @@ class Texture:
     rough_hi_mm: float = 0.05           # lambda_hi, shortest wavelength of r
     rough_lo_mm: float = 4.0            # lambda_lo, longest wavelength of r
     specimen: str = ""                  # whose random draws it takes ("": its own name)
+    shape: str = ""                     # shapes: "bars" or "dots"
+    feature_mm: float = 1.0             # f: a bar's width or a dot's diameter
 
     def __post_init__(self):
-        if self.family not in ("textile", "glass", "paper", "polymer"):
-            raise ValueError(f"{self.name}: family must be textile, glass, paper or polymer, "
-                             f"got {self.family!r}")
+        if self.family not in ("textile", "glass", "paper", "polymer", "shape"):
+            raise ValueError(f"{self.name}: family must be textile, glass, paper, polymer or "
+                             f"shape, got {self.family!r}")
+        if (self.family == "shape") != (self.shape in ("bars", "dots")):
+            raise ValueError(f"{self.name}: a shape is bars or dots (and only a shape has one), "
+                             f"got family {self.family!r}, shape {self.shape!r}")
         number(self.mu_static, f"{self.name}: mu_static", positive=True)
         number(self.mu_kinetic, f"{self.name}: mu_kinetic", positive=True)
         if self.mu_kinetic > self.mu_static:
             raise ValueError(f"{self.name}: mu_kinetic ({self.mu_kinetic:g}) exceeds mu_static "
                              f"({self.mu_static:g})")
-        for k in ("period_u_mm", "period_v_mm", "rough_hi_mm", "rough_lo_mm"):
+        for k in ("period_u_mm", "period_v_mm", "rough_hi_mm", "rough_lo_mm", "feature_mm"):
             number(getattr(self, k), f"{self.name}: {k}", positive=True)
         for k in ("amplitude_um", "motif_um", "rough_rms_um", "motif_period_mm"):
             number(getattr(self, k), f"{self.name}: {k}", nonneg=True)
@@ -126,16 +142,29 @@ TEXTURES: dict[str, Texture] = {t.name: t for t in (
 )}
 
 
+#: Two shapes (the learning protocol's, brief section 5b: three textures and two shapes): raised
+#: bars at 45 degrees to the sliding direction (the ridge experiment's angle) and a lattice of
+#: dots (Braille-like), on a smooth plastic plate.
+SHAPES: dict[str, Texture] = {t.name: t for t in (
+    Texture("bars", "shape", 0.50, 0.46, amplitude_um=150, period_u_mm=4.0, angle_deg=45,
+            feature_mm=1.0, rough_rms_um=0.5, rough_hi_mm=0.05, rough_lo_mm=1.0, shape="bars"),
+    Texture("dots", "shape", 0.50, 0.46, amplitude_um=200, period_u_mm=3.0, period_v_mm=3.0,
+            feature_mm=1.4, rough_rms_um=0.5, rough_hi_mm=0.05, rough_lo_mm=1.0,
+            shape="dots"),
+)}
+
+
 def texture(spec) -> Texture:
-    """A texture from its name (one of :data:`TEXTURES`) or from a mapping: ``name`` and
-    ``like`` (a texture of :data:`TEXTURES` whose parameters it starts from), then any
-    parameter of :class:`Texture` to change."""
+    """A texture (or shape) from its name (one of :data:`TEXTURES` or :data:`SHAPES`) or from a
+    mapping: ``name`` and ``like`` (a texture or shape whose parameters it starts from), then
+    any parameter of :class:`Texture` to change."""
     if isinstance(spec, Texture):
         return spec
     if isinstance(spec, str):
-        if spec not in TEXTURES:
-            raise ValueError(f"unknown texture {spec!r} (known: {', '.join(TEXTURES)})")
-        return TEXTURES[spec]
+        known = TEXTURES | SHAPES
+        if spec not in known:
+            raise ValueError(f"unknown texture {spec!r} (known: {', '.join(known)})")
+        return known[spec]
     spec = dict(spec)
     base = texture(spec.pop("like", "plain_weave"))
     if "harmonics" in spec:
@@ -188,6 +217,27 @@ def _seed(seed: int, name: str) -> np.random.Generator:
     return np.random.default_rng([int(seed), zlib.crc32(name.encode())])
 
 
+#: a shape's edge width (mm)
+SHAPE_EDGE_MM = 0.2
+
+
+def _features(tex: Texture, x, y, phase) -> np.ndarray:
+    """A shape's features ``(ny, nx)`` of unit height (see the module docstring)."""
+    th = np.radians(tex.angle_deg)
+    X, Y = np.meshgrid(x, y)
+    u = X * np.cos(th) + Y * np.sin(th) + phase[0] * tex.period_u_mm
+    v = -X * np.sin(th) + Y * np.cos(th) + phase[1] * tex.period_v_mm
+
+    def centred(a, p):                     # distance to the nearest multiple of p
+        return np.abs(a - p * np.round(a / p))
+    d = centred(u, tex.period_u_mm)
+    if tex.shape == "dots":
+        d = np.hypot(d, centred(v, tex.period_v_mm))
+    e = SHAPE_EDGE_MM
+    s = np.clip((tex.feature_mm / 2 + e / 2 - d) / e, 0.0, 1.0)
+    return s * s * (3.0 - 2.0 * s)
+
+
 def surface(tex: Texture, seed: int, x_mm: tuple, y_mm: tuple, dx_mm: float = 0.025) -> Surface:
     """The height map of ``tex`` (its specimen of synthesis ``seed``) over ``x_mm = (lo, hi)``
     by ``y_mm = (lo, hi)`` on a grid of ``dx_mm``."""
@@ -215,5 +265,7 @@ def surface(tex: Texture, seed: int, x_mm: tuple, y_mm: tuple, dx_mm: float = 0.
         h = h + tex.amplitude_um * weave
         if tex.motif_period_mm > 0:
             h = h + tex.motif_um * np.cos(2 * np.pi * (u / tex.motif_period_mm + ph[2]))
+    elif tex.family == "shape":
+        h = h + tex.amplitude_um * _features(tex, x, y, rng.uniform(0, 1, 2))
     return Surface(tex, h, dx, float(x[0]), float(y[0]),
                    {"rms_um": float(h.std()), "seed": int(seed)})

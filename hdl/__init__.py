@@ -23,4 +23,4 @@ __getattr__, __dir__, __all__ = lazy_exports(__name__, {
                     "generate_coincidence",
     ".network": "NetworkConfig NetworkTwin AfferentCuneateNetwork network_verilog "
                 "generate_network",
-    ".link": "LinkConfig LinkedCore link_config"})
+    ".link": "LinkConfig LinkedTop link_config"})

@@ -42,10 +42,13 @@ and the whole grouped protocol rerun; the null's mean, 95th percentile and the p
 
 from __future__ import annotations
 
+import time
 import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
+
+from ..golden.metrics import victor_purpura_matrix
 
 __all__ = ["Decoded", "Protocol", "isi_samples", "trial_features", "decode_trials",
            "NO_DECISION", "decoded_neurons", "TEXTURE_DECODERS", "ALL_CHANNELS", "TextureRow",
@@ -403,8 +406,6 @@ def rate_cv(trains, window_ms) -> tuple[np.ndarray, np.ndarray]:
 def vp_matrix(trains, q_per_ms: float, timing: list | None = None, what: str = "") -> np.ndarray:
     """The Victor-Purpura matrix of ``trains`` (:func:`~cuneate.golden.metrics
     .victor_purpura_matrix`); ``timing`` gets one entry: trains, spikes, seconds."""
-    import time
-    from ..golden.metrics import victor_purpura_matrix
     t0 = time.perf_counter()
     D = victor_purpura_matrix(trains, q_per_ms)
     if timing is not None:

@@ -14,7 +14,10 @@ import platform
 import subprocess
 import sys
 import time
+from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
+
+from .engines.toolchain import tool_versions
 
 __all__ = ["provenance", "cuneate_version", "git_commit", "TOOLS"]
 
@@ -26,7 +29,6 @@ TOOLS = ("python", "numpy", "scipy", "scikit-learn", "numba", "amaranth", "cocot
 
 def cuneate_version() -> str:
     """The installed cuneate version (``0+unknown`` from a tree that is not installed)."""
-    from importlib.metadata import PackageNotFoundError, version
     try:
         return version("cuneate")
     except PackageNotFoundError:             # pragma: no cover - a plain source tree
@@ -56,7 +58,6 @@ def provenance(scene: dict | None = None, seeds: dict | None = None, tools=TOOLS
                **extra) -> dict:
     """The provenance record: version, git, tools, machine, command, time, and ``scene`` (the
     resolved scene), ``seeds`` and ``extra`` when given."""
-    from .engines.toolchain import tool_versions
     rec = {"cuneate": cuneate_version(), "git": git_commit(),
            "tools": tool_versions(tools),
            "machine": {"platform": platform.platform(), "cpus": os.cpu_count()},

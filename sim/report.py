@@ -18,6 +18,9 @@ from pathlib import Path
 
 import numpy as np
 
+from . import progress as prog
+from .provenance import cuneate_version, provenance
+
 __all__ = ["write_report", "summary_dict", "figure_names", "page_head", "figures_html",
            "pyplot", "html_table", "fmt", "write_page", "DPI", "save_figure",
            "decoding_rows", "DECODING_HEAD", "printable", "format_run", "engine_figures",
@@ -182,7 +185,6 @@ def summary_dict(run) -> dict:
     """``run.json`` of an afferent run: what ran, the decoding per engine (headline: the
     balanced accuracy of the per-grasp decision), agreement, saturation, timing, the spike and
     waveform files, and the provenance (version, commit, tools, resolved scene, seeds)."""
-    from .provenance import cuneate_version, provenance
     files = getattr(run, "files", {})
     return {
         "scene": run.scene.name, "source": run.scene.source, "classes": run.classes,
@@ -337,7 +339,6 @@ def files_html(files: dict) -> str:
 
 def write_report(run, out: Path) -> Path:
     """Write figures, ``run.json`` and ``index.html`` into ``out``; returns the HTML path."""
-    from . import progress as prog
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     with prog.step(f"writing figures ({len(figure_names(run))}) and the report"):

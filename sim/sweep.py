@@ -20,10 +20,13 @@ and an HTML page.
 
 from __future__ import annotations
 
+import csv
 import hashlib
+import html
 import importlib
 import importlib.util
 import json
+import logging
 import pkgutil
 import time
 from dataclasses import asdict, dataclass
@@ -38,7 +41,13 @@ __all__ = ["Point", "SweepSpec", "register_battery", "battery_module", "battery_
            "BLOCK_SAME_DT_KEYS", "VP_Q_PER_MS", "HEADLINE_ERROR", "COSTS", "estimate_sweep",
            "dask_connect", "dask_map"]
 
-from ..golden.metrics import VP_Q_PER_MS  # noqa: E402  (5 / s, every report's q)
+from ..golden.metrics import VP_Q_PER_MS, compare_populations
+from . import progress as prog
+from .engines.registry import estimate_seconds
+from .provenance import provenance
+from .report import figures_html, html_table, page_head, printable, pyplot, save_figure
+from ..golden.budget import BASE_BYTES
+from ..golden.izhikevich import DivergenceError
 
 #: battery name -> the block sweep module that owns it; prefixes (``scene:``) apart
 _BATTERIES: dict = {}
@@ -138,7 +147,6 @@ def reference_trains(spec: SweepSpec) -> list[np.ndarray]:
     """The accuracy reference of the spec's battery (its block decides: float64 RK4 at
     ``reference_hz`` for the Izhikevich batteries). Refused (``ValueError``, one line): a
     reference that diverges or has no spike at all (nothing to measure a point against)."""
-    from ..golden.izhikevich import DivergenceError
     try:
         ref = battery_module(spec.battery).reference_trains(spec)
     except DivergenceError as exc:
@@ -160,8 +168,6 @@ def estimate_sweep(points: list, spec: SweepSpec, workers: int = 1) -> dict:
     non-Euler float points also run float64 Euler at their dt), at the engine registry's
     speeds; the points share ``workers`` processes, each holding one point's per-step
     arrays."""
-    from ..golden.budget import BASE_BYTES
-    from .engines.registry import estimate_seconds
     mod = battery_module(spec.battery)
     size = mod.battery_size(spec.battery)
     n, per_step = size["trains"], size["bytes_per_step"]
@@ -185,7 +191,6 @@ def estimate_sweep(points: list, spec: SweepSpec, workers: int = 1) -> dict:
 
 def accuracy_row(ref: list, trains: list, dt_ms: float) -> dict:
     """The accuracy columns of a row: ``trains`` against ``ref`` with a tick of ``dt_ms``."""
-    from ..golden.metrics import compare_populations
     c = compare_populations(ref, trains, dt_ms, VP_Q_PER_MS)
     per = c["per_train"]
     lat = [abs(x["first_spike_latency_diff_ms"]) for x in per
@@ -263,7 +268,6 @@ def run_sweep(points: list, spec: SweepSpec, cache_dir: Path,
     alongside other points: then they are not comparable between runs). ``repeats`` > 1 runs
     each point that many times and keeps the fastest (the minimum is the figure least
     disturbed by other load)."""
-    from . import progress as prog
     if progress and prog.mode() == "quiet":
         prog.configure("auto")
 
@@ -350,7 +354,6 @@ def dask_map(fn, items: list, args: tuple, done, scheduler: str | None = None,
         for it in items:
             done(it, fn(it, *args))
         return
-    import logging
 
     from dask.distributed import Client, LocalCluster, as_completed
     cluster = None
@@ -400,9 +403,6 @@ def pareto_front(rows: list[dict], cost: str, accuracy: str = HEADLINE_ERROR,
 def write_sweep(rows: list[dict], spec: SweepSpec, out: Path, columns=None) -> Path:
     """``sweep.csv`` (``columns``, default the battery's block's ``COLUMNS``), ``sweep.json``,
     ``pareto.png`` and ``index.html`` in ``out``."""
-    import csv
-    import html
-    from .report import figures_html, html_table, page_head, printable, pyplot, save_figure
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     with open(out / "sweep.csv", "w", newline="") as f:
@@ -412,7 +412,6 @@ def write_sweep(rows: list[dict], spec: SweepSpec, out: Path, columns=None) -> P
         for r in rows:
             w.writerow({k: r.get(k) for k in cols})
     fronts = {c: pareto_front(rows, c) for c in COSTS}
-    from .provenance import provenance
     (out / "sweep.json").write_text(json.dumps({"spec": asdict(spec), "rows": rows,
                                                 "pareto": fronts, "provenance": provenance()},
                                                indent=1, default=float))

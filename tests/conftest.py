@@ -13,22 +13,6 @@ from cuneate.sim.engines.toolchain import apply_simulator_env
 apply_simulator_env()
 
 
-@pytest.fixture
-def v_one_high(monkeypatch):
-    """``v_one_high(module, fn="update_state", key="v")``: fault ``module.<fn>`` so that its
-    result ``key`` comes out one LSB high (a proof's reference keeps the true function, bound at
-    import)."""
-    def apply(module, fn="update_state", key="v"):
-        true_fn = getattr(module, fn)
-
-        def faulty(cfg, *args):
-            out = dict(true_fn(cfg, *args))
-            out[key] = out[key] + 1
-            return out
-        monkeypatch.setattr(module, fn, faulty)
-    return apply
-
-
 @pytest.fixture(scope="session")
 def build_root() -> Path:
     """Root of per-case simulator build directories (``CUNEATE_BUILD_DIR`` or ``build/tests``)."""

@@ -1,9 +1,11 @@
 """Shared by the host-link tests: a trace of held levels, the host driver of three SA gratings,
 the bit-exact twin's stream of it (the reference), the transport contract a stream over a
-link must meet against that reference, and a run of raw samples through a transport."""
+link must meet against that reference, a run of raw samples through a transport, and the spike
+frames a board link sends for a run of current writes."""
 
 import numpy as np
 
+from cuneate.hdl.link.codec import MSG_SPIKES, FrameDecoder
 from cuneate.sim.host.driver import AfferentEncoding, FbgDriver
 from cuneate.sim.host.transport import COUNTERS
 from cuneate.sim.izhikevich.engines import TwinTransport
@@ -59,3 +61,24 @@ def assert_contract(got, ref) -> dict:
         "frames_lost": 0, "overflow": 0, "overrun": 0, "late_writes": 0}
     assert c["device_frames_ok"] == c["frames_sent"] - 2 and c["device_seq_gaps"] == 0
     return c
+
+
+def board_spike_frames(cfg, runs: dict, n: int, **board) -> list:
+    """The spike frames a :class:`~cuneate.sim.link.engines.BoardTransport` (``board`` its
+    options) sends for the current writes ``runs`` (sweep -> ``[(first, raw)]``) and ``n``
+    sweeps of ``cfg``, its counters checked."""
+    from cuneate.sim.link.engines import BoardTransport
+    from cuneate.sim.link.faults import Recorder
+    rec = Recorder()
+    tr = BoardTransport(corrupt=rec, **board)
+    tr.open(cfg)
+    try:
+        for k, rs in runs.items():
+            for first, raw in rs:
+                tr.write_currents(k, first, raw)
+        tr.run(n)
+        tr.collect()
+        tr.check()
+    finally:
+        tr.close()
+    return [m for m in FrameDecoder().feed(bytes(rec.data)) if m.type == MSG_SPIKES]

@@ -76,11 +76,11 @@ def test_the_wheel_holds_every_package_and_data_file(installed):
               "cuneate/sim/scenes/examples/ridge_angle.toml", "cuneate/sim/engines/harness.cpp",
               "cuneate/boards/ulx3s.py", "cuneate/golden/coincidence.py"):
         assert f in names, f
-    # every C++ harness the package compiles at run time (the board engine's serial harness
-    # was missing: package data named sim/engines alone)
-    harnesses = [f for f in _source_files() if f.endswith(".cpp")
+    # every C++ harness and header the package compiles at run time (the board engine's serial
+    # harness was missing: package data named sim/engines alone)
+    harnesses = [f for f in _source_files() if f.endswith((".cpp", ".h"))
                  and not f.startswith(("tests/", "benchmarks/", "scripts/"))]
-    assert "sim/link/serial_harness.cpp" in harnesses
+    assert {"sim/link/serial_harness.cpp", "sim/engines/batch_harness.h"} <= set(harnesses)
     assert [f for f in harnesses if f"cuneate/{f}" not in names] == []
     assert not any(n.startswith(("cuneate/tests/", "cuneate/benchmarks/")) for n in names)
 

@@ -32,8 +32,8 @@ import numpy as np
 from ...golden import coincidence as gcun
 from ..izhikevich.config import CLAMP_KINDS, IzhikevichConfig
 from ..izhikevich.config import min_neurons as iz_min_neurons
-from ..lib.config import MAX_BLOCK_RAM_BITS, ConfigError, int_bits_for
-from ..lib.fixed import FixedPointError, QFormat
+from ..lib.config import MAX_BLOCK_RAM_BITS, ConfigError, int_bits_for, refusing
+from ..lib.fixed import QFormat
 from ..lib.synapses import TraceView, trace_spec
 
 __all__ = ["CoincidenceConfig", "ConfigError", "CYCLES_PER_TARGET_EXTRA", "TRACE_NAMES",
@@ -102,12 +102,8 @@ class CoincidenceConfig:
     iz: IzhikevichConfig = field(init=False, repr=False)
 
     def __post_init__(self):
-        try:
+        with refusing("coincidence detector"):
             self._derive()
-        except ConfigError:
-            raise
-        except FixedPointError as exc:
-            raise ConfigError(f"coincidence detector refused: {exc}") from None
 
     # ------------------------------------------------------------------------------------------
     @classmethod

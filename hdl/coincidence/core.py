@@ -38,6 +38,8 @@ and the Izhikevich stages of :mod:`cuneate.hdl.izhikevich.datapath` - each runs 
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import numpy as np
 from amaranth import Cat, Const, Module, Mux, Signal, unsigned
 from amaranth.lib import wiring
@@ -48,6 +50,7 @@ from ..flow.synth import synthesize_flows
 from ..flow.verilog import verilog_text, write_block
 from ..izhikevich import multiply1, multiply2, operands, update_state
 from ..lib.datapath import lookup
+from ..lib.fsm import wait_states
 from ..lib.synapses import trace_products, trace_update
 from ..lib.tick import tick_strobe
 from .config import CLAMP_KINDS, CoincidenceConfig
@@ -77,6 +80,15 @@ class CoincidenceDetector(wiring.Component):
     ``upd_xr``, ``upd_a``, ``upd_i``, ``upd_spike``, ``upd_clamp``, ``upd_tick``), ``busy``,
     ``tick_count``, ``merged_count``, ``overrun_count``, ``tick_overrun`` and ``clamp_flags``
     (sticky, cleared by ``clamp_clear``).
+
+    **Hooks** (a subclass may override them: the faults a proof must catch,
+    :mod:`cuneate.hdl.coincidence.formal_core`): :meth:`history_address` (the ring slot of a
+    delayed tick), :meth:`memory_write` (the write port the schedule drives) and
+    :meth:`update_state` (the Izhikevich update stage). After
+    elaboration the detector records, for a proof harness, ``memories`` (``{name: Memory}``:
+    ``dw_mem``, ``hist_mem``, ``state_mem``) and ``schedule`` (the registers ``target``,
+    ``slot`` and ``pending``: the target processed, the ring slot of the tick, the pending
+    input spikes).
     """
 
     #: the ports' meanings, for the Verilog's header
@@ -109,15 +121,37 @@ class CoincidenceDetector(wiring.Component):
         }
         super().__init__(sig)
 
+    @staticmethod
+    def delay_weight_rom(cfg: CoincidenceConfig) -> list:
+        """The delay/weight ROM's words: target ``t``, source ``s`` at ``t S + s``, the delay
+        in the low ``history_addr_bits``, the weight above."""
+        db, wb = cfg.history_addr_bits, cfg.W.width
+        return [_pack([(cfg.delays[t, s], db), (cfg.weights_raw[t, s], wb)])
+                for t in range(cfg.n_targets) for s in range(cfg.n_sources)]
+
+    def history_address(self, slot, delay):
+        """The history slot of the tick ``delay`` ticks before the one in ``slot``
+        (:func:`~cuneate.hdl.coincidence.datapath.history_slot`)."""
+        return history_slot(slot, delay, self.cfg.max_delay_ticks)
+
+    def memory_write(self, m: Module, name: str, port):
+        """The write port (``addr``, ``data``, ``en``) through which the schedule writes the
+        memory ``name``: ``port`` itself."""
+        return port
+
+    @staticmethod
+    def update_state(cfg, vb_sh, vb_th, vb_lo, u_sh, ud_sh, p, m, sel):
+        """The update stage: :func:`~cuneate.hdl.izhikevich.datapath.update_state`."""
+        return update_state(cfg, vb_sh, vb_th, vb_lo, u_sh, ud_sh, p, m, sel)
+
     def elaborate(self, platform):
         cfg, iz = self.cfg, self.cfg.iz
         M, S, D = cfg.n_targets, cfg.n_sources, cfg.max_delay_ticks
         m = Module()
         # ---- memories
         db, wb = cfg.history_addr_bits, cfg.W.width
-        rom = [_pack([(cfg.delays[t, s], db), (cfg.weights_raw[t, s], wb)])
-               for t in range(M) for s in range(S)]
-        m.submodules.dw_mem = dw_mem = Memory(shape=unsigned(db + wb), depth=M * S, init=rom)
+        m.submodules.dw_mem = dw_mem = Memory(shape=unsigned(db + wb), depth=M * S,
+                                              init=self.delay_weight_rom(cfg))
         m.submodules.hist_mem = hist_mem = Memory(shape=unsigned(S), depth=D, init=[])
         TD, TR = cfg.traces[0].T, cfg.traces[1].T
         widths = [iz.V.width, iz.U.width, TD.width, TR.width]
@@ -125,9 +159,12 @@ class CoincidenceDetector(wiring.Component):
                 for t in range(M)]
         m.submodules.state_mem = st_mem = Memory(shape=unsigned(sum(widths)), depth=M,
                                                  init=init)
+        self.memories = {"dw_mem": dw_mem, "hist_mem": hist_mem, "state_mem": st_mem}
         dw_rd = dw_mem.read_port()
         hist_rd, hist_wr = hist_mem.read_port(), hist_mem.write_port()
         st_rd, st_wr = st_mem.read_port(), st_mem.write_port()
+        hist_wr = self.memory_write(m, "hist_mem", hist_wr)
+        st_wr = self.memory_write(m, "state_mem", st_wr)
 
         # ---- tick source
         tick = tick_strobe(m, cfg, getattr(self, "tick", None))
@@ -159,11 +196,12 @@ class CoincidenceDetector(wiring.Component):
         vB, sB, lastB = Signal(), Signal(range(max(2, S))), Signal()
         vC, sC, lastC, wC = Signal(), Signal(range(max(2, S))), Signal(), Signal(wb)
         acc = Signal(cfg.acc_bits)
+        self.schedule = SimpleNamespace(target=tgt, slot=slot, pending=pending)
         m.d.comb += [dw_rd.addr.eq(tgt * S + src), st_rd.addr.eq(tgt)]
         m.d.sync += [vB.eq(issuing), sB.eq(src), lastB.eq(src == S - 1)]
         d_B = dw_rd.data[:db]
         w_B = dw_rd.data[db:]
-        m.d.comb += hist_rd.addr.eq(history_slot(slot, d_B, D))
+        m.d.comb += hist_rd.addr.eq(self.history_address(slot, d_B))
         m.d.sync += [vC.eq(vB), sC.eq(sB), lastC.eq(lastB), wC.eq(w_B)]
         bit_C = hist_rd.data.bit_select(sC, 1)
         with m.If(vC):
@@ -204,7 +242,7 @@ class CoincidenceDetector(wiring.Component):
                                                  "p", "m", "y_flag")}
         r_xs = [reg(f"r_x{k}", x) for k, x in enumerate(xs)]
         r_if4, r_i4, r_a4 = reg("r_if4", r_if3), reg("r_i4", r_i3), reg("r_a4", r_a3)
-        out = update_state(iz, *(r4[k] for k in ("vb_sh", "vb_th", "vb_lo", "u_sh", "ud_sh",
+        out = self.update_state(iz, *(r4[k] for k in ("vb_sh", "vb_th", "vb_lo", "u_sh", "ud_sh",
                                                  "p", "m")), sel)
         flags = dict(out, current=r_if4, y=r4["y_flag"])
         clamp = clamp_bits_hdl(flags)
@@ -228,12 +266,7 @@ class CoincidenceDetector(wiring.Component):
                     m.d.sync += src.eq(src + 1)
                 with m.If(vC & lastC):
                     m.next = "U1"
-            with m.State("U1"):
-                m.next = "U2"
-            with m.State("U2"):
-                m.next = "U3"
-            with m.State("U3"):
-                m.next = "U4"
+            wait_states(m, "U1", "U2", "U3", "U4")
             with m.State("U4"):
                 m.d.comb += [st_wr.en.eq(1), st_wr.addr.eq(tgt),
                              st_wr.data.eq(Cat(v_new, u_new, r_xs[0], r_xs[1]))]

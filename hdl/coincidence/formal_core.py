@@ -39,8 +39,15 @@ the FSM's phase within a target, the source counter, the read-pipeline valid bit
 accumulator - is a function of the last ``P + 1`` cycles once the target counter is pinned, so
 an induction of ``P + 2`` steps determines it (:func:`induction_depth`).
 
+**Binding to the detector.** The harness instantiates :class:`~cuneate.hdl.coincidence
+.CoincidenceDetector`, drives its ports and reads what it records when elaborated (its
+memories and its schedule's target, slot and pending registers); to read the memories' words
+it adds asynchronous read ports through a subclass. The **mutants** are subclasses overriding
+the detector's documented hooks: ``memory_write`` (the state's write-back skipped, the
+history's stamp one slot on) and ``history_address`` (the delayed input read one slot late).
+
 **Abstractions.** The products of the Izhikevich datapath and of the synaptic traces are
-uninterpreted (the same function per source line in the core and the reference:
+uninterpreted (the same function per site in the core and the reference:
 :class:`~cuneate.hdl.lib.formal.UninterpretedProducts`); the state and history memories start
 with any contents; the delay/weight ROM is the configuration's (the proof is per delay and
 weight table, like the range proofs); the tick input is free (an internal divider's ticks are
@@ -49,24 +56,19 @@ among its sequences).
 
 from __future__ import annotations
 
-import contextlib
 from pathlib import Path
-from types import SimpleNamespace
 
 import numpy as np
 from amaranth import Array, Cat, ClockDomain, Const, Elaboratable, Module, Mux, Signal
+from amaranth.asserts import AnyConst, AnySeq
 from amaranth.hdl import Fragment
-from amaranth.hdl._ast import AnyConst, AnySeq
 
 from ..flow.sby import SOLVER
-from ..izhikevich import datapath as iz_datapath
 from ..izhikevich import multiply1, multiply2, operands, update_state
-from ..lib import synapses
 from ..lib.datapath import lookup
 from ..lib.formal import (ProofResult, UninterpretedProducts, assert_all, assume_all,
-                          harness_rtlil, patched, run_proof, signal_named)
+                          faulty_write, harness_rtlil, run_proof)
 from ..lib.synapses import trace_products, trace_update
-from . import core as core_module
 from .config import CLAMP_KINDS, CoincidenceConfig
 from .core import CoincidenceDetector
 from .datapath import accumulate, clamp_bits_hdl, history_slot, psp_current
@@ -90,103 +92,94 @@ ABSTRACTIONS = ["products of the Izhikevich and trace datapaths uninterpreted (s
 EXTRA_CYCLES = 6
 
 
+class _SkippedWrite(CoincidenceDetector):
+    """The state's write-back skipped whenever the solver chooses."""
+
+    def memory_write(self, m, name, port):
+        port = super().memory_write(m, name, port)
+        return faulty_write(m, port, skip=AnySeq(1)) if name == "state_mem" else port
+
+
+class _StampWrongSlot(CoincidenceDetector):
+    """The pending spikes stamped into the next tick's history slot."""
+
+    def memory_write(self, m, name, port):
+        port = super().memory_write(m, name, port)
+        if name != "hist_mem":
+            return port
+        last = self.cfg.max_delay_ticks - 1
+        return faulty_write(m, port, addr=lambda a: Mux(a == last, 0, a + 1))
+
+
+class _WrongSlot(CoincidenceDetector):
+    """The delayed input read from the slot of tick ``T - delay + 1``."""
+
+    def history_address(self, slot, delay):
+        return super().history_address(slot + 1, delay) % self.cfg.max_delay_ticks
+
+
+DETECTORS = {"skipped_write": _SkippedWrite, "stamp_wrong_slot": _StampWrongSlot,
+             "wrong_slot": _WrongSlot}
+
+
+def _watched(detector: type, history_depth: int, rom_words: int) -> type:
+    """``detector`` with asynchronous read ports on its memories for the harness (``watch``:
+    one on the state, one per history slot, one per ROM word), added through the memories it
+    records."""
+    class Watched(detector):
+        def elaborate(self, platform):
+            m = super().elaborate(platform)
+            mems = self.memories
+            self.watch = {"state_mem": mems["state_mem"].read_port(domain="comb"),
+                          "hist_mem": [mems["hist_mem"].read_port(domain="comb")
+                                       for _ in range(history_depth)],
+                          "dw_mem": [mems["dw_mem"].read_port(domain="comb")
+                                     for _ in range(rom_words)]}
+            return m
+    return Watched
+
+
 class CoincidenceProof(Elaboratable):
     """Harness of :class:`~cuneate.hdl.coincidence.CoincidenceDetector` (see the module
     docstring); ``mutant`` one of :data:`MUTANTS` or ``None``."""
 
-    def __init__(self, cfg: CoincidenceConfig, mutant: str | None = None):
+    def __init__(self, cfg: CoincidenceConfig, mutant: str | None = None,
+                 detector: type | None = None):
         if mutant is not None and mutant not in MUTANTS:
             raise ValueError(f"unknown mutant {mutant!r}; known: {', '.join(MUTANTS)}")
         self.cfg, self.mutant = cfg, mutant
+        self.detector = detector or DETECTORS.get(mutant, CoincidenceDetector)
         self.cd = ClockDomain("sync", reset_less=True)
         self.ports = [self.cd.clk]
         self.period = cfg.n_sources + EXTRA_CYCLES
-
-    def _elaborate_core(self, platform, products):
-        core = CoincidenceDetector(self.cfg)
-        core._MustUse__silence = True
-        mut, made = self.mutant, []
-
-        def memory(orig):
-            class Faulty(orig):
-                """The detector's memories in construction order: delay/weight ROM, history,
-                state; the state memory's write may be skipped (``skipped_write``), the
-                history's land one slot on (``stamp_wrong_slot``)."""
-
-                def __init__(self, *a, **k):
-                    super().__init__(*a, **k)
-                    made.append(self)
-
-                def write_port(self, *a, **k):
-                    port = super().write_port(*a, **k)
-                    which = made.index(self)
-                    if (mut, which) not in (("skipped_write", 2), ("stamp_wrong_slot", 1)):
-                        return port
-                    fake = SimpleNamespace(addr=Signal.like(port.addr, name="mutant_wr_addr"),
-                                           data=Signal.like(port.data, name="mutant_wr_data"),
-                                           en=Signal(name="mutant_wr_en"))
-                    skip = Signal(name="mutant_skip")
-                    depth = self.depth
-                    addr = (Mux(fake.addr == depth - 1, 0, fake.addr + 1) if which == 1
-                            else fake.addr)
-                    self._mutant = [skip.eq(AnySeq(1) if which == 2 else 0),
-                                    port.addr.eq(addr), port.data.eq(fake.data),
-                                    port.en.eq(fake.en & ~skip)]
-                    return fake
-            return Faulty
-
-        def slot_late(orig):
-            return lambda slot, delay, depth: orig(slot + 1, delay, depth) % depth
-
-        wraps = [("Memory", memory)]
-        if mut == "wrong_slot":
-            wraps.append(("history_slot", slot_late))
-        with contextlib.ExitStack() as stack:
-            for name, w in wraps:
-                stack.enter_context(patched(core_module, name, w))
-            stack.enter_context(products.role("design"))
-            core_m = core.elaborate(platform)
-        for mem in made:
-            core_m.d.comb += getattr(mem, "_mutant", [])
-        names = ("dw_mem", "hist_mem", "state_mem")
-        if [core_m.submodules[n] for n in names] != made:
-            raise RuntimeError("the detector's memories were not built in the order "
-                               + ", ".join(names))
-        return core, core_m, made
 
     def elaborate(self, platform):
         cfg, m = self.cfg, Module()
         m.domains.sync = self.cd
         M, S, D, P = cfg.n_targets, cfg.n_sources, cfg.max_delay_ticks, self.period
-        products = self.products = UninterpretedProducts((iz_datapath.__file__,
-                                                          synapses.__file__))
+        products = self.products = UninterpretedProducts()
         t = Signal(range(max(2, M)), name="tracked")
         m.d.comb += t.eq(AnyConst(len(t)))
         assume_all(m, [t < M])
 
-        core, core_m, made = self._elaborate_core(platform, products)
-        st_mem, hist_mem = core_m.submodules["state_mem"], core_m.submodules["hist_mem"]
-        st_port = st_mem.read_port(domain="comb")
+        core = _watched(self.detector, D, M * S)(cfg)
+        with products.role("design"):
+            m.submodules.core = Fragment.get(core, platform)
+        st_port = core.watch["state_mem"]
         m.d.comb += st_port.addr.eq(t)
         hist_words = []
-        for k in range(D):
-            p = hist_mem.read_port(domain="comb")
+        for k, p in enumerate(core.watch["hist_mem"]):
             m.d.comb += p.addr.eq(k)
             hist_words.append(p.data)
         # the delay/weight ROM holds the configuration's table (in the base case by its
         # initializer, in the induction step by this invariant: nothing writes it)
-        rom = core_m.submodules["dw_mem"]
-        db, wb = cfg.history_addr_bits, cfg.W.width
         rom_checks = []
-        for k in range(M * S):
-            p = rom.read_port(domain="comb")
+        for k, (p, want) in enumerate(zip(core.watch["dw_mem"],
+                                          CoincidenceDetector.delay_weight_rom(cfg))):
             m.d.comb += p.addr.eq(k)
-            want = core_module._pack([(cfg.delays[k // S, k % S], db),
-                                      (cfg.weights_raw[k // S, k % S], wb)])
             rom_checks.append((p.data == want, f"delay/weight ROM: word {k}"))
         assert_all(m, rom_checks)
-        frag = Fragment.get(core_m, platform)
-        m.submodules.core = frag
+        sched = core.schedule
 
         # free inputs
         for name in ("tick", "in_valid", "clamp_clear"):
@@ -221,8 +214,8 @@ class CoincidenceProof(Elaboratable):
             m.d.sync += [overruns.eq(overruns + 1), overrun.eq(1)]
         assert_all(m, [((tgt < M) & (ph < P) & (slot < D), "schedule model: in range"),
                        (core.busy == busy, "schedule: busy"),
-                       (~busy | (signal_named(frag, "tgt") == tgt), "schedule: target"),
-                       (signal_named(frag, "slot") == slot, "history: slot"),
+                       (~busy | (sched.target == tgt), "schedule: target"),
+                       (sched.slot == slot, "history: slot"),
                        (core.tick_count == ticks, "tick_count"),
                        (core.overrun_count == overruns, "overrun_count"),
                        (core.tick_overrun == overrun, "tick_overrun")])
@@ -237,7 +230,7 @@ class CoincidenceProof(Elaboratable):
             m.d.sync += pending.eq(pending | event)
             with m.If(core.in_valid & (pending & (Const(1, S) << core.in_source)).any()):
                 m.d.sync += merged.eq(merged + 1)
-        assert_all(m, [(signal_named(frag, "pending") == pending, "input spikes: pending"),
+        assert_all(m, [(sched.pending == pending, "input spikes: pending"),
                        (core.merged_count == merged, "merged_count")])
 
         # --- the history by age ---------------------------------------------------------------
@@ -349,10 +342,12 @@ def coincidence_proof_config(**kwargs) -> CoincidenceConfig:
     return cfg
 
 
-def coincidence_harness(cfg: CoincidenceConfig, mutant: str | None = None) -> str:
+def coincidence_harness(cfg: CoincidenceConfig, mutant: str | None = None,
+                        detector: type | None = None) -> str:
     """RTLIL of the harness (top ``coincidence_eq``), the state and history memories' initial
-    contents removed."""
-    return harness_rtlil(CoincidenceProof(cfg, mutant), "coincidence_eq",
+    contents removed; ``detector``: a subclass of :class:`CoincidenceDetector` to prove
+    instead."""
+    return harness_rtlil(CoincidenceProof(cfg, mutant, detector), "coincidence_eq",
                          ("state_mem", "hist_mem"))
 
 
@@ -364,12 +359,13 @@ def induction_depth(cfg: CoincidenceConfig) -> int:
 def prove_coincidence(cfg: CoincidenceConfig, workdir: Path, mode: str = "prove",
                       depth: int | None = None, mutant: str | None = None,
                       timeout_s: float = 3600, engine: str = "smtbmc",
-                      solver: str = SOLVER) -> ProofResult:
+                      solver: str = SOLVER, detector: type | None = None) -> ProofResult:
     """Prove (``mode="prove"``: k-induction of ``depth`` steps, default
     :func:`induction_depth`) or check to a bound (``mode="bmc"``) that the detector equals its
-    one-tick reference."""
+    one-tick reference; ``detector``: a subclass of :class:`CoincidenceDetector` to prove
+    instead (a fault of its own)."""
     return run_proof("coincidence detector equals one-tick reference",
-                     coincidence_harness(cfg, mutant), workdir, "coincidence_eq", mode,
+                     coincidence_harness(cfg, mutant, detector), workdir, "coincidence_eq", mode,
                      depth or induction_depth(cfg), timeout_s, engine, ABSTRACTIONS, solver)
 
 
@@ -377,10 +373,11 @@ class HistorySlotProof(Elaboratable):
     """:func:`~cuneate.hdl.coincidence.datapath.history_slot` as the detector forms it (a ring
     slot of ``range(depth)``, a delay field of ``delay_bits``) names the ring slot of the delayed
     tick for every slot and every delay below ``depth``: the slot is below ``depth`` and slot +
-    delay is the tick's slot modulo ``depth``."""
+    delay is the tick's slot modulo ``depth``; ``slot``: the function proven (a faulty one: a
+    test of the proof)."""
 
-    def __init__(self, depth: int, delay_bits: int):
-        self.depth, self.delay_bits = depth, delay_bits
+    def __init__(self, depth: int, delay_bits: int, slot=history_slot):
+        self.depth, self.delay_bits, self.slot = depth, delay_bits, slot
         self.cd = ClockDomain("sync", reset_less=True)
         self.ports = [self.cd.clk]
 
@@ -390,7 +387,7 @@ class HistorySlotProof(Elaboratable):
         slot, delay = Signal(range(D), name="slot"), Signal(self.delay_bits, name="delay")
         m.d.comb += [slot.eq(AnySeq(len(slot))), delay.eq(AnySeq(len(delay)))]
         assume_all(m, [slot < D, delay < D])
-        at = history_slot(slot, delay, D)
+        at = self.slot(slot, delay, D)
         assert_all(m, [((at >= 0) & (at < D), "history slot: in the ring"),
                        ((at + delay == slot) | (at + delay == slot + D),
                         "history slot: the delayed tick's")])
@@ -398,10 +395,11 @@ class HistorySlotProof(Elaboratable):
 
 
 def prove_history_slot(cfg: CoincidenceConfig, workdir: Path, timeout_s: float = 600,
-                       solver: str = SOLVER) -> ProofResult:
+                       solver: str = SOLVER, slot=history_slot) -> ProofResult:
     """The history address of ``cfg``'s detector (its ring depth and delay field width) is the
-    delayed tick's slot for every slot and delay: one combinational step, every input."""
-    il = harness_rtlil(HistorySlotProof(cfg.max_delay_ticks, cfg.history_addr_bits),
+    delayed tick's slot for every slot and delay: one combinational step, every input;
+    ``slot``: see :class:`HistorySlotProof`."""
+    il = harness_rtlil(HistorySlotProof(cfg.max_delay_ticks, cfg.history_addr_bits, slot),
                        "history_slot")
     return run_proof("history slot is the delayed tick's", il, workdir, "history_slot", "bmc",
                      1, timeout_s, "smtbmc", [], solver)

@@ -6,9 +6,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...golden.izhikevich import group_spikes
+from ...golden.izhikevich import group_spikes, spike_times
 from ..izhikevich import IzhikevichTwin
+from ..lib.events import SpikeEvents
 from ..lib.fixed import tally_clamps
+from ..lib.kernel import choose_kernel
 from ..lib.synapses import trace_products, trace_update
 from .config import CLAMP_KINDS, CoincidenceConfig
 from .datapath import accumulate, history_slot, psp_current
@@ -16,7 +18,7 @@ from .datapath import accumulate, history_slot, psp_current
 __all__ = ["CoincidenceTwin"]
 
 
-class CoincidenceTwin:
+class CoincidenceTwin(SpikeEvents):
     """Bit-exact NumPy model of :class:`CoincidenceDetector` (int64, vectorized over targets).
 
     Two implementations of :meth:`tick` and :meth:`run` compute the same bits: ``kernel=
@@ -33,11 +35,7 @@ class CoincidenceTwin:
         from . import kernel as _k
         self.cfg = cfg = config or CoincidenceConfig(**kwargs)
         M, S, D = cfg.n_targets, cfg.n_sources, cfg.max_delay_ticks
-        if kernel is not None and kernel not in self.KERNELS:
-            raise ValueError(f"unknown twin kernel {kernel!r}; known: {', '.join(self.KERNELS)}")
-        if kernel == "numba" and not _k.available():
-            raise ValueError("twin kernel 'numba' needs numba installed")
-        self.kernel = kernel or ("numba" if _k.available() else "stages")
+        self.kernel = choose_kernel(kernel, self.KERNELS)
         self._k = _k
         self._consts = _k.gather_constants(cfg) if self.kernel == "numba" else None
         self.iz = IzhikevichTwin(cfg.iz, kernel="stages" if self.kernel == "stages" else None)
@@ -53,17 +51,6 @@ class CoincidenceTwin:
         self.merged = 0
         self.clamp_sticky = 0
         self.clamp_counts = {k: 0 for k in CLAMP_KINDS}
-
-    def spike_in(self, sources) -> None:
-        """Input spike events (source indices) before the next tick."""
-        for s in np.atleast_1d(np.asarray(sources, dtype=np.int64)):
-            if not 0 <= s < self.cfg.n_sources:
-                raise ValueError(f"spike source {int(s)} is outside 0 .. "
-                                 f"{self.cfg.n_sources - 1}")
-            self.events += 1
-            if self.pending[s]:
-                self.merged += 1
-            self.pending[s] = True
 
     def inputs(self) -> np.ndarray:
         """``a`` (raw weight LSBs) of every target at the current tick (history stamped)."""
@@ -156,4 +143,4 @@ class CoincidenceTwin:
             self.merged += int(np.count_nonzero(self.pending & (counts[0] > 0)))
         ks, ns = self.run_pending(counts > 0)
         steps = group_spikes([ks], [ns], self.cfg.n_targets)
-        return [(np.asarray(h, dtype=np.float64) + 1) * self.cfg.dt_ms for h in steps]
+        return [spike_times(h, self.cfg.dt_ms) for h in steps]

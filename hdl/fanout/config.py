@@ -41,8 +41,8 @@ from typing import Sequence
 import numpy as np
 
 from ...golden.fanout import RECTIFY
-from ..lib.config import MAX_BLOCK_RAM_BITS, ConfigError, shared_exponent
-from ..lib.fixed import FixedPointError, QFormat
+from ..lib.config import MAX_BLOCK_RAM_BITS, ConfigError, refusing, shared_exponent
+from ..lib.fixed import QFormat
 
 __all__ = ["FanoutConfig", "ConfigError", "CLAMP_KINDS", "LATENCY", "MAX_TABLE_BITS",
            "check_table_size",
@@ -117,12 +117,8 @@ class FanoutConfig:
     I: QFormat = field(init=False, repr=False)
 
     def __post_init__(self):
-        try:
+        with refusing("channel fan-out"):
             self._derive()
-        except ConfigError:
-            raise
-        except FixedPointError as exc:
-            raise ConfigError(f"channel fan-out refused: {exc}") from None
 
     # ------------------------------------------------------------------------------------------
     def _derive(self):

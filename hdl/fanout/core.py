@@ -45,7 +45,13 @@ COUNTER_BITS = 32
 
 
 class ChannelFanout(wiring.Component):
-    """The channel fan-out as RTL (see the module docstring for the schedule and the ports)."""
+    """The channel fan-out as RTL (see the module docstring for the schedule and the ports).
+
+    Its three stages are the methods :meth:`rectify_gate`, :meth:`product` and
+    :meth:`to_current` (the datapath's functions): the hooks through which a proof takes the
+    arithmetic the pipeline composes, and a subclass replaces one (a fault the proof must
+    catch, :mod:`cuneate.hdl.fanout.formal`).
+    """
 
     #: the ports' meanings, for the Verilog's header (:func:`~cuneate.hdl.flow.verilog
     #: .verilog_header`)
@@ -71,6 +77,21 @@ class ChannelFanout(wiring.Component):
             "clamp_low_count": Out(COUNTER_BITS), "clamp_high_count": Out(COUNTER_BITS),
             "clamp_flags": Out(len(CLAMP_KINDS)), "clamp_clear": In(1),
         })
+
+    @staticmethod
+    def rectify_gate(s, mode, gated, theta):
+        """Stage 3: :func:`~cuneate.hdl.fanout.datapath.rectify_gate`."""
+        return rectify_gate(s, mode, gated, theta)
+
+    @staticmethod
+    def product(r, g):
+        """Stage 4: :func:`~cuneate.hdl.fanout.datapath.product`."""
+        return product(r, g)
+
+    @staticmethod
+    def to_current(cfg: FanoutConfig, p):
+        """Stage 5: :func:`~cuneate.hdl.fanout.datapath.to_current`."""
+        return to_current(cfg, p)
 
     def elaborate(self, platform):
         cfg = self.cfg
@@ -118,20 +139,20 @@ class ChannelFanout(wiring.Component):
 
         # stage 3: rectify and gate the sample
         s = ch_rd.data.as_signed() if S.signed else ch_rd.data
-        r = rectify_gate(s, mode2, gated2, theta2)
+        r = self.rectify_gate(s, mode2, gated2, theta2)
         v3, n3 = Signal(), Signal.like(n)
         r3 = Signal(signed(cfg.r_width))
         g3 = Signal.like(g2)
         m.d.sync += [v3.eq(v2), n3.eq(n2), r3.eq(r), g3.eq(g2)]
 
         # stage 4: the product
-        p = product(r3, g3)
+        p = self.product(r3, g3)
         v4, n4 = Signal(), Signal.like(n)
         p4 = Signal(signed(cfg.p_width))
         m.d.sync += [v4.eq(v3), n4.eq(n3), p4.eq(p)]
 
         # stage 5: round, clamp (flagged), write the current
-        cur, below, above = to_current(cfg, p4)
+        cur, below, above = self.to_current(cfg, p4)
         m.d.sync += [self.i_wr_en.eq(v4), self.i_wr_addr.eq(n4), self.i_wr_data.eq(cur),
                      self.done.eq(v4 & (n4 == N - 1))]
         with m.If(v4):

@@ -7,6 +7,7 @@ stage 5). Formats and the schedule: :class:`~cuneate.hdl.fanout.config.FanoutCon
 
 from __future__ import annotations
 
+from ..lib.fixed import product as fixed_product
 from ..lib.fixed import round_clamp_flagged, select
 from .config import FanoutConfig
 
@@ -26,7 +27,7 @@ def rectify_gate(s, mode, gated, theta):
 
 def product(r, g):
     """The rectified sample times the gain, at full width."""
-    return r * g
+    return fixed_product(r, g, "fanout product")
 
 
 def to_current(cfg: FanoutConfig, p):

@@ -2,30 +2,29 @@
 sample, with SymbiYosys (a combinational check of depth 1: a pass covers every input).
 
 The design side is what :class:`~cuneate.hdl.fanout.ChannelFanout` builds for one table entry:
-:func:`~cuneate.hdl.fanout.datapath.rectify_gate`, :func:`~cuneate.hdl.fanout.datapath.product`
-and :func:`~cuneate.hdl.fanout.datapath.to_current` (bound at import, so a mutant injected into
-the module does not reach the specification), with the core's register widths between them
-(``r_width``, ``p_width``). The specification is written here, at unbounded width (Amaranth
-grows every result): ``r`` = ``s``, ``max(s, 0)`` or ``|s|`` by the mode, 0 where the entry is
-gated and ``s < theta`` (asserted equal to the design's rectified sample); ``p = r g`` (formed
-from that sample, so the solver compares one product, not two multipliers; asserted equal to
-the design's product register: its width holds it); ``x = floor(p / 2**shift + 1/2)`` (nearest) or
-``floor(p / 2**shift)`` (truncate) or ``p * 2**-shift`` for a negative shift (bits added: a gain
-whose exponent is larger than the current's LSB); the current is ``x`` clamped into the current
-format, ``below`` / ``above`` exactly when the clamp acts.
+its stages :meth:`~cuneate.hdl.fanout.ChannelFanout.rectify_gate`, ``product`` and
+``to_current`` (its documented hooks, taken from the class or, for a mutant, from a subclass
+that replaces one), with the core's register widths between them (``r_width``, ``p_width``). The
+specification is written here, at unbounded width (Amaranth grows every result): ``r`` = ``s``,
+``max(s, 0)`` or ``|s|`` by the mode, 0 where the entry is gated and ``s < theta`` (asserted
+equal to the design's rectified sample); ``p = r g`` (formed from that sample, so the solver
+compares one product, not two multipliers; asserted equal to the design's product register: its
+width holds it); ``x = floor(p / 2**shift + 1/2)`` (nearest) or ``floor(p / 2**shift)``
+(truncate) or ``p * 2**-shift`` for a negative shift (bits added: a gain whose exponent is
+larger than the current's LSB); the current is ``x`` clamped into the current format, ``below``
+/ ``above`` exactly when the clamp acts. Free: the sample ``s`` (the whole sample format), the
+gain's raw word ``g`` (every value between the table's smallest and largest raw gain: every gain
+of that shared exponent), the threshold (any raw sample), the gate bit, and the mode (any mode
+the table uses: the configuration decides from them whether a clamp is built).
+:data:`PROOF_TABLES` are the configurations ``cuneate prove fanout`` proves: the rounding both
+ways, a positive shift, a zero shift, bits added (a few, and more than the current's width: the
+gains of about 1e18 the twin once wrapped in int64), and a table whose clamp is not built.
 
-Free: the sample ``s`` (the whole sample format), the gain's raw word ``g`` (every value
-between the table's smallest and largest raw gain: every gain of that shared exponent), the
-threshold (any raw sample), the gate bit, and the mode (any mode the table uses: the
-configuration decides from them whether a clamp is built). :data:`PROOF_TABLES` are the
-configurations ``cuneate prove fanout`` proves: the rounding both ways, a positive shift, a
-zero shift, bits added (a few, and more than the current's width: the gains of about 1e18 the
-twin once wrapped in int64), and a table whose clamp is not built.
-
-Mutants (:data:`MUTANTS`), each of which the proof must catch: ``fanout_wrap_int64`` (the
-shifted product wrapped to 64 bits before the clamp, as the twin's int64 did),
-``fanout_round_bit_dropped`` (the first dropped bit not added back), ``fanout_abs_passes_negative``
-(``abs`` rectification passing a negative sample through).
+Mutants (:data:`MUTANTS`, subclasses of the fan-out replacing one stage), each of which the
+proof must catch: ``fanout_wrap_int64`` (the shifted product wrapped to 64 bits before the
+clamp, as the twin's int64 did), ``fanout_round_bit_dropped`` (the first dropped bit not added
+back), ``fanout_abs_passes_negative`` (``abs`` rectification passing a negative sample
+through).
 """
 
 from __future__ import annotations
@@ -33,40 +32,44 @@ from __future__ import annotations
 from pathlib import Path
 
 from amaranth import Elaboratable, Module, Mux, Signal, signed
-from amaranth.hdl import Assert, Assume
+from amaranth.hdl import Assume
 
 from ..flow.sby import SOLVER, FormalError
 from ..lib.fixed import clamp_flagged, round_clamp_flagged, round_shift, select
 from ..lib.formal import ProofResult, assert_all, harness_rtlil, run_proof
 from . import datapath as dp
 from .config import FanoutConfig
+from .core import ChannelFanout
 
 __all__ = ["PROOF_TABLES", "MUTANTS", "OneEntryProof", "prove_entry", "prove_fanout",
            "proof_tables", "FormalError"]
 
-_rectify_gate, _product, _to_current = dp.rectify_gate, dp.product, dp.to_current
+class _WrapInt64(ChannelFanout):
+    @staticmethod
+    def to_current(cfg, p):
+        """The twin's former arithmetic: the shifted product held in 64 bits, then clamped."""
+        x = round_shift(p, cfg.shift, cfg.rounding)
+        return clamp_flagged(x[:64].as_signed(), cfg.I.min_raw, cfg.I.max_raw, cfg.I,
+                             cfg.i_bounds)
 
 
-def _wrap_int64(cfg, p):
-    """The twin's former arithmetic: the shifted product held in 64 bits, then clamped."""
-    x = round_shift(p, cfg.shift, cfg.rounding)
-    return clamp_flagged(x[:64].as_signed(), cfg.I.min_raw, cfg.I.max_raw, cfg.I, cfg.i_bounds)
+class _RoundBitDropped(ChannelFanout):
+    @staticmethod
+    def to_current(cfg, p):
+        return round_clamp_flagged(p, cfg.shift, "truncate", cfg.I.min_raw, cfg.I.max_raw,
+                                   cfg.I, cfg.i_bounds)
 
 
-def _round_bit_dropped(cfg, p):
-    return round_clamp_flagged(p, cfg.shift, "truncate", cfg.I.min_raw, cfg.I.max_raw, cfg.I,
-                               cfg.i_bounds)
+class _AbsPassesNegative(ChannelFanout):
+    @staticmethod
+    def rectify_gate(s, mode, gated, theta):
+        r = select(mode == dp.POSITIVE, select(s < 0, 0, s), s)
+        return select(gated & (s < theta), 0, r)
 
 
-def _abs_passes_negative(s, mode, gated, theta):
-    r = select(mode == dp.POSITIVE, select(s < 0, 0, s), s)
-    return select(gated & (s < theta), 0, r)
-
-
-#: mutant -> (stage function replaced, faulty version)
-MUTANTS = {"fanout_wrap_int64": ("to_current", _wrap_int64),
-           "fanout_round_bit_dropped": ("to_current", _round_bit_dropped),
-           "fanout_abs_passes_negative": ("rectify_gate", _abs_passes_negative)}
+#: mutant -> the fan-out with one stage replaced
+MUTANTS = {"fanout_wrap_int64": _WrapInt64, "fanout_round_bit_dropped": _RoundBitDropped,
+           "fanout_abs_passes_negative": _AbsPassesNegative}
 
 _MIXED = dict(n_channels=1, channel=[0, 0, 0], rectify=["none", "positive", "abs"],
               threshold=[None, 1.0, None])
@@ -94,6 +97,7 @@ class OneEntryProof(Elaboratable):
         if mutant is not None and mutant not in MUTANTS:
             raise FormalError(f"unknown fan-out mutant {mutant!r}; known: {', '.join(MUTANTS)}")
         self.cfg, self.mutant = cfg, mutant
+        self.fanout = MUTANTS.get(mutant, ChannelFanout)
         S = cfg.S
         self.s = Signal(S.shape(), name="s")
         self.g = Signal(signed(cfg.gain_width), name="g")
@@ -105,10 +109,7 @@ class OneEntryProof(Elaboratable):
     def elaborate(self, platform):
         cfg, m = self.cfg, Module()
         s, g, theta, mode, gated = self.s, self.g, self.theta, self.mode, self.gated
-        stages = {"rectify_gate": _rectify_gate, "product": _product, "to_current": _to_current}
-        if self.mutant:
-            name, fn = MUTANTS[self.mutant]
-            stages[name] = fn
+        fan = self.fanout
         raw = [c.raw for c in cfg.gains_]
         used = False
         for k in set(cfg.modes_):
@@ -117,9 +118,8 @@ class OneEntryProof(Elaboratable):
         # the design, with the core's register widths between its stages
         r = Signal(signed(cfg.r_width), name="r")
         p = Signal(signed(cfg.p_width), name="p")
-        m.d.comb += [r.eq(stages["rectify_gate"](s, mode, gated, theta)),
-                     p.eq(stages["product"](r, g))]
-        cur, below, above = stages["to_current"](cfg, p)
+        m.d.comb += [r.eq(fan.rectify_gate(s, mode, gated, theta)), p.eq(fan.product(r, g))]
+        cur, below, above = fan.to_current(cfg, p)
 
         # the specification, at unbounded width
         rect = Mux(mode == dp.POSITIVE, Mux(s > 0, s, 0),

@@ -37,10 +37,16 @@ flip-flops removed and the output enable ``OCE`` tied high (Lattice TN1264: the 
 register loads the read latch every clock it is enabled), the same cycle behaviour.
 :func:`pack_registers` packs the block RAMs first, then the multipliers.
 
-Command line (what ``cuneate sweep --fmax --pack-registers`` and
-``synthesize(..., pack_registers=True)`` run between yosys and nextpnr)::
+Command line (what ``cuneate sweep --fmax --pack-registers``,
+``synthesize(..., pack_registers=True)`` and the ECP5 board builds run between yosys and
+nextpnr; ``--report`` writes :meth:`PackReport.to_dict` as JSON)::
 
-    python -m cuneate.hdl.flow.ecp5_pack NETLIST.json
+    python -m cuneate.hdl.flow.ecp5_pack NETLIST.json [--report REPORT.json]
+
+**Board builds** (:func:`packing_platform`): amaranth's ``LatticeECP5Platform`` (Trellis
+toolchain) builds from its ``command_templates`` (yosys, nextpnr-ecp5, ecppack); the subclass
+inserts this command after yosys's, on ``{{name}}.json`` in the build directory, run by
+``$PYTHON`` (one more of the platform's ``required_tools``).
 """
 
 from __future__ import annotations
@@ -52,7 +58,14 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 __all__ = ["PackReport", "pack_dsp_registers", "pack_bram_registers", "pack_registers",
-           "pack_netlist_file"]
+           "pack_netlist_file", "packing_platform", "PACK_COMMAND"]
+
+#: the build-script command amaranth renders between yosys and nextpnr-ecp5 (relative paths:
+#: the script runs in the build directory)
+PACK_COMMAND = r"""
+    {{invoke_tool("python")}} -m cuneate.hdl.flow.ecp5_pack {{name}}.json
+        --report {{name}}.pack.json
+"""
 
 @dataclass
 class PackReport:
@@ -295,13 +308,47 @@ def pack_netlist_file(path: Path) -> PackReport:
     return rep
 
 
+class _PackingECP5:
+    """Mixin over an amaranth ``LatticeECP5Platform`` (Trellis toolchain): the register
+    packing between yosys and nextpnr-ecp5."""
+
+    @property
+    def required_tools(self):
+        return [*super().required_tools, "python"]
+
+    @property
+    def command_templates(self):
+        yosys, *rest = super().command_templates
+        return [yosys, PACK_COMMAND, *rest]
+
+
+def packing_platform(platform):
+    """``platform`` (an amaranth ECP5 platform instance, Trellis toolchain) as an instance of
+    a subclass whose build script packs the registers (:data:`PACK_COMMAND`) between yosys and
+    nextpnr-ecp5. Anything else raises ``ValueError``."""
+    if getattr(platform, "family", None) != "ecp5" or platform.toolchain != "Trellis":
+        raise ValueError(f"register packing needs an ECP5 platform with the Trellis toolchain, "
+                         f"not {type(platform).__name__}")
+    cls = type(platform)
+    packed = type(f"{cls.__name__}Packed", (_PackingECP5, cls), {"__module__": __name__})
+    return packed(toolchain=platform.toolchain)
+
+
+_USAGE = "usage: python -m cuneate.hdl.flow.ecp5_pack NETLIST.json [--report REPORT.json]"
+
+
 def main(argv=None) -> int:
-    args = sys.argv[1:] if argv is None else argv
-    if len(args) != 1:
-        print("usage: python -m cuneate.hdl.flow.ecp5_pack NETLIST.json", file=sys.stderr)
+    args = sys.argv[1:] if argv is None else list(argv)
+    report = None
+    if len(args) == 3 and args[1] == "--report":
+        args, report = args[:1], args[2]
+    if len(args) != 1 or args[0].startswith("-"):
+        print(_USAGE, file=sys.stderr)
         return 2
     try:
         rep = pack_netlist_file(Path(args[0]))
+        if report is not None:
+            Path(report).write_text(json.dumps(rep.to_dict(), indent=2) + "\n")
     except (OSError, ValueError, KeyError) as exc:
         print(f"ecp5_pack: {args[0]}: {exc}", file=sys.stderr)
         return 2

@@ -67,7 +67,10 @@ def core_configs(config: IzhikevichConfig, n_cores: int,
     itself, or, with ``neuron_sets`` (one parameter-set index per global neuron id, ``n_cores *
     config.n_neurons`` of them), ``config`` with each core's slice as its ``neuron_sets`` (its
     initial states follow its sets unless ``config`` gives them). Refused (:class:`ConfigError`)
-    when ``neuron_sets`` has the wrong length or names a set the table does not have."""
+    when ``n_cores`` is not an integer >= 1, or ``neuron_sets`` has the wrong length or names a
+    set the table does not have."""
+    if isinstance(n_cores, bool) or not isinstance(n_cores, int) or n_cores < 1:
+        raise ConfigError(f"n_cores must be an integer >= 1, got {n_cores!r}")
     if neuron_sets is None:
         return [config] * n_cores
     N = config.n_neurons
@@ -99,18 +102,19 @@ class IzhikevichArray(wiring.Component):
         the per-core update probes).
     """
 
+    def __new__(cls, config: IzhikevichConfig, n_cores: int, probes: bool = False,
+                neuron_sets=None):
+        # refused (core_configs) before the component exists: a component created and never
+        # elaborated would be reported as unused
+        configs = core_configs(config, n_cores, neuron_sets)
+        self = super().__new__(cls, src_loc_at=1)
+        self._core_configs = configs
+        return self
+
     def __init__(self, config: IzhikevichConfig, n_cores: int, probes: bool = False,
                  neuron_sets=None):
-        if isinstance(n_cores, bool) or not isinstance(n_cores, int) or n_cores < 1:
-            self._MustUse__silence = True       # refused: never elaborated
-            raise ConfigError(f"n_cores must be an integer >= 1, got {n_cores!r}")
-        try:
-            configs = core_configs(config, n_cores, neuron_sets)
-        except ConfigError:
-            self._MustUse__silence = True
-            raise
         self.cfg, self.n_cores = config, n_cores
-        self.cores = [IzhikevichCore(c) for c in configs]
+        self.cores = [IzhikevichCore(c) for c in self._core_configs]
         total = config.n_neurons * n_cores
         kinds = len(CLAMP_KINDS)
         sig = {

@@ -45,8 +45,9 @@ import numpy as np
 
 from ...golden import izhikevich as golden
 from ..lib.banked import DP16KD_SHAPES, block_shapes
-from ..lib.config import SATURATION, ConfigError, CoreOptions, int_bits_for, shared_exponent
-from ..lib.fixed import FixedConstant, FixedPointError, QFormat, round_shift
+from ..lib.config import (SATURATION, ConfigError, CoreOptions, int_bits_for, refusing,
+                          shared_exponent)
+from ..lib.fixed import FixedConstant, QFormat, round_shift
 from .range import RangeSearchError, one_step_bound, reachable_ranges
 
 __all__ = ["ConfigError", "IzhikevichConfig", "PIPELINE_DEPTH", "PIPELINE_STAGES", "PIPELINE_CUTS",
@@ -174,16 +175,9 @@ class IzhikevichConfig(CoreOptions):
 
     def __post_init__(self):
         self.param_sets = tuple(self.param_sets)
-        try:
+        # parameter-set errors from the golden model are ValueErrors
+        with refusing("Izhikevich core configuration", RangeSearchError, ValueError):
             self._derive()
-        except RangeSearchError as exc:
-            raise ConfigError(f"Izhikevich core configuration refused: {exc}") from None
-        except FixedPointError as exc:
-            if isinstance(exc, ConfigError):
-                raise
-            raise ConfigError(f"Izhikevich core configuration refused: {exc}") from None
-        except ValueError as exc:      # parameter-set errors from the golden model
-            raise ConfigError(f"Izhikevich core configuration refused: {exc}") from None
 
     # ------------------------------------------------------------------------------------------
     def _derive(self):

@@ -12,12 +12,11 @@ from __future__ import annotations
 from pathlib import Path
 
 from amaranth import Cat, Module, Mux, Signal
-from amaranth.lib import wiring
 from amaranth.lib.wiring import Out
 
 from ..flow.verilog import write_block, verilog_text
-from ..lib.bookkeeping import (core_memories, core_ports, pipeline_tags, registrar,
-                               sweep_bookkeeping, sweep_issue)
+from ..lib.bookkeeping import (SweepCore, core_memories, core_ports, sweep_bookkeeping,
+                               sweep_issue)
 from ..lib.fixed import is_hdl
 from ..lib.tick import tick_strobe
 from .config import CLAMP_KINDS, IzhikevichConfig
@@ -26,7 +25,7 @@ from . import datapath
 __all__ = ["IzhikevichCore", "izhikevich_verilog", "generate_izhikevich"]
 
 
-class IzhikevichCore(wiring.Component):
+class IzhikevichCore(SweepCore):
     """Time-multiplexed Izhikevich core: one neuron update per clock, a pipeline of
     ``config.pipeline_stages`` stages (5 by default, up to 9).
 
@@ -110,13 +109,21 @@ class IzhikevichCore(wiring.Component):
 
     Attributes
     ----------
-    probes
-        After elaboration: the stage-3 registers (``valid``, ``index``, ``v``, ``u``, ``i``,
-        ``sel``: the state, current and set an update starts from) and ``latency``, the cycles
-        from them to ``upd_*`` (``pipeline_stages - 2``), for the formal harness.
+    STEPS
+        The pipelined steps the core registers at its cuts
+        (:data:`~cuneate.hdl.izhikevich.datapath.STEPS`); a subclass may replace one (a fault
+        a proof must catch).
+    issue, tags, memories, pending_writes, counters
+        After elaboration, for a proof harness (:class:`~cuneate.hdl.lib.bookkeeping
+        .SweepCore`); also ``state_write_lag`` (1: the state's write lands a cycle after it
+        is issued) and ``state_sample_lag`` (1 at depth 9: the memories sample at the end of
+        the fetch, not of the cycle before).
     stages
         After elaboration: ``{stage: {name: register}}`` of every datapath register.
     """
+
+    DATA_RESET_LESS = True
+    STEPS = datapath.STEPS
 
     def __init__(self, config: IzhikevichConfig | None = None, **kwargs):
         self.cfg = cfg = config or IzhikevichConfig(**kwargs)
@@ -137,39 +144,41 @@ class IzhikevichCore(wiring.Component):
 
         # --- sweep control and pipeline tags ----------------------------------------------
         tick = tick_strobe(m, cfg, getattr(self, "tick", None))
-        issue = sweep_issue(m, self, N, tick, cfg.sweep_number_width)
+        self.issue = issue = sweep_issue(m, self, N, tick, cfg.sweep_number_width)
         # the memories are read one cycle ahead of the fetch into registers beside the block
         # RAMs (hdl/lib/banked.py), a write landing with the read bypassed (n_neurons >= D + 1:
         # a neuron's registered write-back lands at the latest then)
         # (depth 9: read at the fetch from its registered address, the host's writes
         # registered too - the words come a stage later, PIPELINE_READ)
         ahead = cfg.read_stages == 1
-        st_rd, st_wr, cur_rd, sel_rd = core_memories(
+        mems = core_memories(
             m, self, cfg, V.width + U.width, init_state, state_attrs={"no_rw_check": 1},
             prefetch=issue.next_addr if ahead else issue.addr, host_write_register=not ahead)
-        tags = pipeline_tags(m, N, cfg.sweep_number_width, issue, last_stage=D)
+        self.memories, self.pending_writes = mems.banks, mems.pending
+        st_rd, cur_rd, sel_rd = mems.state, mems.current, mems.set
+        st_wr = self.memory_write(m, "state_mem", mems.state_write)
+        self.tags = tags = self.pipeline_tags(m, issue, D)
         tD = tags[D]
 
-        reg = registrar(m, reset_less=True)
+        def reg(name, value, stage):
+            return self.stage_register(m, name, value, stage)
 
         # --- stage 2 (3): the banks' registered words (bank multiplexer, host-write bypass) --
         s0 = 2 + cfg.read_stages           # the first datapath stage
         words = {"v": st_rd.data[:V.width].as_signed(), "u": st_rd.data[V.width:].as_signed(),
                  "i": cur_rd.data, "sel": sel_rd.data}
         vals = {k: reg(k, x, s0) for k, x in words.items()}
-        t0 = tags[s0]
-        # what an update starts from, for the formal harness (hdl/izhikevich/formal.py)
-        self.probes = {"valid": t0[0], "index": t0[1], **{k: vals[k] for k in vals},
-                       "latency": D - s0 + 1}
         self.state_write_lag = 1            # the state's write is registered before its RAM
         # the memories sample at the end of the fetch cycle (depth 9) or of the one before
         self.state_sample_lag = cfg.read_stages - 1
         if len(cfg.params) == 1:
             vals["sel"] = words["sel"] = 0
 
+        steps = self.STEPS
+
         def live_after(k):
             live = set(datapath.CARRIED)
-            for later in datapath.STEPS[k + 1:]:
+            for later in steps[k + 1:]:
                 live.update(later.reads)
             return live
 
@@ -177,7 +186,7 @@ class IzhikevichCore(wiring.Component):
         # words, and registered with them: every stage-3 multiplier then takes registers
         first = 0
         if 0 not in cfg.cuts:
-            step = datapath.STEPS[0]
+            step = steps[0]
             ops = step.fn(cfg, {n: words[n] for n in step.reads})
             live = live_after(0)
             vals.update({n: (reg(n, x, s0) if is_hdl(x) else x)
@@ -185,10 +194,8 @@ class IzhikevichCore(wiring.Component):
             first = 1
         self.stages = {s0: {n: x for n, x in vals.items() if is_hdl(x)}}
         # --- stages s0 .. D: the datapath steps, registered at the cuts ------------------
-        # the step functions are looked up in their module at elaboration, so a fault
-        # injected there (tests) reaches the RTL and not the twin
         stage = s0
-        for k, step in enumerate(datapath.STEPS):
+        for k, step in enumerate(steps):
             if k < first:
                 continue
             vals.update(step.fn(cfg, {n: vals[n] for n in step.reads}))
@@ -220,8 +227,8 @@ class IzhikevichCore(wiring.Component):
                      self.upd_spike.eq(spike), self.upd_clamp.eq(clamp)]
 
         # --- bookkeeping from the registered outputs (off the datapath's critical path) -----
-        sweep_bookkeeping(m, self, N, cfg.sweep_number_width, tD, CLAMP_KINDS,
-                          cfg.spike_fifo_depth)
+        self.counters = sweep_bookkeeping(m, self, N, cfg.sweep_number_width, tD, CLAMP_KINDS,
+                                          cfg.spike_fifo_depth)
         return m
 
 

@@ -31,7 +31,8 @@ import numpy as np
 from amaranth.hdl import Cat
 
 from ..lib.datapath import const_like, false_like, lookup, select_by
-from ..lib.fixed import clamp_flagged, is_hdl, narrow, round_shift, round_shift_add, select
+from ..lib.fixed import (clamp_flagged, is_hdl, narrow, product, round_shift, round_shift_add,
+                         select)
 from .config import CLAMP_KINDS, IzhikevichConfig
 
 __all__ = ["operands", "multiply1", "multiply2", "update_state", "stage_update", "clamp_bits",
@@ -75,8 +76,8 @@ def operands(cfg: IzhikevichConfig, v, u, I, sel):
 def multiply1(cfg: IzhikevichConfig, wq, vq, x, u, sel):
     """Multipliers 1 and 3 (and 5, ``dt (I - u)``, when dt is not a power of two; when it is,
     ``dt I - dt u`` by shifts, the rounding of ``dt u`` folded into the subtraction)."""
-    out = {"q": wq * lookup([k.raw for k in cfg.KA], sel),
-           "bvp": vq * lookup([b.raw for b in cfg.beta], sel)}
+    out = {"q": product(wq, lookup([k.raw for k in cfg.KA], sel), "multiply1 q"),
+           "bvp": product(vq, lookup([b.raw for b in cfg.beta], sel), "multiply1 bvp")}
     # y = round((b v - lambda u - b v_u) / 2**shift_y) is computed in stage 4 as
     # (bvp - uy) >> shift_y with uy = (lambda u + E) << shift_b, minus half an LSB of y when
     # rounding to nearest (exact, one adder)
@@ -88,7 +89,8 @@ def multiply1(cfg: IzhikevichConfig, wq, vq, x, u, sel):
         uy = select_by(sel, [((u << cfg.shift_b) + es) if lam else const_like(u, es)
                               for lam, es in zip(cfg.u_leak, e_sh)])
     out["uy"] = uy
-    out["x"] = _dt_x(cfg, x, u) if cfg.dt_shift is not None else x * cfg.KDT.raw
+    out["x"] = (_dt_x(cfg, x, u) if cfg.dt_shift is not None
+                else product(x, cfg.KDT.raw, "multiply1 x"))
     return out
 
 
@@ -135,9 +137,10 @@ def multiply2(cfg: IzhikevichConfig, q, bvp, uy, wq, v, u, x, sel):
     else:
         u_sh = select_by(sel, [(u << sa) + h for sa, h in zip(shifts, halves)])
         ud_sh = select_by(sel, [(ud << sa) + h for sa, h in zip(shifts, halves)])
-    return {"p": qq * wq, "m": y * lookup([a.raw for a in cfg.alpha], sel), "qq": qq, "y": y,
-            "vb_sh": vb_sh, "vb_th": vb_th, "vb_lo": vb_lo, "u_sh": u_sh, "ud_sh": ud_sh,
-            "y_flag": y_low | y_high}
+    return {"p": product(qq, wq, "multiply2 p"),
+            "m": product(y, lookup([a.raw for a in cfg.alpha], sel), "multiply2 m"),
+            "qq": qq, "y": y, "vb_sh": vb_sh, "vb_th": vb_th, "vb_lo": vb_lo, "u_sh": u_sh,
+            "ud_sh": ud_sh, "y_flag": y_low | y_high}
 
 
 def update_state(cfg: IzhikevichConfig, vb_sh, vb_th, vb_lo, u_sh, ud_sh, p, m, sel):
@@ -263,9 +266,10 @@ def product1_step(cfg: IzhikevichConfig, x):
     ``(I - u) dt`` when dt is not a power of two); beside them ``vx = v + dt (I - u)`` when dt
     is a power of two (the shifts' difference is ready), else ``vx = v``, so that each ``v`` sum
     of the next step adds one constant."""
-    out = {"pq": x["vs_w"] * x["ka"], "pb": x["vs_q"] * x["beta"]}
+    out = {"pq": product(x["vs_w"], x["ka"], "product1_step pq"),
+           "pb": product(x["vs_q"], x["beta"], "product1_step pb")}
     if cfg.dt_shift is None:
-        out["px"], out["vx"] = x["x"] * cfg.KDT.raw, x["v"]
+        out["px"], out["vx"] = product(x["x"], cfg.KDT.raw, "product1_step px"), x["v"]
     else:
         out["px"], out["vx"] = x["x"], x["v"] + x["x"]
     return out
@@ -385,7 +389,8 @@ def product2_step(cfg: IzhikevichConfig, x):
     beside them the ``v`` sums take the ``q`` rounding bit's ``w`` and the six ``u`` sums are
     formed with the ``y_lo (a dt)`` term."""
     u, sel, wq, qbit = x["u"], x["sel"], x["wq"], x["qbit"]
-    out = {"p2": x["qq_f"] * wq, "m2": x["y_hi"] * x["alpha"]}
+    out = {"p2": product(x["qq_f"], wq, "product2_step p2"),
+           "m2": product(x["y_hi"], x["alpha"], "product2_step m2")}
     if not is_hdl(qbit) and isinstance(qbit, int):
         extra = 0           # no rounding bit (truncation, no dropped constant bits)
     elif is_hdl(qbit) and len(qbit) > 1:      # 0, 1 or 2 (q_split)
@@ -438,15 +443,20 @@ def select_step(cfg: IzhikevichConfig, x):
 
 class Step:
     """One step of the pipelined datapath: its name, the values it reads and its function,
-    looked up in this module by name when used (so that a fault injected into the module's
-    function reaches the RTL built afterwards; the formal reference binds them at import)."""
+    looked up in this module by name when used (``fn`` a name; so that a fault injected into
+    the module's function reaches the RTL built afterwards; the formal reference binds them
+    at import) or given (``fn`` a function: :meth:`with_fn`)."""
 
-    def __init__(self, name: str, fn_name: str, reads: tuple):
-        self.name, self.fn_name, self.reads = name, fn_name, reads
+    def __init__(self, name: str, fn, reads: tuple):
+        self.name, self._fn, self.reads = name, fn, reads
 
     @property
     def fn(self):
-        return globals()[self.fn_name]
+        return globals()[self._fn] if isinstance(self._fn, str) else self._fn
+
+    def with_fn(self, fn) -> "Step":
+        """This step computed by ``fn`` (a core with a fault of its own: its ``STEPS``)."""
+        return Step(self.name, fn, self.reads)
 
 
 #: The pipelined datapath: step ``k`` of the update; the core registers the live values at

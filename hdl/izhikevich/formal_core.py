@@ -3,16 +3,15 @@ every length (k-induction) or of a bounded length (BMC), with SymbiYosys.
 
 The harness is :class:`cuneate.hdl.lib.core_proof.SweepCoreProof` (the contract, the pipeline
 invariants, the tracked neuron, the uninterpreted products: see there and docs/formal.md); this
-module gives it the core and the reference: one combinational composition of the pipelined
-steps (:data:`~cuneate.hdl.izhikevich.datapath.STEPS`, their functions bound at import, so a
-fault injected into the core's copy in :mod:`cuneate.hdl.izhikevich.datapath` does not reach the
-reference) from the tracked neuron's state word, current and set. The steps' products are the
-ones the core forms (same source lines), so each is one uninterpreted function on both sides;
-that the steps compute the four-stage update's integers is proven per configuration by the
-``steps`` property of :mod:`cuneate.hdl.izhikevich.formal`.
+module gives it the core and the reference: one combinational composition of the pipelined steps
+(:data:`~cuneate.hdl.izhikevich.datapath.STEPS`, their functions bound at import; a core proven
+with a fault of its own replaces one in its ``STEPS``) from the tracked neuron's state word,
+current and set. The steps' products are the ones the core forms (same sites), so each is one
+uninterpreted function on both sides; that the steps compute the four-stage update's integers is
+proven per configuration by the ``steps`` property of :mod:`cuneate.hdl.izhikevich.formal`.
 
 The pipeline's depth is read from the core, not assumed: the latency ``L`` is the last stage of
-its ``pipeline_tags``, and every stage's tag is checked against the fetch of ``k - 1`` cycles
+its ``tags``, and every stage's tag is checked against the fetch of ``k - 1`` cycles
 before. The induction needs ``L + 1`` steps (the data registers between the stages are a
 function of the last ``L`` cycles); :func:`prove_core` uses ``L + 2``.
 """
@@ -27,12 +26,12 @@ from amaranth import Cat
 from ..lib.core_proof import MUTANTS, SweepCoreProof
 from ..flow.sby import SOLVER
 from ..lib.formal import ProofResult, harness_rtlil, run_proof
-from . import core as core_module
 from . import datapath
 from .config import CLAMP_KINDS, ConfigError, IzhikevichConfig
 from .core import IzhikevichCore
 
-#: the reference keeps the true step functions, bound at import (a test may fault the core's)
+#: the reference keeps the true step functions, bound at import (a core proven with a fault of
+#: its own replaces one in its ``STEPS``)
 _TRUE_STEPS = tuple((s.fn, s.reads) for s in datapath.STEPS)
 
 
@@ -65,13 +64,12 @@ def one_bank(cfg: IzhikevichConfig) -> IzhikevichConfig:
 class IzhikevichCoreProof(SweepCoreProof):
     """The Izhikevich core (see :class:`~cuneate.hdl.lib.core_proof.SweepCoreProof`)."""
 
-    core_module = core_module
-    datapath_files = (datapath.__file__,)
+    core_class = IzhikevichCore
     clamp_kinds = CLAMP_KINDS
     off_by_one_register = ("u", 4)          # stage 4's u: the previous neuron's
 
-    def make_core(self):
-        return IzhikevichCore(one_bank(self.cfg))
+    def core_config(self):
+        return one_bank(super().core_config())
 
     def reference(self, words, inputs):
         cfg = self.cfg
@@ -130,10 +128,11 @@ def induction_depth(cfg: IzhikevichConfig) -> int:
 def prove_core(cfg: IzhikevichConfig, workdir: Path, mode: str = "prove",
                depth: int | None = None, mutant: str | None = None,
                timeout_s: float = 3600, engine: str = "smtbmc",
-               solver: str = SOLVER) -> ProofResult:
+               solver: str = SOLVER, core: type | None = None) -> ProofResult:
     """Prove (``mode="prove"``: k-induction of ``depth`` steps, default the core's latency + 2)
-    or check to a bound (``mode="bmc"``) that the core equals its one-step reference."""
-    top = IzhikevichCoreProof(cfg, mutant)
+    or check to a bound (``mode="bmc"``) that the core equals its one-step reference;
+    ``core``: a subclass of :class:`IzhikevichCore` to prove instead (a fault of its own)."""
+    top = IzhikevichCoreProof(cfg, mutant, core)
     il = harness_rtlil(top, "core_eq", MEMORIES)            # one elaboration: the RTLIL and k
     return run_proof("core equals one-step datapath", il, workdir, "core_eq", mode,
                      depth or _depth(top), timeout_s, engine, ABSTRACTIONS, solver)

@@ -8,6 +8,7 @@ import numpy as np
 
 from ...golden import izhikevich as golden
 from ..lib.fixed import check_int64, clamp_report, store_raw, tally_clamps
+from ..lib.kernel import choose_kernel
 from .config import CLAMP_KINDS, IzhikevichConfig
 from .datapath import clamp_bits, one_update
 
@@ -57,13 +58,7 @@ class IzhikevichTwin:
         from . import kernel as _k
         self.cfg = cfg = config or IzhikevichConfig(**kwargs)
         self.check = check
-        if kernel is None:
-            kernel = "numba" if (_k.available() and not check) else "stages"
-        if kernel not in self.KERNELS:
-            raise ValueError(f"unknown twin kernel {kernel!r}; known: {', '.join(self.KERNELS)}")
-        if kernel == "numba" and not _k.available():
-            raise ValueError("twin kernel 'numba' needs numba installed")
-        self.kernel = kernel
+        self.kernel = kernel = choose_kernel(kernel, self.KERNELS, numba_default=not check)
         self.threads = threads
         self.specialize = specialize
         self._k = _k

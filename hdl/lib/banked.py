@@ -48,7 +48,7 @@ from amaranth import Array, Module, Mux, Shape, Signal
 from amaranth.lib.memory import Memory
 
 __all__ = ["DP16KD_SHAPES", "block_shapes", "bank_shape", "blocks_for", "PrefetchedMemory",
-           "prefetched_memory"]
+           "prefetched_memory", "bank_word"]
 
 #: ``(depth, width)`` modes of the ECP5 DP16KD (18 Kbit), the default block shape
 DP16KD_SHAPES = ((16384, 1), (8192, 2), (4096, 4), (2048, 9), (1024, 18), (512, 36))
@@ -93,16 +93,23 @@ class PrefetchedMemory:
         self.pending = pending
 
 
+def bank_word(words, bank):
+    """The registered word of bank ``bank`` among ``words`` (one per bank)."""
+    return Array(words)[bank]
+
+
 def prefetched_memory(m: Module, name: str, shape, depth: int, init, read_addr, shapes,
                       bypass: bool = False, write_register: bool = False,
-                      attrs: dict | None = None) -> PrefetchedMemory:
+                      attrs: dict | None = None, pick=bank_word) -> PrefetchedMemory:
     """A ``depth``-word memory of ``shape`` (an Amaranth shape or a width; signed words stay
     signed) in banks of the best of ``shapes``, read at
     ``read_addr`` (one cycle ahead) into a register per bank; ``init`` its initial words;
     ``bypass``: a write landing as the word is sampled replaces it (host-written memories);
     ``write_register``: the write (address, data, enable) is registered before the RAM, so it
     lands a cycle later (the state's write-back: the result's routing to the block RAM gets
-    a cycle of its own). See the module docstring for the timing.
+    a cycle of its own); ``pick``: how the word is chosen among the banks' registered words
+    by the bank index (:func:`bank_word`; a proof's mutant passes a wrong one). See the module
+    docstring for the timing.
 
     Every bank carries ``no_rw_check``: the word a block RAM returns while the other port
     writes the same address is never used (the state memory is not read then; a host
@@ -147,7 +154,7 @@ def prefetched_memory(m: Module, name: str, shape, depth: int, init, read_addr, 
         sel_a = Signal(range(n_banks), name=f"{name}_bank_a", reset_less=True)
         sel_b = Signal(range(n_banks), name=f"{name}_bank_b", reset_less=True)
         m.d.sync += [sel_a.eq(read_addr[lo_bits:]), sel_b.eq(sel_a)]
-        word = Array(words)[sel_b]
+        word = pick(words, sel_b)
     if bypass:
         hit_a = Signal(name=f"{name}_bypass_a", reset_less=True)
         hit_b = Signal(name=f"{name}_bypass_b", reset_less=True)

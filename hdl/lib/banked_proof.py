@@ -26,38 +26,44 @@ free inputs (addresses below the depth); the RAM starts with any contents.
 
 from __future__ import annotations
 
-import contextlib
 from pathlib import Path
 
 from amaranth import Array, ClockDomain, Elaboratable, Module, Mux, Signal
-from amaranth.hdl._ast import AnyConst, AnySeq
+from amaranth.asserts import AnyConst, AnySeq
 
-from . import banked
-from .banked import prefetched_memory
-from .formal import (ProofResult, assert_all, assume_all, delay_line, harness_rtlil, patched,
-                     run_proof)
+from .banked import bank_word, prefetched_memory
+from .formal import ProofResult, assert_all, assume_all, delay_line, harness_rtlil, run_proof
 
 __all__ = ["BankedMemoryProof", "prove_banked", "MUTANTS", "ABSTRACTIONS"]
 
 #: faults the harness can build into the memory (never into the product): the bank of a word
-#: read one bank off, the bypass left out
+#: read one bank off (the memory built with a wrong ``pick``), the bypass left out
 MUTANTS = ("wrong_bank", "no_bypass")
 ABSTRACTIONS = ["read addresses and writes free every cycle", "memory with free initial "
                                                               "contents"]
 
 
+def _next_bank_word(words, bank):
+    """The word of the bank after ``bank``: each word read from the wrong bank."""
+    words = list(words)
+    return bank_word(words[1:] + words[:1], bank)
+
+
 class BankedMemoryProof(Elaboratable):
     """Harness: a ``depth``-word memory of ``width`` bits in banks of ``bank_depth`` words
     (the block shape ``(bank_depth, width)``), with the write bypass and optionally a
-    registered write, against its contract."""
+    registered write, against its contract; ``memory``: the function that builds it
+    (:func:`~cuneate.hdl.lib.banked.prefetched_memory`, or a faulty one: a test of the
+    proof)."""
 
     def __init__(self, depth: int, bank_depth: int, width: int = 3,
                  write_register: bool = False, bypass: bool = True,
-                 mutant: str | None = None):
+                 mutant: str | None = None, memory=prefetched_memory):
         if mutant is not None and mutant not in MUTANTS:
             raise ValueError(f"unknown mutant {mutant!r}; known: {', '.join(MUTANTS)}")
         self.depth, self.bank_depth, self.width = depth, bank_depth, width
         self.write_register, self.bypass, self.mutant = write_register, bypass, mutant
+        self.memory = memory
         self.cd = ClockDomain("sync", reset_less=True)
         self.ports = [self.cd.clk]
         self.n_banks = None
@@ -74,16 +80,10 @@ class BankedMemoryProof(Elaboratable):
         m.d.comb += [read_addr.eq(AnySeq(len(read_addr))), wr_en.eq(AnySeq(1)),
                      wr_addr.eq(AnySeq(len(wr_addr))), wr_data.eq(AnySeq(W))]
         assume_all(m, [t < N, read_addr < N, wr_addr < N])
-        wraps = []
-        if self.mutant == "wrong_bank":     # the word of the next bank read for each bank
-            wraps.append(patched(banked, "Array", lambda orig: lambda items: orig(
-                list(items)[1:] + list(items)[:1])))
-        with contextlib.ExitStack() as stack:
-            for w in wraps:
-                stack.enter_context(w)
-            mem = prefetched_memory(m, "mem", W, N, [], read_addr, ((self.bank_depth, W),),
-                                    bypass=self.bypass and self.mutant != "no_bypass",
-                                    write_register=self.write_register)
+        pick = _next_bank_word if self.mutant == "wrong_bank" else bank_word
+        mem = self.memory(m, "mem", W, N, [], read_addr, ((self.bank_depth, W),),
+                          bypass=self.bypass and self.mutant != "no_bypass",
+                          write_register=self.write_register, pick=pick)
         self.n_banks = len(mem.banks)
         m.d.comb += [mem.wr_en.eq(wr_en), mem.wr_addr.eq(wr_addr), mem.wr_data.eq(wr_data)]
         data = mem.data
@@ -128,11 +128,14 @@ class BankedMemoryProof(Elaboratable):
 
 def prove_banked(workdir: Path, depth: int = 10, bank_depth: int = 4, width: int = 3,
                  write_register: bool = False, mode: str = "prove", k: int | None = None,
-                 mutant: str | None = None, timeout_s: float = 600) -> ProofResult:
+                 mutant: str | None = None, timeout_s: float = 600,
+                 memory=prefetched_memory) -> ProofResult:
     """k-induction (``mode="prove"``) or a bounded check (``"bmc"``) of a ``depth``-word
     memory in banks of ``bank_depth`` against its contract; ``k`` default 4 (two cycles from
-    a read to its word, one of a registered write, one more)."""
-    top = BankedMemoryProof(depth, bank_depth, width, write_register, mutant=mutant)
+    a read to its word, one of a registered write, one more); ``memory``: see
+    :class:`BankedMemoryProof`."""
+    top = BankedMemoryProof(depth, bank_depth, width, write_register, mutant=mutant,
+                            memory=memory)
     il = harness_rtlil(top, "banked_eq", ("mem",))
     return run_proof("banked memory meets its contract", il, workdir, "banked_eq", mode,
                      k or 4, timeout_s, "smtbmc", ABSTRACTIONS)

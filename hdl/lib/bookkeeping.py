@@ -15,6 +15,9 @@ the contract of both cores (see :class:`cuneate.hdl.izhikevich.IzhikevichCore`):
     sticky clamp flags (bit per kind); a clamp in the clearing cycle keeps its flag set.
 ``spike_valid``, ``spike_ready``, ``spike_index``, ``spike_sweep``, ``spike_overflow``
     the spike FIFO; a spike that finds it full is dropped and sets the sticky overflow flag.
+
+Both cores derive from :class:`SweepCore`: its methods are the hooks through which a proof
+harness builds its faults, its attributes what the harness reads after elaboration.
 """
 
 from __future__ import annotations
@@ -22,14 +25,50 @@ from __future__ import annotations
 from types import SimpleNamespace
 
 from amaranth import Cat, Module, Mux, Signal
+from amaranth.lib import wiring
 from amaranth.lib.fifo import SyncFIFOBuffered
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
 from .banked import prefetched_memory
 
-__all__ = ["SweepIssue", "sweep_issue", "pipeline_tags", "registrar", "sweep_bookkeeping",
-           "core_memories", "core_ports"]
+__all__ = ["SweepCore", "SweepIssue", "sweep_issue", "pipeline_tags", "sweep_bookkeeping",
+           "SweepCounters", "CoreMemories", "core_memories", "core_ports"]
+
+
+class SweepCore(wiring.Component):
+    """Base of the time-multiplexed cores (the Izhikevich and LIF cores).
+
+    **Hooks.** A core forms its pipeline tags (:meth:`pipeline_tags`), its stage registers
+    (:meth:`stage_register`) and its state memory's write (:meth:`memory_write`) through these
+    methods; a subclass may override them - the faults a proof must catch
+    (:mod:`cuneate.hdl.lib.core_proof`). The product's cores use them as written here.
+
+    **What a core records** when elaborated, for a proof harness (nothing else reads them):
+    ``issue`` (:class:`SweepIssue`), ``tags`` (``{stage: (valid, index, sweep)}`` as the core
+    uses them), ``memories`` (``{name: [Memory of each bank]}`` of every per-neuron memory),
+    ``pending_writes`` (``{name: (en, addr, data)}`` of a write registered on its way to a
+    RAM) and ``counters`` (:class:`SweepCounters`).
+    """
+
+    #: data registers without a reset (their validity travels in the tags)
+    DATA_RESET_LESS = False
+
+    def pipeline_tags(self, m: Module, issue: SweepIssue, last_stage: int) -> dict:
+        """The tags of stages 2 .. ``last_stage`` (:func:`pipeline_tags`)."""
+        return pipeline_tags(m, self.cfg.n_neurons, self.cfg.sweep_number_width, issue,
+                             last_stage)
+
+    def stage_register(self, m: Module, name: str, value, stage: int) -> Signal:
+        """The pipeline register ``<name><stage>`` loaded with ``value`` every cycle."""
+        s = Signal(value.shape(), name=f"{name}{stage}", reset_less=self.DATA_RESET_LESS)
+        m.d.sync += s.eq(value)
+        return s
+
+    def memory_write(self, m: Module, name: str, port):
+        """The write port (``addr``, ``data``, ``en``) through which the pipeline writes the
+        memory ``name``: ``port`` itself."""
+        return port
 
 
 def core_ports(cfg, clamp_kinds, state_ports: dict, extra: dict | None = None) -> dict:
@@ -58,13 +97,23 @@ def core_ports(cfg, clamp_kinds, state_ports: dict, extra: dict | None = None) -
     return sig
 
 
+class CoreMemories:
+    """What :func:`core_memories` built: the state's read port and write port (``state``,
+    ``state_write``: ``addr``, ``data``, ``en``), the current's and the set's read ports
+    (``current``, ``set``), ``banks`` (``{name: [Memory of each bank]}``) and ``pending``
+    (``{name: (en, addr, data)}`` of each write registered on its way to the RAM)."""
+
+    def __init__(self, state, state_write, current, set_, banks, pending):
+        self.state, self.state_write, self.current, self.set = state, state_write, current, set_
+        self.banks, self.pending = banks, pending
+
+
 def core_memories(m: Module, core, cfg, state_width: int, state_init: list,
                   state_attrs: dict | None = None, prefetch=None,
-                  host_write_register: bool = False):
+                  host_write_register: bool = False) -> CoreMemories:
     """The per-neuron memories every core has: the state (``state_width`` bits, ``state_init``,
     ``state_attrs`` for synthesis), the host-written current and the parameter-set index, with
-    the host write ports (``i_wr_*``, ``sel_wr_*``) wired. Returns the state read and write
-    ports and the current and set read ports.
+    the host write ports (``i_wr_*``, ``sel_wr_*``) wired (:class:`CoreMemories`).
 
     ``prefetch`` (the issue's :attr:`SweepIssue.next_addr`): the memories are
     :func:`~cuneate.hdl.lib.banked.prefetched_memory` banks in ``cfg.bram_shapes``, read one
@@ -79,9 +128,7 @@ def core_memories(m: Module, core, cfg, state_width: int, state_init: list,
     fetch, addressed from a register: the words come a cycle later) with
     ``host_write_register``: the host's writes are then registered before their RAMs too, so
     that the memories sample and take writes a cycle later than with ``next_addr`` and an
-    update still sees them as they are in its fetch cycle. The read ports returned carry
-    ``pending``: ``(en, addr, data)`` of a write registered on its way to the RAM (None
-    without one), for a harness that observes the memories."""
+    update still sees them as they are in its fetch cycle."""
     N = cfg.n_neurons
     if prefetch is not None:
         shapes = cfg.bram_shapes
@@ -98,9 +145,12 @@ def core_memories(m: Module, core, cfg, state_width: int, state_init: list,
             sel.wr_en.eq(core.sel_wr_en),
         ]
         st_wr = SimpleNamespace(addr=st.wr_addr, data=st.wr_data, en=st.wr_en)
-        return (SimpleNamespace(data=st.data, pending=st.pending), st_wr,
-                SimpleNamespace(data=cur.data, pending=cur.pending),
-                SimpleNamespace(data=sel.data, pending=sel.pending))
+        mems = {"state_mem": st, "cur_mem": cur, "sel_mem": sel}
+        return CoreMemories(SimpleNamespace(data=st.data), st_wr,
+                            SimpleNamespace(data=cur.data), SimpleNamespace(data=sel.data),
+                            {name: mem.banks for name, mem in mems.items()},
+                            {name: mem.pending for name, mem in mems.items()
+                             if mem.pending is not None})
     m.submodules.state_mem = state_mem = Memory(shape=state_width, depth=N, init=state_init,
                                                 attrs=state_attrs)
     m.submodules.cur_mem = cur_mem = Memory(shape=cfg.I.shape(), depth=N, init=[])
@@ -114,18 +164,22 @@ def core_memories(m: Module, core, cfg, state_width: int, state_init: list,
         sel_wr.addr.eq(core.sel_wr_addr), sel_wr.data.eq(core.sel_wr_data),
         sel_wr.en.eq(core.sel_wr_en),
     ]
-    return st_rd, st_wr, cur_rd, sel_rd
+    return CoreMemories(st_rd, st_wr, cur_rd, sel_rd,
+                        {"state_mem": [state_mem], "cur_mem": [cur_mem], "sel_mem": [sel_mem]},
+                        {})
 
 
 class SweepIssue:
     """The issue counter's signals: ``start`` (a sweep starts this cycle), ``issuing``,
     ``addr`` (the neuron issued), ``sweep_no`` (the sweep's number), ``next_addr`` (what
     ``addr`` holds in the next cycle: the address a memory read one cycle ahead takes),
-    ``inc`` and ``at_last`` (registers kept equal to ``addr + 1`` and ``addr == N - 1``)."""
+    ``inc`` and ``at_last`` (registers kept equal to ``addr + 1`` and ``addr == N - 1``),
+    ``started`` (a sweep has started since reset: the first sweep is number 0)."""
 
-    def __init__(self, start, issuing, addr, sweep_no, next_addr, inc=None, at_last=None):
+    def __init__(self, start, issuing, addr, sweep_no, next_addr, inc=None, at_last=None,
+                 started=None):
         self.start, self.issuing, self.addr, self.sweep_no = start, issuing, addr, sweep_no
-        self.next_addr, self.inc, self.at_last = next_addr, inc, at_last
+        self.next_addr, self.inc, self.at_last, self.started = next_addr, inc, at_last, started
 
 
 def sweep_issue(m: Module, core, n_neurons: int, tick, number_width: int) -> SweepIssue:
@@ -159,7 +213,7 @@ def sweep_issue(m: Module, core, n_neurons: int, tick, number_width: int) -> Swe
     with m.Elif(issuing & last_issue):
         m.d.sync += issuing.eq(0)
     m.d.comb += core.busy.eq(issuing)
-    return SweepIssue(start, issuing, addr, sweep_no, next_addr, inc, at_last)
+    return SweepIssue(start, issuing, addr, sweep_no, next_addr, inc, at_last, started)
 
 
 def pipeline_tags(m: Module, n_neurons: int, number_width: int, issue: SweepIssue,
@@ -176,23 +230,20 @@ def pipeline_tags(m: Module, n_neurons: int, number_width: int, issue: SweepIssu
     return tags
 
 
-def registrar(m: Module, reset_less: bool = False):
-    """``reg(name, value, stage)``: a pipeline register named ``<name><stage>`` loaded with
-    ``value`` every cycle (``reset_less``: without a reset, for data registers whose validity
-    travels in the pipeline tags)."""
-    def reg(name, value, stage):
-        s = Signal(value.shape(), name=f"{name}{stage}", reset_less=reset_less)
-        m.d.sync += s.eq(value)
-        return s
-    return reg
+class SweepCounters:
+    """The counters of the sweep in progress :func:`sweep_bookkeeping` keeps: ``spikes`` (spikes
+    so far) and ``clamps`` (``{kind: clamps so far}``)."""
+
+    def __init__(self, spikes, clamps: dict):
+        self.spikes, self.clamps = spikes, clamps
 
 
 def sweep_bookkeeping(m: Module, core, n_neurons: int, number_width: int, last_tag,
-                      clamp_kinds, fifo_depth: int) -> None:
+                      clamp_kinds, fifo_depth: int) -> SweepCounters:
     """Per-sweep spike and clamp counters, sticky clamp flags and the spike FIFO, all fed from
     the core's registered ``upd_*`` outputs (off the datapath's critical path); ``last_tag`` is
     the last stage's ``(valid, index, sweep)``, which the core registers into ``upd_valid``
-    and ``upd_index``."""
+    and ``upd_index``. Returns the counters of the sweep in progress."""
     N = n_neurons
     upd_sweep = Signal(number_width)
     m.d.sync += upd_sweep.eq(last_tag[2])
@@ -207,8 +258,9 @@ def sweep_bookkeeping(m: Module, core, n_neurons: int, number_width: int, last_t
                      core.sweep_number.eq(upd_sweep), count.eq(0)]
     with m.Elif(core.upd_valid):
         m.d.sync += count.eq(count + core.upd_spike)
+    clamps = {}
     for i, k in enumerate(clamp_kinds):
-        cnt = Signal(range(N + 1), name=f"clamp_count_{k}")
+        cnt = clamps[k] = Signal(range(N + 1), name=f"clamp_count_{k}")
         with m.If(last):
             m.d.sync += [getattr(core, f"sweep_clamps_{k}").eq(cnt + core.upd_clamp[i]),
                          cnt.eq(0)]
@@ -226,3 +278,4 @@ def sweep_bookkeeping(m: Module, core, n_neurons: int, number_width: int, last_t
                  core.spike_sweep.eq(fifo.r_data[iw:])]
     with m.If(push & ~fifo.w_rdy):
         m.d.sync += core.spike_overflow.eq(1)
+    return SweepCounters(count, clamps)

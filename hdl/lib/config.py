@@ -9,12 +9,14 @@ refused later, at elaboration or while simulating.
 
 from __future__ import annotations
 
+from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Sequence
 
 from .fixed import ROUNDINGS, FixedConstant, FixedPointError
 
-__all__ = ["ConfigError", "CoreOptions", "MAX_BLOCK_RAM_BITS", "SATURATION", "TICK_SOURCES", "int_bits_for",
+__all__ = ["ConfigError", "refusing", "MIN_NEURONS", "CoreOptions", "MAX_BLOCK_RAM_BITS",
+           "SATURATION", "TICK_SOURCES", "int_bits_for",
            "check_delays", "shared_exponent"]
 
 #: The most block-RAM bits a block may ask for: the block RAM of the largest supported FPGA
@@ -25,9 +27,28 @@ SATURATION = ("refuse", "flag")
 TICK_SOURCES = ("internal", "external")
 
 
+#: The fewest neurons the engines and boards run a time-multiplexed core with: the LIF core's
+#: minimum (its pipeline depth plus margin); an Izhikevich core's own is
+#: :func:`~cuneate.hdl.izhikevich.config.min_neurons` (depth + 1), its deepest above this.
+MIN_NEURONS = 8
+
+
 class ConfigError(FixedPointError):
     """A block configuration that cannot hold; raised at construction (before elaboration),
     with a one-line reason."""
+
+
+@contextmanager
+def refusing(what: str, *errors):
+    """Turn a :class:`~cuneate.hdl.lib.fixed.FixedPointError` (or one of ``errors``) raised
+    inside into the one-line ``ConfigError("<what> refused: <reason>")``; a
+    :class:`ConfigError` passes as it is."""
+    try:
+        yield
+    except ConfigError:
+        raise
+    except (FixedPointError, *errors) as exc:
+        raise ConfigError(f"{what} refused: {exc}") from None
 
 
 @dataclass(kw_only=True)

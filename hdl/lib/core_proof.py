@@ -24,8 +24,8 @@ against the block's one-step reference, for every input sequence of every length
 * the contract's sweep model counts at most ``N`` neurons left (its counter is wider than that),
   and the issue counter agrees with it (issuing, address, sweep number; the increment and
   end test it keeps beside the address);
-* each stage's tag (valid, index, sweep; ``pipeline_tags``) holds the fetch of ``k - 1`` cycles
-  before, for every stage ``k`` of the core's own tag list (``L`` is its last stage);
+* each stage's tag (valid, index, sweep; the core's ``tags``) holds the fetch of ``k - 1``
+  cycles before, for every stage ``k`` of the core's own tag list (``L`` is its last stage);
 * every tracked memory word of ``t`` equals the reference's copy: the host memories the host's
   writes, the state the reference's last result from the cycle its write-back lands (with the
   result leaving, or ``state_write_lag`` cycles later for a core that registers the write),
@@ -40,19 +40,29 @@ initial contents. The properties speak of one neuron ``t``, a free constant, so 
 for every ``t`` at once. The sweep model, the tags and the bookkeeping do not depend on ``t``.
 See docs/formal.md for why a proof at one ``N`` speaks for every ``N`` the configuration
 accepts.
+
+**Binding to the core.** The harness instantiates the block's core (with an external tick,
+which it drives freely: every tick sequence, an internal divider's among them), drives its
+ports and reads what the core records when elaborated (:class:`~cuneate.hdl.lib.bookkeeping
+.SweepCore`: the issue counter, the tags, the memories, the pending registered writes, the
+sweep counters); to read the tracked neuron's words it adds an asynchronous read port to each
+memory, through a subclass of the core. The **mutants** are subclasses overriding one of the
+core's documented hooks (``memory_write``: the state write-back skipped; ``stage_register``: a
+stage register one neuron late; ``pipeline_tags``: the write-back stage's index one off), or a
+wiring of the harness (``late_host_write``: the host's writes reach the core a cycle after the
+reference takes them).
 """
 
 from __future__ import annotations
 
-import contextlib
+import dataclasses
 from types import SimpleNamespace
 
 from amaranth import Array, ClockDomain, Elaboratable, Module, Mux, Signal
+from amaranth.asserts import AnyConst, AnySeq
 from amaranth.hdl import Fragment
-from amaranth.hdl._ast import AnyConst, AnySeq
 
-from .formal import (UninterpretedProducts, assert_all, assume_all, delay_line, patched,
-                     signal_named)
+from .formal import UninterpretedProducts, assert_all, assume_all, delay_line, faulty_write
 
 __all__ = ["SweepCoreProof", "MUTANTS"]
 
@@ -62,23 +72,74 @@ __all__ = ["SweepCoreProof", "MUTANTS"]
 MUTANTS = ("skipped_write", "stage_off_by_one", "late_host_write", "tag_off_by_one")
 
 
+class _SkippedWrite:
+    """The state memory's write enable gated by a free bit: a write-back skipped whenever the
+    solver chooses."""
+
+    def memory_write(self, m, name, port):
+        port = super().memory_write(m, name, port)
+        return faulty_write(m, port, skip=AnySeq(1)) if name == "state_mem" else port
+
+
+class _StageOffByOne:
+    """The stage register ``OFF_BY_ONE`` (name, stage) one cycle late: the previous neuron's."""
+
+    OFF_BY_ONE = None
+
+    def stage_register(self, m, name, value, stage):
+        r = super().stage_register(m, name, value, stage)
+        if (name, stage) != self.OFF_BY_ONE:
+            return r
+        return super().stage_register(m, f"{name}_late", r, stage)
+
+
+class _TagOffByOne:
+    """The last stage's index one high: the write-back addressed one neuron off."""
+
+    def pipeline_tags(self, m, issue, last_stage):
+        tags = dict(super().pipeline_tags(m, issue, last_stage))
+        valid, idx, swp = tags[last_stage]
+        bad = Signal.like(idx, name="mutant_idx")
+        m.d.comb += bad.eq(idx + 1)
+        tags[last_stage] = (valid, bad, swp)
+        return tags
+
+
+_FAULTS = {"skipped_write": _SkippedWrite, "stage_off_by_one": _StageOffByOne,
+           "tag_off_by_one": _TagOffByOne}
+
+
+def _watched(core: type, names) -> type:
+    """``core`` with an asynchronous read port on every bank of each memory of ``names``
+    (``watch``: ``{name: [port of each bank]}``), added through the memories it records."""
+    class Watched(core):
+        def elaborate(self, platform):
+            m = super().elaborate(platform)
+            self.watch = {name: [bank.read_port(domain="comb") for bank in self.memories[name]]
+                          for name in names}
+            return m
+    Watched.__name__ = f"Watched{core.__name__}"
+    return Watched
+
+
 class SweepCoreProof(Elaboratable):
-    """Harness of a core built on :mod:`cuneate.hdl.lib.bookkeeping`; a block subclasses it
-    with its core, its datapath files and its one-step :meth:`reference`.
+    """Harness of a core built on :class:`~cuneate.hdl.lib.bookkeeping.SweepCore`; a block
+    subclasses it with its core class and its one-step :meth:`reference`.
 
     Parameters
     ----------
     cfg
-        The block's configuration (any tick source: the harness drives the tick freely, which
-        covers the divider's ticks).
+        The block's configuration (any tick source: the harness proves the core with an
+        external tick and drives it freely, which covers the divider's ticks).
     mutant
         ``None`` or one of :data:`MUTANTS`: the fault built into the core for this run.
+    core
+        The core class to prove (default :attr:`core_class`): a subclass of it with a fault
+        of its own (a test of the proof).
     """
 
-    #: the module whose helpers the core calls (wrapped while the core elaborates)
-    core_module = None
-    #: source files whose products are uninterpreted
-    datapath_files: tuple = ()
+    #: the block's core
+    core_class: type = None
     clamp_kinds: tuple = ()
     #: host-written memories of every core and their write ports
     host_memories = {"cur_mem": "i_wr", "sel_mem": "sel_wr"}
@@ -87,28 +148,31 @@ class SweepCoreProof(Elaboratable):
     #: the stage register a ``stage_off_by_one`` mutant delays (name, stage)
     off_by_one_register = None
 
-    def __init__(self, cfg, mutant: str | None = None):
+    def __init__(self, cfg, mutant: str | None = None, core: type | None = None):
         if mutant is not None and mutant not in MUTANTS:
             raise ValueError(f"unknown mutant {mutant!r}; known: {', '.join(MUTANTS)}")
         self.cfg, self.mutant = cfg, mutant
+        self.core_cls = core or self.core_class
         self.cd = ClockDomain("sync", reset_less=True)
         self.ports = [self.cd.clk]
         self.latency = None
 
     # --- what a block provides --------------------------------------------------------------
-    def make_core(self):
-        raise NotImplementedError
+    def core_config(self):
+        """The configuration of the core the harness elaborates: ``cfg`` with an external
+        tick."""
+        return dataclasses.replace(self.cfg, tick_source="external")
 
-    def host_write_ports(self, core) -> dict:
+    def host_write_ports(self) -> dict:
         """``{memory: port prefix}`` of the host-written memories this core has."""
         return dict(self.host_memories)
 
-    def read_only_memories(self, core) -> tuple:
+    def read_only_memories(self) -> tuple:
         """Per-neuron memories neither the host nor the pipeline writes (LIF: fixed weights);
         their tracked word is whatever the memory starts with."""
         return ()
 
-    def fetched_inputs(self, m, core, frag, fetch) -> dict:
+    def fetched_inputs(self, m, core, fetch) -> dict:
         """Inputs of an update besides the tracked memories' words, as the contract gives
         them in the fetch cycle (LIF: the tick's input spikes)."""
         return {}
@@ -118,146 +182,88 @@ class SweepCoreProof(Elaboratable):
         ``{"words": {state memory: next word}, "ports": {upd port: expected value}}``."""
         raise NotImplementedError
 
-    def extra_invariants(self, m, core, frag, ref) -> None:
-        """Block-specific invariants (state the block's core keeps beside the shared one)."""
-
     # --- the harness ---------------------------------------------------------------------------
-    def _elaborate_core(self, platform, tick):
-        core = self.make_core()
-        core._MustUse__silence = True
-        rec = SimpleNamespace(issue=None, tags=None, pending={})
-        mut = self.mutant
-        ns = self.core_module
+    def _make_core(self):
+        cls = self.core_cls
+        fault = _FAULTS.get(self.mutant)
+        if fault is not None:
+            cls = type(f"{fault.__name__[1:]}{cls.__name__}", (fault, cls),
+                       {"OFF_BY_ONE": self.off_by_one_register})
+        names = (*self.state_memories, *self.host_write_ports(), *self.read_only_memories())
+        return _watched(cls, names)(self.core_config())
 
-        def rec_issue(orig):
-            def f(*a, **k):
-                rec.issue = orig(*a, **k)
-                return rec.issue
-            return f
+    def _host_writes(self, m, core, N) -> dict:
+        """The host's writes, free (addresses in range, set indices valid): ``{memory: (en,
+        addr, data)}`` as the reference takes them; the core's ports are driven with them
+        (``late_host_write``: the current's a cycle later)."""
+        writes = {}
+        for name, prefix in self.host_write_ports().items():
+            ports = [getattr(core, f"{prefix}_{x}") for x in ("en", "addr", "data")]
+            free = [Signal.like(p, name=f"host_{prefix}_{x}")
+                    for p, x in zip(ports, ("en", "addr", "data"))]
+            m.d.comb += [f.eq(AnySeq(len(f))) for f in free]
+            assume_all(m, [free[1] < N])
+            wire = free
+            if self.mutant == "late_host_write" and prefix == "i_wr":
+                wire = [delay_line(m, f, 1, f"mutant_{f.name}")[1] for f in free]
+            m.d.comb += [p.eq(w) for p, w in zip(ports, wire)]
+            writes[name] = tuple(free)
+        assume_all(m, [writes["sel_mem"][2] < len(self.cfg.param_sets)])
+        return writes
 
-        def rec_tags(orig):
-            def f(m, *a, **k):
-                rec.tags = orig(m, *a, **k)
-                if mut == "tag_off_by_one":           # the write-back stage's index + 1
-                    last = max(rec.tags)
-                    valid, idx, swp = rec.tags[last]
-                    bad = Signal.like(idx, name="mutant_idx")
-                    m.d.comb += bad.eq(idx + 1)
-                    rec.tags = dict(rec.tags)
-                    rec.tags[last] = (valid, bad, swp)
-                return rec.tags
-            return f
-
-        def free_tick(orig):
-            return lambda m, cfg, tick_in=None: tick
-
-        def registrar(orig):
-            def f(m, *args, **kwargs):
-                reg = orig(m, *args, **kwargs)
-
-                def faulty(name, value, stage):
-                    r = reg(name, value, stage)
-                    if (name, stage) != self.off_by_one_register:
-                        return r
-                    return reg(f"{name}_late", r, stage)   # one more cycle: previous neuron
-                return faulty
-            return f
-
-        def memories(orig):
-            def f(m, core_, *a, **k):
-                view = core_
-                if mut == "late_host_write":
-                    view = SimpleNamespace(**{n: getattr(core_, n) for n in
-                                              ("sel_wr_en", "sel_wr_addr", "sel_wr_data")})
-                    for n in ("i_wr_en", "i_wr_addr", "i_wr_data"):
-                        d = Signal.like(getattr(core_, n), name=f"mutant_{n}")
-                        m.d.sync += d.eq(getattr(core_, n))
-                        setattr(view, n, d)
-                st_rd, st_wr, cur_rd, sel_rd = orig(m, view, *a, **k)
-                for name, rd in (("cur_mem", cur_rd), ("sel_mem", sel_rd)):
-                    if getattr(rd, "pending", None) is not None:
-                        rec.pending[name] = rd.pending
-                if mut == "skipped_write":
-                    skip = Signal(name="mutant_skip")
-                    m.d.comb += skip.eq(AnySeq(1))
-                    fake = SimpleNamespace(addr=Signal.like(st_wr.addr, name="mutant_wr_addr"),
-                                           data=Signal.like(st_wr.data, name="mutant_wr_data"),
-                                           en=Signal(name="mutant_wr_en"))
-                    m.d.comb += [st_wr.addr.eq(fake.addr), st_wr.data.eq(fake.data),
-                                 st_wr.en.eq(fake.en & ~skip)]
-                    st_wr = fake
-                return st_rd, st_wr, cur_rd, sel_rd
-            return f
-
-        wraps = [("sweep_issue", rec_issue), ("pipeline_tags", rec_tags),
-                 ("tick_strobe", free_tick), ("core_memories", memories)]
-        if mut == "stage_off_by_one":
-            wraps.append(("registrar", registrar))
-        with contextlib.ExitStack() as stack:
-            for name, w in wraps:
-                stack.enter_context(patched(ns, name, w))
-            stack.enter_context(self.products.role("design"))
-            core_m = core.elaborate(platform)
-        return core, core_m, rec
-
-    def elaborate(self, platform):
-        cfg, m = self.cfg, Module()
-        m.domains.sync = self.cd
-        N = cfg.n_neurons
-        self.products = UninterpretedProducts(self.datapath_files)
-        tick = Signal(name="tick")
-        m.d.comb += tick.eq(AnySeq(1))
-        t = Signal(range(N), name="tracked")
-        m.d.comb += t.eq(AnyConst(range(N)))
-        assume_all(m, [t < N])
-
-        core, core_m, rec = self._elaborate_core(platform, tick)
-        # one asynchronous read port at the tracked neuron on each memory (observation only);
-        # a memory in banks (hdl/lib/banked.py: ``name``, ``name_1`` ...) is read in the bank
-        # that holds the tracked neuron
+    def _seen(self, m, core, t) -> dict:
+        """Each watched memory's word at the tracked neuron ``t``: read in the bank that holds
+        it (hdl/lib/banked.py), a host memory's with a write registered on its way to the RAM
+        (read at the fetch) over it."""
         seen = {}
-        for name in (*self.state_memories, *self.host_write_ports(core),
-                     *self.read_only_memories(core)):
-            banks = [core_m.submodules[name]]
-            while True:
-                try:
-                    banks.append(core_m.submodules[f"{name}_{len(banks)}"])
-                except (AttributeError, KeyError, NameError):
-                    break
-            ports = [bank.read_port(domain="comb") for bank in banks]
+        for name, ports in core.watch.items():
             if len(ports) == 1:
                 m.d.comb += ports[0].addr.eq(t)
                 seen[name] = ports[0].data
                 continue
+            banks = core.memories[name]
             lo = (banks[0].depth - 1).bit_length()
             for port in ports:
                 m.d.comb += port.addr.eq(t[:lo])
             word = Signal.like(ports[0].data, name=f"seen_{name}")
             m.d.comb += word.eq(Array(p.data for p in ports)[t[lo:]])
             seen[name] = word
-        # a host memory whose writes are registered on their way to the RAM (read at the
-        # fetch, hdl/lib/banked.py): its word is the RAM's with the pending write over it
-        for name, (en, addr, data) in rec.pending.items():
-            word = Signal.like(seen[name], name=f"seen_{name}_pending")
-            m.d.comb += word.eq(Mux(en & (addr == t), data, seen[name]))
-            seen[name] = word
-        frag = Fragment.get(core_m, platform)
-        m.submodules.core = frag
-        tags, issue = rec.tags, rec.issue
-        L = self.latency = max(tags)                  # fetch in f, stage k in f + k - 1, out f + L
+        for name in self.host_write_ports():
+            if name in core.pending_writes:
+                en, addr, data = core.pending_writes[name]
+                word = Signal.like(seen[name], name=f"seen_{name}_pending")
+                m.d.comb += word.eq(Mux(en & (addr == t), data, seen[name]))
+                seen[name] = word
+        return seen
 
-        # free host inputs (addresses in range, set indices valid)
-        for name, prefix in self.host_write_ports(core).items():
-            addr = getattr(core, f"{prefix}_addr")
-            m.d.comb += [getattr(core, f"{prefix}_{x}").eq(AnySeq(len(getattr(core, f"{prefix}_{x}"))))
-                         for x in ("en", "addr", "data")]
-            assume_all(m, [addr < N])
-        n_sets = len(cfg.param_sets)
-        assume_all(m, [core.sel_wr_data < n_sets])
+    def elaborate(self, platform):
+        cfg, m = self.cfg, Module()
+        m.domains.sync = self.cd
+        N = cfg.n_neurons
+        self.products = UninterpretedProducts()
+        t = Signal(range(N), name="tracked")
+        m.d.comb += t.eq(AnyConst(range(N)))
+        assume_all(m, [t < N])
+
+        core = self._make_core()
+        with self.products.role("design"):
+            m.submodules.core = Fragment.get(core, platform)
+        self.latency = max(core.tags)           # fetch in f, stage k in f + k - 1, out f + L
+        tick = Signal(name="tick")
+        m.d.comb += [tick.eq(AnySeq(1)), core.tick.eq(tick)]
         for name in ("clamp_clear", "spike_ready"):
             m.d.comb += getattr(core, name).eq(AnySeq(1))
+        writes = self._host_writes(m, core, N)
+        model = self._sweep_model(m, core, tick)
+        flight = [model.dv[k] & (model.di[k] == t) for k in range(self.latency + 1)]
+        self._tracked_neuron(m, core, writes, self._seen(m, core, t), t, flight)
+        self._bookkeeping(m, core, model)
+        return m
 
-        # --- the contract's sweeps ----------------------------------------------------------
+    def _sweep_model(self, m, core, tick):
+        """The contract's sweeps, the issue counter and every stage's tag against them."""
+        cfg, N, L = self.cfg, self.cfg.n_neurons, self.latency
+        issue = core.issue
         left = Signal(range(N + 1), name="ref_left")
         overrun = Signal(name="ref_overrun")
         number = Signal(cfg.sweep_number_width, name="ref_sweep_no")
@@ -277,25 +283,27 @@ class SweepCoreProof(Elaboratable):
         dv = delay_line(m, fetch_valid, L, "ref_valid")
         di = delay_line(m, fetch_idx, L, "ref_idx")
         dn = delay_line(m, number, L, "ref_no")
-        core_started = signal_named(frag, "started")
         assert_all(m, [(left <= N, "sweep model: at most N neurons left"),
                        (issue.issuing == fetch_valid, "issue: busy as the sweep model"),
                        (~fetch_valid | (issue.addr == fetch_idx), "issue: neuron fetched"),
-                       (core_started == started, "issue: first sweep"),
+                       (issue.started == started, "issue: first sweep"),
                        (issue.sweep_no == number, "issue: sweep number"),
                        (issue.inc == issue.addr + 1, "issue: the address's increment"),
                        (issue.at_last == (issue.addr == N - 1), "issue: the last address")])
-        for k, (valid, idx, swp) in sorted(tags.items()):
+        for k, (valid, idx, swp) in sorted(core.tags.items()):
             assert_all(m, [(valid == dv[k - 1], f"stage {k}: valid"),
                            (~valid | (idx == di[k - 1]), f"stage {k}: neuron"),
                            (~valid | (swp == dn[k - 1]), f"stage {k}: sweep")])
         assert_all(m, [(core.upd_valid == dv[L], "update timing"),
                        (~dv[L] | (core.upd_index == di[L]), "update order")])
+        return SimpleNamespace(dv=dv, di=di, dn=dn, overrun=overrun)
 
-        # --- the tracked neuron ---------------------------------------------------------------
+    def _tracked_neuron(self, m, core, writes, seen, t, flight):
+        """Every memory word of the tracked neuron equals the reference's copy; each of its
+        updates equals the reference's step."""
+        L = self.latency
         primed = Signal(name="ref_primed")      # step 0: the reference takes the memories' words
         m.d.sync += primed.eq(1)
-        flight = [dv[k] & (di[k] == t) for k in range(L + 1)]   # fetched k cycles ago
         words = {}
         for name, data in seen.items():
             r = Signal.like(data, name=f"ref_{name}")
@@ -304,7 +312,7 @@ class SweepCoreProof(Elaboratable):
             words[name] = (r, now)
             assert_all(m, [(data == now, f"memory {name}: tracked word")])
         held = {name: Signal.like(now, name=f"held_{name}") for name, (_, now) in words.items()}
-        extra = self.fetched_inputs(m, core, frag, flight[0])
+        extra = self.fetched_inputs(m, core, flight[0])
         held_in = {}
         for name, value in extra.items():
             h = Signal.like(value, name=f"held_{name}")
@@ -314,11 +322,10 @@ class SweepCoreProof(Elaboratable):
         with self.products.role("reference"):
             exp = self.reference(held, held_in)
         self.products.constrain(m, flight[0])
-        for name, prefix in self.host_write_ports(core).items():
+        for name, (en, addr, data) in writes.items():
             r, now = words[name]
-            en, addr, data = (getattr(core, f"{prefix}_{x}") for x in ("en", "addr", "data"))
             m.d.sync += r.eq(Mux(en & (addr == t), data, now))
-        for name in self.read_only_memories(core):
+        for name in self.read_only_memories():
             r, now = words[name]
             m.d.sync += r.eq(now)
         # the write-back is issued from the last stage (fetched L - 1 cycles ago) and lands at
@@ -332,9 +339,8 @@ class SweepCoreProof(Elaboratable):
         # sample at the end of the fetch (``state_sample_lag`` = 1: read from the fetch's
         # registered address) also sees a write-back landing then (in a reachable state the
         # tracked neuron's own write lands earlier: n_neurons > depth)
-        at_end = getattr(core, "state_sample_lag", 0)
         fetched = {n: words[n][1] for n in held}
-        if at_end:
+        if getattr(core, "state_sample_lag", 0):
             fetched.update({n: Mux(lands, exp["words"][n], words[n][1])
                             for n in self.state_memories})
         with m.If(flight[0]):
@@ -344,7 +350,10 @@ class SweepCoreProof(Elaboratable):
                    for port, value in exp["ports"].items()]
         assert_all(m, checks)
 
-        # --- bookkeeping ------------------------------------------------------------------------
+    def _bookkeeping(self, m, core, model):
+        """The sweep counters, the sticky clamp flags and ``overrun`` against the reference's
+        count of the updates leaving."""
+        cfg, N, L = self.cfg, self.cfg.n_neurons, self.latency
         done = Signal(name="ref_sweep_done")
         count = Signal(range(N + 1), name="ref_count")
         total = Signal(range(N + 1), name="ref_total")
@@ -355,7 +364,7 @@ class SweepCoreProof(Elaboratable):
         counts = [Signal(range(N + 1), name=f"ref_clamps_{k}") for k in kinds]
         totals = [Signal(range(N + 1), name=f"ref_clamps_total_{k}") for k in kinds]
         with m.If(last):
-            m.d.sync += [count.eq(0), total.eq(count + core.upd_spike), last_no.eq(dn[L])]
+            m.d.sync += [count.eq(0), total.eq(count + core.upd_spike), last_no.eq(model.dn[L])]
             m.d.sync += [c.eq(0) for c in counts]
             m.d.sync += [tt.eq(c + core.upd_clamp[i]) for i, (c, tt) in
                          enumerate(zip(counts, totals))]
@@ -366,15 +375,11 @@ class SweepCoreProof(Elaboratable):
         m.d.sync += sticky.eq(Mux(core.clamp_clear, 0, sticky) | core.upd_clamp)
         checks = [(core.sweep_done == done, "sweep_done"),
                   (core.sweep_count == total, "sweep_count"),
-                  (signal_named(frag, "count") == count, "spike count so far"),
+                  (core.counters.spikes == count, "spike count so far"),
                   (core.clamp_flags == sticky, "clamp_flags"),
-                  (core.overrun == overrun, "overrun"),
+                  (core.overrun == model.overrun, "overrun"),
                   (core.sweep_number == last_no, "sweep_number")]
         for k, c, tt in zip(kinds, counts, totals):
             checks += [(getattr(core, f"sweep_clamps_{k}") == tt, f"sweep_clamps_{k}"),
-                       (signal_named(frag, f"clamp_count_{k}") == c, f"clamp count {k} so far")]
+                       (core.counters.clamps[k] == c, f"clamp count {k} so far")]
         assert_all(m, checks)
-        self.extra_invariants(m, core, frag, SimpleNamespace(start=start, tick=tick, t=t,
-                                                             flight=flight))
-        return m
-

@@ -16,10 +16,19 @@ Rules:
 * **Constants** are quantized once, with their representation error recorded
   (:class:`FixedConstant`), either in a given format or normalized to use a whole operand
   (mantissa plus shift: the most precise constant an 18-bit multiplier can take).
+* **Products** of a datapath are formed by :func:`product`, each named by the multiplier it
+  is (its ``site``), and narrowings by :func:`narrow`. :func:`arithmetic_hooks` is the one
+  documented hook through which a proof harness sees them: inside its ``with`` block the
+  products of Amaranth values are the hook's values (uninterpreted products,
+  :class:`cuneate.hdl.lib.formal.UninterpretedProducts`) and each narrowing is reported. The
+  hook is a context variable: nothing outside the block (no module, no Amaranth class) is
+  changed, the twin's NumPy arithmetic never sees it.
 """
 
 from __future__ import annotations
 
+import contextlib
+import contextvars
 import math
 from dataclasses import dataclass
 from typing import Sequence
@@ -32,7 +41,7 @@ __all__ = [
     "round_shift_add",
     "round_shift_select", "saturate", "narrow", "clamp_flagged", "round_clamp_flagged", "select",
     "check_int64", "tree_sum",
-    "tally_clamps", "clamp_report", "store_raw",
+    "tally_clamps", "clamp_report", "store_raw", "product", "arithmetic_hooks",
 ]
 
 ROUNDINGS = ("nearest", "truncate")
@@ -308,15 +317,48 @@ def saturate(x, fmt: QFormat, bounds: tuple[int, int] | None = None):
     return np.clip(x, fmt.min_raw, fmt.max_raw)
 
 
+#: the hooks of :func:`arithmetic_hooks` active in this context (None: plain arithmetic)
+_HOOKS: contextvars.ContextVar = contextvars.ContextVar("cuneate_fixed_hooks", default=None)
+
+
+@contextlib.contextmanager
+def arithmetic_hooks(product=None, narrow=None):
+    """Inside the ``with`` block, :func:`product` of Amaranth operands returns
+    ``product(a, b, site)`` (a value of the product's shape: a harness's uninterpreted product)
+    and :func:`narrow` of an Amaranth value calls ``narrow(x, bounds, name)`` before it
+    narrows (a harness asserting each narrowing's bounds). Either may be None; an inner block
+    replaces an outer one until it ends. NumPy operands are never hooked."""
+    token = _HOOKS.set((product, narrow))
+    try:
+        yield
+    finally:
+        _HOOKS.reset(token)
+
+
+def product(a, b, site: str):
+    """``a * b`` at full width: every multiplier of a datapath's stage functions, named by
+    ``site`` (the same name wherever the same multiplier is formed - the core, its twin and a
+    proof's reference call the same stage function). A harness may replace it
+    (:func:`arithmetic_hooks`)."""
+    hooks = _HOOKS.get()
+    if hooks is not None and hooks[0] is not None and (is_hdl(a) or is_hdl(b)):
+        return hooks[0](a, b, site)
+    return a * b
+
+
 def narrow(x, fmt: QFormat, bounds: tuple[int, int], name: str = "value"):
     """Resize ``x`` to ``fmt`` where its proven raw ``bounds`` fit: no clamp, no flag. Raises
     :class:`FixedPointError` (at construction, when the RTL or the twin is built) if they do
-    not: an unflagged narrowing that could clamp is never built."""
+    not: an unflagged narrowing that could clamp is never built. A harness sees each
+    narrowing of an Amaranth value (:func:`arithmetic_hooks`)."""
     lo, hi = bounds
     if not fmt.min_raw <= lo <= hi <= fmt.max_raw:
         raise FixedPointError(f"{name}: proven range [{lo}, {hi}] (raw) does not fit {fmt}; "
                               f"a clamp here would be silent")
     if is_hdl(x):
+        hooks = _HOOKS.get()
+        if hooks is not None and hooks[1] is not None:
+            hooks[1](x, bounds, name)
         v = x[:fmt.width]
         return v.as_signed() if fmt.signed else v
     return x

@@ -1,45 +1,45 @@
-"""What every proof harness of the project shares: uninterpreted products, observing a core's
-internals without changing it, fault injection for mutants, delay lines, free initial memory
-contents, and the run that turns a harness into a verdict.
+"""What every proof harness of the project shares: uninterpreted products, reading a
+component's registers, delay lines, free initial memory contents, and the run that turns a
+harness into a verdict.
 
-**Uninterpreted products** (:class:`UninterpretedProducts`). While it is active, every product
-``a * b`` of Amaranth values written in one of the given source files (the datapath's stage
-functions) becomes a fresh signal instead of a ``$mul`` cell. The reference's products are free
-values chosen when the reference takes its inputs (held as long as the update is in flight);
-every product the design forms at the same source line is free too, except that it equals the
-reference's product whenever its operands equal the reference's operands. This is Ackermann's
-reduction of an uninterpreted function, restricted to the pairs the proof compares: every
-behaviour of the real design (any function of the operands, multiplication included) is a
-behaviour of the abstract one, so a property proven with the abstraction holds for the real
-multipliers. What the products are - their width, their range, their rounding - is the
-business of the one-step range proofs and of the twin's bit-exact equality with the RTL, not of
-the pipeline proof.
+**Uninterpreted products** (:class:`UninterpretedProducts`). Every multiplier of a datapath is
+formed by :func:`cuneate.hdl.lib.fixed.product`, named by its site; inside
+:meth:`UninterpretedProducts.role` (which opens :func:`cuneate.hdl.lib.fixed.arithmetic_hooks`)
+each product of Amaranth values becomes a fresh signal instead of a ``$mul`` cell. The
+reference's products are free values chosen when the reference takes its inputs (held as long
+as the update is in flight); every product the design forms at the same site is free too,
+except that it equals the reference's product whenever its operands equal the reference's
+operands. This is Ackermann's reduction of an uninterpreted function, restricted to the pairs
+the proof compares: every behaviour of the real design (any function of the operands,
+multiplication included) is a behaviour of the abstract one, so a property proven with the
+abstraction holds for the real multipliers. What the products are - their width, their range,
+their rounding - is the business of the one-step range proofs and of the twin's bit-exact
+equality with the RTL, not of the pipeline proof.
 
-**Observing without changing** (:func:`patched`, :func:`signal_named`). A harness elaborates
-the core itself, with some of the helpers the core calls (``sweep_issue``, ``pipeline_tags``,
-``core_memories``, ``registrar``, ``Memory`` ...) wrapped in the core's module namespace for
-the duration of that call: the wrappers record what they return (the issue counter, the stage
-tags, the memories, each stage register) and may substitute a faulty version (mutants). The
-product's cores ship without any formal port or knob. Registers local to an ``elaborate`` are
-found by name in the elaborated fragment (:func:`signal_named`).
+**Binding to components.** A harness instantiates the component it proves (or a subclass that
+overrides one of its documented hooks: the mutants), drives its ports and reads what the
+component records after elaboration (the cores' ``issue``, ``tags``, ``memories`` ...). The
+host link's components record nothing: their registers are found by name in the elaborated
+fragment (:func:`signal_named`).
 """
 
 from __future__ import annotations
 
 import contextlib
 import re
-import sys
 from dataclasses import dataclass, field
 from pathlib import Path
+from types import SimpleNamespace
 
-from amaranth import Mux, Signal, Value
+from amaranth import ClockDomain, Elaboratable, Module, Mux, Signal, Value
+from amaranth.asserts import AnySeq
 from amaranth.hdl import Assert, Assume, Fragment
-from amaranth.hdl._ast import AnySeq, Assign, Switch
 
 from ..flow.sby import SOLVER, FormalError, parse_sby_log, run_sby
+from .fixed import arithmetic_hooks
 
-__all__ = ["UninterpretedProducts", "patched", "signal_named", "delay_line", "free_memories",
-           "harness_rtlil",
+__all__ = ["ClockedHarness", "UninterpretedProducts", "signal_named", "faulty_write", "delay_line",
+           "free_memories", "harness_rtlil",
            "ProofResult", "run_proof", "assert_all", "check_id", "assume_all", "FormalError"]
 
 
@@ -49,74 +49,48 @@ __all__ = ["UninterpretedProducts", "patched", "signal_named", "delay_line", "fr
 @dataclass
 class _Product:
     role: str
-    site: tuple
+    site: str
     a: Value
     b: Value
     y: Signal
 
 
 class UninterpretedProducts:
-    """Replace every product written in ``files`` by an uninterpreted one (see the module
-    docstring). Use :meth:`role` around the elaboration of each side (``"design"`` and
-    ``"reference"``), then :meth:`constrain` once."""
+    """Every product :func:`~cuneate.hdl.lib.fixed.product` forms inside :meth:`role` made
+    uninterpreted (see the module docstring). Use :meth:`role` around the elaboration of each
+    side (``"design"`` and ``"reference"``), then :meth:`constrain` once."""
 
-    def __init__(self, files):
-        self.files = {str(Path(f).resolve()) for f in files}
+    def __init__(self):
         self.products: list[_Product] = []
-        self._role = None
 
     @contextlib.contextmanager
     def role(self, role: str):
         """Products formed inside this block belong to ``role``."""
-        orig_mul, orig_rmul = Value.__mul__, Value.__rmul__
-        this = self
+        def hook(a, b, site):
+            # integer constants are operands too; anything else is multiplied as written
+            if not all(isinstance(x, (Value, int)) for x in (a, b)):
+                return a * b
+            a, b = Value.cast(a), Value.cast(b)
+            y = Signal((a * b).shape(), name=f"product{len(self.products)}_{role}")
+            self.products.append(_Product(role, site, a, b, y))
+            return y
 
-        def site(depth=2):
-            f = sys._getframe(depth)
-            path = str(Path(f.f_code.co_filename).resolve())
-            # the bytecode offset tells two products written on one line apart
-            return (path, f.f_lineno, f.f_lasti) if path in this.files else None
-
-        def mul(a, b):
-            where = site()
-            if where is None or not isinstance(b, (Value, int)):
-                return orig_mul(a, b)
-            return this._product(where, a, Value.cast(b), orig_mul)
-
-        def rmul(a, b):
-            where = site()
-            if where is None or not isinstance(b, int):
-                return orig_rmul(a, b)
-            return this._product(where, Value.cast(b), a, orig_mul)
-
-        self._role = role
-        Value.__mul__, Value.__rmul__ = mul, rmul
-        try:
+        with arithmetic_hooks(product=hook):
             yield self
-        finally:
-            Value.__mul__, Value.__rmul__ = orig_mul, orig_rmul
-            self._role = None
-
-    def _product(self, where, a, b, orig_mul):
-        shape = orig_mul(a, b).shape()
-        n = len(self.products)
-        y = Signal(shape, name=f"product{n}_{self._role}")
-        self.products.append(_Product(self._role, where, a, b, y))
-        return y
 
     def constrain(self, m, capture) -> None:
         """Drive every product: the reference's are free values loaded when ``capture`` is
         high (the cycle the reference takes its inputs) and held until the next capture; the
-        design's are free except equal to the reference's product of the same source line
-        whenever their operands are equal."""
+        design's are free except equal to the reference's product of the same site whenever
+        their operands are equal."""
         ref = [p for p in self.products if p.role == "reference"]
         held = []
         for j, p in enumerate(ref):
             r = Signal(p.y.shape(), name=f"{p.y.name}_held")
             with m.If(capture):
                 m.d.sync += r.eq(AnySeq(p.y.shape()))
-            # one function per source line: a reference product whose operands equal an
-            # earlier one's of the same line (a loop over traces sharing a constant) is it
+            # one function per site: a reference product whose operands equal an earlier
+            # one's of the same site (a loop over traces sharing a constant) is it
             out = r
             for q in reversed(ref[:j]):
                 if q.site == p.site and (len(q.a), len(q.b)) == (len(p.a), len(p.b)):
@@ -131,7 +105,7 @@ class UninterpretedProducts:
                 if q.site != p.site:
                     continue
                 if (len(q.a), len(q.b)) != (len(p.a), len(p.b)):
-                    # one line forming products of several shapes (a loop over traces with
+                    # one site forming products of several shapes (a loop over traces with
                     # their own constants): a function per shape, so these two are unrelated
                     continue
                 out = Mux((p.a == q.a) & (p.b == q.b), r, out)
@@ -142,39 +116,20 @@ class UninterpretedProducts:
 
 
 # ----------------------------------------------------------------------------------------------
-# observing a core without changing it
-
-@contextlib.contextmanager
-def patched(namespace, name: str, wrapper):
-    """Replace ``namespace.name`` by ``wrapper(original)`` for the duration of the block."""
-    orig = getattr(namespace, name)
-    setattr(namespace, name, wrapper(orig))
-    try:
-        yield
-    finally:
-        setattr(namespace, name, orig)
-
-
-def _statements(stmts):
-    for s in stmts:
-        yield s
-        if isinstance(s, Switch):
-            for _patterns, body, _src_loc in s.cases:
-                yield from _statements(body)
-
+# reading a component's registers
 
 def signal_named(fragment: Fragment, name: str) -> Signal:
-    """The one signal called ``name`` that ``fragment`` (not its subfragments) assigns."""
-    found = {}
+    """The one signal called ``name`` that ``fragment`` (not its subfragments) assigns.
 
+    The signals a fragment assigns are what its statements' ``_lhs_signals()`` give: the one
+    Amaranth method the harnesses call that is not public API (Amaranth 0.5 offers none that
+    lists a fragment's assigned signals), kept to this function; the components proven here
+    record what their harness reads instead."""
+    found = {}
     for stmts in fragment.statements.values():
-        for s in _statements(stmts):
-            if isinstance(s, Assign):
-                # every signal the target may write (through slices, parts and Array
-                # elements)
-                for sig in s.lhs._lhs_signals():
-                    if sig.name == name:
-                        found[id(sig)] = sig
+        for sig in stmts._lhs_signals():
+            if sig.name == name:
+                found[id(sig)] = sig
     if len(found) != 1:
         raise FormalError(f"expected one register {name!r} in the elaborated core, "
                           f"found {len(found)}")
@@ -183,6 +138,24 @@ def signal_named(fragment: Fragment, name: str) -> Signal:
 
 # ----------------------------------------------------------------------------------------------
 # harness helpers
+
+def faulty_write(m, port, skip=None, addr=None):
+    """A stand-in for the write port ``port`` (``addr``, ``data``, ``en``) for a component's
+    ``memory_write`` hook to return (a mutant): what the component drives on it reaches
+    ``port`` with the enable gated by ``skip`` (a write skipped while it is high) and the
+    address mapped by ``addr`` (a function of the address: a write landing elsewhere)."""
+    fake = SimpleNamespace(addr=Signal.like(port.addr, name="mutant_wr_addr"),
+                           data=Signal.like(port.data, name="mutant_wr_data"),
+                           en=Signal(name="mutant_wr_en"))
+    en = fake.en
+    if skip is not None:
+        gate = Signal(name="mutant_skip")
+        m.d.comb += gate.eq(skip)
+        en = en & ~gate
+    m.d.comb += [port.addr.eq(fake.addr if addr is None else addr(fake.addr)),
+                 port.data.eq(fake.data), port.en.eq(en)]
+    return fake
+
 
 def delay_line(m, sig, n: int, name: str) -> list:
     """``[sig, sig delayed 1, ..., sig delayed n]`` (registers named ``<name>_d<k>``)."""
@@ -232,6 +205,35 @@ def free_memories(il: str, memids) -> str:
             if n == 0 and bank > 0:
                 break
     return il
+
+
+class ClockedHarness(Elaboratable):
+    """A harness of ``dut`` on a reset-less clock domain (:attr:`cd`; the initial state is the
+    registers' reset values, the induction step starts anywhere); :meth:`reg` delays a value."""
+
+    def __init__(self, dut):
+        self.dut = dut
+        self.cd = ClockDomain("sync", reset_less=True)
+        self.ports = [self.cd.clk]
+
+    def module(self, dut=None):
+        """A module on :attr:`cd` holding ``dut`` (default the harness's) as ``dut``."""
+        m = Module()
+        m.domains.sync = self.cd
+        m.submodules.dut = self.dut if dut is None else dut
+        return m
+
+    @staticmethod
+    def free(m, *signals) -> None:
+        """Each of ``signals`` any value in any cycle (``AnySeq``)."""
+        for sig in signals:
+            m.d.comb += sig.eq(AnySeq(len(sig)))
+
+    def reg(self, m, value, name: str, init: int = 0) -> Signal:
+        """``value`` one cycle late."""
+        r = Signal.like(value, name=name, init=init)
+        m.d.sync += r.eq(value)
+        return r
 
 
 def harness_rtlil(top, name: str, memories=()) -> str:

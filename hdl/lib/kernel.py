@@ -16,7 +16,7 @@ import numpy as np
 from ...golden import kernel as gk
 from ...golden.kernel import BLOCK, available, close_block, open_block, record
 
-__all__ = ["available", "record", "BLOCK", "open_block", "close_block", "rs", "rq", "rounding_slots", "as_tuples", "default_threads",
+__all__ = ["available", "choose_kernel", "record", "BLOCK", "open_block", "close_block", "rs", "rq", "rounding_slots", "as_tuples", "default_threads",
            "split_over_threads", "trace_table", "trace_step", "PARALLEL_MIN_NEURONS",
            "INT64_MIN", "INT64_MAX", "TR_Y", "TR_K", "TR_P", "N_TRACE_COLS"]
 
@@ -58,6 +58,16 @@ if available():
         return y - rq(yq * ttab[j][TR_K], ttab[j], TR_P)
 else:                                  # pragma: no cover
     rs = rq = trace_step = None
+
+
+def choose_kernel(kernel: str | None, known: tuple, numba_default: bool = True) -> str:
+    """A twin's kernel: ``kernel`` (one of ``known``; ``"numba"`` refused without numba), or
+    for None ``"numba"`` when numba is available and ``numba_default``, else ``"stages"``."""
+    if kernel is not None and kernel not in known:
+        raise ValueError(f"unknown twin kernel {kernel!r}; known: {', '.join(known)}")
+    if kernel == "numba" and not available():
+        raise ValueError("twin kernel 'numba' needs numba installed")
+    return kernel or ("numba" if available() and numba_default else "stages")
 
 
 def rounding_slots(shift: int, near: bool) -> list[int]:

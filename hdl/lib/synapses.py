@@ -33,7 +33,7 @@ import numpy as np
 
 from ...golden import synapses as gsyn
 from .config import ConfigError, int_bits_for
-from .fixed import FixedConstant, QFormat, narrow, round_shift, select, tree_sum
+from .fixed import FixedConstant, QFormat, narrow, product, round_shift, select, tree_sum
 
 __all__ = ["TRACE_NAMES", "TraceSpec", "TraceView", "trace_spec", "scale_weights",
            "derive_traces", "derive_cuba_trace", "cuba_input", "CUBA_TRACE", "trace_inputs",
@@ -210,7 +210,8 @@ def trace_products(cfg, ys):
     for s, y in zip(cfg.traces, ys):
         yq = narrow(round_shift(y, cfg.V.frac_bits - s.Y.frac_bits, cfg.rounding), s.Y,
                     s.y_bounds, f"{s.name} operand")
-        out.append(round_shift(yq * s.K.raw, s.product_shift, cfg.rounding))
+        out.append(round_shift(product(yq, s.K.raw, "trace_products"), s.product_shift,
+                               cfg.rounding))
     return out
 
 

@@ -4,8 +4,7 @@
 (:class:`ConfigError`, at construction) what the formats cannot hold:
 
 * decay constants that round to 0 or 1, or miss ``max_decay_error`` (also a shift's 2**-s);
-* weights outside their format (given ``weight_frac_bits``), thresholds, resets and rests that
-  the state format cannot hold;
+* weights outside their format (given ``weight_frac_bits``), thresholds, resets, rests;
 * a fan-in whose weight sum can leave ``input_limit`` (refused, or clamped and flagged with
   ``saturation="flag"``), an accumulator narrower than its fan-in needs;
 * a state format narrower than the proven state range (refused, or flagged ``v_low`` clamp);
@@ -32,7 +31,8 @@ from typing import Sequence
 import numpy as np
 
 from ...golden import lif as golden
-from ..lib.config import SATURATION, ConfigError, CoreOptions, check_delays, int_bits_for
+from ..lib.config import MIN_NEURONS, SATURATION, ConfigError, CoreOptions, check_delays, \
+    int_bits_for
 from ..lib.fixed import FixedConstant, QFormat
 from .checks import (MAX_OPERAND_WIDTH, MAX_V_FRAC_BITS, MAX_WEIGHT_BITS, LifSet, check_int64,
                      check_leak, check_weight_memory)
@@ -126,9 +126,9 @@ class LifConfig(CoreOptions):
     # ------------------------------------------------------------------------------------------
     def _check_sizes(self):
         N = self.n_neurons
-        if not isinstance(N, (int, np.integer)) or N < 8:
-            raise ConfigError(f"n_neurons must be an integer >= 8 (the pipeline depth plus "
-                              f"margin), got {N!r}")
+        if not isinstance(N, (int, np.integer)) or N < MIN_NEURONS:
+            raise ConfigError(f"n_neurons must be an integer >= {MIN_NEURONS} (the pipeline "
+                              f"depth plus margin), got {N!r}")
         if self.form not in FORMS:
             raise ConfigError(f"form must be one of {FORMS}, got {self.form!r}")
         if self.decay not in DECAYS:

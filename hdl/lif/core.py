@@ -8,15 +8,16 @@ Latency 5 cycles, then one neuron update per clock; formats from
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import numpy as np
 from amaranth import Cat, Const, Module, Mux, Signal, signed
-from amaranth.lib import wiring
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
 from ..flow.verilog import verilog_text, write_block
-from ..lib.bookkeeping import (core_memories, core_ports, pipeline_tags, registrar,
-                               sweep_bookkeeping, sweep_issue)
+from ..lib.bookkeeping import (SweepCore, core_memories, core_ports, sweep_bookkeeping,
+                               sweep_issue)
 from ..lib.synapses import trace_products, trace_update
 from ..lib.tick import tick_strobe
 from .config import CLAMP_KINDS, LifConfig
@@ -26,7 +27,7 @@ from .twin import LifTwin
 __all__ = ["LifCore", "lif_verilog", "generate_lif"]
 
 
-class LifCore(wiring.Component):
+class LifCore(SweepCore):
     """Time-multiplexed LIF core: one neuron update per clock, 5-stage pipeline.
 
     Latency: a neuron's index is issued at cycle t; its update is on ``upd_*`` at t + 5.
@@ -53,6 +54,16 @@ class LifCore(wiring.Component):
     ``weights_writable``, ``w_wr_en/w_wr_addr/w_wr_data`` write a neuron's whole weight row
     (same rules as the current writes; the accepted input range is then proven for any weights
     of the format).
+
+    After elaboration the core records what a proof harness reads (:class:`~cuneate.hdl.lib
+    .bookkeeping.SweepCore`: ``issue``, ``tags``, ``memories``, ``pending_writes``,
+    ``counters``) and, with input sources, ``input_spikes`` (``pending``, ``active``: the
+    tick's pending and active spike vectors).
+
+    **Hooks** besides :class:`~cuneate.hdl.lib.bookkeeping.SweepCore`'s: the datapath stages
+    :meth:`gather_input`, :meth:`update_state` and :meth:`trace_update` (the datapath's
+    functions); a subclass replaces one - a fault the proof must catch
+    (:mod:`cuneate.hdl.lif.formal_core`).
     """
 
     #: the ports' meanings the blocks' shared ones lack, for the Verilog's header
@@ -74,17 +85,36 @@ class LifCore(wiring.Component):
                                             "upd_ref": Out(max(1, cfg.ref_bits))}, extra)
         super().__init__(sig)
 
+    @staticmethod
+    def gather_input(cfg: LifConfig, I, x, w, traces=None):
+        """Stage 3: :func:`~cuneate.hdl.lif.datapath.gather_input`."""
+        return gather_input(cfg, I, x, w, traces)
+
+    @staticmethod
+    def update_state(cfg: LifConfig, v, d, D, ref, sel):
+        """Stage 5: :func:`~cuneate.hdl.lif.datapath.update_state`."""
+        return update_state(cfg, v, d, D, ref, sel)
+
+    @staticmethod
+    def trace_update(cfg: LifConfig, ys, ps):
+        """Stage 5's traces: :func:`~cuneate.hdl.lib.synapses.trace_update`."""
+        return trace_update(cfg, ys, ps)
+
     def elaborate(self, platform):
         cfg = self.cfg
         N, F, V, R = cfg.n_neurons, cfg.n_inputs, cfg.V, cfg.ref_bits
         m = Module()
         init_state = [int(v) & ((1 << V.width) - 1) for v in cfg.v_init_raw]
-        st_rd, st_wr, cur_rd, sel_rd = core_memories(m, self, cfg, V.width + R, init_state)
+        mems = core_memories(m, self, cfg, V.width + R, init_state)
+        self.memories, self.pending_writes = dict(mems.banks), mems.pending
+        st_rd, cur_rd, sel_rd = mems.state, mems.current, mems.set
+        st_wr = self.memory_write(m, "state_mem", mems.state_write)
         rd_ports = [st_rd, cur_rd, sel_rd]
         wb = cfg.W.width
         if F:
             rows = [LifTwin.pack_weights(cfg, row) for row in cfg.weights_raw]
             m.submodules.weight_mem = w_mem = Memory(shape=wb * F, depth=N, init=rows)
+            self.memories["weight_mem"] = [w_mem]
             w_rd = w_mem.read_port()
             rd_ports.append(w_rd)
             if cfg.weights_writable:
@@ -94,12 +124,14 @@ class LifCore(wiring.Component):
         TW = [t.T.width for t in cfg.traces]
         if cfg.traces:
             m.submodules.trace_mem = tr_mem = Memory(shape=sum(TW), depth=N, init=[])
+            self.memories["trace_mem"] = [tr_mem]
             tr_rd, tr_wr = tr_mem.read_port(), tr_mem.write_port()
+            tr_wr = self.memory_write(m, "trace_mem", tr_wr)
             rd_ports.append(tr_rd)
 
         # --- sweep control -----------------------------------------------------------------
         tick = tick_strobe(m, cfg, getattr(self, "tick", None))
-        issue = sweep_issue(m, self, N, tick, cfg.sweep_number_width)
+        self.issue = issue = sweep_issue(m, self, N, tick, cfg.sweep_number_width)
         start = issue.start
         for port in rd_ports:
             m.d.comb += [port.addr.eq(issue.addr), port.en.eq(1)]
@@ -116,11 +148,14 @@ class LifCore(wiring.Component):
                 # a second spike of a source within one tick merges with the first: flagged
                 with m.If(self.in_valid & pending.bit_select(self.in_source, 1)):
                     m.d.sync += self.in_merged.eq(1)
+            self.input_spikes = SimpleNamespace(pending=pending, active=active)
 
         # --- pipeline tags --------------------------------------------------------------------
-        tags = pipeline_tags(m, N, cfg.sweep_number_width, issue)
+        self.tags = tags = self.pipeline_tags(m, issue, 5)
         t5 = tags[5]
-        reg = registrar(m)
+
+        def reg(name, value, stage):
+            return self.stage_register(m, name, value, stage)
 
         x2 = reg("x", active, 2)
         # --- stage 2: RAM outputs registered -------------------------------------------------
@@ -135,7 +170,7 @@ class LifCore(wiring.Component):
             offs = np.cumsum([0] + TW)
             tr3 = [reg(f"tr_{t.name}", tr_rd.data[offs[j]:offs[j + 1]].as_signed(), 3)
                    for j, t in enumerate(cfg.traces)]
-        g = gather_input(cfg, i3, [x3[i] for i in range(F)], ws, tr3)
+        g = self.gather_input(cfg, i3, [x3[i] for i in range(F)], ws, tr3)
         xop = leak_operand(cfg, v3, g["d"], sel3)
         v4, ref4, sel4, i4 = (reg(n, s, 4) for n, s in
                               (("v", v3), ("ref", ref3), ("sel", sel3), ("i", i3)))
@@ -153,7 +188,7 @@ class LifCore(wiring.Component):
             tp5 = [reg(f"tp_{t.name}", q, 5) for t, q in zip(cfg.traces,
                                                              trace_products(cfg, ys4))]
             ys5 = [reg(f"y_{t.name}", y, 5) for t, y in zip(cfg.traces, ys4)]
-            tr_new = trace_update(cfg, ys5, tp5)
+            tr_new = self.trace_update(cfg, ys5, tp5)
             tr_out = [Signal(t.T.shape(), name=f"{t.name}_out") for t in cfg.traces]
             m.d.comb += [o.eq(v) for o, v in zip(tr_out, tr_new)]
             m.d.comb += [tr_wr.addr.eq(t5[1]), tr_wr.data.eq(Cat(*tr_out)),
@@ -162,7 +197,7 @@ class LifCore(wiring.Component):
                          for t, o in zip(cfg.traces, tr_out)]
         fcur5, fin5 = reg("flag_current", fcur4, 5), reg("flag_input", fin4, 5)
         # --- stage 5: update, write back ------------------------------------------------------
-        s5 = update_state(cfg, v5, p5, d5, ref5, sel5)
+        s5 = self.update_state(cfg, v5, p5, d5, ref5, sel5)
         v_out = Signal(V.shape())
         ref_out = Signal(max(1, R))
         spike = Signal()
@@ -178,8 +213,8 @@ class LifCore(wiring.Component):
                      self.upd_acc.eq(acc5), self.upd_spike.eq(spike), self.upd_clamp.eq(clamp)]
 
         # --- bookkeeping ------------------------------------------------------------------------
-        sweep_bookkeeping(m, self, N, cfg.sweep_number_width, t5, CLAMP_KINDS,
-                          cfg.spike_fifo_depth)
+        self.counters = sweep_bookkeeping(m, self, N, cfg.sweep_number_width, t5, CLAMP_KINDS,
+                                          cfg.spike_fifo_depth)
         return m
 
 

@@ -40,8 +40,8 @@ import numpy as np
 from amaranth import Const
 
 from ..lib.datapath import false_like, lookup
-from ..lib.fixed import (QFormat, clamp_flagged, is_hdl, narrow, round_shift, round_shift_select,
-                         select, tree_sum)
+from ..lib.fixed import (QFormat, clamp_flagged, is_hdl, narrow, product, round_shift,
+                         round_shift_select, select, tree_sum)
 from ..lib.synapses import cuba_input, trace_inputs
 from .config import CLAMP_KINDS, LifConfig
 
@@ -106,8 +106,8 @@ def leak_product(cfg: LifConfig, x, sel):
     if cfg.k_shift is not None:
         return round_shift_select(x, cfg.k_shift, sel, cfg.rounding) if len(
             set(cfg.k_shift)) > 1 else round_shift(x, cfg.k_shift[0], cfg.rounding)
-    return round_shift(x * lookup([c.raw for c in cfg.K], sel), cfg.product_shift,
-                       cfg.rounding)
+    return round_shift(product(x, lookup([c.raw for c in cfg.K], sel), "leak_product"),
+                       cfg.product_shift, cfg.rounding)
 
 
 def update_state(cfg: LifConfig, v, d, D, ref, sel):

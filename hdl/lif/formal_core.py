@@ -21,18 +21,14 @@ from pathlib import Path
 import numpy as np
 
 from amaranth import Cat, Const, Mux, Signal
-from amaranth.hdl._ast import AnySeq
+from amaranth.asserts import AnySeq
 
 from ..flow.sby import SOLVER
 from ..lib.core_proof import MUTANTS, SweepCoreProof
-from ..lib.formal import (ProofResult, assert_all, assume_all, harness_rtlil, run_proof,
-                          signal_named)
-from . import core as core_module
-from . import datapath
+from ..lib.formal import ProofResult, assert_all, assume_all, harness_rtlil, run_proof
 from .config import CLAMP_KINDS, LifConfig
 from .core import LifCore
 from .datapath import gather_input, leak_operand, leak_product, update_state
-from ..lib import synapses
 from ..lib.synapses import trace_products, trace_update
 
 __all__ = ["LifCoreProof", "lif_harness", "prove_lif", "lif_proof_config", "MUTANTS",
@@ -48,32 +44,27 @@ class LifCoreProof(SweepCoreProof):
     """The LIF core, with or without synaptic traces (see
     :class:`~cuneate.hdl.lib.core_proof.SweepCoreProof`)."""
 
-    core_module = core_module
-    datapath_files = (datapath.__file__,)
+    core_class = LifCore
     clamp_kinds = CLAMP_KINDS
     off_by_one_register = ("v", 4)          # stage 4's v: the previous neuron's
 
-    def __init__(self, cfg: LifConfig, mutant: str | None = None):
-        super().__init__(cfg, mutant)
+    def __init__(self, cfg: LifConfig, mutant: str | None = None, core: type | None = None):
+        super().__init__(cfg, mutant, core)
         if cfg.traces:
             # the traces are a second state memory, written back with the state; their
             # products (one per trace) are uninterpreted like the leak's
             self.state_memories = ("state_mem", "trace_mem")
-            self.datapath_files = (datapath.__file__, synapses.__file__)
 
-    def make_core(self):
-        return LifCore(self.cfg)
-
-    def host_write_ports(self, core) -> dict:
+    def host_write_ports(self) -> dict:
         ports = dict(self.host_memories)
         if self.cfg.n_inputs and self.cfg.weights_writable:
             ports["weight_mem"] = "w_wr"
         return ports
 
-    def read_only_memories(self, core) -> tuple:
+    def read_only_memories(self) -> tuple:
         return ("weight_mem",) if self.cfg.n_inputs and not self.cfg.weights_writable else ()
 
-    def fetched_inputs(self, m, core, frag, fetch) -> dict:
+    def fetched_inputs(self, m, core, fetch) -> dict:
         """The contract's input spikes: events (free) set a source's bit in the pending
         vector; a sweep's start moves it into the active vector (and the event of that cycle
         into the new pending one); a second event of a source within one tick sets
@@ -94,8 +85,8 @@ class LifCoreProof(SweepCoreProof):
             m.d.sync += pending.eq(pending | event)
             with m.If(core.in_valid & (pending & (Const(1, F) << core.in_source)).any()):
                 m.d.sync += merged.eq(1)
-        assert_all(m, [(signal_named(frag, "pending") == pending, "input spikes: pending"),
-                       (signal_named(frag, "active") == active, "input spikes: active"),
+        assert_all(m, [(core.input_spikes.pending == pending, "input spikes: pending"),
+                       (core.input_spikes.active == active, "input spikes: active"),
                        (core.in_merged == merged, "input spikes: in_merged")])
         return {"x": active}
 
@@ -142,10 +133,11 @@ def lif_proof_config(n_neurons: int = 8, **kwargs) -> LifConfig:
                      tick_source="external", **kwargs)
 
 
-def lif_harness(cfg: LifConfig, mutant: str | None = None) -> tuple[str, int]:
+def lif_harness(cfg: LifConfig, mutant: str | None = None,
+                core: type | None = None) -> tuple[str, int]:
     """RTLIL of the harness (top ``lif_eq``), the memories' initial contents removed, and the
-    core's latency."""
-    top = LifCoreProof(cfg, mutant)
+    core's latency; ``core``: a subclass of :class:`LifCore` to prove instead."""
+    top = LifCoreProof(cfg, mutant, core)
     il = harness_rtlil(top, "lif_eq", ("state_mem", "cur_mem", "sel_mem", "weight_mem",
                                        "trace_mem"))
     return il, top.latency
@@ -153,9 +145,10 @@ def lif_harness(cfg: LifConfig, mutant: str | None = None) -> tuple[str, int]:
 
 def prove_lif(cfg: LifConfig, workdir: Path, mode: str = "prove", depth: int | None = None,
               mutant: str | None = None, timeout_s: float = 3600, engine: str = "smtbmc",
-              solver: str = SOLVER) -> ProofResult:
+              solver: str = SOLVER, core: type | None = None) -> ProofResult:
     """Prove (``mode="prove"``: k-induction of ``depth`` steps, default the core's latency + 2)
-    or check to a bound (``mode="bmc"``) that the LIF core equals its one-step reference."""
-    il, latency = lif_harness(cfg, mutant)
+    or check to a bound (``mode="bmc"``) that the LIF core equals its one-step reference;
+    ``core``: a subclass of :class:`LifCore` to prove instead (a fault of its own)."""
+    il, latency = lif_harness(cfg, mutant, core)
     return run_proof("LIF core equals one-step datapath", il, workdir, "lif_eq", mode,
                      depth or latency + 2, timeout_s, engine, ABSTRACTIONS, solver)

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...golden.izhikevich import group_spikes
+from ...golden.izhikevich import group_spikes, spike_times
 from ..lib.fixed import check_int64, clamp_report, store_raw, tally_clamps
 from ..lib.synapses import trace_products, trace_update
 from .config import CLAMP_KINDS, LifConfig
@@ -201,7 +201,7 @@ class LifTwin:
             raw = self.set_currents(np.broadcast_to(currents, (self.cfg.n_neurons,)))
             ks, ns = self.run_raw(np.asarray(raw, dtype=np.int64), n_sweeps, inputs)
             steps = group_spikes([ks], [ns], self.cfg.n_neurons)
-            return [(np.asarray(s, dtype=np.float64) + 1) * self.cfg.dt_ms for s in steps]
+            return [spike_times(s, self.cfg.dt_ms) for s in steps]
         for k in range(n_sweeps):
             if callable(currents):
                 self.set_currents(np.broadcast_to(currents(k * self.cfg.dt_ms),
@@ -209,7 +209,7 @@ class LifTwin:
             spk = self.sweep(None if inputs is None else inputs[k])
             for n in np.flatnonzero(spk):
                 hits[n].append(k)
-        return [(np.asarray(h, dtype=np.float64) + 1) * self.cfg.dt_ms for h in hits]
+        return [spike_times(h, self.cfg.dt_ms) for h in hits]
 
     def clamp_report(self) -> dict:
         """Sticky flags and counts per clamp kind (for reports and ``simulate --json``)."""

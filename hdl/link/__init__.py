@@ -1,27 +1,23 @@
-"""The link block: the host link over a UART (COBS frames with a CRC-32, a version and
-sequence numbers) between a host and a core on the board.
+"""The UART face: the host link over a UART (COBS frames with a CRC-32, a version and
+sequence numbers) between a host and any block behind it on the board.
 
-``config``    :class:`LinkConfig`: link parameters checked against the core they serve
+``config``    :class:`LinkConfig`: link parameters checked against the payload they serve
 ``codec``     the wire format: frames, COBS, messages (the host's codec)
 ``datapath``  the CRC-32 step, one definition for ints and Amaranth values
-``twin``      :class:`LinkModel`: the device's answers on the bit-exact Izhikevich twin
-``core``      :class:`HostLink` and :class:`LinkedCore` (Amaranth) and their Verilog
-``network``   :class:`LinkedNetwork`: the on-chip afferent -> cuneate network behind the link
-``fanout``    :class:`LinkedFanoutCore`, :class:`LinkedFanoutNetwork`: channel samples in, fanned
-              out on chip to a core or to the network's afferents
-``lif``       :class:`LinkedLif`: a LIF core behind the link
+``decoder``, ``executor``, ``batcher``, ``encoder``
+              the link's stream components (frames in, writes out; spikes in, frames out)
+``core``      :class:`HostLink` (the components and a UART) and :class:`LinkedTop` (a block's
+              payload behind it: every board top), and their Verilog
+``twin``      :class:`LinkModel`: the device's answers on the block's bit-exact twin
+``formal_core``  the k-induction of the decoder and executor against the wire format
 """
 
 from .codec import (COUNTER_NAMES, MAX_FRAME, MIN_FRAME, CobsError, FrameDecoder, FrameError,
                     Message, decode_frame, encode_frame)
 from .config import LinkConfig, link_config
-from .core import HostLink, LinkedCore, link_verilog
-from .fanout import LinkedFanoutCore, LinkedFanoutNetwork
-from .lif import LinkedLif
-from .network import LinkedNetwork
+from .core import HostLink, LinkedTop, link_verilog
 from .twin import LinkModel
 
-__all__ = ["LinkConfig", "link_config", "HostLink", "LinkedCore", "LinkedNetwork",
-           "LinkedFanoutCore", "LinkedFanoutNetwork", "LinkedLif", "link_verilog",
+__all__ = ["LinkConfig", "link_config", "HostLink", "LinkedTop", "link_verilog",
            "COUNTER_NAMES", "MAX_FRAME", "MIN_FRAME", "CobsError", "FrameError", "FrameDecoder",
            "LinkModel", "Message", "encode_frame", "decode_frame"]

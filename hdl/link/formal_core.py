@@ -1,10 +1,12 @@
 """The host link's frame decoder against the wire format's specification, for every byte
 stream of every length (k-induction) or of a bounded length (BMC), with SymbiYosys.
 
-The harness builds :class:`~cuneate.hdl.link.core.HostLink` with its UART receiver and its
-receive FIFO's head replaced by free sources (any byte ready in any cycle, any framing error:
-every stream a line and the receive buffers can deliver) and watches the bytes the decoder
-takes. Beside it runs a reference
+The harness takes the link's two receiving components as they are, through their ports:
+:class:`~cuneate.hdl.link.decoder.FrameDecoder`, its byte stream driven by a free source (any
+byte offered in any cycle: every stream a line and the receive buffers can deliver), and
+:class:`~cuneate.hdl.link.executor.FrameExecutor` behind it, its tick generator's state, the
+payload's ``busy`` and its write stream's ``ready`` free (any back-pressure). Beside them runs a
+reference
 decoder written from :mod:`cuneate.hdl.link.codec`'s description of a frame, byte by byte:
 COBS blocks (a code byte ``c`` announces ``c - 1`` data bytes and, unless ``c`` is 255, a zero
 after them; a zero byte ends the frame), the CRC-32 over the decoded bytes
@@ -20,95 +22,109 @@ tests), the header fields by position, the values by position (``first`` at byte
   frame is accepted (``frames_ok``) only if its decoded bytes carry the CRC-32 residue, the
   version and a consistent length: **no corrupted frame the CRC detects is accepted**.
 * *No accepted write is lost or reordered*: after an accepted ``WRITE`` frame of ``n`` values
-  the core's write port sees exactly ``n`` writes, to ``first, first + 1, ...`` in that order,
-  the tracked value ``k`` (a free constant, so every ``k``) with the frame's value ``k``, no
-  write at any other time, and the decoder takes no further byte until the last write is out
-  (or the frame is counted as a late write, before any of its writes).
+  the payload takes exactly ``n`` writes, to ``first, first + 1, ...`` in that order, the
+  tracked value ``k`` (a free constant, so every ``k``) with the frame's value ``k``, the last
+  marked as the burst's end, no write at any other time, and the decoder takes no further
+  byte until the last write is taken (or the frame is counted as a late write, before any of
+  its writes).
 
 **Why the induction step closes** - the invariants: while the decoder receives, its COBS state
 (bytes left in the block, the pending zero, frame started), length, overlong flag, CRC
 register, value assembly (shift register, byte phase, value count), the header bytes received
 so far and the tracked value in the value RAM equal the reference's; once a frame has ended and
 until the next byte, the decoder's frame state is the reset state, and its header, value count
-and the tracked value equal the reference's frame; during the writes the write index equals
-the reference's count of writes seen; the expected sequence number equals the reference's. The
-remaining registers (the decision of the frame end cycles, the write port's pipeline) are a
-function of the last few cycles.
+and the tracked value equal the reference's frame; the executor works only on a frame the
+decoder offers, and while it writes, its value index equals the reference's count of writes
+taken plus the one on offer; the expected sequence number equals the reference's. The
+remaining registers (the decision of the frame end cycles) are a function of the last few
+cycles. The decoder's and the executor's registers are read by name from their elaborated
+modules (:func:`~cuneate.hdl.lib.formal.signal_named`): observed, not changed.
 
-**Abstractions.** None in the decoder: the UART receiver and the receive FIFO's head are
-replaced by free sources (a superset of what they deliver: the FIFOs are amaranth's library
-FIFOs, their overflow counted by the link), the memories start with any contents, the core's
-side (busy, spikes) and the tick generator run freely.
+**Mutants** are subclasses of the decoder through its documented hooks (the CRC residue it
+checks against, the value RAM word a value goes to), or a harness wiring (the executor's
+reads one value ahead).
+
+**Abstractions.** None in the decoder or the executor: their inputs are free (a superset of
+what the link's UART, receive buffers, tick generator and payload give them), the value RAM
+starts with any contents.
 """
 
 from __future__ import annotations
 
-import contextlib
 from pathlib import Path
+from types import SimpleNamespace
 
 from amaranth import Cat, ClockDomain, Const, Elaboratable, Module, Mux, Signal
+from amaranth.asserts import AnyConst, AnySeq
 from amaranth.hdl import Fragment
-from amaranth.hdl._ast import AnyConst, AnySeq
 
 from ..flow.sby import SOLVER
-from ..lib.formal import (ProofResult, assert_all, assume_all, harness_rtlil, patched,
-                          run_proof, signal_named)
-from . import core as core_module
+from ..lib.formal import (ProofResult, assert_all, assume_all, harness_rtlil, run_proof,
+                          signal_named)
 from .codec import (CONTROL_PAYLOAD, CRC_INIT, CRC_RESIDUE, HEADER_BYTES, MAX_FRAME,
                     MIN_FRAME, MSG_CONTROL, MSG_WRITE, OP_CLEAR_COUNTERS, OP_START, VERSION)
 from .config import LinkConfig, link_config
-from .core import HostLink
 from .datapath import crc32_update
+from .decoder import FrameDecoder, max_values
+from .executor import FrameExecutor
 
 __all__ = ["DecoderProof", "decoder_harness", "prove_decoder", "decoder_proof_config",
-           "induction_depth",
-           "MUTANTS", "ABSTRACTIONS", "VERDICTS"]
+           "induction_depth", "MUTANTS", "ABSTRACTIONS", "VERDICTS"]
 
-#: faults the harness can build into its copy of the link (never into the product): the CRC
-#: check against a residue one bit off (a corrupted frame accepted); each value stored in its
-#: neighbour's word (two values swapped); the writes reading one value ahead (the first lost,
-#: the rest shifted)
+#: faults the harness builds into its copies of the components (never into the product): the
+#: CRC check against a residue one bit off (a corrupted frame accepted); each value stored in
+#: its neighbour's word (two values swapped); the writes reading one value ahead (the first
+#: lost, the rest shifted)
 MUTANTS = ("wrong_residue", "values_swapped", "value_read_ahead")
 
-ABSTRACTIONS = ["UART receiver and receive FIFO head replaced by free byte sources (any "
-                "byte, any framing error, any cycle)", "memories with free initial contents",
-                "core side and tick generator free"]
+ABSTRACTIONS = ["the decoder's byte stream free (any byte offered in any cycle)",
+                "the executor's tick-generator state, the payload's busy and its write "
+                "stream's ready free", "value RAM with free initial contents"]
 
 #: the counters a frame's verdict increments
 VERDICTS = ("frames_ok", "crc_errors", "length_errors", "version_errors", "range_errors")
 
 
-class _FreeUart(Elaboratable):
-    """A UART receiver that delivers any byte with any framing error in any cycle."""
-
-    def __init__(self, clocks_per_bit):
-        self.rx = Signal(init=1)
-        self.valid, self.data, self.frame_error = Signal(), Signal(8), Signal()
-
-    def elaborate(self, platform):
-        m = Module()
-        m.d.comb += [self.valid.eq(AnySeq(1)), self.data.eq(AnySeq(8)),
-                     self.frame_error.eq(AnySeq(1))]
-        return m
+class _WrongResidue(FrameDecoder):
+    RESIDUE = CRC_RESIDUE ^ 1
 
 
-class _FreeByteSource(Elaboratable):
-    """In place of the receive path's head FIFO: any byte ready in any cycle, any
-    back-pressure toward the FIFO before it (every behaviour of the receive buffers)."""
+class _ValuesSwapped(FrameDecoder):
+    def value_slot(self, n):
+        return n ^ 1
 
-    def __init__(self, width, depth):
-        self.w_data, self.w_en, self.w_rdy = Signal(width), Signal(), Signal()
-        self.r_data, self.r_rdy, self.r_en = Signal(width), Signal(), Signal()
 
-    def elaborate(self, platform):
-        m = Module()
-        m.d.comb += [self.r_rdy.eq(AnySeq(1)), self.r_data.eq(AnySeq(len(self.r_data))),
-                     self.w_rdy.eq(AnySeq(1))]
-        return m
+DECODERS = {"wrong_residue": _WrongResidue, "values_swapped": _ValuesSwapped}
+
+
+def _watched(decoder: type) -> type:
+    """``decoder`` with a combinational read port of its value RAM for the harness
+    (``watch``), added through the RAM it documents (``values``)."""
+    class Watched(decoder):
+        def elaborate(self, platform):
+            m = super().elaborate(platform)
+            self.watch = self.values.read_port(domain="comb")
+            return m
+    return Watched
+
+
+def _state_flags(m, fsm: Signal, names, prefix: str) -> dict:
+    """``{state: flag}``: the FSM register ``fsm`` (its decoder names the states) is in it."""
+    enc = {}
+    for i in range(2 ** len(fsm)):
+        try:
+            label = str(fsm.decoder(i))
+        except (KeyError, IndexError):             # not a state's encoding
+            continue
+        if "/" in label:
+            enc[label.split("/")[0]] = i
+    flags = {n: Signal(name=f"{prefix}_{n}") for n in names}
+    m.d.comb += [f.eq(fsm == enc[n]) if n in enc else f.eq(0) for n, f in flags.items()]
+    return flags
 
 
 class DecoderProof(Elaboratable):
-    """Harness of the link's frame decoder (see the module docstring)."""
+    """Harness of the link's frame decoder and executor (see the module docstring)."""
 
     def __init__(self, lcfg: LinkConfig, mutant: str | None = None):
         if mutant is not None and mutant not in MUTANTS:
@@ -118,103 +134,56 @@ class DecoderProof(Elaboratable):
         self.cd = ClockDomain("sync", reset_less=True)
         self.ports = [self.cd.clk]
 
-    def _elaborate_link(self, platform):
-        link = HostLink(self.lcfg)
-        link._MustUse__silence = True
-        mut, made = self.mutant, []
-
-        def memory(orig):
-            class Faulty(orig):
-                """The link's memories in construction order (the value RAM first); the value
-                RAM's writes may go to the neighbouring word (``values_swapped``) or its reads
-                one word ahead (``value_read_ahead``)."""
-
-                def __init__(self, *a, **k):
-                    super().__init__(*a, **k)
-                    made.append(self)
-
-                def _redirect(self, port, fault):
-                    if made.index(self) != 0 or mut != fault or getattr(self, "_built", 0):
-                        return port
-                    fake = Signal.like(port.addr, name=f"mutant_{fault}_addr")
-                    self._mutant = getattr(self, "_mutant", []) + [
-                        port.addr.eq(fake ^ 1 if fault == "values_swapped" else fake + 1)]
-                    return _Readdressed(port, fake)
-
-                def write_port(self, *a, **k):
-                    return self._redirect(super().write_port(*a, **k), "values_swapped")
-
-                def read_port(self, *a, **k):
-                    return self._redirect(super().read_port(*a, **k), "value_read_ahead")
-            return Faulty
-
-        fifos = []
-
-        def fifo(orig):
-            def make(*a, **k):
-                # the link's FIFOs in construction order: receive buffer, receive head, ...
-                fifos.append(_FreeByteSource(*a, **k) if len(fifos) == 1 else orig(*a, **k))
-                return fifos[-1]
-            return make
-
-        wraps = [("UartRx", lambda orig: _FreeUart), ("Memory", memory),
-                 ("SyncFIFOBuffered", fifo)]
-        if mut == "wrong_residue":
-            # the check compares against a residue one bit off: intact frames fail, frames
-            # corrupted to that residue pass
-            wraps.append(("CRC_RESIDUE", lambda orig: orig ^ 1))
-        with contextlib.ExitStack() as stack:
-            for name, w in wraps:
-                stack.enter_context(patched(core_module, name, w))
-            link_m = link.elaborate(platform)
-        for mem in made:
-            link_m.d.comb += getattr(mem, "_mutant", [])
-            mem._built = True                  # the harness's own ports are not redirected
-        if not isinstance(link_m.submodules["rx_head"], _FreeByteSource):
-            raise RuntimeError("the link's receive head FIFO was not the second one built")
-        return link, link_m
-
     def elaborate(self, platform):
         lc, m = self.lcfg, Module()
         m.domains.sync = self.cd
         N, W, I = lc.n_written, lc.current_bytes, lc.current_width
-        max_vals = (MAX_FRAME - HEADER_BYTES - 2) // W + 1
-        link, link_m = self._elaborate_link(platform)
+        max_vals = max_values(lc)
+        dec = _watched(DECODERS.get(self.mutant, FrameDecoder))(lc)
+        exe = FrameExecutor(lc)
+        dfrag, efrag = Fragment.get(dec, platform), Fragment.get(exe, platform)
         kt = Signal(range(max_vals), name="tracked_value")
         m.d.comb += kt.eq(AnyConst(len(kt)))
         assume_all(m, [kt < max_vals])
-        vport = link_m.submodules["vmem"].read_port(domain="comb")
+        vport = dec.watch
         m.d.comb += vport.addr.eq(kt)
-        rxf, urx = link_m.submodules["rx_head"], link_m.submodules["uart_rx"]
-        frag = Fragment.get(link_m, platform)
-        m.submodules.link = frag
-        for name in ("core_busy", "spike_valid", "sweep_done"):
-            m.d.comb += getattr(link, name).eq(AnySeq(1))
-        for name in ("spike_index", "spike_sweep"):
-            m.d.comb += getattr(link, name).eq(AnySeq(len(getattr(link, name))))
-        reg = {name: signal_named(frag, name) for name in
+        m.submodules.decoder, m.submodules.executor = dfrag, efrag
+        # the link's wiring between the two, the rest of their inputs free
+        ahead = 1 if self.mutant == "value_read_ahead" else 0
+        w = exe.write
+        m.d.comb += [
+            dec.bytes.valid.eq(AnySeq(1)), dec.bytes.payload.eq(AnySeq(8)),
+            exe.frame.valid.eq(dec.frame.valid), exe.frame.payload.eq(dec.frame.payload),
+            dec.frame.ready.eq(exe.frame.ready),
+            dec.value_addr.eq(exe.value_addr + ahead), dec.value_en.eq(exe.value_en),
+            exe.value_data.eq(dec.value_data),
+            exe.sweeps_started.eq(AnySeq(32)), exe.pending.eq(AnySeq(1)),
+            exe.busy.eq(AnySeq(1)), w.ready.eq(AnySeq(1)),
+        ]
+        reg = {name: signal_named(dfrag, name) for name in
                ("remain", "zero_pending", "started", "flen", "overlong", "crc", "acc", "phase",
-                "nvals", "count", "widx", "exp_seq", "rx_fsm_state")}
-        hdr = [signal_named(frag, f"hdr{i}") for i in range(HEADER_BYTES + CONTROL_PAYLOAD)]
-        inc = {name: signal_named(frag, f"inc_{name}") for name in
-               (*VERDICTS, "seq_gaps", "framing_errors", "late_writes")}
-        fsm = reg["rx_fsm_state"]
-        names = {}
-        for i in range(2 ** len(fsm)):
-            try:
-                label = str(fsm.decoder(i))
-            except (KeyError, IndexError):             # not a state's encoding
-                continue
-            if "/" in label:
-                names[label.split("/")[0]] = i
-        st = {name: Signal(name=f"in_{name}") for name in ("RECV", "CHECK", "DECIDE", "WAIT",
-                                                            "WRITE")}
-        m.d.comb += [s.eq(fsm == names[n]) if n in names else s.eq(0) for n, s in st.items()]
+                "nvals", "count", "exp_seq", "rx_fsm_state")}
+        hdr = [signal_named(dfrag, f"hdr{i}") for i in range(HEADER_BYTES + CONTROL_PAYLOAD)]
+        widx = signal_named(efrag, "widx")
+        st = _state_flags(m, reg["rx_fsm_state"], ("RECV", "CHECK", "DECIDE", "OFFER"), "dec")
+        ex = _state_flags(m, signal_named(efrag, "exec_fsm_state"),
+                          ("IDLE", "WAIT", "WRITE", "DRAIN"), "exe")
+        h = SimpleNamespace(N=N, W=W, I=I, max_vals=max_vals, dec=dec, exe=exe, w=w, kt=kt,
+                            vport=vport, reg=reg, hdr=hdr, widx=widx, st=st, ex=ex)
+        r = self._reference(m, h)
+        v = self._verdicts(m, h, r)
+        o = self._writes(m, h, r, v)
+        self._invariants(m, h, r, v, o)
+        return m
 
+    def _reference(self, m, h):
+        """The reference decoder, byte by byte: its state and the frame it ends."""
+        W, kt, dec = h.W, h.kt, h.dec
+        hdr = h.hdr
         # --- the reference decoder, byte by byte ----------------------------------------------
         take = Signal(name="ref_take")
         b = Signal(8, name="ref_byte")
-        m.d.comb += [take.eq(rxf.r_rdy & rxf.r_en), b.eq(rxf.r_data)]
+        m.d.comb += [take.eq(dec.bytes.valid & dec.bytes.ready), b.eq(dec.bytes.payload)]
         left = Signal(8, name="ref_left")              # data bytes left in the COBS block
         zero = Signal(name="ref_zero")                 # the block ends with a zero
         framing = Signal(name="ref_framing")           # a frame's first byte came
@@ -265,7 +234,15 @@ class DecoderProof(Elaboratable):
             # the tracked value, whole, when its last byte comes (its first bytes are in last)
             with m.If(~z_over & (z_len == HEADER_BYTES + 2 + W * kt + W - 1)):
                 m.d.sync += val.eq(Cat(last[8:], ebyte))
+        return SimpleNamespace(take=take, b=b, left=left, zero=zero, framing=framing, ended=ended,
+                               flen=flen, over=over, crc=crc, rhdr=rhdr, last=last, val=val, delim=delim,
+                               cobs_err=cobs_err)
 
+    def _verdicts(self, m, h, r):
+        """The verdict the decoder counts, from the reference's fields."""
+        N, W, max_vals, dec, st = h.N, h.W, h.max_vals, h.dec, h.st
+        flen, over, crc = r.flen, r.over, r.crc
+        rhdr, delim, cobs_err = r.rhdr, r.delim, r.cobs_err
         # the verdict at a frame's end, from the reference's own fields, in the documented
         # order: size, CRC, version, length field; then the type's layout and range
         seq, plen, op = rhdr[2], rhdr[3], rhdr[8]
@@ -297,7 +274,7 @@ class DecoderProof(Elaboratable):
             m.d.sync += exp_seq.eq(seq + 1)
 
         # the decoder counts the verdict its decision latency after the delimiter
-        lat = self.latency = 2 if "DECIDE" in names else 1
+        lat = self.latency = 2 if "DECIDE" in st else 1
         cur = {k: delim & x for k, x in v.items()} | {"seq_gaps": gap}
         for step in range(lat):
             nxt = {}
@@ -306,20 +283,28 @@ class DecoderProof(Elaboratable):
                 m.d.sync += r.eq(x)
                 nxt[k] = r
             cur = nxt
-        checks = [(inc[k] == cur[k], f"verdict: {k}") for k in (*VERDICTS, "seq_gaps")]
-        checks += [(inc["framing_errors"] == cobs_err + urx.frame_error,
-                    "verdict: framing_errors")]
+        counted = {k: getattr(dec, f"count_{k}") for k in VERDICTS} | {"seq_gaps": dec.seq_gap}
+        checks = [(counted[k] == cur[k], f"verdict: {k}") for k in (*VERDICTS, "seq_gaps")]
+        checks += [(dec.count_framing_errors == cobs_err, "verdict: framing_errors")]
         assert_all(m, checks)
+        return SimpleNamespace(n_vals=n_vals, first=first, write=write, exp_seq=exp_seq, ok=v)
 
+    def _writes(self, m, h, r, v):
+        """The writes the payload takes: an accepted frame's, in order, none lost."""
+        W, I, max_vals, kt = h.W, h.I, h.max_vals, h.kt
+        exe, w = h.exe, h.w
+        take = r.take
+        val, delim = r.val, r.delim
+        n_vals, first, write = v.n_vals, v.first, v.write
         # --- the writes -------------------------------------------------------------------------
         owed = Signal(name="ref_owed")                   # writes of an accepted frame to come
         wfirst = Signal(16, name="ref_write_first")
         wcount = Signal(range(max_vals + 1), name="ref_write_count")
         wval = Signal(8 * W, name="ref_write_value")
         done = Signal(range(max_vals + 1), name="ref_writes_seen")
-        late = inc["late_writes"] != 0
-        wr = link.i_wr_en
-        with m.If(delim & v["frames_ok"] & write):
+        late = exe.count_late_writes
+        wr = w.valid & w.ready                           # a write the payload takes
+        with m.If(delim & v.ok["frames_ok"] & write):
             m.d.sync += [owed.eq(n_vals != 0), wfirst.eq(first), wcount.eq(n_vals),
                          done.eq(0), wval.eq(val)]
         with m.If(wr):
@@ -328,25 +313,40 @@ class DecoderProof(Elaboratable):
                 m.d.sync += owed.eq(0)
         with m.If(late):
             m.d.sync += owed.eq(0)
-        in_flight = wr & (done + 1 == wcount)              # the frame's last write, leaving
         checks = [(~wr | owed, "writes: only an accepted frame's"),
-                  (~wr | (link.i_wr_addr == wfirst + done), "writes: in order, none lost"),
-                  (~wr | (done != kt) | (link.i_wr_data == wval[:I]),
+                  (~wr | (w.payload.addr == wfirst + done), "writes: in order, none lost"),
+                  (~wr | (done != kt) | (w.payload.value.as_unsigned() == wval[:I]),
                    "writes: the tracked value"),
+                  (~wr | (w.payload.last == (done + 1 == wcount)), "writes: the burst's end"),
                   (~late | (done == 0) & (owed | (wcount == 0)),
                    "late write: before any write"),
-                  (~take | ~owed | in_flight, "no byte taken while writes are owed")]
+                  (~take | ~owed, "no byte taken while writes are owed")]
         assert_all(m, checks)
+        return SimpleNamespace(owed=owed, wfirst=wfirst, wcount=wcount, wval=wval, done=done)
 
+    def _invariants(self, m, h, r, v, o):
+        """The invariants that make the properties inductive."""
+        N, W, I, kt, max_vals = h.N, h.W, h.I, h.kt, h.max_vals
+        dec, w, vport = h.dec, h.w, h.vport
+        reg, hdr, widx, st, ex = h.reg, h.hdr, h.widx, h.st, h.ex
+        ended, flen, over, crc = r.ended, r.flen, r.over, r.crc
+        rhdr, last, val = r.rhdr, r.last, r.val
+        left, zero, framing = r.left, r.zero, r.framing
+        exp_seq = v.exp_seq
+        owed, wfirst, wcount, wval, done = o.owed, o.wfirst, o.wcount, o.wval, o.done
         # --- invariants -----------------------------------------------------------------------
         holding = (st["RECV"] & ~ended) | st["CHECK"] | st["DECIDE"]
-        reset = (st["RECV"] & ended) | st["WAIT"] | st["WRITE"]
+        reset = (st["RECV"] & ended) | st["OFFER"]
+        working = ex["WAIT"] | ex["WRITE"] | ex["DRAIN"]
+        offered_write = st["OFFER"] & dec.frame.payload.write
         assembling = holding & ~over & (flen >= HEADER_BYTES + 2)
         pos = flen - (HEADER_BYTES + 2)
         checks = [
-            (st["RECV"] | st["CHECK"] | st["DECIDE"] | st["WAIT"] | st["WRITE"],
-             "state: a decoder state"),
+            (st["RECV"] | st["CHECK"] | st["DECIDE"] | st["OFFER"], "state: a decoder state"),
+            (ex["IDLE"] | working, "state: an executor state"),
+            (~working | offered_write, "state: the executor works on the offered write"),
             (flen <= MAX_FRAME, "reference: length in range"),
+            (wcount < max_vals, "reference: a frame's values fit a frame"),
             (framing | (flen == 0) & ~over & (crc == CRC_INIT) & (left == 0) & ~zero,
              "reference: nothing before a frame's first byte"),
             (~holding | (reg["remain"] == left), "state: block bytes left"),
@@ -367,28 +367,42 @@ class DecoderProof(Elaboratable):
              "state: reset after a frame"),
             (st["CHECK"] | st["DECIDE"] | (reg["exp_seq"] == exp_seq),
              "state: expected sequence number"),
-            (~ended | ~framing | st["RECV"] | st["CHECK"] | st["DECIDE"] | st["WAIT"]
-             | st["WRITE"], "state: frame end seen"),
-            (~st["RECV"] | ~owed | in_flight, "state: no writes owed while receiving"),
-            (~(st["CHECK"] | st["DECIDE"] | st["WAIT"] | st["WRITE"]) | ended & framing
-             & (left == 0), "state: past an ended frame"),
-            (~st["WAIT"] | (reg["count"] == wcount) & (done == 0) & (owed == (wcount != 0))
-             & ~wr & (reg["widx"] == 0), "state: waiting to write"),
-            (~st["WRITE"] | (reg["count"] == wcount) & owed
-             & (reg["widx"] == done + 1 + wr) & (reg["widx"] <= wcount) & (reg["widx"] != 0),
+            (~st["RECV"] | ~owed, "state: no writes owed while receiving"),
+            (~(st["CHECK"] | st["DECIDE"] | st["OFFER"]) | ended & framing & (left == 0),
+             "state: past an ended frame"),
+            (~(st["CHECK"] | st["DECIDE"]) | ex["IDLE"] & ~w.valid,
+             "state: the executor idle while a frame is decided"),
+            (~ex["IDLE"] | ~w.valid, "state: nothing on offer while idle"),
+            (~w.valid | (w.payload.addr == wfirst + done)
+             & (w.payload.last == (done + 1 == wcount))
+             & ((done != kt) | (w.payload.value.as_unsigned() == wval[:I])),
+             "state: the write on offer"),
+            # the value RAM's read register holds the value the next load takes
+            (~ex["WRITE"] | (widx != kt + 1) | (dec.value_data == wval[:I]),
+             "state: the tracked value read"),
+            (~(st["OFFER"] & ex["IDLE"]) | Mux(dec.frame.payload.write,
+                                               (done == 0) & (owed == (wcount != 0))
+                                               & (reg["count"] == wcount),
+                                               ~owed),
+             "state: a frame offered"),
+            (~ex["WAIT"] | (reg["count"] == wcount) & (done == 0) & (owed == (wcount != 0))
+             & ~w.valid & (widx == 0), "state: waiting to write"),
+            (~ex["WRITE"] | (reg["count"] == wcount) & owed
+             & (widx == done + 1 + w.valid) & (widx <= wcount) & (widx != 0),
              "state: writing"),
-            (~(st["WAIT"] | st["WRITE"]) | (Cat(hdr[8], hdr[9]) == wfirst), "state: first"),
-            (~(st["WAIT"] | st["WRITE"] | owed) | (wfirst + wcount <= N),
+            (~ex["DRAIN"] | (reg["count"] == wcount) & owed & w.valid
+             & (done + 1 == wcount) & (widx == wcount + 1), "state: the last write on offer"),
+            (~offered_write | (Cat(hdr[8], hdr[9]) == wfirst), "state: first"),
+            (~(offered_write | owed) | (wfirst + wcount <= N),
              "state: an accepted frame's writes in range"),
         ]
         checks += [(~(flen > i) | (h == rh), f"state: header byte {i}")
                    for i, (h, rh) in enumerate(zip(hdr, rhdr))]
         stored = holding & ~over & (HEADER_BYTES + 2 + W * (kt + 1) <= flen)
         checks += [(~stored | (vport.data == val[:I]), "state: tracked value assembled"),
-                   (~(st["WAIT"] | st["WRITE"]) | (kt >= wcount) | (vport.data == wval[:I]),
+                   (~offered_write | (kt >= wcount) | (vport.data == wval[:I]),
                     "state: tracked value to write")]
         assert_all(m, checks)
-        return m
 
 
 def _same_top_bytes(a, b, n, width: int):
@@ -399,26 +413,16 @@ def _same_top_bytes(a, b, n, width: int):
     return out
 
 
-class _Readdressed:
-    """A memory port whose address the harness drives (a mutant's redirection)."""
-
-    def __init__(self, port, addr):
-        self._port, self.addr = port, addr
-
-    def __getattr__(self, name):
-        return getattr(self._port, name)
-
-
 def decoder_proof_config(n_neurons: int = 8, **kwargs) -> LinkConfig:
-    """A small link for the decoder proof: ``n_neurons`` (default 8), a 4-byte receive FIFO,
-    ``kwargs`` to :func:`~cuneate.hdl.link.config.link_config`."""
+    """A small link for the decoder proof: ``n_neurons`` (default 8), ``kwargs`` to
+    :func:`~cuneate.hdl.link.config.link_config`."""
     kw = dict(rx_fifo_depth=4, tx_fifo_depth=4, batch_capacity=2)
     kw.update(kwargs)
     return link_config(dict(n_neurons=n_neurons, clock_hz=n_neurons * 16e3 * 4), **kw)
 
 
-#: memories of the link that start with any contents
-MEMORIES = ("vmem", "smem", "tmem")
+#: memories of the harness that start with any contents
+MEMORIES = ("vmem",)
 
 
 def decoder_harness(lcfg: LinkConfig, mutant: str | None = None) -> str:
@@ -427,15 +431,15 @@ def decoder_harness(lcfg: LinkConfig, mutant: str | None = None) -> str:
 
 
 def _depth(top: DecoderProof) -> int:
-    # the decision latency + 5: the write port's and the value RAM's pipelines, the receive
-    # FIFO's head
+    # the decision latency + 5: the executor's output register and the value RAM's
+    # pipeline
     return top.latency + 5
 
 
 def induction_depth(lcfg: LinkConfig) -> int:
     """The k of the k-induction: the decoder's decision latency (cycles from the delimiter to
-    the verdict, read from its states) + 5 (the write port's and the value RAM's pipelines,
-    the receive FIFO's head)."""
+    the verdict, read from its states) + 5 (the executor's output register and the value
+    RAM's pipeline)."""
     top = DecoderProof(lcfg)
     harness_rtlil(top, "decoder_eq", MEMORIES)
     return _depth(top)
@@ -447,8 +451,8 @@ def prove_decoder(lcfg: LinkConfig, workdir: Path, mode: str = "prove",
                   solver: str = SOLVER) -> ProofResult:
     """Prove (``mode="prove"``, k-induction of ``depth`` steps, default
     :func:`induction_depth`) or check to a bound (``mode="bmc"``) that the link's frame
-    decoder gives every frame its specified verdict and loses or reorders no accepted
-    write."""
+    decoder gives every frame its specified verdict and its executor loses or reorders no
+    accepted write."""
     top = DecoderProof(lcfg, mutant)
     il = harness_rtlil(top, "decoder_eq", MEMORIES)         # one elaboration: the RTLIL and k
     return run_proof("link frame decoder meets the wire format", il, workdir, "decoder_eq",

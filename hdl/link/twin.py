@@ -1,9 +1,7 @@
 """The link's bit-exact model (:class:`LinkModel`): what the link gateware answers, sweep for
-sweep, on the Izhikevich twin, when no timing loss occurs."""
+sweep, on the twin of the block behind it, when no timing loss occurs."""
 
 from __future__ import annotations
-
-import numpy as np
 
 import struct
 
@@ -13,9 +11,9 @@ from .codec import (CONTROL_PAYLOAD, COUNTER_NAMES, MSG_CONTROL, MSG_COUNTERS, M
 
 __all__ = ["LinkModel"]
 
-
 class LinkModel:
-    """Behavioural model of :class:`cuneate.hdl.link.LinkedCore` on the bit-exact twin.
+    """Behavioural model of :class:`cuneate.hdl.link.LinkedTop` on the block's bit-exact twin
+    (:meth:`~cuneate.hdl.lib.payload.PayloadSpec.twin`).
 
     Feed it the host's bytes (:meth:`feed`); it returns the bytes the device sends. It follows
     the gateware's rules (framing, length, CRC, version, sequence, range and late-write checks,
@@ -26,16 +24,8 @@ class LinkModel:
     """
 
     def __init__(self, lcfg):
-        from ..izhikevich import ConfigError, IzhikevichArrayTwin, IzhikevichConfig
-        if not isinstance(lcfg.core, IzhikevichConfig):
-            raise ConfigError(f"the link model runs the Izhikevich twin, not a "
-                              f"{type(lcfg.core).__name__} core")
         self.lcfg = lcfg
-        self.twin = IzhikevichArrayTwin(lcfg.core, lcfg.n_cores, neuron_sets=lcfg.neuron_sets)
-        self.fanout = None
-        if lcfg.fanout is not None:             # writes are channel samples, fanned out
-            from ..fanout import FanoutTwin
-            self.fanout = FanoutTwin(lcfg.fanout)
+        self.twin = lcfg.payload.twin()
         self.counters = {n: 0 for n in COUNTER_NAMES}
         self.S = 0
         self.free = False
@@ -54,7 +44,7 @@ class LinkModel:
         self.tx_seq = (self.tx_seq + 1) & 0xFF
 
     def _sweep(self):
-        spk = np.flatnonzero(self.twin.sweep())
+        spk = self.twin.sweep()
         cap = self.lcfg.batch_capacity
         for n in spk:
             if len(self._batch) < cap:
@@ -126,17 +116,10 @@ class LinkModel:
             if self.S > msg.tick:
                 c["late_writes"] += 1
                 return
-            if self.fanout is not None:
-                # the frame's samples, then one fan-out run writes every afferent's current
-                if not vals:
-                    return
-                for n, raw in enumerate(vals, start=first):
-                    self.fanout.write(n, raw)
-                for n, raw in enumerate(self.fanout.run()[0]):
-                    self.twin.set_current_raw(n, int(raw))
-                return
             for n, raw in enumerate(vals, start=first):
-                self.twin.set_current_raw(n, raw)
+                self.twin.write(n, raw)
+            if vals:                          # the burst's last value ends it
+                self.twin.end_burst()
         elif (msg.type == MSG_CONTROL and len(msg.payload) == CONTROL_PAYLOAD
               and OP_START <= msg.payload[0] <= OP_CLEAR_COUNTERS):
             c["frames_ok"] += 1

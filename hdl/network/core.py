@@ -34,7 +34,7 @@ Tick report: ``tick_open`` rises with a tick taken and falls with ``tick_done`` 
 once every spike of that tick has been handed to the output stream: the core's sweep and the
 detector's update are done, :data:`REPORT_SETTLE` cycles have passed for the FIFOs' outputs
 to show their last entries, and both FIFOs are empty. A consumer that takes no tick while
-``busy | tick_open`` (the host link: :class:`~cuneate.hdl.link.LinkedNetwork`) sees every tick's
+``busy | tick_open`` (its payload, :mod:`cuneate.hdl.network.payload`) sees every tick's
 spikes before its ``tick_done`` and none of the next tick's; the FIFOs then hold one tick's
 spikes at most and cannot overflow.
 """
@@ -71,7 +71,8 @@ class AfferentCuneateNetwork(wiring.Component):
     ``afferent_spike_count``, ``cuneate_spike_count``, ``overrun_count``,
     ``cuneate_overflow_count`` and ``afferent_overflow`` (sticky: the core's FIFO dropped a
     spike), ``merged_count`` (events the detector merged: 0 by construction),
-    ``clamp_flags`` (core | detector, sticky), ``busy``, ``tick_open`` and ``tick_done`` (the
+    ``clamp_flags`` (core | detector, sticky; ``clamp_clear`` clears both), ``busy``,
+    ``tick_open`` and ``tick_done`` (the
     tick report, see the module docstring).
     """
 
@@ -99,7 +100,8 @@ class AfferentCuneateNetwork(wiring.Component):
                "cuneate_spike_count": Out(COUNTER_BITS), "overrun_count": Out(COUNTER_BITS),
                "cuneate_overflow_count": Out(COUNTER_BITS), "afferent_overflow": Out(1),
                "merged_count": Out(COUNTER_BITS),
-               "clamp_flags": Out(5), "busy": Out(1), "tick_open": Out(1),
+               "clamp_flags": Out(5), "clamp_clear": In(1), "busy": Out(1),
+               "tick_open": Out(1),
                "tick_done": Out(1)}
         if cfg.tick_source == "external":
             sig["tick"] = In(1)
@@ -114,7 +116,8 @@ class AfferentCuneateNetwork(wiring.Component):
         self.core, self.det = core, det
         m.d.comb += [core.i_wr_en.eq(self.i_wr_en), core.i_wr_addr.eq(self.i_wr_addr),
                      core.i_wr_data.eq(self.i_wr_data), core.sel_wr_en.eq(0),
-                     det.clamp_clear.eq(0), core.clamp_clear.eq(0)]
+                     det.clamp_clear.eq(self.clamp_clear),
+                     core.clamp_clear.eq(self.clamp_clear)]
 
         # ---- tick: held until the previous sweep is complete and the detector idle
         tick = tick_strobe(m, cfg, getattr(self, "tick", None))

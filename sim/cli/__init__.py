@@ -32,7 +32,10 @@ import os
 import pkgutil
 import sys
 import warnings
+from importlib.metadata import PackageNotFoundError
+from importlib.metadata import version as dist_version
 
+from ...golden import budget
 from .options import (CliError, CommandGroups, Parser, add_quiet_option, anticipated,
                       environment_failure, one_line)
 
@@ -56,8 +59,6 @@ def block_command_modules() -> list[str]:
 
 def version() -> str:
     """The installed cuneate version."""
-    from importlib.metadata import PackageNotFoundError
-    from importlib.metadata import version as dist_version
     try:
         return dist_version("cuneate")
     except PackageNotFoundError:             # pragma: no cover - running from a plain checkout
@@ -149,7 +150,6 @@ def command_line(argv) -> str:
 
 def main(argv=None) -> int:
     """Run one command; see the module docstring for the exit status."""
-    from ...golden import budget
     argv, debug = _split_debug(sys.argv[1:] if argv is None else argv)
     debug = debug or os.environ.get("CUNEATE_DEBUG", "") not in ("", "0")
     args = None

@@ -3,54 +3,109 @@
 from __future__ import annotations
 
 import json
+import shutil
+import subprocess
+from pathlib import Path
 
+from ...hdl.izhikevich.config import PIPELINE_STAGES
+from ...hdl.lib.config import ConfigError
+from ..izhikevich.cli import add_pipeline_option
 from .options import (CliError, CommandGroups, add_quiet_option, claim_output, output_dir,
-                      positive_float, positive_int)
+                      positive_float, positive_int, start_progress)
 
 __all__ = ["register"]
 
 
-def cmd_boards(args) -> int:
+def _output(t: dict) -> str:
+    if t.get("bitstream"):
+        return "bitstream"
+    if t.get("zynq"):
+        return "Vivado IP + block design + estimate"
+    return "Vivado project + estimate" if t.get("vivado") else "Verilog + estimate"
+
+
+def board_rows() -> list[dict]:
+    """One row per board and pipeline depth where the depths' limits differ (one row where
+    they do not): bounds and the largest build in neurons at the board's update rate."""
     from ...boards.sizing import limits
     from ...boards.targets import TARGETS
-    from ...hdl.izhikevich.config import PIPELINE_STAGES
     rows = []
     for name, t in TARGETS.items():
-        plan = t["clock_plan"]
+        plans = [p.clock_hz / 1e6 for p, _ in t.get("clock_plans", [])] or \
+            [t["clock_plan"].clock_hz / 1e6]
         per_depth = {d: limits(t, d) for d in (PIPELINE_STAGES[0], PIPELINE_STAGES[-1])}
-        rows.append({"name": name, "device": t["device"], "description": t["description"],
-                     "bitstream": bool(t.get("bitstream")), "clock_mhz": plan.clock_hz / 1e6,
-                     "plans_mhz": [p.clock_hz / 1e6 for p, _ in t.get("clock_plans", [])]
-                     or [plan.clock_hz / 1e6],
-                     "update_khz": plan.update_hz / 1e3, "baud": plan.baud,
-                     "max_neurons_one_core": plan.cycles_per_tick - 16,
-                     "largest": {str(d): lim for d, lim in per_depth.items()},
-                     "default_neurons": t["default_neurons"], "resources": t["resources"]})
+        depths = list(per_depth)
+        if per_depth[depths[0]] == per_depth[depths[-1]]:
+            depths = [depths]
+        else:
+            depths = [[d] for d in depths]
+        for ds in depths:
+            lim = per_depth[ds[0]]
+            rows.append({
+                "name": name, "device": t["device"], "output": _output(t),
+                "description": t["description"], "bitstream": bool(t.get("bitstream")),
+                "depths": ds, "plans_mhz": plans, "update_khz": lim["update_hz"] / 1e3,
+                "uart": t.get("uart", "USB-serial"), "default_neurons": t["default_neurons"],
+                "bram_bound": lim["bram"], "multiplier_bound": lim["multiplier"],
+                "logic_fmax_bound": lim["fmax"], "fmax_mhz": lim["fmax_mhz"],
+                "largest": lim.get("largest"), "largest_cores": lim.get("cores"),
+                "largest_per_core": lim.get("per_core"),
+                "largest_clock_mhz": lim["clock_hz"] / 1e6 if lim.get("clock_hz") else None,
+                "largest_bram": (lim.get("estimate") or {}).get("BRAM"),
+                "resources": t["resources"]})
+    return rows
+
+
+_COLUMNS = [("board", lambda r: r["name"]), ("device", lambda r: r["device"]),
+            ("output", lambda r: r["output"]),
+            ("PLL plans (MHz)", lambda r: ", ".join(f"{c:g}" for c in r["plans_mhz"])),
+            ("depth", lambda r: " or ".join(str(d) for d in r["depths"])),
+            ("block-RAM bound (neurons)", lambda r: _n(r["bram_bound"])),
+            ("multiplier bound (neurons)", lambda r: _n(r["multiplier_bound"])),
+            ("logic x fmax bound (neurons)",
+             lambda r: "-" if r["logic_fmax_bound"] is None else
+             f"{_n(r['logic_fmax_bound'])} (at {r['fmax_mhz']:.4g} MHz)"),
+            ("largest build (neurons)",
+             lambda r: "-" if r["largest"] is None else
+             f"{_n(r['largest'])} ({r['largest_cores']} x {_n(r['largest_per_core'])} at "
+             f"{r['largest_clock_mhz']:g} MHz, {r['largest_bram']} block RAMs)"),
+            ("default (neurons)", lambda r: _n(r["default_neurons"]))]
+
+
+def _n(v) -> str:
+    return "-" if v is None else f"{v:,}".replace(",", " ")
+
+
+def format_board_table(rows: list[dict], markdown: bool = False) -> str:
+    """The limit table: neurons at 16 kHz per board (and depth where depths differ)."""
+    head = [h for h, _ in _COLUMNS]
+    body = [[f(r) for _, f in _COLUMNS] for r in rows]
+    if markdown:
+        lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+        lines += ["| " + " | ".join(f"`{c}`" if i == 0 else c for i, c in enumerate(row))
+                  + " |" for row in body]
+        return "\n".join(lines) + "\n"
+    widths = [max(len(x) for x in col) for col in zip(head, *body)]
+    fmt = "  ".join(f"{{:{w}s}}" for w in widths)
+    upd = {r["update_khz"] for r in rows}
+    note = (f"neurons at {', '.join(f'{u:g}' for u in sorted(upd))} kHz updates; bounds: every "
+            f"block-RAM bit at the best shapes' packing, every multiplier block at the fastest "
+            f"plan's cycles per sweep, as many cores as the logic holds at the measured fmax")
+    return "\n".join([fmt.format(*head)] + [fmt.format(*row) for row in body] + [note]) + "\n"
+
+
+def cmd_boards(args) -> int:
+    rows = board_rows()
     if args.json:
         print(json.dumps(rows, indent=2, default=str))
     else:
-        for r in rows:
-            print(f"{r['name']:11s} {r['device']:20s} "
-                  f"{'bitstream' if r['bitstream'] else 'Verilog + estimate'}, PLL plans "
-                  f"{', '.join(f'{c:g}' for c in r['plans_mhz'])} MHz, "
-                  f"{r['update_khz']:g} kHz updates")
-            for d, lim in r["largest"].items():
-                tight = min(x for x in (lim["bram"], lim["multiplier"], lim["fmax"]) if x)
-                print(f"{'':11s} depth {d}: largest {lim['largest']} neurons "
-                      f"({lim['cores']} x {lim['per_core']} at {lim['clock_hz'] / 1e6:g} MHz, "
-                      f"{lim['estimate']['BRAM']} block RAMs); bounds in neurons: block RAM "
-                      f"{lim['bram']}, multipliers {lim['multiplier']}"
-                      + (f", logic at the measured fmax of {lim['fmax_mhz']:.1f} MHz "
-                         f"{lim['fmax']}" if lim["fmax"] else "")
-                      + f" ({100 * lim['largest'] / tight:.0f} % of the tightest)")
+        print(format_board_table(rows, markdown=args.markdown), end="")
     return 0
 
 
 def cmd_build(args) -> int:
     from ...boards.build import BuildError, build_target
     from ...boards.targets import TARGETS
-    from ...hdl.lib.config import ConfigError
-    from .options import start_progress
     if args.board_option is not None:
         if args.board is not None and args.board != args.board_option and args.scene is None:
             args.board, args.scene = args.board_option, args.board    # --board B SCENE
@@ -79,7 +134,8 @@ def cmd_build(args) -> int:
                                   clock_hz=args.clock_hz, update_hz=args.update_hz,
                                   bitstream=not args.no_bitstream, seed=args.seed,
                                   pipeline_stages=args.pipeline_stages, scene=scene,
-                                  baud=args.baud)
+                                  baud=args.baud,
+                                  pack_registers=not args.no_pack_registers)
     except ConfigError as exc:
         raise CliError(f"cuneate build: {exc}") from None
     except BuildError as exc:
@@ -92,9 +148,6 @@ def cmd_build(args) -> int:
 
 
 def cmd_program(args) -> int:
-    import shutil
-    import subprocess
-    from pathlib import Path
     from ...boards.targets import TARGETS
     t = TARGETS.get(args.board)
     if t is None or not t.get("loader_board"):
@@ -127,6 +180,8 @@ def register(groups: CommandGroups) -> None:
 
     b = groups.root.add_parser("boards", help="list the board targets and their limits")
     b.add_argument("--json", action="store_true")
+    b.add_argument("--markdown", action="store_true", help="the table as Markdown "
+                                                            "(docs/boards.md)")
     b.set_defaults(func=cmd_boards)
 
     c = groups.root.add_parser("build", help="Verilog, bitstream and resource/timing report "
@@ -149,9 +204,12 @@ def register(groups: CommandGroups) -> None:
                         "1 %% (115200 on the ULX3S at 60 MHz: 521 clocks a bit)")
     c.add_argument("--out", required=True)
     c.add_argument("--seed", type=positive_int, default=1, help="nextpnr placement seed")
-    from ..izhikevich.cli import add_pipeline_option
     add_pipeline_option(c)
     c.add_argument("--no-bitstream", action="store_true",
                    help="Verilog and estimate only (no place and route)")
+    c.add_argument("--no-pack-registers", action="store_true",
+                   help="ECP5: leave the multipliers' and block RAMs' registers in the fabric "
+                        "(by default they move into the MULT18X18D and DP16KD between yosys "
+                        "and nextpnr)")
     c.add_argument("--json", action="store_true")
     c.set_defaults(func=cmd_build)

@@ -3,18 +3,22 @@ scene and its report); ``--summary`` generates the hardware and summarizes the m
 
 from __future__ import annotations
 
+import argparse
 import time
 from pathlib import Path
 
 import numpy as np
 
-from .options import CommandGroups, output_dir
+from ...golden.izhikevich import PRESETS, simulate
+from ...hdl.izhikevich import IzhikevichConfig, IzhikevichTwin
+from ..engines.waves import DEFAULT_TICKS
+from .options import CommandGroups, add_quiet_option, output_dir
+from .run import cmd_run
 
 __all__ = ["run_demo", "register"]
 
 
 def golden_summary() -> list[str]:
-    from ...golden.izhikevich import PRESETS, simulate
     from ...golden.metrics import isi_stats
     lines = ["golden Izhikevich (forward Euler, dt = 1/16 ms, 1 s per neuron):",
              f"  {'preset':6s} {'I':>6s} {'spikes':>7s} {'mean ISI ms':>12s} {'CV':>6s}"]
@@ -53,9 +57,7 @@ def run_demo(out: Path) -> int:
 
 
 def core_summary() -> list[str]:
-    from ...golden.izhikevich import simulate
     from ...golden.metrics import compare_trains
-    from ...hdl.izhikevich import IzhikevichConfig, IzhikevichTwin
     cfg = IzhikevichConfig()
     d = cfg.to_dict()
     f = d["formats"]
@@ -86,10 +88,7 @@ def cmd_demo(args) -> int:
     ``--summary`` the hardware's files and a golden-model summary instead."""
     if args.summary:
         return run_demo(output_dir(args.out))
-    import argparse
 
-    from ..engines.waves import DEFAULT_TICKS
-    from .run import cmd_run
     return cmd_run(argparse.Namespace(
         scene=None, out=args.out, engines=None, list_examples=False, json=False, waves=None,
         waves_start=0, waves_ticks=DEFAULT_TICKS, quiet=getattr(args, "quiet", False),
@@ -97,7 +96,6 @@ def cmd_demo(args) -> int:
 
 
 def register(groups: CommandGroups) -> None:
-    from .options import add_quiet_option
     dm = groups.root.add_parser("demo", help="what make demo runs: the default scene (the "
                                              "four-material grasp) and its report")
     dm.add_argument("--out", default="out/demo", help="report directory")

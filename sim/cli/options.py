@@ -11,20 +11,27 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import json
 import math
 import os
 import re
+import sys
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+from ...golden import budget
 from ...golden.budget import fmt_count, fmt_time
+from ...hdl.lib.config import ConfigError
+from ..engines.registry import BLOCKS, ENGINES, block_engines, estimate_seconds
+from ..engines.waves import DEFAULT_TICKS, Waves
 
 __all__ = ["CliError", "Parser", "one_line", "anticipated", "ANTICIPATED", "environment_failure",
            "engine_list", "claim_output", "LOCK_NAME", "INCOMPLETE_NAME", "CommandGroups",
            "finite_float", "positive_float", "positive_int", "nonneg_int", "seed_int",
            "probability", "verilog_name", "output_dir", "input_file", "run_budget",
-           "check_estimate", "fmt_time",
-           "engine_choices", "add_run_options", "add_max_minutes", "add_generate_options",
+           "check_estimate", "fmt_time", "engine_choices", "EngineChoices",
+           "add_run_options", "add_max_minutes", "add_generate_options",
            "run_ticks", "print_run", "clamp_summary", "build_config", "add_rate_options",
            "add_block_commands", "HelpFormatter", "add_quiet_option", "start_progress",
            "add_waves_options", "waves_from_args", "add_spikes_option", "write_simulate_spikes"]
@@ -59,7 +66,6 @@ ANTICIPATED = {
 def anticipated(exc: BaseException) -> bool:
     """True for the errors of :data:`ANTICIPATED` (of modules already loaded: an error of a
     module never imported cannot have been raised) and for undecodable text input."""
-    import sys
     if isinstance(exc, UnicodeDecodeError):
         return True
     root = __package__.split(".")[0]
@@ -89,10 +95,9 @@ def environment_failure(exc: BaseException) -> str | None:
     folder should be ...) says what failed on which path; a :class:`MemoryError` says that
     memory ran out and how much this process may still use."""
     if isinstance(exc, MemoryError):
-        from ...golden.budget import available_memory, fmt_bytes
         detail = f" ({one_line(str(exc), 160)})" if str(exc) else ""
         return (f"out of memory{detail}: this process can get about "
-                f"{fmt_bytes(available_memory())} more; free memory or ask for less")
+                f"{budget.fmt_bytes(budget.available_memory())} more; free memory or ask for less")
     if isinstance(exc, OSError) and getattr(exc, "filename", None) is not None:
         what = exc.strerror or type(exc).__name__
         name = str(exc.filename)
@@ -170,7 +175,6 @@ def start_progress(args, verbose: bool = False) -> str:
 
 def add_waves_options(p) -> None:
     """``--waves DIR`` and its window (``--waves-start``, ``--waves-ticks``)."""
-    from ..engines.waves import DEFAULT_TICKS
     p.add_argument("--waves", default=None, metavar="DIR",
                    help="write the RTL engines' waveforms (amaranth: VCD, icarus: FST, "
                         "verilator: VCD) and GTKWave save files into DIR")
@@ -184,7 +188,6 @@ def waves_from_args(args, relative_to: Path | None = None):
     """The :class:`~cuneate.sim.engines.waves.Waves` window of ``--waves``, or ``None``."""
     if not getattr(args, "waves", None):
         return None
-    from ..engines.waves import Waves
     d = output_dir(args.waves, "--waves")
     return Waves(d, args.waves_start, args.waves_ticks)
 
@@ -375,10 +378,29 @@ def input_file(path: str | Path, what: str) -> Path:
     return p
 
 
-def engine_choices(block: str) -> tuple[str, ...]:
+class EngineChoices(Sequence):
+    """The engines ``block`` supports (the registry's list; ``hdl``: its RTL engines alone), as
+    an option's choices: asked of the registry when first used (parsing, a command's help),
+    not when the parser is built, so that ``cuneate --help`` loads no engine (measured 40 ms
+    of 800). The option takes a ``metavar`` (argparse would list the choices as it is
+    added) and its help names them with ``%(choices)s``."""
+
+    def __init__(self, block: str, hdl: bool = False):
+        self.block, self.hdl = block, hdl
+
+    def _names(self) -> tuple[str, ...]:
+        return tuple(e for e in block_engines(self.block) if not self.hdl or ENGINES[e].hdl)
+
+    def __getitem__(self, i):
+        return self._names()[i]
+
+    def __len__(self) -> int:
+        return len(self._names())
+
+
+def engine_choices(block: str, hdl: bool = False) -> EngineChoices:
     """The engines ``block`` supports (the registry's list, for ``--engine``)."""
-    from ..engines.registry import block_engines
-    return block_engines(block)
+    return EngineChoices(block, hdl)
 
 
 def run_budget(command: str, block: str, engine: str, work: float, nbytes: float = 0.0,
@@ -387,8 +409,6 @@ def run_budget(command: str, block: str, engine: str, work: float, nbytes: float
     simulator) that the engine registry estimates to take longer than the time limit in force
     (``--max-minutes``), or whose ``nbytes`` exceed the memory this machine can give
     (:func:`cuneate.golden.budget.check`); returns the estimate."""
-    from ...golden import budget
-    from ..engines.registry import BLOCKS, estimate_seconds
     secs = estimate_seconds(block, engine, work)
     unit = BLOCKS[block].unit
     try:
@@ -401,7 +421,6 @@ def run_budget(command: str, block: str, engine: str, work: float, nbytes: float
 def check_estimate(command: str, est: dict, hint: str = "") -> dict:
     """An estimate ``{"what", "bytes", "seconds"}`` checked against the limits in force
     (:func:`cuneate.golden.budget.check`), refused as a one-line :class:`CliError`."""
-    from ...golden import budget
     try:
         return budget.check(est["what"], est["bytes"], est["seconds"], hint)
     except budget.BudgetError as exc:
@@ -431,13 +450,50 @@ def add_generate_options(g) -> None:
     g.add_argument("--out", required=True, help="output directory")
 
 
+def add_face_option(g) -> None:
+    """``--face``: the block behind one of its faces (:data:`cuneate.hdl.axi.faces.FACES`)."""
+    from ...hdl.axi.faces import FACES
+    g.add_argument("--face", choices=("none",) + tuple(FACES), default="none",
+                   help="none (default): the block alone; " + "; ".join(
+                       f"{k}: {v}" for k, v in FACES.items()) + " (standard port names, the "
+                   "register map in the header and in NAME.regmap.json/.md)")
+
+
+def generate_faced(args, config, block: str, **spec_options) -> int:
+    """``cuneate generate BLOCK --face F``: the block of ``config`` behind face ``F`` in
+    ``--out`` (module ``<name>_<face>``, ``<name>`` the block's ``--name`` or ``block``);
+    prints the files and the face's figures, one line each."""
+    from ...hdl.axi.faces import write_face
+    from ...hdl.lib.config import ConfigError
+    name = f"{getattr(args, 'name', None) or block}_{args.face}"
+    try:
+        res = write_face(output_dir(args.out), config, args.face, name, **spec_options)
+    except ConfigError as exc:
+        raise CliError(f"cuneate generate {block} --face {args.face}: {exc}") from None
+    for f in res["files"]:
+        print(f)
+    d = res["description"]
+    line = (f"{d['payload']['block']} behind the {args.face} face: {d['face_summary']}; "
+            f"{d['payload']['n_written']} values written, {d['payload']['n_spike_ids']} "
+            f"spike ids")
+    if "cycles_per_sweep" in d:
+        line += (f"; a sweep takes {d['cycles_per_sweep']} cycles behind it, the divider "
+                 f"{d['cycles_per_tick']}" + ("" if d["free_running_fits"] else
+                                               f" (free running at {d['update_hz']:g} Hz "
+                                               f"needs a clock of "
+                                               f"{d['cycles_per_sweep'] * d['update_hz'] / 1e6:g}"
+                                               f" MHz, or TICK_DIVIDER >= "
+                                               f"{d['cycles_per_sweep']})"))
+    print(line)
+    return 0
+
+
 def run_ticks(command: str, block: str, args, dt_ms: float, cycles: float, updates: float,
               unit: str = "tick", bytes_per_tick: float = 0.0) -> int:
     """The ticks of ``args.duration_ms`` at ``dt_ms``, refused in one line when shorter than
     one tick, or estimated to take longer than ``args.max_minutes`` on ``args.engine``
     (``cycles`` per tick on an HDL simulator, ``updates`` per tick otherwise) or to hold more
     memory (``bytes_per_tick``) than the machine can give."""
-    from ..engines.registry import ENGINES
     n = int(round(args.duration_ms / dt_ms))
     if n < 1:
         raise CliError(f"--duration-ms {args.duration_ms:g} is shorter than one {unit} "
@@ -458,7 +514,6 @@ def print_run(args, out: dict, header: str, rows) -> None:
     """A ``simulate`` result: ``out`` as JSON with ``--json``, else ``header`` and one line per
     ``(label, spike times)`` row with the first six times; with ``--spikes`` also the spike
     file (population: ``out["populations"]`` when it names them, else the block)."""
-    import json
     trains = out["spikes_ms"]
     pops = None
     for pop in out.get("populations", []):
@@ -478,7 +533,6 @@ def print_run(args, out: dict, header: str, rows) -> None:
 def build_config(cls, kwargs: dict, what: str = ""):
     """``cls(**kwargs)``, or the one-line refusal every command gives for a configuration the
     block cannot hold (``ConfigError``; ``what`` names the block for other errors)."""
-    from ...hdl.lib.config import ConfigError
     try:
         return cls(**kwargs)
     except ConfigError as exc:
@@ -500,21 +554,23 @@ def add_rate_options(g, clock_default: float | None, clock_help: str = "") -> No
 
 def add_block_commands(groups, block: str, help: str, duration_ms: float, options=None,
                        simulate=None, generate=None, module: str | None = None,
-                       resources_s: int | None = None):
+                       resources_s: int | None = None, faces: bool = False):
     """``cuneate simulate BLOCK`` (``--engine`` from the engine registry, ``--duration-ms``
     and the run options) and ``cuneate generate BLOCK`` (the generate options, ``--name``
     when the block names its ``module``, ``--resources`` when it offers synthesis figures);
     ``options(parser)`` adds the block's own options to both, ``simulate``/``generate`` are
-    the commands. Returns both parsers for more options."""
+    the commands; ``faces``: ``generate`` takes ``--face`` (a block with a payload). Returns
+    both parsers for more options."""
     s = groups.simulate.add_parser(block, help=help)
-    engines = engine_choices(block)
-    s.add_argument("--engine", choices=engines, default="golden",
-                   help=f"{', '.join(engines)} (default golden)")
+    s.add_argument("--engine", choices=engine_choices(block), metavar="ENGINE", default="golden",
+                   help="%(choices)s (default golden)")
     s.add_argument("--duration-ms", type=positive_float, default=duration_ms,
                    help=f"biological time in ms (default {duration_ms:g})")
     add_run_options(s)
     g = groups.generate.add_parser(block, help=help)
     add_generate_options(g)
+    if faces:
+        add_face_option(g)
     if module:
         g.add_argument("--name", type=verilog_name, default=module,
                        help=f"Verilog module name (default {module})")

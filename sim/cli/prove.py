@@ -6,43 +6,74 @@ against its one-tick reference (:mod:`cuneate.hdl.coincidence.formal_core`); ``c
 banked``: a memory in banks of block RAM against its per-cycle contract
 (:mod:`cuneate.hdl.lib.banked_proof`); k-induction with ``--unbounded``; ``cuneate prove
 fanout``: the channel fan-out's one-entry datapath against its specification for every gain and
-sample (:mod:`cuneate.hdl.fanout.formal`)."""
+sample (:mod:`cuneate.hdl.fanout.formal`); ``cuneate prove faces`` (or one of its targets
+``axi-stream-out``, ``axi-stream-in``, ``axi-lite``, ``wishbone``): the bus faces' protocols
+(:mod:`cuneate.hdl.axi.formal`, :mod:`cuneate.hdl.wishbone.formal`); ``cuneate prove
+plasticity``: the learning stage against its one-operation specification
+(:mod:`cuneate.hdl.plasticity.formal_core`)."""
 
 from __future__ import annotations
 
+import contextlib
+import json
+import tempfile
 from pathlib import Path
 
-from .options import CliError, CommandGroups, positive_float, positive_int
+from ...hdl.axi.formal import MUTANTS as AXI_MUTANTS
+from ...hdl.axi.formal import prove_face
+from ...hdl.coincidence import CoincidenceConfig
+from ...hdl.coincidence.formal_core import MUTANTS as DETECTOR_MUTANTS
+from ...hdl.coincidence.formal_core import (coincidence_proof_config, prove_coincidence,
+                                             prove_history_slot)
+from ...hdl.fanout.formal import MUTANTS as FANOUT_MUTANTS
+from ...hdl.fanout.formal import prove_fanout
+from ...hdl.flow.sby import SOLVER, SOLVERS, FormalError, reporting
+from ...hdl.izhikevich import ConfigError, IzhikevichConfig
+from ...hdl.izhikevich.config import PIPELINE_STAGES
+from ...hdl.lib.banked_proof import MUTANTS as BANK_MUTANTS
+from ...hdl.lib.banked_proof import prove_banked
+from ...hdl.lib.core_proof import MUTANTS
+from ...hdl.lif import LifConfig
+from ...hdl.link.config import link_config
+from ...hdl.link.formal_core import MUTANTS as LINK_MUTANTS
+from ...hdl.link.formal_core import decoder_proof_config, prove_decoder
+from ...hdl.plasticity.formal_core import MUTANTS as STAGE_MUTANTS
+from ...hdl.plasticity.formal_core import prove_stage, stage_proof_config
+from ...hdl.wishbone.formal import PROOFS as WB_PROOFS
+from .. import progress
+from .options import (CliError, CommandGroups, add_quiet_option, positive_float, positive_int,
+                      start_progress)
 
 __all__ = ["register", "cmd_prove"]
+
+#: the bus faces' mutants (cuneate prove faces)
+FACE_MUTANTS = tuple(AXI_MUTANTS) + tuple(v[3] for v in WB_PROOFS.values())
 
 
 def _proof_target(args):
     """The configuration and the prove function of ``args.target`` (core, lif, coincidence,
     link)."""
-    from ...hdl.coincidence import CoincidenceConfig
-    from ...hdl.coincidence.formal_core import coincidence_proof_config, prove_coincidence
-    from ...hdl.izhikevich import IzhikevichConfig
     from ...hdl.izhikevich.formal_core import proof_config, prove_core
-    from ...hdl.lif import LifConfig
     from ...hdl.lif.formal_core import lif_proof_config, prove_lif
-    from ...hdl.link.config import link_config
-    from ...hdl.link.formal_core import MUTANTS as LINK_MUTANTS
-    from ...hdl.link.formal_core import decoder_proof_config, prove_decoder
     configure, default, prove = {
         "core": (proof_config, IzhikevichConfig, prove_core),
         "lif": (lif_proof_config, LifConfig, prove_lif),
         "coincidence": (coincidence_proof_config, CoincidenceConfig, prove_coincidence),
         "link": (decoder_proof_config, link_config, prove_decoder),
     }[args.target]
-    from ...hdl.lib.banked_proof import MUTANTS as BANK_MUTANTS
+    if args.mutant in FACE_MUTANTS or args.mutant in {v[3] for v in WB_PROOFS.values()}:
+        raise CliError(f"cuneate prove {args.target}: mutant {args.mutant} is a bus face's "
+                       f"(cuneate prove faces)")
     if args.mutant in BANK_MUTANTS:
         raise CliError(f"cuneate prove {args.target}: mutant {args.mutant} is the banked "
                        f"memory's (cuneate prove banked)")
-    from ...hdl.fanout.formal import MUTANTS as FANOUT_MUTANTS
     if args.mutant in FANOUT_MUTANTS:
         raise CliError(f"cuneate prove {args.target}: mutant {args.mutant} is the fan-out's "
                        f"(cuneate prove fanout)")
+    from ...hdl.plasticity.formal_core import MUTANTS as STAGE_MUTANTS
+    if args.mutant in set(STAGE_MUTANTS) - {"skipped_write"}:
+        raise CliError(f"cuneate prove {args.target}: mutant {args.mutant} is the learning "
+                       f"stage's (cuneate prove plasticity)")
     if args.target == "link":
         if args.mutant and args.mutant not in LINK_MUTANTS:
             raise CliError(f"cuneate prove link: mutant {args.mutant} is not the link's (its "
@@ -81,10 +112,6 @@ def cmd_prove_core(args) -> int:
     """``cuneate prove core|lif|coincidence``: bounded (``--depth``, default the induction
     depth) or, with ``--unbounded``, k-induction; PASS/FAIL with mode, depth, solver and
     time."""
-    import json
-    import tempfile
-    from ...hdl.izhikevich import ConfigError
-    from ...hdl.izhikevich.formal import FormalError
     try:
         cfg, prove = _proof_target(args)
     except ConfigError as exc:
@@ -98,8 +125,6 @@ def cmd_prove_core(args) -> int:
             if args.target == "coincidence" and not args.mutant:
                 # the ring address at the default detector's 513-tick history (the scale
                 # argument of docs/formal.md rests on it)
-                from ...hdl.coincidence import CoincidenceConfig
-                from ...hdl.coincidence.formal_core import prove_history_slot
                 detector = CoincidenceConfig()
                 ring = detector.max_delay_ticks
                 slot = prove_history_slot(detector, Path(d) / "history_slot",
@@ -140,11 +165,6 @@ def cmd_prove_banked(args) -> int:
     write port as the host's (unregistered) and as the write-back's or the deepest core's
     (registered); by default the default core's state memory (2500 words in five banks of
     512)."""
-    import json
-    import tempfile
-    from ...hdl.izhikevich.formal import FormalError
-    from ...hdl.lib.banked_proof import MUTANTS as BANK_MUTANTS
-    from ...hdl.lib.banked_proof import prove_banked
     if args.mutant and args.mutant not in BANK_MUTANTS:
         raise CliError(f"cuneate prove banked: mutant {args.mutant} is not the memory's (its "
                        f"mutants: {', '.join(BANK_MUTANTS)})")
@@ -165,18 +185,26 @@ def cmd_prove_banked(args) -> int:
                                           "banks": -(-depth // bank),
                                           "write_register": registered,
                                           "mutant": args.mutant})
+    return _report(args, records, lambda rec: (
+        f"{rec['seconds']:.1f} s, {rec['words']} words in {rec['banks']} banks of "
+        f"{rec['bank_depth']}, write {'registered' if rec['write_register'] else 'direct'}"),
+        lambda rec: f" in step {rec['step']} ({rec['phase']})")
+
+
+def _report(args, records: list, detail, where) -> int:
+    """Print proof ``records`` (JSON with ``--json``, else one line each: ``detail(rec)`` after
+    the mode and depth, a failure's properties after ``where(rec)``); 0 when every one
+    passed."""
+    import json
     if args.json:
         print(json.dumps(records))
     else:
         for rec in records:
             what = "k-induction" if rec["mode"] == "prove" else "bounded from the start"
             print(f"{rec['property']}: {rec['status'].upper()} ({what}, depth {rec['depth']}, "
-                  f"{rec['seconds']:.1f} s, {rec['words']} words in {rec['banks']} banks of "
-                  f"{rec['bank_depth']}, write {'registered' if rec['write_register'] else 'direct'}"
-                  + (f", mutant {args.mutant}" if args.mutant else "") + ")")
+                  f"{detail(rec)}" + (f", mutant {args.mutant}" if args.mutant else "") + ")")
             if rec["failed"]:
-                print(f"  failed in step {rec['step']} ({rec['phase']}): "
-                      f"{', '.join(rec['failed'])}")
+                print(f"  failed{where(rec)}: {', '.join(rec['failed'])}")
     return 0 if all(rec["status"] == "pass" for rec in records) else 1
 
 
@@ -184,10 +212,6 @@ def cmd_prove_fanout(args) -> int:
     """``cuneate prove fanout``: :func:`~cuneate.hdl.fanout.formal.prove_fanout` on each of its
     tables (a combinational check: every input at once, so ``--unbounded`` changes nothing);
     one line per table, exit 0 when every one passes."""
-    import json
-    import tempfile
-    from ...hdl.fanout.formal import MUTANTS as FANOUT_MUTANTS
-    from ...hdl.fanout.formal import FormalError, prove_fanout
     if args.mutant and args.mutant not in FANOUT_MUTANTS:
         raise CliError(f"cuneate prove fanout: mutant {args.mutant} is not the fan-out's (its "
                        f"mutants: {', '.join(FANOUT_MUTANTS)})")
@@ -221,16 +245,72 @@ def cmd_prove_fanout(args) -> int:
     return 0 if all(rec["status"] == "pass" for rec in records) else 1
 
 
+#: the bus faces' protocol targets (``faces``: every one)
+FACE_TARGETS = ("axi-stream-out", "axi-stream-in", "axi-lite", "wishbone")
+
+
+def cmd_prove_faces(args) -> int:
+    """``cuneate prove faces`` (or one face target): each protocol proof, bounded (``--depth``,
+    default the target's k) or by k-induction (``--unbounded``); one line per target, exit 0
+    when every one passes. A ``--mutant`` selects the target it belongs to."""
+    owners = AXI_MUTANTS | {v[3]: k for k, v in WB_PROOFS.items()}
+    targets = FACE_TARGETS if args.target == "faces" else (args.target,)
+    if args.mutant:
+        if args.mutant not in owners or owners[args.mutant] not in targets:
+            raise CliError(f"cuneate prove {args.target}: mutant {args.mutant} is not its "
+                           f"(its mutants: {', '.join(m for m, t in owners.items() if t in targets)})")
+        targets = (owners[args.mutant],)
+    records = []
+    with tempfile.TemporaryDirectory(prefix="cuneate-prove-") as d:
+        for t in targets:
+            try:
+                r = prove_face(t, Path(args.work_dir or d) / t,
+                               mode="prove" if args.unbounded else "bmc", depth=args.depth,
+                               mutant=args.mutant, timeout_s=args.timeout_s,
+                               solver=args.solver)
+            except FormalError as exc:
+                raise CliError(f"cuneate prove {t}: {exc}") from None
+            records.append(r.to_dict() | {"target": t, "mutant": args.mutant})
+    return _report(args, records, lambda rec: f"{rec['solver']}, {rec['seconds']:.1f} s",
+                   lambda rec: "")
+
+
+def cmd_prove_plasticity(args) -> int:
+    """``cuneate prove plasticity``: the learning stage (2 CNs of 2 synapses, any synapse
+    tracked) against its one-operation specification, bounded (``--depth``, default the
+    induction depth) or, with ``--unbounded``, k-induction; PASS/FAIL as ``prove core``."""
+    if args.mutant and args.mutant not in STAGE_MUTANTS:
+        raise CliError(f"cuneate prove plasticity: mutant {args.mutant} is not the learning "
+                       f"stage's (its mutants: {', '.join(STAGE_MUTANTS)})")
+    cfg = stage_proof_config()
+    with tempfile.TemporaryDirectory(prefix="cuneate-prove-") as d:
+        try:
+            r = prove_stage(cfg, Path(args.work_dir) if args.work_dir else Path(d),
+                            mode="prove" if args.unbounded else "bmc", depth=args.depth,
+                            mutant=args.mutant, timeout_s=args.timeout_s, solver=args.solver)
+        except FormalError as exc:
+            raise CliError(f"cuneate prove plasticity: {exc}") from None
+    size = {"n_targets": cfg.n_targets, "n_synapses": cfg.n_synapses}
+    if args.json:
+        print(json.dumps(r.to_dict() | size | {"mutant": args.mutant}))
+    else:
+        what = "k-induction" if r.mode == "prove" else "bounded from the initial state"
+        print(f"{r.property}: {r.status.upper()} ({what}, depth {r.depth}, {r.engine} "
+              f"{r.solver}, {r.seconds:.1f} s, {cfg.n_targets} CNs x {cfg.n_synapses} "
+              f"synapses" + (f", mutant {args.mutant}" if args.mutant else "") + ")")
+        if r.failed:
+            print(f"  failed in step {r.step} ({r.phase}): {', '.join(r.failed)}")
+        for a in r.abstractions:
+            print(f"  abstraction: {a}")
+    return 0 if r.passed else 1
+
+
 def cmd_prove(args) -> int:
     """Every ``cuneate prove``: says while it runs what it checks, the phase and step each
     SymbiYosys run has reached and the time (:mod:`cuneate.sim.progress`; ``-q`` silences)."""
-    from ...hdl.flow.sby import reporting
-    from .. import progress
-    from .options import start_progress
     if args.pipeline_stages is not None and args.target != "core":
         raise CliError(f"cuneate prove {args.target}: --pipeline-stages is the Izhikevich "
                        f"core's (cuneate prove core)")
-    import contextlib
     start_progress(args)
     what = (f"cuneate prove {args.target}" + (f" {args.property}" if args.target ==
                                                "datapath" else "")
@@ -247,16 +327,17 @@ def cmd_prove(args) -> int:
 
 
 def _cmd_prove(args) -> int:
+    if args.target == "faces" or args.target in FACE_TARGETS:
+        return cmd_prove_faces(args)
     if args.target in ("core", "lif", "coincidence", "link"):
         return cmd_prove_core(args)
     if args.target == "banked":
         return cmd_prove_banked(args)
     if args.target == "fanout":
         return cmd_prove_fanout(args)
-    import json
-    import tempfile
-    from ...hdl.izhikevich import ConfigError, IzhikevichConfig
-    from ...hdl.izhikevich.formal import FormalError, prove
+    if args.target == "plasticity":
+        return cmd_prove_plasticity(args)
+    from ...hdl.izhikevich.formal import prove
     args.preset = args.preset or ["RS"]
     try:
         cfg = IzhikevichConfig(n_neurons=8, clock_hz=args.update_hz * 8,
@@ -293,23 +374,21 @@ def _cmd_prove(args) -> int:
 
 
 def register(groups: CommandGroups) -> None:
-    from ...hdl.flow.sby import SOLVER, SOLVERS
-    from ...hdl.coincidence.formal_core import MUTANTS as DETECTOR_MUTANTS
-    from ...hdl.lib.core_proof import MUTANTS
-    from ...hdl.link.formal_core import MUTANTS as LINK_MUTANTS
-    from ...hdl.lib.banked_proof import MUTANTS as BANK_MUTANTS
-    from ...hdl.fanout.formal import MUTANTS as FANOUT_MUTANTS
     f = groups.root.add_parser("prove", help="SymbiYosys checks of the one-update datapath "
                                "and of the pipelined core")
     f.add_argument("target", nargs="?",
-                   choices=("datapath", "core", "lif", "coincidence", "link", "banked", "fanout"),
+                   choices=("datapath", "core", "lif", "coincidence", "link", "banked", "fanout",
+                            "faces") + FACE_TARGETS + ("plasticity",),
                    default="datapath",
                    help="datapath (default): one update's range properties; core, lif: the "
                    "pipelined Izhikevich or LIF core equals its one-step datapath; "
                    "coincidence: the detector equals its one-tick reference; link: the host "
                    "link's frame decoder meets the wire format; banked: a memory in banks of "
                    "block RAM meets its per-cycle contract; fanout: the channel fan-out's "
-                   "one-entry datapath meets its specification for every gain and sample")
+                   "one-entry datapath meets its specification for every gain and sample; "
+                   "faces (or axi-stream-out, axi-stream-in, axi-lite, wishbone): the bus "
+                   "faces' protocols; plasticity: the learning stage equals its one-operation "
+                   "specification")
     f.add_argument("--unbounded", action="store_true",
                    help="core: k-induction (every input sequence of every length)")
     f.add_argument("--depth", type=positive_int, default=None,
@@ -317,7 +396,6 @@ def register(groups: CommandGroups) -> None:
     f.add_argument("--neurons", type=positive_int, default=None,
                    help="core: neurons (default the fewest accepted, one per stage); banked: "
                    "the memory's words (default 2500)")
-    from ...hdl.izhikevich.config import PIPELINE_STAGES
     f.add_argument("--pipeline-stages", type=int, choices=PIPELINE_STAGES, default=None,
                    help="core: the pipeline depth proven (default 5; its smallest core is "
                    "depth + 1 neurons)")
@@ -335,9 +413,10 @@ def register(groups: CommandGroups) -> None:
                    help="coincidence: history depth in ticks (default 3)")
     f.add_argument("--mutant",
                    choices=tuple(dict.fromkeys(MUTANTS + DETECTOR_MUTANTS + LINK_MUTANTS
-                                               + BANK_MUTANTS + tuple(FANOUT_MUTANTS))),
-                   default=None, help="core, lif, coincidence, link: build this fault into "
-                   "the block (the proof must fail)")
+                                               + BANK_MUTANTS + tuple(FANOUT_MUTANTS)
+                                               + FACE_MUTANTS + tuple(STAGE_MUTANTS))),
+                   default=None, help="core, lif, coincidence, link, plasticity: build this "
+                   "fault into the block (the proof must fail)")
     f.add_argument("--solver", choices=SOLVERS, default=SOLVER)
     f.add_argument("--preset", action="append", default=None,
                    help="parameter set(s) (repeat for a mix; default RS)")
@@ -351,6 +430,5 @@ def register(groups: CommandGroups) -> None:
     f.add_argument("--timeout-s", type=positive_float, default=1800.0)
     f.add_argument("--work-dir", default=None, help="keep the SymbiYosys files here")
     f.add_argument("--json", action="store_true")
-    from .options import add_quiet_option
     add_quiet_option(f)
     f.set_defaults(func=cmd_prove, preset=None)

@@ -25,8 +25,10 @@ from __future__ import annotations
 import json
 import sys
 
-from .options import CliError, CommandGroups, add_max_minutes, output_dir, positive_float, \
-    positive_int
+from ...hdl.lib.config import ConfigError
+from .options import (CliError, CommandGroups, add_max_minutes, add_quiet_option, output_dir,
+                      positive_float, positive_int, start_progress)
+from .run import resolve_scene
 
 __all__ = ["register", "cmd_stream"]
 
@@ -46,7 +48,6 @@ def _check_fits(target: dict, scene, cfg, baud: int | None) -> dict:
     the line rate ``baud`` (``None``: the board's), or a one-line refusal naming the limit the
     scene exceeds."""
     from ...boards.sizing import size_core
-    from ...hdl.lib.config import ConfigError
     try:
         if scene["hardware"]["fanout"] or any(p["model"] == "cuneate"
                                               for p in scene.populations):
@@ -84,8 +85,6 @@ def cmd_stream(args) -> int:
     from ..host.uart import UartTransport
     from ..scenes import afferent
     from ..scenes.runner import check_budget
-    from .options import start_progress
-    from .run import resolve_scene
     target = _board(args.board)
     if not args.port:
         raise CliError(f"{COMMAND}: name the board's serial port: --port PORT (a device such "
@@ -147,7 +146,6 @@ def cmd_stream(args) -> int:
 
 
 def register(groups: CommandGroups) -> None:
-    from .options import add_quiet_option
     p = groups.root.add_parser("stream", help="run an afferent scene on a programmed board "
                                               "through its serial port")
     p.add_argument("board", help="board target (see cuneate boards)")

@@ -5,8 +5,10 @@ from __future__ import annotations
 
 import math
 
+from ...golden import budget
+from ..izhikevich.cli import add_pipeline_option
 from .options import (CliError, CommandGroups, add_max_minutes, add_quiet_option, claim_output,
-                      output_dir, positive_float, positive_int)
+                      output_dir, positive_float, positive_int, start_progress)
 
 __all__ = ["register", "cmd_sweep"]
 
@@ -25,10 +27,8 @@ def _list(text: str, conv, what: str) -> list:
 
 
 def cmd_sweep(args) -> int:
-    from ...golden import budget
     from .. import progress
     from ..sweep import SweepSpec, battery_module, estimate_sweep, run_sweep, write_sweep
-    from .options import start_progress
     try:
         block = battery_module(args.battery)
         duration = args.duration_ms or block.default_duration_ms(args.battery) or 1000.0
@@ -155,7 +155,6 @@ def register(groups: CommandGroups) -> None:
                    help="with --fmax: move the flip-flops around each multiplier and after "
                         "each block RAM into the MULT18X18D's input/output and the DP16KD's "
                         "output registers before place and route")
-    from ..izhikevich.cli import add_pipeline_option
     add_pipeline_option(p)
     p.add_argument("--scheduler", default=None,
                    help="dask.distributed address; 'sync' runs in this process (default: a "

@@ -27,23 +27,16 @@ import time
 
 import cocotb
 import numpy as np
-from cocotb.clock import Clock
-from cocotb.triggers import FallingEdge, RisingEdge
+from cocotb.triggers import FallingEdge
 
 from cuneate.hdl.coincidence import CoincidenceConfig
 from cuneate.sim.coincidence.scoreboard import CoincidenceChecker
-from cuneate.sim.engines.bench import bench_config, bench_report
+from cuneate.sim.engines.bench import (bench_config, bench_report, bench_verdict, spikes_then_tick,
+                                       start_in_reset)
 
 
 async def start_bench(dut):
-    cocotb.start_soon(Clock(dut.clk, 10, unit="ns").start())
-    dut.rst.value = 1
-    for s in (dut.tick, dut.in_valid, dut.in_source, dut.clamp_clear):
-        s.value = 0
-    await RisingEdge(dut.clk)
-    await RisingEdge(dut.clk)
-    await FallingEdge(dut.clk)
-    dut.rst.value = 0
+    await start_in_reset(dut, (dut.tick, dut.in_valid, dut.in_source, dut.clamp_clear))
 
 
 UPDATE_FIELDS = ("v", "u", "xd", "xr", "a", "i", "spike", "clamp")
@@ -117,9 +110,7 @@ async def scoreboard(dut):
     report = checker.stats | {"izhikevich": checker.iz.stats.to_dict(), "cycles": cycles,
                               "cycles_per_s": cycles / wall, "spikes": len(stream),
                               "merged": merged, "events": sum(map(len, events_of.values()))}
-    bench_report(report)
-    fails = checker.failures() + extra
-    assert not fails, "; ".join(fails)
+    bench_verdict(report, checker.failures() + extra)
 
 
 @cocotb.test()
@@ -132,14 +123,7 @@ async def engine(dut):
     stream, clamp_words = [], []
     t0 = time.perf_counter()
     for k in range(n_ticks):
-        for s in by_tick.get(k, []):
-            dut.in_valid.value = 1
-            dut.in_source.value = int(s)
-            await FallingEdge(dut.clk)
-        dut.in_valid.value = 0
-        dut.tick.value = 1
-        await FallingEdge(dut.clk)
-        dut.tick.value = 0
+        await spikes_then_tick(dut, by_tick.get(k, []), lambda: FallingEdge(dut.clk), True)
         while True:
             await FallingEdge(dut.clk)
             if int(dut.spike_valid.value):

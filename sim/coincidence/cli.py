@@ -19,12 +19,14 @@ import json
 
 import numpy as np
 
-from ..engines.registry import ENGINES as ENGINE_TRAITS
-
+from ...golden.izhikevich import PRESETS, to_params
+from ...hdl.coincidence import CoincidenceConfig, generate_coincidence, synth_resources
+from ...hdl.flow.synth import format_resources
 from ..cli.options import (CliError, CommandGroups, add_block_commands, add_max_minutes,
                            add_rate_options, build_config, check_estimate, clamp_summary,
-                           engine_choices, finite_float, output_dir, positive_float,
-                           positive_int, print_run, run_ticks, seed_int)
+                           engine_choices, finite_float, output_dir, positive_float, positive_int,
+                           print_run, run_ticks, seed_int)
+from ..izhikevich.cli import parse_param_set
 
 __all__ = ["register", "add_coincidence_options", "coincidence_kwargs",
            "coincidence_from_args", "parse_matrix", "print_resources"]
@@ -78,7 +80,6 @@ def add_coincidence_options(p) -> None:
 def coincidence_kwargs(args) -> dict:
     """Constructor keywords of :class:`~cuneate.hdl.coincidence.CoincidenceConfig` from the
     shared options (delays converted to ticks, refused when not whole)."""
-    from ..izhikevich.cli import parse_param_set
     delays = parse_matrix(args.delays_ms, "--delays-ms") if args.delays_ms else None
     w = None
     if args.weights:
@@ -128,12 +129,10 @@ def coincidence_kwargs(args) -> dict:
 
 def coincidence_from_args(kw: dict):
     """The configuration, or the one-line refusal shared by every command."""
-    from ...hdl.coincidence import CoincidenceConfig
     return build_config(CoincidenceConfig, kw, "coincidence detector")
 
 
 def _param_dicts(cfg) -> list:
-    from ...golden.izhikevich import PRESETS, to_params
     out = []
     for p in cfg.param_sets:
         q = PRESETS[p.upper()] if isinstance(p, str) else to_params(p)
@@ -222,7 +221,6 @@ def print_resources(args, cfg, files, synth_resources) -> None:
     if not args.resources:
         return
     json_path = files[1]
-    from ...hdl.flow.synth import format_resources
     try:
         res = synth_resources(cfg)
     except (RuntimeError, ValueError) as exc:
@@ -236,7 +234,6 @@ def print_resources(args, cfg, files, synth_resources) -> None:
 
 
 def cmd_generate(args) -> int:
-    from ...hdl.coincidence import generate_coincidence, synth_resources
     kw = coincidence_kwargs(args) | {"tick_source": args.tick_source}
     kw.setdefault("clock_hz", 40e6)
     cfg = coincidence_from_args(kw)
@@ -304,8 +301,8 @@ def register(groups: CommandGroups) -> None:
     sub = c.add_subparsers(dest="coincidence_command", required=True, parser_class=type(c))
     r = sub.add_parser("ridge", help="ridge angle (-45, 0, +45 deg) from two sensors' SA/FA "
                                      "afferents through three cuneate neurons")
-    r.add_argument("--hdl-engine", choices=[e for e in engine_choices("coincidence")
-                                            if ENGINE_TRAITS[e].hdl],
+    r.add_argument("--hdl-engine", metavar="ENGINE",
+                   choices=engine_choices("coincidence", hdl=True),
                    nargs="*", default=["verilator"],
                    help="HDL engines run on a few trials beside golden and fixed (default "
                         "verilator; none: give the option without a value)")

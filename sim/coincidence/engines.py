@@ -14,6 +14,9 @@ with the golden convention (update of tick ``T`` -> ``(T + 1) dt``):
 ``icarus``, ``verilator``
     cocotb on the generated Verilog (bench :mod:`cuneate.sim.coincidence.bench`, test
     ``engine``; Icarus runs the yosys-lowered netlist).
+
+:class:`CoincidenceEngine` is the block's engine interface; each engine implements it and
+registers itself (:func:`~cuneate.sim.engines.registry.implements`).
 """
 
 from __future__ import annotations
@@ -24,19 +27,16 @@ from pathlib import Path
 import numpy as np
 
 from ...golden import coincidence as gcun
+from ...golden import izhikevich as giz
 from ...hdl.coincidence import (CLAMP_KINDS, CoincidenceConfig, CoincidenceDetector,
                                 CoincidenceTwin, coincidence_verilog)
 from ..engines.amaranth import simulate
-from ..engines.registry import block_engines, check_engine
-from ..engines.run import EngineRun
+from ..engines.engine import BlockEngine
+from ..engines.registry import engine_for, implements
+from ..engines.run import EngineRun, times_from_pairs
 
-__all__ = ["COINCIDENCE_ENGINES", "CoincidenceRun", "run_coincidence", "events_by_tick",
+__all__ = ["CoincidenceEngine", "run_coincidence", "events_by_tick",
            "clamp_tally"]
-
-#: The engines the coincidence block runs on (the registry's list).
-COINCIDENCE_ENGINES = block_engines("coincidence")
-#: A coincidence run is an :class:`~cuneate.sim.engines.run.EngineRun`.
-CoincidenceRun = EngineRun
 
 
 def clamp_tally(words) -> tuple[dict, int]:
@@ -64,37 +64,114 @@ def events_by_tick(input_ticks, n_sources: int) -> dict[int, list[int]]:
     return out
 
 
-def run_coincidence(engine: str, cfg: CoincidenceConfig, input_ticks, n_ticks: int,
-                    build_dir: Path | None = None) -> CoincidenceRun:
-    """Run ``n_ticks`` with ``input_ticks`` (one tick array per source) on ``engine``."""
-    check_engine("coincidence", engine)
-    by_tick = events_by_tick(input_ticks, cfg.n_sources)
-    dt = cfg.dt_ms
-    t0 = time.perf_counter()
-    merged = 0
-    clamps: tuple[dict, int] = ({}, 0)
-    if engine == "golden":
+class CoincidenceEngine(BlockEngine):
+    """The coincidence detector on one engine: :meth:`run` input spike ticks."""
+
+    block = "coincidence"
+
+    def run(self, cfg: CoincidenceConfig, input_ticks, n_ticks: int) -> EngineRun:
+        """``n_ticks`` ticks with ``input_ticks`` (one tick array per source): the targets'
+        spikes, the input events of those ticks (``events``) and the ones merged with an
+        earlier one of the same tick (``merged_count``), the clamps."""
+        by_tick = events_by_tick(input_ticks, cfg.n_sources)
+        t0 = time.perf_counter()
+        spikes, merged, counts, sticky = self.spikes(cfg, input_ticks, by_tick, n_ticks)
+        events = sum(len(s) for k, s in by_tick.items() if k < n_ticks)
+        return EngineRun(self.name, cfg.dt_ms, n_ticks, spikes, counts, sticky,
+                         time.perf_counter() - t0,
+                         {"events": events, "merged_count": int(merged)})
+
+    def spikes(self, cfg, input_ticks, by_tick: dict, n_ticks: int):
+        """``(spike times per target, merged events, clamp counts, sticky)``: by default from
+        :meth:`pairs`."""
+        pairs, merged, words = self.pairs(cfg, by_tick, n_ticks)
+        counts, sticky = clamp_tally(words)
+        return times_from_pairs(pairs, cfg.n_targets, cfg.dt_ms), merged, counts, sticky
+
+    def pairs(self, cfg, by_tick: dict, n_ticks: int):
+        """``((tick, target) spike pairs, merged events, per-update clamp words)``."""
+        raise NotImplementedError
+
+
+@implements("coincidence", "golden", speed=8e5)
+class CoincidenceGolden(CoincidenceEngine):
+    """The float64 model (:func:`~cuneate.golden.coincidence.simulate_cuneate`'s scheme) with
+    the exact delays and weights: each target's drive summed over its connected sources
+    (weight > 0; a weight of 0 disconnects a pair), then every target integrated at once."""
+
+    def spikes(self, cfg, input_ticks, by_tick, n_ticks):
+        dt = cfg.dt_ms
         times = [np.asarray(ts, dtype=np.float64) * dt for ts in input_ticks]
-        r = gcun.simulate_cuneate(times, cfg.delays * dt, n_ticks * dt, dt_ms=dt, J=1.0,
-                                  weights=cfg.weights_real,
-                                  params=[cfg.param_sets[s] for s in cfg.target_sets_],
-                                  tau_rise_ms=cfg.tau_rise_ms, tau_decay_ms=cfg.tau_decay_ms)
-        spikes = [np.asarray(s) for s in r.spikes_ms]
-    elif engine == "fixed":
+        grid = np.arange(n_ticks) * dt
+        drive = np.zeros((n_ticks, cfg.n_targets))
+        for k in range(cfg.n_targets):
+            src = np.flatnonzero(cfg.weights_real[k])
+            if src.size:
+                drive[:, k] = gcun.psp_drive([times[s] for s in src], cfg.delays[k, src] * dt,
+                                             grid, J=1.0, weights=cfg.weights_real[k, src],
+                                             tau_rise_ms=cfg.tau_rise_ms,
+                                             tau_decay_ms=cfg.tau_decay_ms)[:, 0]
+        r = giz.simulate([cfg.param_sets[s] for s in cfg.target_sets_], drive, n_steps=n_ticks,
+                         n_neurons=cfg.n_targets, dt_ms=dt, scheme="euler")
+        return [np.asarray(s) for s in r.spikes_ms], 0, {}, 0
+
+
+@implements("coincidence", "fixed", speed=8e4)
+class CoincidenceFixed(CoincidenceEngine):
+    """The bit-exact twin."""
+
+    def spikes(self, cfg, input_ticks, by_tick, n_ticks):
         twin = CoincidenceTwin(cfg)
         spikes = twin.run(input_ticks, n_ticks)
-        merged = twin.merged
-        clamps = (dict(twin.clamp_counts), twin.clamp_sticky)
-    else:
-        if engine == "amaranth":
-            pairs, merged, words = _run_amaranth(cfg, by_tick, n_ticks)
-        else:
-            pairs, merged, words = _run_cocotb(engine, cfg, by_tick, n_ticks, build_dir)
-        clamps = clamp_tally(words)
-        spikes = [np.array([(k + 1) * dt for k, t in sorted(pairs) if t == tgt])
-                  for tgt in range(cfg.n_targets)]
-    return EngineRun(engine, dt, n_ticks, spikes, clamps[0], clamps[1],
-                     time.perf_counter() - t0, {"merged_count": int(merged)})
+        return spikes, twin.merged, dict(twin.clamp_counts), twin.clamp_sticky
+
+
+@implements("coincidence", "amaranth", speed=5e3)
+class CoincidenceAmaranth(CoincidenceEngine):
+    """The Amaranth simulator on the detector."""
+
+    def pairs(self, cfg, by_tick, n_ticks):
+        dut = CoincidenceDetector(cfg)
+        pairs, out, words = [], {}, []
+
+        def sample(ctx) -> bool:
+            """Record this cycle's output spike and clamp word; False once the tick is done."""
+            if ctx.get(dut.spike_valid):
+                pairs.append((ctx.get(dut.spike_tick), ctx.get(dut.spike_target)))
+            if ctx.get(dut.upd_valid) and ctx.get(dut.upd_clamp):
+                words.append(ctx.get(dut.upd_clamp))
+            return bool(ctx.get(dut.busy) or ctx.get(dut.upd_valid))
+
+        async def tb(ctx):
+            for k in range(n_ticks):
+                await pulse_tick(ctx, dut, by_tick.get(k, []))
+                await ctx.tick()
+                while sample(ctx):
+                    await ctx.tick()
+            out["merged"] = ctx.get(dut.merged_count)
+
+        simulate(dut, tb, cfg.clock_hz)
+        return pairs, out["merged"], words
+
+
+@implements("coincidence", "icarus", speed=5e3)
+@implements("coincidence", "verilator", speed=5e4)
+class CoincidenceCocotb(CoincidenceEngine):
+    """cocotb on the detector's Verilog (Icarus: the yosys-lowered netlist)."""
+
+    def pairs(self, cfg, by_tick, n_ticks):
+        events = {str(k): v for k, v in by_tick.items()}
+        rep = self.engine_bench(lambda low: coincidence_verilog(cfg, lowered=low),
+                                "coincidence_detector",
+                                {"detector": cfg.to_kwargs(), "ticks": n_ticks, "events": events})
+        return [tuple(p) for p in rep["spikes"]], rep["merged"], rep["clamp_words"]
+
+
+def run_coincidence(engine: str, cfg: CoincidenceConfig, input_ticks, n_ticks: int,
+                    build_dir: Path | None = None) -> EngineRun:
+    """Run ``n_ticks`` with ``input_ticks`` (one tick array per source) on ``engine``."""
+    return engine_for("coincidence", engine, build_dir=build_dir).run(cfg, input_ticks,
+                                                                      n_ticks)
 
 
 async def pulse_tick(ctx, dut, sources) -> None:
@@ -107,37 +184,3 @@ async def pulse_tick(ctx, dut, sources) -> None:
     ctx.set(dut.tick, 1)
     await ctx.tick()
     ctx.set(dut.tick, 0)
-
-
-def _run_amaranth(cfg: CoincidenceConfig, by_tick: dict, n_ticks: int):
-    dut = CoincidenceDetector(cfg)
-    pairs, out, words = [], {}, []
-
-    def sample(ctx) -> bool:
-        """Record this cycle's output spike and clamp word; False once the tick is done."""
-        if ctx.get(dut.spike_valid):
-            pairs.append((ctx.get(dut.spike_tick), ctx.get(dut.spike_target)))
-        if ctx.get(dut.upd_valid) and ctx.get(dut.upd_clamp):
-            words.append(ctx.get(dut.upd_clamp))
-        return bool(ctx.get(dut.busy) or ctx.get(dut.upd_valid))
-
-    async def tb(ctx):
-        for k in range(n_ticks):
-            await pulse_tick(ctx, dut, by_tick.get(k, []))
-            await ctx.tick()
-            while sample(ctx):
-                await ctx.tick()
-        out["merged"] = ctx.get(dut.merged_count)
-
-    simulate(dut, tb, cfg.clock_hz)
-    return pairs, out["merged"], words
-
-
-def _run_cocotb(simulator: str, cfg: CoincidenceConfig, by_tick: dict, n_ticks: int,
-                build_dir: Path | None):
-    from ..engines.cocotb import run_engine_bench
-    rep = run_engine_bench(simulator, lambda low: coincidence_verilog(cfg, lowered=low),
-                           "coincidence_detector", "coincidence",
-                           {"detector": cfg.to_kwargs(), "ticks": n_ticks, "events":
-                            {str(k): v for k, v in by_tick.items()}}, build_dir)
-    return [tuple(p) for p in rep["spikes"]], rep["merged"], rep["clamp_words"]

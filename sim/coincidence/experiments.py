@@ -37,8 +37,12 @@ import numpy as np
 
 from ...golden import encoders
 from ...golden import izhikevich as giz
+from ...golden.budget import BASE_BYTES, array_bytes
 from ...hdl.coincidence import CoincidenceConfig
 from ...hdl.izhikevich import IzhikevichConfig, IzhikevichTwin
+from ...hdl.izhikevich.config import min_neurons
+from ...hdl.network import NetworkConfig
+from ..engines.registry import ENGINES, block_engines, estimate_seconds
 from ..network.engines import run_network
 from .engines import run_coincidence
 
@@ -140,8 +144,6 @@ def ridge_estimate(spec: RidgeSpec, engines) -> dict:
     """Memory (bytes) and time (s) of the experiment on ``engines`` before it runs: every trial
     of every angle in one run, the afferents' currents and spikes per tick, and the afferent
     core's and the detector's updates (or cycles) at the engine registry's speeds."""
-    from ...golden.budget import BASE_BYTES, array_bytes
-    from ..engines.registry import ENGINES, block_engines, estimate_seconds
 
     def block_of(e):
         """The detector alone, or the on-chip network for the engines that run only that."""
@@ -182,8 +184,6 @@ def network_config(spec: RidgeSpec):
     sixth idle),
     sources 0 .. 3 = (SA top, FA top, SA bottom, FA bottom), the detector of
     :func:`detector_config`."""
-    from ...hdl.izhikevich.config import min_neurons
-    from ...hdl.network import NetworkConfig
     det = detector_config(spec).to_kwargs()
     for k in ("clock_hz", "update_hz", "tick_source"):
         det.pop(k)
@@ -261,7 +261,6 @@ def ridge_experiment(engine: str = "fixed", spec: RidgeSpec | None = None,
     Engines that run the network but not the detector alone (``board``: the network behind the
     board's UART link) always run on chip.
     """
-    from ..engines.registry import block_engines
     spec = spec or RidgeSpec()
     cfg = detector_config(spec)
     cur, angles, per = afferent_currents(spec)

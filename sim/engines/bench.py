@@ -17,7 +17,8 @@ from cocotb.triggers import FallingEdge, RisingEdge
 
 from .waves import BENCH_CLOCK_NS
 
-__all__ = ["bench_config", "bench_report", "bench_progress", "spikes_then_tick", "CoreBench"]
+__all__ = ["bench_config", "bench_report", "bench_verdict", "bench_progress", "start_in_reset",
+           "spikes_then_tick", "CoreBench"]
 
 
 def bench_config() -> dict:
@@ -30,6 +31,12 @@ def bench_report(data: dict) -> None:
     """Hand ``data`` back to the caller as the run's report."""
     with open(os.environ["CUNEATE_BENCH_REPORT"], "w") as f:
         json.dump(data, f, default=float)
+
+
+def bench_verdict(report: dict, failures: list) -> None:
+    """Hand back ``report`` (:func:`bench_report`), then fail the bench naming every failure."""
+    bench_report(report)
+    assert not failures, "; ".join(failures)
 
 
 #: the shortest interval between two progress reports of a bench (seconds): a bench may call
@@ -47,6 +54,21 @@ def bench_progress(config: dict, done: int, force: bool = False) -> None:
         _last_progress[0] = now
         with open(path, "w") as f:
             json.dump({"done": int(done)}, f)
+
+
+async def start_in_reset(dut, idle=(), ready=()) -> None:
+    """Start the bench clock, hold reset for two rising edges with the inputs ``idle`` at 0 and
+    ``ready`` at 1, and release it after the next falling edge."""
+    cocotb.start_soon(Clock(dut.clk, BENCH_CLOCK_NS, unit="ns").start())
+    dut.rst.value = 1
+    for s in idle:
+        s.value = 0
+    for s in ready:
+        s.value = 1
+    await RisingEdge(dut.clk)
+    await RisingEdge(dut.clk)
+    await FallingEdge(dut.clk)
+    dut.rst.value = 0
 
 
 async def spikes_then_tick(dut, sources, step, has_inputs: bool) -> None:

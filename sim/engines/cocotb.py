@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import fcntl
 import hashlib
+import importlib.util
 import json
 import os
 import shutil
@@ -30,6 +31,7 @@ import tempfile
 import threading
 import time
 from dataclasses import dataclass
+from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 
 from .toolchain import SIMULATORS, apply_simulator_env
@@ -218,7 +220,6 @@ def sim_cache_root() -> Path | None:
 
 def _toolchain_hash():
     """A hash started with the Verilator and cocotb versions and cocotb's library path."""
-    from importlib.metadata import PackageNotFoundError, version
     h = hashlib.sha256()
     for pkg in ("verilator", "cocotb"):
         try:
@@ -227,7 +228,6 @@ def _toolchain_hash():
             h.update(f"{pkg}={shutil.which(pkg)};".encode())
     # the simulator binary loads cocotb's VPI library from this environment's path (RUNPATH):
     # a binary built from another environment may not find it
-    import importlib.util
     spec = importlib.util.find_spec("cocotb")
     libs = Path(spec.origin).parent / "libs" if spec and spec.origin else None
     h.update(f"libs={libs};".encode())

@@ -21,17 +21,7 @@
 //                over sweep_done, sticky flags, overrun and spike_overflow
 // --raw CYCLES: only reset and run the core free for CYCLES cycles with ticks (Verilator's
 // raw cycle rate for this design, nothing recorded) and write summary.json.
-#include <chrono>
-#include <cstdint>
-#include <cstdio>
-#include <cstdlib>
-#include <cstring>
-#include <memory>
-#include <string>
-#include <vector>
-
-#include "Vtop.h"
-#include "verilated.h"
+#include "batch_harness.h"
 
 #ifndef CUNEATE_CORES
 #define CUNEATE_CORES 1
@@ -52,11 +42,6 @@ static int64_t sext(uint64_t x, int width) {
     return (int64_t)((x ^ m) - m);
 }
 
-static void die(const char* msg) {
-    std::fprintf(stderr, "harness: %s\n", msg);
-    std::exit(2);
-}
-
 int main(int argc, char** argv) {
     if (argc < 3) die("usage: harness <schedule.bin> <out_dir> [--dump] [--raw CYCLES]");
     std::string sched_path = argv[1], out_dir = argv[2];
@@ -67,10 +52,8 @@ int main(int argc, char** argv) {
         else if (!std::strcmp(argv[a], "--raw") && a + 1 < argc) raw_cycles = std::atoll(argv[++a]);
         else die("unknown argument");
     }
-    FILE* f = std::fopen(sched_path.c_str(), "rb");
-    if (!f) die("cannot open the schedule");
     int64_t hdr[6];
-    if (std::fread(hdr, sizeof(int64_t), 6, f) != 6) die("short schedule header");
+    FILE* f = open_schedule(sched_path, hdr, 6);
     const int64_t N = hdr[0], n_sweeps = hdr[1], n_seg = hdr[2];
     const int vw = (int)hdr[3], uw = (int)hdr[4], iw = (int)hdr[5];
     if (N < 1 || n_sweeps < 0 || n_seg < 0 || vw < 1 || vw > 64 || uw < 1 || uw > 64 || iw < 1 ||
@@ -79,48 +62,31 @@ int main(int argc, char** argv) {
     std::vector<int64_t> seg_start(n_seg);
     std::vector<int64_t> seg_cur(n_seg * N);
     for (int64_t s = 0; s < n_seg; ++s) {
-        if (std::fread(&seg_start[s], sizeof(int64_t), 1, f) != 1 ||
-            std::fread(&seg_cur[s * N], sizeof(int64_t), N, f) != (size_t)N)
+        if (!read_values(f, &seg_start[s], 1) || !read_values(f, &seg_cur[s * N], N))
             die("short schedule");
     }
     std::fclose(f);
 
-    auto ctx = std::make_unique<VerilatedContext>();
-    ctx->commandArgs(1, argv);
-    auto top = std::make_unique<Vtop>(ctx.get());
+    Clocked h(argv);
+    Vtop* top = h.top.get();
     if (N % CORES) die("N must be a multiple of the cores");
     const int64_t n_core = N / CORES;   // neurons of each core: one sweep every n_core cycles
     const uint64_t imask = (iw == 64) ? ~0ULL : ((1ULL << iw) - 1);
 
-    long long cycles = 0;
-    auto cycle = [&]() {
-        top->clk = 0;
-        top->eval();
-        top->clk = 1;
-        top->eval();
-        ++cycles;
-    };
+    auto cycle = [&]() { h.cycle(); };
     // reset
-    top->rst = 1;
     top->i_wr_en = 0;
     top->sel_wr_en = 0;
     top->clamp_clear = 0;
     top->tick = 0;
     top->spike_ready = 1;
-    cycle();
-    cycle();
-    top->rst = 0;
-    cycles = 0;
+    h.leave_reset();
 
     FILE* fs = nullptr;
     FILE* fu = nullptr;
     if (raw_cycles < 0) {
-        fs = std::fopen((out_dir + "/spikes.bin").c_str(), "wb");
-        if (!fs) die("cannot write spikes.bin");
-        if (dump) {
-            fu = std::fopen((out_dir + "/updates.bin").c_str(), "wb");
-            if (!fu) die("cannot write updates.bin");
-        }
+        fs = open_output(out_dir, "spikes.bin");
+        if (dump) fu = open_output(out_dir, "updates.bin");
     }
     std::vector<int64_t> spk;
     spk.reserve(1 << 16);
@@ -138,10 +104,7 @@ int main(int argc, char** argv) {
             spk.push_back(upd_sweep[k]);
             spk.push_back(idx);
             ++n_spikes;
-            if (spk.size() >= (1u << 16)) {
-                std::fwrite(spk.data(), sizeof(int64_t), spk.size(), fs);
-                spk.clear();
-            }
+            spill(spk, fs, 1u << 16);
         }
         if (dump) {
             upd.push_back(sext(v, vw));
@@ -149,10 +112,7 @@ int main(int argc, char** argv) {
             upd.push_back(sext(current, iw));
             upd.push_back(spike);
             upd.push_back(clamp);
-            if (upd.size() >= 5 * 65536) {
-                std::fwrite(upd.data(), sizeof(int64_t), upd.size(), fu);
-                upd.clear();
-            }
+            spill(upd, fu, 5 * 65536);
         }
         ++updates;
         if (local == n_core - 1) ++upd_sweep[k];
@@ -185,7 +145,7 @@ int main(int argc, char** argv) {
 #endif
         if (top->spike_valid) ++stream_spikes;
     };
-    auto t0 = std::chrono::steady_clock::now();
+    h.start_clock();
     if (raw_cycles >= 0) {
         for (long long c = 0; c < raw_cycles; ++c) {
             top->tick = (c % n_core) == 0;
@@ -243,26 +203,24 @@ int main(int argc, char** argv) {
             monitor();
         }
     }
-    auto t1 = std::chrono::steady_clock::now();
-    double wall = std::chrono::duration<double>(t1 - t0).count();
+    double wall = h.wall_s();
     if (fs) {
-        std::fwrite(spk.data(), sizeof(int64_t), spk.size(), fs);
+        spill(spk, fs);
         std::fclose(fs);
     }
     if (fu) {
-        std::fwrite(upd.data(), sizeof(int64_t), upd.size(), fu);
+        spill(upd, fu);
         std::fclose(fu);
     }
     unsigned sticky = top->clamp_flags;
-    FILE* fj = std::fopen((out_dir + "/summary.json").c_str(), "w");
-    if (!fj) die("cannot write summary.json");
+    FILE* fj = open_output(out_dir, "summary.json", "w");
     std::fprintf(fj,
                  "{\"cycles\": %lld, \"wall_s\": %.9f, \"cycles_per_s\": %.3f, \"updates\": %lld, "
                  "\"sweeps_done\": %lld, \"spikes\": %lld, \"stream_spikes\": %lld, "
                  "\"clamp_counts\": {\"v_low\": %lld, \"u_high\": %lld, \"u_low\": %lld, "
                  "\"current\": %lld, \"y\": %lld}, \"clamp_sticky_bits\": %u, \"overrun\": %d, "
                  "\"spike_overflow\": %d, \"raw\": %s}\n",
-                 cycles, wall, wall > 0 ? cycles / wall : 0.0, updates, sweeps_done, n_spikes,
+                 h.cycles, wall, wall > 0 ? h.cycles / wall : 0.0, updates, sweeps_done, n_spikes,
                  stream_spikes, clamp_counts[0], clamp_counts[1], clamp_counts[2], clamp_counts[3],
                  clamp_counts[4], sticky, (int)top->overrun, (int)top->spike_overflow,
                  raw_cycles >= 0 ? "true" : "false");

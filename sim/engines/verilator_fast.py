@@ -29,13 +29,17 @@ from pathlib import Path
 
 import numpy as np
 
-from ...hdl.izhikevich import CLAMP_KINDS, IzhikevichConfig
+from ...hdl.izhikevich import CLAMP_KINDS, IzhikevichConfig, izhikevich_verilog
+from ...hdl.izhikevich.array import izhikevich_array_verilog
+from .toolchain import apply_simulator_env
 
 __all__ = ["HARNESS_SOURCE", "HarnessError", "HarnessRun", "compile_harness", "build_harness",
-           "run_harness",
+           "run_harness", "quit_harness",
            "raw_cycle_rate", "check_dump", "default_build_root"]
 
 HARNESS_SOURCE = Path(__file__).with_name("harness.cpp")
+#: the batch harnesses' shared part, written beside a harness that includes it
+BATCH_HEADER = Path(__file__).with_name("batch_harness.h")
 TOP = "izhikevich_core"
 ARRAY_TOP = "izhikevich_array"
 
@@ -80,7 +84,6 @@ def default_build_root() -> Path:
 
 
 def _verilator() -> str:
-    from .toolchain import apply_simulator_env
     apply_simulator_env()
     exe = shutil.which("verilator")
     if exe is None:
@@ -96,8 +99,10 @@ def compile_harness(text: str, top: str, source: Path, defines: dict,
     class ``prefix``, by default ``V<top>``) linked with the C++ harness ``source``, compiled
     with ``-D`` ``defines``; cached under ``build_root`` by the Verilog, the harness and the
     defines; ``includes`` (name -> text) are files the harness includes, written beside the
-    Verilog. Returns its path."""
+    Verilog (with :data:`BATCH_HEADER` when the harness includes it). Returns its path."""
     src = Path(source).read_bytes()
+    if f'"{BATCH_HEADER.name}"'.encode() in src:
+        includes = {BATCH_HEADER.name: BATCH_HEADER.read_text(), **(includes or {})}
     prefix = prefix or f"V{top}"
     flags = " ".join(f"-D{k}={v}" for k, v in sorted(defines.items()))
     extra = "".join(f"{k}\0{v}\0" for k, v in sorted((includes or {}).items()))
@@ -131,13 +136,29 @@ def compile_harness(text: str, top: str, source: Path, defines: dict,
     return exe
 
 
+def quit_harness(proc: subprocess.Popen) -> dict:
+    """End a request-answer harness (the serial and the AXI one): ``Q``, then its one JSON
+    line of totals (``{}`` when it is already gone), then wait for it."""
+    try:
+        proc.stdin.write(b"Q")
+        proc.stdin.flush()
+        line = proc.stdout.readline()
+        return json.loads(line) if line.strip() else {}
+    except (OSError, ValueError):
+        return {}
+    finally:
+        try:
+            proc.stdin.close()
+        except OSError:                  # the harness already gone (killed, crashed)
+            pass
+        proc.wait()
+
+
 def build_harness(cfg: IzhikevichConfig, build_root: Path | None = None,
                   jobs: int = 2, n_cores: int = 1) -> Path:
     """Build (or reuse) the harness executable for ``cfg`` (``n_cores`` > 1: an
     :class:`~cuneate.hdl.izhikevich.array.IzhikevichArray` of that many cores of ``cfg``, its
     per-core update probes read by the harness); returns its path."""
-    from ...hdl.izhikevich import izhikevich_verilog
-    from ...hdl.izhikevich.array import izhikevich_array_verilog
     for fmt, name in ((cfg.V, "v"), (cfg.U, "u"), (cfg.I, "current")):
         if fmt.width > 64:
             raise HarnessError(f"the harness reads ports up to 64 bits; {name} has {fmt.width}")

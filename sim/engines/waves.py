@@ -35,7 +35,7 @@ from pathlib import Path
 
 __all__ = ["Waves", "DPI_SOURCE", "instrument", "cocotb_options", "write_gtkw",
            "WindowedVcd", "port_groups", "stage_registers", "SCOPES", "FORMATS",
-           "DEFAULT_TICKS", "SIM_CLOCK_S", "BENCH_CLOCK_NS", "time_axis"]
+           "DEFAULT_TICKS", "SIM_CLOCK_S", "BENCH_CLOCK_NS", "time_axis", "wave_files"]
 
 #: The C++ side of the Verilator window's end (compiled into the cocotb model).
 DPI_SOURCE = Path(__file__).with_name("waves_dpi.cpp")
@@ -196,7 +196,7 @@ def port_groups(verilog: str, top: str) -> list[tuple[str, list[tuple[str, int]]
 
 def stage_registers(verilog: str, top: str) -> dict[int, list[tuple[str, int]]]:
     """``{stage: [(register, width), ...]}``: the pipeline registers (named ``<what><stage>``,
-    see :func:`cuneate.hdl.lib.bookkeeping.registrar`) of the top module."""
+    see :meth:`cuneate.hdl.lib.bookkeeping.SweepCore.stage_register`) of the top module."""
     out: dict = {}
     for name, width in _widths(verilog, top).items():
         m = re.fullmatch(r"([a-z][a-z_]*?)(\d)", name)
@@ -315,3 +315,16 @@ class WindowedVcd:
             self._line(self._buf)
             self._buf = ""
         self.f.close()
+
+
+def wave_files(wv, names: list, clock_hz: float) -> dict:
+    """The waveform dumps the run's engines wrote (``{}`` without a waveform window)."""
+    files = {}
+    if wv:
+        wrote = [e for e in names if e in FORMATS]
+        files["waves"] = wv.to_dict() | {
+            "files": {e: {"dump": str(wv.path(e)), "gtkw": str(wv.path(e).with_suffix(".gtkw")),
+                          "time_axis": time_axis(e, clock_hz)} for e in wrote},
+            "note": "" if wrote else " (no engine of this run writes waveforms: amaranth, "
+                                     "icarus or verilator do)"}
+    return files

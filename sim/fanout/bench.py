@@ -22,23 +22,16 @@ import random
 import time
 
 import cocotb
-from cocotb.clock import Clock
-from cocotb.triggers import FallingEdge, RisingEdge
+from cocotb.triggers import FallingEdge
 
 from cuneate.hdl.fanout import LATENCY, FanoutConfig
-from cuneate.sim.engines.bench import bench_config, bench_report
+from cuneate.sim.engines.bench import bench_config, bench_report, bench_verdict, start_in_reset
 from cuneate.sim.fanout.scoreboard import FanoutChecker
 
 
 async def start_bench(dut):
-    cocotb.start_soon(Clock(dut.clk, 10, unit="ns").start())
-    dut.rst.value = 1
-    for s in (dut.ch_wr_valid, dut.ch_wr_addr, dut.ch_wr_data, dut.start, dut.clamp_clear):
-        s.value = 0
-    await RisingEdge(dut.clk)
-    await RisingEdge(dut.clk)
-    await FallingEdge(dut.clk)
-    dut.rst.value = 0
+    await start_in_reset(dut, (dut.ch_wr_valid, dut.ch_wr_addr, dut.ch_wr_data, dut.start,
+                               dut.clamp_clear))
 
 
 class Watch:
@@ -135,11 +128,9 @@ async def scoreboard(dut):
             extra.append(f"{name} {got} != {want}")
     if overruns and not held:
         extra.append("no channel write was held during a run")
-    bench_report(st | {"cycles": watch.cycles, "cycles_per_s": watch.cycles / wall,
-                       "overruns": overruns, "held_cycles": held,
-                       "clamp_counts": checker.twin.clamp_counts})
-    fails = checker.failures() + extra
-    assert not fails, "; ".join(fails)
+    bench_verdict(st | {"cycles": watch.cycles, "cycles_per_s": watch.cycles / wall,
+                        "overruns": overruns, "held_cycles": held,
+                        "clamp_counts": checker.twin.clamp_counts}, checker.failures() + extra)
 
 
 @cocotb.test()

@@ -19,11 +19,17 @@ from __future__ import annotations
 import argparse
 import json
 import math
+from dataclasses import fields
 
 import numpy as np
 
-from ..cli.options import (CliError, CommandGroups, add_block_commands, finite_float,
-                           input_file, output_dir, positive_float, positive_int, run_ticks)
+from ...golden.fanout import RECTIFY
+from ...hdl.fanout import ConfigError, FanoutConfig, generate_fanout
+from ...hdl.fanout.config import check_table_size
+from ...hdl.lib.fixed import FixedPointError, QFormat
+from ..cli.options import (CliError, CommandGroups, add_block_commands, build_config,
+                           finite_float, generate_faced, input_file, output_dir, positive_float,
+                           positive_int, run_ticks)
 
 __all__ = ["register", "add_fanout_options", "fanout_from_args", "threshold_value"]
 
@@ -130,9 +136,7 @@ def _refusal(exc: Exception, where: str | None = None) -> CliError:
 
 
 def _table_config(path_text: str):
-    from dataclasses import fields
 
-    from ...hdl.fanout import ConfigError, FanoutConfig
     path = input_file(path_text, "--table")
     what = ("not a fan-out table (a JSON object of FanoutConfig's arguments, as cuneate "
             "generate fanout writes in NAME.table.json)")
@@ -160,9 +164,6 @@ def _table_config(path_text: str):
 def fanout_from_args(args):
     """The :class:`~cuneate.hdl.fanout.FanoutConfig` of the table options (or ``--table``),
     or a one-line refusal naming the option."""
-    from ...hdl.fanout import ConfigError, FanoutConfig
-    from ...hdl.fanout.config import check_table_size
-    from ...hdl.lib.fixed import FixedPointError, QFormat
     given = [opt for attr, opt in TABLE_OPTIONS if getattr(args, attr) is not None]
     if args.table is not None:
         if given:
@@ -221,7 +222,6 @@ def _samples(args, cfg, n_runs: int) -> np.ndarray:
 
 
 def _afferent_label(cfg, i: int) -> str:
-    from ...golden.fanout import RECTIFY
     th = cfg.thresholds_[i]
     return (f"afferent {i} (channel {cfg.channels_[i]}, gain {float(cfg.gain[i]):g}, "
             f"{RECTIFY[cfg.modes_[i]]}" + ("" if th is None else f", gated below {th:g}") + ")")
@@ -276,11 +276,16 @@ def cmd_simulate(args) -> int:
 
 
 def cmd_generate(args) -> int:
-    from ...hdl.fanout import generate_fanout
     if args.tick_source != "internal":
         raise CliError("--tick-source: the fan-out has no tick (it runs once per channel "
                        "frame, on start)")
     cfg = fanout_from_args(args)
+    if args.face != "none":              # in front of an Izhikevich core of its afferents
+        from ...hdl.izhikevich import IzhikevichConfig
+        core = build_config(IzhikevichConfig, {"n_neurons": cfg.n_neurons,
+                                               "clock_hz": cfg.clock_hz,
+                                               "tick_source": "external"})
+        return generate_faced(args, core, "fanout", fanout=cfg)
     out = output_dir(args.out)
     files = generate_fanout(out, cfg, name=args.name)
     table = out / f"{args.name}.table.json"
@@ -308,7 +313,8 @@ def _hide(p, dest: str) -> None:
 def register(groups: CommandGroups) -> None:
     s, g = add_block_commands(groups, "fanout", "the channel fan-out (channel samples -> "
                                                 "afferent currents)", 10.0,
-                              add_fanout_options, cmd_simulate, cmd_generate, "channel_fanout")
+                              add_fanout_options, cmd_simulate, cmd_generate, "channel_fanout",
+                              faces=True)
     _hide(s, "spikes")
     _hide(g, "tick_source")
     src = s.add_argument_group("channel samples (one run per sample period)")

@@ -10,10 +10,11 @@ afferents with the front end's rectification, SA afferents gated at their thresh
 Outside a trial's loading window (``frontend.window = "loading"``) its channels carry 0, so
 every current is 0 as the host-side front end makes it.
 
-Engines: ``fixed`` runs the fan-out twin in front of the Izhikevich twin
-(:class:`FanoutTransport`), ``board`` the board top with the fan-out
-(:class:`~cuneate.hdl.link.LinkedFanoutCore`); ``golden`` integrates the float currents as
-without the fan-out, so the fixed engines' difference from golden includes the samples'
+Engines (those whose Izhikevich implementation says it runs the fan-out,
+:func:`fanout_scene_engines`): ``fixed`` runs the fan-out twin in front of the Izhikevich twin
+(:class:`~cuneate.sim.fanout.engines.FanoutTransport`), ``board`` the board top with the
+fan-out (:class:`~cuneate.hdl.link.LinkedTop`); ``golden`` integrates the float
+currents as without the fan-out, so the fixed engines' difference from golden includes the samples'
 quantization (the fan-out's bound: :meth:`~cuneate.hdl.fanout.FanoutConfig.sample_bound`).
 """
 
@@ -23,16 +24,21 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...hdl.fanout import FanoutConfig, FanoutTwin
+from ...hdl.fanout import FanoutConfig
+from ..engines.registry import block_engines, engine_for, implementation, refuse_engines_outside
 from ..host.driver import FbgDriver
 from ..host.transport import Transport
+from .engines import FanoutTransport
 
 __all__ = ["ChannelPlan", "channel_plan", "scene_fanout", "check_fanout_engines",
-           "fanout_transport",
-           "FanoutTransport", "FANOUT_SCENE_ENGINES"]
+           "fanout_transport", "FanoutTransport", "fanout_scene_engines"]
 
-#: the scene engines that run the fan-out (golden needs none: it integrates the float currents)
-FANOUT_SCENE_ENGINES = ("golden", "fixed", "board")
+
+def fanout_scene_engines() -> tuple[str, ...]:
+    """The engines that run a scene's channel fan-out (golden needs none: it integrates the
+    float currents): those whose Izhikevich implementation says so."""
+    return tuple(e for e in block_engines("izhikevich")
+                 if implementation("izhikevich", e).fanout)
 
 
 @dataclass
@@ -112,58 +118,12 @@ def scene_fanout(scene, neurons, traces, infos, core, drv, engines, blocks) -> C
 
 def check_fanout_engines(scene, engines) -> None:
     """Refuse (one line) an engine of ``engines`` that does not run the scene's fan-out."""
-    bad = [e for e in engines if e not in FANOUT_SCENE_ENGINES]
-    if scene["hardware"]["fanout"] and bad:
-        raise ValueError(f"hardware.fanout: engine {bad[0]!r} does not run the channel "
-                         f"fan-out (engines that do: {', '.join(FANOUT_SCENE_ENGINES)})")
+    if not scene["hardware"]["fanout"]:
+        return
+    refuse_engines_outside(engines, fanout_scene_engines(), "hardware.fanout", "channel fan-out")
 
 
 def fanout_transport(engine: str, plan: ChannelPlan, kw: dict) -> Transport:
-    """The transport of a fan-out engine: the fan-out twin before the fixed engine's twin, or
-    the board top with the fan-out."""
-    from ..izhikevich.engines import make_transport
-    if engine == "board":
-        return make_transport("board", fanout=plan.config, **kw)
-    return FanoutTransport(make_transport(engine, **kw), plan.config)
-
-
-class FanoutTransport(Transport):
-    """The fan-out twin in front of another transport (the ``fixed`` engine's twin): channel
-    writes set the twin's samples, and each write is followed by a fan-out run whose currents
-    go to ``inner`` for the same sweep, as :class:`~cuneate.hdl.link.LinkedFanoutCore` does
-    on chip. The fan-out's clamp counts join the counters (``fanout_current_low`` /
-    ``fanout_current_high``)."""
-
-    def __init__(self, inner: Transport, fanout: FanoutConfig):
-        self.inner, self.fanout = inner, fanout
-        self.name = inner.name
-
-    def open(self, config) -> None:
-        self.twin = FanoutTwin(self.fanout)
-        self.inner.open(config)
-
-    def write_currents(self, tick: int, first: int, raw) -> None:
-        raw = np.asarray(raw, dtype=np.int64)
-        self.twin.samples[first:first + raw.size] = raw
-        self.inner.write_currents(tick, 0, self.twin.run()[0])
-
-    def run(self, n_ticks: int) -> None:
-        self.inner.run(n_ticks)
-
-    def collect(self):
-        return self.inner.collect()
-
-    def counters(self) -> dict[str, int]:
-        return dict(self.inner.counters(), **{f"fanout_{k}": v
-                                              for k, v in self.twin.clamp_counts.items()})
-
-    def loss_detail(self, counters: dict) -> str:
-        return self.inner.loss_detail(counters)
-
-    def close(self) -> None:
-        self.inner.close()
-
-    def __getattr__(self, name):
-        if name == "inner":
-            raise AttributeError(name)
-        return getattr(self.inner, name)      # sim_s, figures of the inner transport
+    """The transport of a fan-out engine (``kw``: its options): the fan-out twin before the
+    fixed engine's twin, or the board top with the fan-out."""
+    return engine_for("izhikevich", engine, **kw).fanout_transport(plan.config)

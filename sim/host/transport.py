@@ -31,8 +31,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["SpikeBatch", "Transport", "TransportError", "sweep_count", "COUNTERS", "check_counters",
-           "SimulatedSerial"]
+from ..engines.run import spike_times
+
+__all__ = ["SpikeBatch", "Transport", "TransportError", "queue_write", "sweep_count", "COUNTERS",
+           "check_counters", "SimulatedSerial"]
 
 #: The counters every transport reports, and what each counts.
 COUNTERS = {
@@ -80,10 +82,8 @@ class SpikeBatch:
 
     def times_ms(self, dt_ms: float, n_neurons: int, first: int = 0) -> list[np.ndarray]:
         """Spike times per neuron (``first`` .. ``first + n_neurons - 1``) in ms, ``(k+1) dt``."""
-        out = []
-        for i in range(first, first + n_neurons):
-            out.append((self.tick[self.neuron == i] + 1) * dt_ms)
-        return out
+        return [spike_times(self.tick[self.neuron == i], dt_ms)
+                for i in range(first, first + n_neurons)]
 
 
 def sweep_count(n_ticks, name: str) -> int:
@@ -97,6 +97,21 @@ def sweep_count(n_ticks, name: str) -> int:
     if n != n_ticks or n < 0:
         raise TransportError(f"{name}: cannot run {n_ticks!r} sweeps (a whole number >= 0)")
     return n
+
+
+def queue_write(queue: dict, name: str, tick: int, ran: int, first: int, raw, n: int,
+                what: str = "neurons", owner: str = "core") -> None:
+    """Queue the write of ``raw`` to ``first`` .. of ``n`` (``what`` of the ``owner``) for
+    sweep ``tick`` in ``queue`` (sweep -> ``[(first, raw)]``), refused when the device has
+    already run to sweep ``ran`` past it or when it falls outside."""
+    raw = np.asarray(raw, dtype=np.int64).ravel()
+    if tick < ran:
+        raise TransportError(f"{name}: write for sweep {tick} but the core has run to sweep "
+                             f"{ran}: it would be applied late")
+    if first < 0 or first + raw.size > n:
+        raise TransportError(f"{name}: write of {what} {first}..{first + raw.size - 1} "
+                             f"outside the {owner}'s {n}")
+    queue.setdefault(int(tick), []).append((int(first), raw))
 
 
 class Transport(abc.ABC):

@@ -1,6 +1,6 @@
 """Host side of the UART link: :class:`UartTransport` behind the driver's transport interface.
 
-The transport talks to a :class:`~cuneate.hdl.link.LinkedCore` on a board through pyserial
+The transport talks to a :class:`~cuneate.hdl.link.LinkedTop` on a board through pyserial
 (any ``serial_for_url`` URL: a device path, ``socket://host:port``, ``loop://``), to the
 protocol model (:class:`ModelSerial`, the simulated serial path used by tests and for dry
 runs), or to the gateware in the Amaranth simulator
@@ -34,13 +34,14 @@ import time
 
 import numpy as np
 
-from ...hdl.link.codec import (COUNTER_NAMES, FRAME_ERRORS, MSG_COUNTERS, MSG_SPIKES,
-                              OP_CLEAR_COUNTERS, OP_READ_COUNTERS, OP_STEP, OP_STOP,
-                              FrameDecoder, FrameError, control_message, current_bytes,
-                              encode_frame, parse_counters, parse_spikes, write_message)
+from ...hdl.link.codec import (COUNTER_NAMES, FRAME_ERRORS, MAX_FRAME, MIN_FRAME, MSG_COUNTERS,
+                               MSG_SPIKES, OP_CLEAR_COUNTERS, OP_READ_COUNTERS, OP_STEP, OP_STOP,
+                               SPIKE_HEADER, FrameDecoder, FrameError, control_message,
+                               current_bytes, encode_frame, parse_counters, parse_spikes,
+                               write_message)
 from ...hdl.link.twin import LinkModel
-from ...hdl.link.codec import MAX_FRAME, MIN_FRAME
-from .transport import SimulatedSerial, SpikeBatch, Transport, TransportError, sweep_count
+from .transport import (SimulatedSerial, SpikeBatch, Transport, TransportError, queue_write,
+                        sweep_count)
 
 __all__ = ["UartTransport", "ModelSerial", "DEVICE_ERRORS", "HOST_ERRORS", "link_budget",
            "measured_budget", "run_budget", "format_budget", "BUDGET_BAUDS"]
@@ -313,15 +314,7 @@ class UartTransport(Transport):
 
     # -- transport interface -----------------------------------------------------------------
     def write_currents(self, tick: int, first: int, raw) -> None:
-        raw = np.asarray(raw, dtype=np.int64).ravel()
-        N = self.cfg.n_neurons
-        if tick < self._ticks:
-            raise TransportError(f"uart: write for sweep {tick} but the core has run to sweep "
-                                 f"{self._ticks}: it would be applied late")
-        if first < 0 or first + raw.size > N:
-            raise TransportError(f"uart: write of neurons {first}..{first + raw.size - 1} "
-                                 f"outside the core's {N}")
-        self._queued.setdefault(int(tick), []).append((int(first), raw))
+        queue_write(self._queued, "uart", tick, self._ticks, first, raw, self.cfg.n_neurons)
 
     def _flush_writes(self, tick: int):
         """Send the writes for ``tick`` once the device is known to stand at it (its spike
@@ -450,7 +443,6 @@ def link_budget(n_neurons: int, current_width: int, sample_hz: float, update_hz:
     direction and whether both fit the line (``real_time``: a bandwidth bound; the lockstep
     host also waits for each step's batch before its next writes, see docs/boards.md).
     """
-    from ...hdl.link.codec import SPIKE_HEADER, current_bytes
     cb = current_bytes(current_width)
     per_frame = (MAX_FRAME - MIN_FRAME - 2) // cb
     words = float(n_neurons if words_per_sample is None else words_per_sample)

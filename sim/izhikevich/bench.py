@@ -33,12 +33,13 @@ from __future__ import annotations
 import random
 import time
 
-import numpy as np
 import cocotb
+import numpy as np
 from cocotb.clock import Clock
 from cocotb.triggers import ClockCycles, FallingEdge, RisingEdge
 
 from cuneate.hdl.izhikevich import CLAMP_KINDS, IzhikevichConfig
+from cuneate.hdl.izhikevich.array import PROBES, core_configs
 from cuneate.sim.engines.bench import CoreBench, bench_config, bench_progress, bench_report
 from cuneate.sim.engines.waves import BENCH_CLOCK_NS
 from cuneate.sim.izhikevich.scoreboard import SweepChecker
@@ -273,7 +274,6 @@ async def array_check(dut):
     sweep)``, each core's spikes in that core's order; ``sweep_count`` is the sum over the
     cores; nothing overruns or overflows. ``neuron_sets`` in the bench configuration: the
     array's per-neuron initial parameter sets (each core checked against its own)."""
-    from cuneate.hdl.izhikevich.array import PROBES, core_configs
     cfgj = bench_config()
     cfg = make_config(cfgj["core"])
     K, N = int(cfgj["cores"]), cfg.n_neurons

@@ -12,11 +12,20 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
+
+from ...golden import izhikevich as gz
 from ...golden.budget import fmt_count
+from ...golden.izhikevich import PRESETS, SCHEMES, to_params
+from ...hdl.izhikevich import IzhikevichConfig, generate_izhikevich
+from ...hdl.izhikevich.config import PIPELINE_DEPTH, PIPELINE_STAGES
+from ...hdl.lib.config import MIN_NEURONS
 from ..cli.options import (CliError, CommandGroups, add_block_commands, add_rate_options,
-                           add_waves_options, build_config, finite_float, fmt_time, output_dir,
+                           add_waves_options, build_config, finite_float, fmt_time, generate_faced, output_dir,
                            positive_float, positive_int, run_budget, start_progress,
                            waves_from_args, write_simulate_spikes)
+from ..engines.registry import estimate_seconds
+from ..engines.waves import FORMATS, time_axis
 
 __all__ = ["register", "add_core_options", "add_pipeline_option", "core_from_args",
            "parse_param_set", "estimate_run"]
@@ -34,7 +43,6 @@ def parse_param_set(text: str):
     """A parameter set from the command line: a preset (``RS``), a published behaviour
     (``behaviour:Q`` or ``behaviour:"depolarizing after-potential"``), or numbers
     ``a,b,c,d`` optionally followed by ``A,B,C`` and ``u_leak,v_u``."""
-    from ...golden import izhikevich as gz
     t = text.strip()
     if t.lower().startswith("behaviour:"):
         from ...golden.behaviours import behaviour
@@ -97,7 +105,6 @@ def add_core_options(p, *, neurons_default: int) -> None:
 
 def add_pipeline_option(g) -> None:
     """``--pipeline-stages``: the core's pipeline depth (generate, simulate, build)."""
-    from ...hdl.izhikevich.config import PIPELINE_DEPTH, PIPELINE_STAGES
     g.add_argument("--pipeline-stages", type=int, choices=PIPELINE_STAGES,
                    default=PIPELINE_DEPTH,
                    help=f"pipeline depth of the core (default {PIPELINE_DEPTH}; deeper "
@@ -142,7 +149,6 @@ def core_kwargs(args, param_sets, n_core: int, n: int | None = None) -> dict:
 
 def core_from_args(kwargs: dict):
     """The configuration, or the one-line refusal shared by every command."""
-    from ...hdl.izhikevich import IzhikevichConfig
     return build_config(IzhikevichConfig, kwargs)
 
 
@@ -150,7 +156,6 @@ def core_from_args(kwargs: dict):
 # simulate
 def _param_sets(args) -> list:
     """``--param-set`` (repeatable) or the single set of ``--preset`` and ``--a/b/c/d``."""
-    from ...golden.izhikevich import PRESETS, to_params
     overrides = {k: getattr(args, k) for k in "abcd" if getattr(args, k, None) is not None}
     if args.param_set:
         if overrides or args.preset != "RS":
@@ -178,8 +183,6 @@ def _currents(args, n):
 def estimate_run(engine: str, n: int, n_sweeps: int, rate_hz: float = 50.0) -> dict:
     """Memory (bytes) and time (s) a run will take, from conservative per-engine figures;
     ``rate_hz`` is the spike rate assumed for the size of the output."""
-    from ..engines.registry import estimate_seconds
-    from .engines import MIN_NEURONS
     n_core = max(n, MIN_NEURONS)
     work = n_core * n_sweeps                        # updates (= cycles on HDL simulators)
     seconds = estimate_seconds("izhikevich", engine, work)
@@ -189,10 +192,8 @@ def estimate_run(engine: str, n: int, n_sweeps: int, rate_hz: float = 50.0) -> d
 
 
 def cmd_simulate(args) -> int:
-    import numpy as np
     start_progress(args)
-    from ...golden import izhikevich as gz
-    from .engines import MIN_NEURONS, run_engine
+    from .engines import run_engine
 
     n = args.neurons
     sets = _param_sets(args)
@@ -223,7 +224,6 @@ def cmd_simulate(args) -> int:
                est["bytes"], f"{n} neuron(s) x {fmt_count(n_sweeps)} updates",
                "reduce --neurons or --duration-ms, pick a faster engine, or pass --force to "
                "run it anyway with a progress bar")
-    from ..engines.waves import FORMATS, time_axis
     waves = waves_from_args(args)
     if waves is not None and args.engine not in FORMATS:
         raise CliError(f"--waves: engine {args.engine!r} writes no waveforms (those that do: "
@@ -308,11 +308,11 @@ def cmd_simulate(args) -> int:
 # --------------------------------------------------------------------------------------------
 # generate
 def cmd_generate(args) -> int:
-    from ...hdl.izhikevich import generate_izhikevich
-    from ...golden.izhikevich import PRESETS
     sets = [parse_param_set(s) for s in args.param_set] if args.param_set else [PRESETS["RS"]]
     kw = core_kwargs(args, sets, args.neurons) | {"tick_source": args.tick_source}
     cfg = core_from_args(kw)
+    if args.face != "none":
+        return generate_faced(args, cfg, "izhikevich")
     out = output_dir(args.out)
     files = generate_izhikevich(out, config=cfg)
     for f in files:
@@ -325,8 +325,8 @@ def cmd_generate(args) -> int:
 
 
 def register(groups: CommandGroups) -> None:
-    from ...golden.izhikevich import PRESETS, SCHEMES
-    s, g = add_block_commands(groups, "izhikevich", "the Izhikevich core", 1000.0)
+    s, g = add_block_commands(groups, "izhikevich", "the Izhikevich core", 1000.0,
+                              faces=True)
     s.add_argument("--preset", choices=list(PRESETS), default="RS", type=str.upper)
     for k in "abcd":
         s.add_argument(f"--{k}", type=finite_float, default=None,

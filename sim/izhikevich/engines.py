@@ -1,9 +1,13 @@
 """The Izhikevich block's engines: whole runs (``cuneate simulate izhikevich``) and transports
 for the host driver (scenes), one spike convention.
 
-All engines run the same core configuration and report spikes with the golden convention (a
-spike produced by update k is at (k+1) dt ms), so their outputs are directly comparable:
+:class:`IzhikevichEngine` is the block's engine interface; each engine implements it and
+registers itself (:func:`~cuneate.sim.engines.registry.implements`). All engines run the same
+core configuration and report spikes with the golden convention (a spike produced by update k
+is at (k+1) dt ms), so their outputs are directly comparable:
 
+``golden``
+    The float64 model (forward Euler at the core's dt) with the core's parameter sets.
 ``fixed``
     The bit-exact NumPy twin.
 ``amaranth``
@@ -15,22 +19,25 @@ spike produced by update k is at (k+1) dt ms), so their outputs are directly com
     (:mod:`cuneate.sim.engines.verilator_fast`): no Python per cycle, same spikes and clamp
     counters.
 
+(``board``, the core behind the UART link, is :mod:`cuneate.sim.engines.board`.)
+
 A core is described by its constructor keywords (``core``, as for
 :class:`~cuneate.hdl.izhikevich.IzhikevichConfig`); :func:`engine_core` turns them into the
 configuration an engine simulates: the same parameter sets, formats, accepted range and
-rounding, at least 8 neurons (unused ones idle at zero current), and an external tick every
-``max(n, 8)`` cycles (one update per clock, no idle cycles) - results depend only on the update
-rate (dt), not on the clock. Every engine also reports the core's clamp counters.
+rounding, at least :data:`~cuneate.hdl.lib.config.MIN_NEURONS` neurons (unused ones idle at
+zero current), and an external tick every ``n_neurons`` cycles (one update per clock, no idle
+cycles) - results depend only on the update rate (dt), not on the clock. Every engine but
+golden also reports the core's clamp counters.
 
-Transports (:func:`make_transport`; the interface is :mod:`cuneate.sim.host.transport`) carry a
-host driver's timed current writes to a core. The hardware engines share one sweep protocol
-(:data:`PROTOCOL`): the writes due at tick ``k`` are driven through the host-write port after
-sweep ``k - 1`` has left the pipeline and before the tick of sweep ``k`` (so no write can reach
-the wrong sweep); the spike FIFO (one entry per neuron deep) is read out between sweeps and
-checked against the core's own per-sweep spike count. Idle cycles between sweeps do not change
-the arithmetic (external tick). Every transport refuses a write for a tick already run
-(``TransportError``) and a schedule longer than its buffer (``buffer_writes``; a buffer overrun
-is an error, never a silent drop).
+Transports (:meth:`IzhikevichEngine.transport`, :func:`make_transport`; the interface is
+:mod:`cuneate.sim.host.transport`) carry a host driver's timed current writes to a core. The
+hardware engines share one sweep protocol (:data:`PROTOCOL`): the writes due at tick ``k`` are
+driven through the host-write port after sweep ``k - 1`` has left the pipeline and before the
+tick of sweep ``k`` (so no write can reach the wrong sweep); the spike FIFO (one entry per
+neuron deep) is read out between sweeps and checked against the core's own per-sweep spike
+count. Idle cycles between sweeps do not change the arithmetic (external tick). Every transport
+refuses a write for a tick already run (``TransportError``) and a schedule longer than its
+buffer (``buffer_writes``; a buffer overrun is an error, never a silent drop).
 """
 
 from __future__ import annotations
@@ -40,23 +47,26 @@ from pathlib import Path
 
 import numpy as np
 
+from ...golden import izhikevich as golden
 from ...hdl.izhikevich import (CLAMP_KINDS, IzhikevichConfig, IzhikevichCore,
                                IzhikevichTwin, izhikevich_verilog)
+from ...hdl.izhikevich.config import min_neurons
+from ...hdl.lib.config import MIN_NEURONS
 from ..engines.amaranth import simulate, write_currents
-from ..engines.registry import block_engines, check_engine
-from ..engines.run import EngineRun, TickUnwrap, times_from_pairs
+from ..engines.cocotb import run_bench
+from ..engines.engine import WAVE_ENGINES, BlockEngine
+from ..engines.registry import engine_for, implements
+from ..engines.run import EngineRun, TickUnwrap, spike_times
+from ..engines.verilator_fast import run_harness
+from ..engines.waves import WindowedVcd, write_gtkw
+from ..fanout.engines import FanoutTransport
 from ..host.transport import SpikeBatch, Transport, TransportError, sweep_count
 
-__all__ = ["HARDWARE_ENGINES", "EngineRun", "engine_core", "run_engine", "engine_config",
+__all__ = ["IzhikevichEngine", "EngineRun", "engine_core", "run_engine", "engine_config",
            "run_hardware_engine", "run_cocotb_engine", "run_amaranth_sweeps", "MIN_NEURONS",
            "TwinTransport", "CocotbTransport", "AmaranthTransport", "VerilatorFastTransport",
-           "TRANSPORTS", "make_transport", "PROTOCOL", "WAVE_ENGINES"]
+           "make_transport", "PROTOCOL", "WAVE_ENGINES"]
 
-#: The engines that run the core's arithmetic (all but golden), from the engine registry.
-HARDWARE_ENGINES = tuple(e for e in block_engines("izhikevich") if e != "golden")
-MIN_NEURONS = 8
-#: The engines that write waveforms (their simulators dump the RTL's signals).
-WAVE_ENGINES = ("amaranth", "icarus", "verilator")
 PROTOCOL = "writes between sweeps, external tick, FIFO drained between sweeps"
 #: Default write-buffer capacity of the batch transports (write calls held until collect).
 BUFFER_WRITES = 1 << 20
@@ -65,7 +75,8 @@ BUFFER_WRITES = 1 << 20
 def engine_core(core: dict, n: int) -> IzhikevichConfig:
     """The configuration an engine simulates for ``n`` neurons of the core ``core``
     (constructor keywords); raises :class:`~cuneate.hdl.izhikevich.ConfigError`."""
-    N = max(n, MIN_NEURONS)
+    depth = core.get("pipeline_stages")
+    N = max(n, MIN_NEURONS, min_neurons(depth) if depth else min_neurons())
     kw = dict(core)
     update_hz = float(kw.get("update_hz", 16e3))
     kw.update(n_neurons=N, clock_hz=update_hz * N, update_hz=update_hz,
@@ -90,53 +101,11 @@ def engine_config(params: dict, n: int, update_hz: float) -> IzhikevichConfig:
 # ----------------------------------------------------------------------------------------------
 # whole runs with constant currents
 
-def _run_fixed(cfg, cur, n_sweeps, n, build_dir, progress, waves=None):
-    twin = IzhikevichTwin(cfg)
-    spikes = [s.tolist() for s in twin.run(cur, n_sweeps, progress=progress)[:n]]
-    rep = twin.clamp_report()
-    return spikes, rep["counts"], rep["sticky"]
-
-
-def _run_verilator_fast(cfg, cur, n_sweeps, n, build_dir, progress, waves=None):
-    from ..engines.verilator_fast import run_harness
-    run = run_harness(cfg, cur, n_sweeps, build_root=build_dir)
-    if progress is not None:
-        progress(n_sweeps)
-    ks = run.spikes_per_neuron(n)
-    return ([((k + 1) * cfg.dt_ms).tolist() for k in ks], dict(run.summary["clamp_counts"]),
-            run.clamp_sticky())
-
-
-def _run_board(cfg, cur, n_sweeps, n, build_dir, progress, waves=None):
-    """The board top through its serial line: the currents written once, the sweeps run, the
-    spikes read back and every counter checked. The link carries no clamp counters: none
-    are reported (``None``)."""
-    from ..host.transport import check_counters
-    tr = make_transport("board", progress=progress, waves=waves)
-    try:
-        tr.open(cfg)
-        raw = np.asarray(cfg.I.to_raw(cur), dtype=np.int64)
-        tr.write_currents(0, 0, raw)
-        tr.run(n_sweeps)
-        batch = tr.collect()
-        check_counters(tr, tr.counters(), 1, len(batch))
-    finally:
-        tr.close()
-    keep = batch.neuron < n
-    pairs = zip(batch.tick[keep].tolist(), batch.neuron[keep].tolist())
-    return [t.tolist() for t in times_from_pairs(pairs, n, cfg.dt_ms)], None, None
-
-
-def _to_times(spike_sweeps, n, dt_ms):
-    return [[(k + 1) * dt_ms for k in sorted(spike_sweeps[i])] for i in range(n)]
-
-
 def _amaranth_window(cfg: IzhikevichConfig, waves):
     """The VCD window of an Amaranth run (``None`` without ``waves``) and what writes its
     GTKWave save file when the run is over."""
     if not waves:
         return None, lambda: None
-    from ..engines.waves import WindowedVcd, write_gtkw
     path = waves.path("amaranth")
     path.parent.mkdir(parents=True, exist_ok=True)
     window = WindowedVcd(path)
@@ -188,37 +157,142 @@ def run_amaranth_sweeps(cfg: IzhikevichConfig, cur, n_sweeps: int, progress=None
     return spikes, counts, sticky
 
 
-def _run_amaranth(cfg, cur, n_sweeps, n, build_dir, progress, waves=None):
-    spikes, counts, sticky = run_amaranth_sweeps(cfg, cur, n_sweeps, progress, waves)
-    return _to_times(spikes, n, cfg.dt_ms), counts, sticky
-
-
 def run_cocotb_engine(simulator: str, cfg: IzhikevichConfig, cur, n_sweeps: int,
                       build_dir: Path | None, progress=None, waves=None):
     """Generate the core for ``cfg`` and run the cocotb ``engine`` bench (in ``build_dir`` or a
     scratch directory); returns the :class:`~cuneate.sim.engines.cocotb.CocotbRun` (its report
     has the spike sweeps and the clamp counters). ``waves``: a window to dump."""
-    from ..engines.cocotb import run_bench
     return run_bench(simulator, izhikevich_verilog(cfg), "izhikevich_core", "izhikevich",
                      {"core": cfg.to_kwargs(), "currents": list(map(float, cur)),
                       "sweeps": n_sweeps}, build_dir, testcase="engine", progress=progress,
                      waves=waves)
 
 
-def _cocotb_runner(simulator):
-    def run(cfg, cur, n_sweeps, n, build_dir, progress, waves=None):
-        rep = run_cocotb_engine(simulator, cfg, cur, n_sweeps, build_dir, progress,
-                                waves).report
-        return (_to_times(rep["spike_sweeps"], n, cfg.dt_ms), rep["clamp_counts"],
-                rep["clamp_sticky"])
-    return run
+class IzhikevichEngine(BlockEngine):
+    """The Izhikevich block on one engine: :meth:`run` a whole run with constant currents,
+    :meth:`transport` the host driver's transport (scenes)."""
+
+    block = "izhikevich"
+
+    def build(self, core: dict, n: int) -> IzhikevichConfig:
+        """The core this engine simulates for ``n`` neurons of ``core`` (:func:`engine_core`)."""
+        return engine_core(core, n)
+
+    def run(self, cfg: IzhikevichConfig, cur, n_sweeps: int, n: int) -> EngineRun:
+        """``n_sweeps`` sweeps of ``cfg`` with constant currents ``cur`` (mV/ms, one per neuron
+        of the core); the spikes of its first ``n`` neurons."""
+        t0 = time.perf_counter()
+        spikes, counts, sticky, counters = self.sweeps(cfg, cur, n_sweeps, n)
+        return EngineRun(self.name, cfg.dt_ms, n_sweeps, spikes,
+                         None if counts is None else dict(counts), sticky,
+                         time.perf_counter() - t0, counters)
+
+    def sweeps(self, cfg: IzhikevichConfig, cur, n_sweeps: int, n: int):
+        """``(spike times per neuron as lists, clamp counts, sticky flags, counters)``; by
+        default through :meth:`transport` (the currents written once, before the first sweep;
+        no clamps seen: ``None``)."""
+        raw = np.asarray(cfg.I.to_raw(cur), dtype=np.int64)
+        got, counters = self.stream(cfg, {0: [(0, raw)]}, n_sweeps)
+        return [t.tolist() for t in got.times_ms(cfg.dt_ms, n)], None, None, counters
+
+    #: How the engine runs a scene's cuneate layer: ``"host"`` (its afferents' spikes into
+    #: the layer's model or twin, :func:`~cuneate.sim.network.scene.run_layer`), ``"chip"``
+    #: (its transport opens the afferent -> cuneate network) or ``None`` (it does not).
+    layer: str | None = None
+    #: Whether the engine runs a scene's channel fan-out (:meth:`fanout_transport`).
+    fanout: bool = False
+
+    def fanout_transport(self, fanout) -> Transport:
+        """The transport of a scene that streams channels: the channel fan-out ``fanout``
+        (:class:`~cuneate.hdl.fanout.FanoutConfig`) in front of the core; by default its twin
+        before this engine's transport."""
+        return FanoutTransport(self.transport(), fanout)
 
 
-#: Engine name -> whole-run runner ``(cfg, currents, n_sweeps, n, build_dir, progress, waves)
-#: -> (spikes per neuron, clamp counts, sticky flags)`` (``waves``: the RTL engines' window).
-RUNNERS = {"fixed": _run_fixed, "amaranth": _run_amaranth, "icarus": _cocotb_runner("icarus"),
-           "verilator": _cocotb_runner("verilator"), "verilator-fast": _run_verilator_fast,
-           "board": _run_board}
+def _times(spike_sweeps, n: int, dt_ms: float) -> list[list[float]]:
+    return [spike_times(np.sort(spike_sweeps[i]), dt_ms).tolist() for i in range(n)]
+
+
+@implements("izhikevich", "golden", speed=15e6)
+class IzhikevichGolden(IzhikevichEngine):
+    """The float64 model at the core's dt (forward Euler), the core's parameter sets."""
+
+    layer, fanout = "host", True
+
+    def sweeps(self, cfg, cur, n_sweeps, n):
+        params = [cfg.params[s] for s in cfg.neuron_sets[:n]]
+        cur = np.asarray(cur[:n], dtype=np.float64)
+        r = golden.simulate(params, lambda t_ms: cur, n_steps=n_sweeps, n_neurons=n,
+                            dt_ms=cfg.dt_ms, scheme="euler", progress=self.progress)
+        return [np.asarray(s).tolist() for s in r.spikes_ms], None, None, {}
+
+    def transport(self) -> Transport:
+        raise ValueError("engine 'golden' has no transport (it runs the golden model)")
+
+
+@implements("izhikevich", "fixed", speed=2e6)
+class IzhikevichFixed(IzhikevichEngine):
+    """The bit-exact twin."""
+
+    layer, fanout = "host", True
+
+    def sweeps(self, cfg, cur, n_sweeps, n):
+        twin = IzhikevichTwin(cfg)
+        spikes = [s.tolist() for s in twin.run(cur, n_sweeps, progress=self.progress)[:n]]
+        rep = twin.clamp_report()
+        return spikes, rep["counts"], rep["sticky"], {}
+
+    def transport(self) -> Transport:
+        return TwinTransport(progress=self.progress)
+
+
+@implements("izhikevich", "amaranth", speed=4e3)
+class IzhikevichAmaranth(IzhikevichEngine):
+    """The Amaranth simulator on the core."""
+
+    writes_waves = True
+
+    def sweeps(self, cfg, cur, n_sweeps, n):
+        spikes, counts, sticky = run_amaranth_sweeps(cfg, cur, n_sweeps, self.progress,
+                                                     self.waves)
+        return _times(spikes, n, cfg.dt_ms), counts, sticky, {}
+
+    def transport(self) -> Transport:
+        return AmaranthTransport(self.build_dir, progress=self.progress, waves=self.waves)
+
+
+@implements("izhikevich", "icarus", speed=2.5e3)
+@implements("izhikevich", "verilator", speed=4e4)
+class IzhikevichCocotb(IzhikevichEngine):
+    """cocotb on the generated Verilog (the bench's ``engine`` and ``play`` tests)."""
+
+    writes_waves = True
+
+    def sweeps(self, cfg, cur, n_sweeps, n):
+        rep = run_cocotb_engine(self.name, cfg, cur, n_sweeps, self.build_dir, self.progress,
+                                self.waves).report
+        return (_times(rep["spike_sweeps"], n, cfg.dt_ms), rep["clamp_counts"],
+                rep["clamp_sticky"], {})
+
+    def transport(self) -> Transport:
+        return CocotbTransport(self.name, self.build_dir, progress=self.progress,
+                               waves=self.waves)
+
+
+@implements("izhikevich", "verilator-fast", speed=1e6)
+class IzhikevichVerilatorFast(IzhikevichEngine):
+    """The core compiled by Verilator with the C++ harness."""
+
+    def sweeps(self, cfg, cur, n_sweeps, n):
+        run = run_harness(cfg, cur, n_sweeps, build_root=self.build_dir)
+        if self.progress is not None:
+            self.progress(n_sweeps)
+        ks = run.spikes_per_neuron(n)
+        return ([spike_times(k, cfg.dt_ms).tolist() for k in ks],
+                dict(run.summary["clamp_counts"]), run.clamp_sticky(), {})
+
+    def transport(self) -> Transport:
+        return VerilatorFastTransport(self.build_dir, progress=self.progress)
 
 
 def run_engine(engine: str, core: dict, currents, duration_ms: float,
@@ -230,14 +304,10 @@ def run_engine(engine: str, core: dict, currents, duration_ms: float,
     ``waves``: a :class:`~cuneate.sim.engines.waves.Waves` window, dumped by the RTL engines
     (``amaranth``, ``icarus``, ``verilator``; refused for the others).
     """
-    if waves and engine not in WAVE_ENGINES:
-        raise ValueError(f"engine {engine!r} writes no waveforms (those that do: "
-                         f"{', '.join(WAVE_ENGINES)})")
-    if engine not in RUNNERS:
-        check_engine("izhikevich", engine)
-        raise ValueError(f"engine {engine!r} runs the golden model, not the core")
+    impl = engine_for("izhikevich", engine, build_dir=build_dir, progress=progress,
+                      waves=waves)
     n = len(currents)
-    cfg = engine_core(core, n)
+    cfg = impl.build(core, n)
     n_sweeps = int(round(duration_ms / cfg.dt_ms))
     cur = np.zeros(cfg.n_neurons)
     cur[:n] = currents
@@ -245,10 +315,7 @@ def run_engine(engine: str, core: dict, currents, duration_ms: float,
         if not cfg.I.contains(x):
             raise ValueError(f"current {x:g} is outside the core's input format {cfg.I} "
                              f"[{cfg.I.min_value:g}, {cfg.I.max_value:g}]")
-    t0 = time.perf_counter()
-    spikes, counts, sticky = RUNNERS[engine](cfg, cur, n_sweeps, n, build_dir, progress, waves)
-    return EngineRun(engine, cfg.dt_ms, n_sweeps, spikes,
-                     None if counts is None else dict(counts), sticky, time.perf_counter() - t0)
+    return impl.run(cfg, cur, n_sweeps, n)
 
 
 def run_hardware_engine(engine: str, params: dict, currents, duration_ms: float,
@@ -259,6 +326,12 @@ def run_hardware_engine(engine: str, params: dict, currents, duration_ms: float,
             "update_hz": update_hz}
     r = run_engine(engine, core, currents, duration_ms, build_dir)
     return r.dt_ms, r.spikes_ms
+
+
+def make_transport(engine: str, **kw) -> Transport:
+    """The transport of ``engine`` for the host driver (``build_dir``, ``progress``, ``waves``
+    and the engine's own keywords)."""
+    return engine_for("izhikevich", engine, **kw).transport()
 
 
 # ----------------------------------------------------------------------------------------------
@@ -406,7 +479,6 @@ class CocotbTransport(_Batch):
         self.name = simulator
 
     def _execute(self, n_ticks, writes) -> dict:
-        from ..engines.cocotb import run_bench
         cfg = self.cfg
         config = {"core": cfg.to_kwargs(), "ticks": n_ticks,
                   "writes": [[t, f, r] for t, f, r in writes]}
@@ -489,7 +561,6 @@ class VerilatorFastTransport(_Batch):
         super().__init__(build_dir, buffer_writes, progress)
 
     def _execute(self, n_ticks, writes) -> dict:
-        from ..engines.verilator_fast import run_harness
         cfg = self.cfg
         cur = np.zeros(cfg.n_neurons, dtype=np.int64)
         segments, words = [], 0
@@ -509,34 +580,3 @@ class VerilatorFastTransport(_Batch):
                 int(s["spike_overflow"]), "overrun": int(s["overrun"]), "sweeps": n_ticks,
                 "clamp_counts": dict(s["clamp_counts"]), "spike_tick": run.spike_sweeps,
                 "spike_neuron": run.spike_neurons, "wall_s": float(s.get("wall_s", 0.0))}
-
-
-def _twin_transport(progress=None, waves=None, **_):
-    if waves:
-        raise ValueError(f"engine 'fixed' writes no waveforms (those that do: "
-                         f"{', '.join(WAVE_ENGINES)})")
-    return TwinTransport(progress=progress)
-
-
-#: Engine name -> transport factory (``build_dir``, ``progress`` and ``waves`` keywords).
-TRANSPORTS = {
-    "fixed": _twin_transport,
-    "amaranth": lambda **kw: AmaranthTransport(**kw),
-    "icarus": lambda **kw: CocotbTransport("icarus", **kw),
-    "verilator": lambda **kw: CocotbTransport("verilator", **kw),
-    "verilator-fast": lambda **kw: VerilatorFastTransport(**kw),
-    "board": lambda **kw: _board_transport(**kw),
-}
-
-
-def _board_transport(build_dir=None, progress=None, waves=None, **kw):
-    from ..link.engines import BoardTransport
-    return BoardTransport(build_dir=build_dir, progress=progress, waves=waves, **kw)
-
-
-def make_transport(engine: str, **kw) -> Transport:
-    """The transport of ``engine`` for the host driver."""
-    if engine not in TRANSPORTS:
-        check_engine("izhikevich", engine)
-        raise ValueError(f"engine {engine!r} has no transport (it runs the golden model)")
-    return TRANSPORTS[engine](**kw)

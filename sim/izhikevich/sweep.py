@@ -27,12 +27,19 @@ from __future__ import annotations
 
 import functools
 import sys
+import tempfile
 import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import numpy as np
 
+from ...golden import izhikevich as giz
+from ...hdl.flow.synth import nextpnr_ecp5, synthesize
+from ...hdl.izhikevich import IzhikevichConfig, izhikevich_verilog
+from ...hdl.lib.fixed import QFormat
+from ..scenes.runner import check_budget
+from ..scenes.scene import default_scene, example_names, example_path, load_scene
 from ..sweep import (Point, SweepSpec, n_steps, ok_row, point_key, refused, register_battery,
                      same_dt_columns)
 
@@ -129,7 +136,6 @@ def scene_battery(which: str | None = None) -> Battery:
     Izhikevich neurons driven by currents (the taxel skin, the ridge network), a grid of
     texture conditions (one condition is a battery)."""
     from ..scenes.afferent import build_izhikevich, build_neurons, front_end, synthesize
-    from ..scenes.runner import check_budget
     scene = _scene_of(which)
     if scene.kind == "texture":        # a MEMS fingertip's trials and SA afferents
         from ..scenes import texture_trials
@@ -152,7 +158,6 @@ def scene_battery(which: str | None = None) -> Battery:
 def _scene_of(which: str | None):
     """The scene of a ``scene`` battery, refused (``ValueError``) unless it drives independent
     Izhikevich neurons with currents."""
-    from ..scenes.scene import default_scene, example_names, example_path, load_scene
     if which is None:
         scene = default_scene()
     elif example_path(which) is not None:
@@ -173,7 +178,6 @@ def _scene_of(which: str | None):
 def simulate_float(bat: Battery, dt_ms: float, n_steps: int, scheme: str,
                    dtype=np.float64) -> list[np.ndarray]:
     """The battery on the golden model with ``scheme`` and ``dtype`` (float64 or float32)."""
-    from ...golden import izhikevich as giz
     r = giz.simulate(list(bat.params), bat.currents(dt_ms, n_steps), n_neurons=bat.n,
                      n_steps=n_steps, dt_ms=dt_ms, scheme=scheme, dtype=dtype,
                      v0=None if bat.v0 is None else np.asarray(bat.v0),
@@ -260,7 +264,6 @@ def grid(update_hz=(16e3,), operand_width=(18,), frac_bits=((18, 20),),
 def fixed_config(p: SweepPoint, bat: Battery):
     """The core configuration of point ``p`` for battery ``bat`` (at least 5 neurons, external
     tick, the battery's initial states and current format)."""
-    from ...hdl.izhikevich import IzhikevichConfig
     n = bat.n
     N = max(n, 5)
     sets = tuple(dict.fromkeys(bat.params))
@@ -286,8 +289,6 @@ def fixed_config(p: SweepPoint, bat: Battery):
 def current_format(p: SweepPoint, base=None):
     """The core's current format at point ``p``: ``base`` (default sQ10.8) with the point's
     fraction bits."""
-    from ...hdl.lib.fixed import QFormat
-    from ...hdl.izhikevich import IzhikevichConfig
     base = base or IzhikevichConfig.current_format
     if p.current_frac_bits is None:
         return base
@@ -311,10 +312,7 @@ def synth_point(p: SweepPoint, spec: SweepSpec) -> dict:
     ``fmax_mhz`` (the lowest) and ``fmax_mhz_per_seed``; the core has
     ``spec.pipeline_stages`` stages; with ``spec.pack_registers`` the flip-flops around its
     multipliers and after its block RAMs are packed into their registers first."""
-    import tempfile
 
-    from ...hdl.flow.synth import nextpnr_ecp5, synthesize
-    from ...hdl.izhikevich import IzhikevichConfig, izhikevich_verilog
     n = int(spec.clock_hz // p.update_hz)
     cfg = IzhikevichConfig(n_neurons=n, clock_hz=n * p.update_hz, update_hz=p.update_hz,
                            operand_width=p.operand_width, v_frac_bits=p.v_frac_bits,

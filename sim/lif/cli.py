@@ -13,9 +13,10 @@ import json
 
 import numpy as np
 
+from ...hdl.lif import ConfigError, LifConfig, generate_lif
 from ..cli.options import (CliError, CommandGroups, add_block_commands, add_max_minutes,
                            add_rate_options, clamp_summary, engine_choices, finite_float,
-                           input_file, nonneg_int, output_dir, positive_float, positive_int,
+                           generate_faced, input_file, nonneg_int, output_dir, positive_float, positive_int,
                            print_run, probability, run_ticks, seed_int)
 
 __all__ = ["register", "add_lif_options", "lif_kwargs", "lif_from_kwargs"]
@@ -92,7 +93,6 @@ def lif_kwargs(args, n: int) -> dict:
 
 def lif_from_kwargs(kw: dict, engine_n: int | None = None):
     """The configuration (or, with ``engine_n``, the engine's), or a one-line refusal."""
-    from ...hdl.lif import ConfigError, LifConfig
     from .engines import engine_config
     try:
         return engine_config(kw, engine_n) if engine_n is not None else LifConfig(**kw)
@@ -145,10 +145,11 @@ def cmd_simulate(args) -> int:
 
 
 def cmd_generate(args) -> int:
-    from ...hdl.lif import generate_lif
     kw = lif_kwargs(args, args.neurons) | {"tick_source": args.tick_source}
     kw.setdefault("clock_hz", 40e6)
     cfg = lif_from_kwargs(kw)
+    if args.face != "none":
+        return generate_faced(args, cfg, "lif")
     files = generate_lif(output_dir(args.out), cfg)
     for f in files:
         print(f)
@@ -188,7 +189,7 @@ def cmd_quantization(args) -> int:
 
 
 def register(groups: CommandGroups) -> None:
-    s, g = add_block_commands(groups, "lif", "the LIF core", 200.0)
+    s, g = add_block_commands(groups, "lif", "the LIF core", 200.0, faces=True)
     s.add_argument("--current", type=finite_float, nargs="+", default=[25.0],
                    help="host current (mV, or u per step for --form discrete): one value or "
                         "one per neuron")
@@ -204,7 +205,8 @@ def register(groups: CommandGroups) -> None:
     lif = groups.root.add_parser("lif", help="LIF experiments (3x3 skin, quantization table)")
     sub = lif.add_subparsers(dest="lif_command", required=True, parser_class=type(lif))
     sk = sub.add_parser("skin", help="3x3 skin: pulses of growing width and amplitude")
-    sk.add_argument("--engine", choices=engine_choices("lif"), default="fixed")
+    sk.add_argument("--engine", choices=engine_choices("lif"), metavar="ENGINE",
+                    default="fixed", help="%(choices)s (default fixed)")
     sk.add_argument("--pressed", type=nonneg_int, default=4)
     sk.add_argument("--k1", type=finite_float, default=5.0, help="mV")
     sk.add_argument("--k2", type=finite_float, default=20.0, help="mV per force unit")

@@ -15,12 +15,10 @@ reports spikes with the golden convention (update ``k`` -> ``(k + 1) dt``):
 ``icarus``, ``verilator``
     cocotb on the generated Verilog (bench :mod:`cuneate.sim.lif.bench`, test ``engine``).
 ``board``
-    The board top :class:`cuneate.hdl.link.LinkedLif` (the core behind the UART link) compiled
-    by Verilator behind a simulated serial line, driven by the host stack
-    (:class:`cuneate.sim.link.engines.BoardTransport`): the currents that change written for
-    their sweep, the sweeps stepped, the spike frames read back and every counter checked.
-    The link carries spikes alone (no clamp counts, no input spikes); the run's counters hold
-    the line's figures (``board_*``: cycles, bytes and frames each way).
+    The core behind the UART link (:mod:`cuneate.sim.engines.board`).
+
+:class:`LifEngine` is the block's engine interface; each engine implements it and registers
+itself (:func:`~cuneate.sim.engines.registry.implements`).
 
 The hardware engines run an external-tick core; per sweep the host waits for the previous sweep
 to finish issuing, writes the currents that changed, sends the input spikes and ticks, so the
@@ -36,18 +34,15 @@ from pathlib import Path
 import numpy as np
 
 from ...golden import lif as golden
+from ...hdl.lib.config import MIN_NEURONS
 from ...hdl.lif import CLAMP_KINDS, PIPELINE_DEPTH, LifConfig, LifCore, LifTwin, lif_verilog
 from ..engines.amaranth import simulate, spikes_then_tick
-from ..engines.registry import block_engines, check_engine
-from ..engines.run import EngineRun, TickUnwrap
+from ..engines.cocotb import run_bench
+from ..engines.engine import BlockEngine
+from ..engines.registry import engine_for, implements
+from ..engines.run import EngineRun, TickUnwrap, spike_times
 
-__all__ = ["LIF_ENGINES", "LifProgram", "LifRun", "engine_config", "run_lif", "current_runs"]
-
-#: The engines the LIF block runs on (the registry's list).
-LIF_ENGINES = block_engines("lif")
-MIN_NEURONS = 8
-#: A LIF run is an :class:`~cuneate.sim.engines.run.EngineRun`.
-LifRun = EngineRun
+__all__ = ["LifEngine", "LifProgram", "engine_config", "run_lif", "current_runs"]
 
 
 @dataclass
@@ -70,8 +65,8 @@ class LifProgram:
 
 def engine_config(core: dict, n: int) -> LifConfig:
     """The configuration the engines simulate for ``n`` neurons of ``core`` (constructor
-    keywords): at least 8 neurons (idle ones get zero current and zero weights), external
-    tick. Raises :class:`~cuneate.hdl.lif.ConfigError`."""
+    keywords): at least :data:`~cuneate.hdl.lib.config.MIN_NEURONS` neurons (idle ones get
+    zero current and zero weights), external tick. Raises :class:`~cuneate.hdl.lif.ConfigError`."""
     N = max(n, MIN_NEURONS)
     kw = dict(core)
     kw.update(n_neurons=N, clock_hz=float(kw.get("update_hz", 16e3)) * N * 4,
@@ -97,10 +92,44 @@ def _pad(program: LifProgram, N: int) -> np.ndarray:
     return cur
 
 
+class LifEngine(BlockEngine):
+    """The LIF block on one engine: :meth:`run` a :class:`LifProgram`."""
+
+    block = "lif"
+
+    def build(self, core: dict, n: int) -> LifConfig:
+        """The core this engine simulates for ``n`` neurons of ``core`` (:func:`engine_config`)."""
+        return engine_config(core, n)
+
+    def run(self, cfg: LifConfig, cur: np.ndarray, inputs, n: int) -> EngineRun:
+        """Host currents ``cur`` ``(n_sweeps, n_neurons)`` and input spikes ``inputs`` (or
+        ``None``) on ``cfg``; the spikes of its first ``n`` neurons."""
+        t0 = time.perf_counter()
+        steps, counts, sticky, counters = self.sweeps(cfg, cur, inputs)
+        spikes = [spike_times(np.sort(steps[i]), cfg.dt_ms).tolist() for i in range(n)]
+        return EngineRun(self.name, cfg.dt_ms, cur.shape[0], spikes, counts, sticky,
+                         time.perf_counter() - t0, counters=counters)
+
+    def sweeps(self, cfg: LifConfig, cur: np.ndarray, inputs):
+        """``(spike ticks per neuron, clamp counts, sticky flags, counters)``; by default
+        through :meth:`transport` (the currents that change written for their sweep,
+        :func:`current_runs`; no clamps seen). A transport carries host currents alone: a
+        program with input spikes is refused."""
+        if inputs is not None and np.any(inputs):
+            raise ValueError(f"the {self.name} engine's transport carries no input spikes: a "
+                             f"LIF program on it has host currents alone")
+        raw = np.asarray(cfg.I.to_raw(cur), dtype=np.int64)
+        got, counters = self.stream(cfg, current_runs(raw), raw.shape[0])
+        steps: list[list[int]] = [[] for _ in range(cfg.n_neurons)]
+        for k, i in zip(got.tick.tolist(), got.neuron.tolist()):
+            steps[i].append(k)
+        return steps, {}, {}, counters
+
+
 def run_lif(engine: str, cfg: LifConfig, program: LifProgram, n: int | None = None,
-            build_dir: Path | None = None) -> LifRun:
+            build_dir: Path | None = None) -> EngineRun:
     """Run ``program`` on ``engine``; returns the spikes of the first ``n`` neurons."""
-    check_engine("lif", engine)
+    impl = engine_for("lif", engine, build_dir=build_dir)
     N = cfg.n_neurons
     n = N if n is None else n
     cur = _pad(program, N)
@@ -113,31 +142,43 @@ def run_lif(engine: str, cfg: LifConfig, program: LifProgram, n: int | None = No
                                    and np.all(cur <= cfg.I.max_value)):
         raise ValueError(f"a current lies outside the core's input format {cfg.I} "
                          f"[{cfg.I.min_value:g}, {cfg.I.max_value:g}]")
-    t0 = time.perf_counter()
-    out = RUNNERS[engine](cfg, cur, program.inputs, build_dir)
-    steps, counts, sticky = out[:3]
-    spikes = [[(k + 1) * cfg.dt_ms for k in sorted(steps[i])] for i in range(n)]
-    return EngineRun(engine, cfg.dt_ms, program.n_sweeps, spikes, counts, sticky,
-                     time.perf_counter() - t0, counters=out[3] if len(out) > 3 else {})
+    return impl.run(cfg, cur, program.inputs, n)
 
 
-def _run_fixed(cfg: LifConfig, cur: np.ndarray, inputs, build_dir=None):
-    twin = LifTwin(cfg)
-    ks, ns = twin.run_raw(np.asarray(cfg.I.to_raw(cur), dtype=np.int64), cur.shape[0], inputs)
-    steps = [[] for _ in range(cfg.n_neurons)]
-    for k, i in zip(ks.tolist(), ns.tolist()):
-        steps[i].append(k)
-    rep = twin.clamp_report()
-    return steps, rep["counts"], rep["sticky"]
+@implements("lif", "fixed", speed=3e5)
+class LifFixed(LifEngine):
+    """The bit-exact twin."""
+
+    def sweeps(self, cfg, cur, inputs):
+        twin = LifTwin(cfg)
+        ks, ns = twin.run_raw(np.asarray(cfg.I.to_raw(cur), dtype=np.int64), cur.shape[0],
+                              inputs)
+        steps = [[] for _ in range(cfg.n_neurons)]
+        for k, i in zip(ks.tolist(), ns.tolist()):
+            steps[i].append(k)
+        rep = twin.clamp_report()
+        return steps, rep["counts"], rep["sticky"], {}
 
 
-def _rtl_runner(engine: str):
-    def run(cfg: LifConfig, cur: np.ndarray, inputs, build_dir=None):
-        ops = _host_program(cfg, cur, inputs)
-        rep = _run_amaranth(cfg, ops) if engine == "amaranth" else \
-            _run_cocotb(engine, cfg, ops, build_dir)
-        return rep["spike_sweeps"], rep["clamp_counts"], rep["clamp_sticky"]
-    return run
+@implements("lif", "amaranth", speed=3.3e3)
+class LifAmaranth(LifEngine):
+    """The Amaranth simulator on the core."""
+
+    def sweeps(self, cfg, cur, inputs):
+        rep = _run_amaranth(cfg, _host_program(cfg, cur, inputs))
+        return rep["spike_sweeps"], rep["clamp_counts"], rep["clamp_sticky"], {}
+
+
+@implements("lif", "icarus", speed=3.3e3)
+@implements("lif", "verilator", speed=3.3e4)
+class LifCocotb(LifEngine):
+    """cocotb on the generated Verilog (the bench's ``engine`` test)."""
+
+    def sweeps(self, cfg, cur, inputs):
+        rep = run_bench(self.name, lif_verilog(cfg), "lif_core", "lif",
+                        {"core": cfg.to_kwargs(), "program": _host_program(cfg, cur, inputs)},
+                        self.build_dir, testcase="engine").report
+        return rep["spike_sweeps"], rep["clamp_counts"], rep["clamp_sticky"], {}
 
 
 def current_runs(raw: np.ndarray) -> dict[int, list[tuple[int, np.ndarray]]]:
@@ -153,36 +194,6 @@ def current_runs(raw: np.ndarray) -> dict[int, list[tuple[int, np.ndarray]]]:
             out[k] = [(int(r[0]), raw[k, r[0]:r[-1] + 1]) for r in np.split(idx, cuts)]
         prev = raw[k]
     return out
-
-
-def _run_board(cfg: LifConfig, cur: np.ndarray, inputs, build_dir=None):
-    """The board top (:class:`~cuneate.hdl.link.LinkedLif`) through its serial line; every
-    counter of the transport's contract checked. The link carries no clamp counts: none are
-    reported (empty), and no input spikes: a program with any is refused."""
-    from ..host.transport import check_counters
-    from ..link.engines import BoardTransport
-    if inputs is not None and np.any(inputs):
-        raise ValueError("the board engine's link carries no input spikes: a LIF program on "
-                         "it has host currents alone")
-    raw = np.asarray(cfg.I.to_raw(cur), dtype=np.int64)
-    writes = current_runs(raw)
-    tr = BoardTransport()
-    tr.open(cfg)
-    try:
-        for k, runs in writes.items():
-            for first, vals in runs:
-                tr.write_currents(k, first, vals)
-        tr.run(raw.shape[0])
-        got = tr.collect()
-        counters = tr.counters()
-        check_counters(tr, counters, sum(map(len, writes.values())), len(got))
-    finally:
-        tr.close()
-    counters |= {f"board_{k}": v for k, v in tr.figures().items()}
-    steps: list[list[int]] = [[] for _ in range(cfg.n_neurons)]
-    for k, i in zip(got.tick.tolist(), got.neuron.tolist()):
-        steps[i].append(k)
-    return steps, {}, {}, counters
 
 
 def _run_golden(cfg: LifConfig, cur: np.ndarray, inputs, build_dir=None):
@@ -226,8 +237,12 @@ def _run_golden(cfg: LifConfig, cur: np.ndarray, inputs, build_dir=None):
     return steps
 
 
-def _golden_runner(cfg: LifConfig, cur: np.ndarray, inputs, build_dir=None):
-    return _run_golden(cfg, cur, inputs), {}, {}
+@implements("lif", "golden", speed=8e5)
+class LifGolden(LifEngine):
+    """The float64 models with the exact parameters, weights and currents."""
+
+    def sweeps(self, cfg, cur, inputs):
+        return _run_golden(cfg, cur, inputs), {}, {}, {}
 
 
 def _host_program(cfg: LifConfig, cur: np.ndarray, inputs) -> list:
@@ -280,17 +295,3 @@ def _run_amaranth(cfg: LifConfig, ops) -> dict:
     simulate(dut, bench)
     return {"spike_sweeps": spikes, "clamp_counts": counts,
             "clamp_sticky": {k: bool(out["sticky"] >> i & 1) for i, k in enumerate(CLAMP_KINDS)}}
-
-
-def _run_cocotb(simulator: str, cfg: LifConfig, ops, build_dir: Path | None) -> dict:
-    from ..engines.cocotb import run_bench
-    return run_bench(simulator, lif_verilog(cfg), "lif_core", "lif",
-                     {"core": cfg.to_kwargs(), "program": ops}, build_dir,
-                     testcase="engine").report
-
-
-#: Engine name -> runner ``(cfg, currents, inputs, build_dir) -> (spike sweeps per neuron,
-#: clamp counts, sticky flags[, counters])``.
-RUNNERS = {"golden": _golden_runner, "fixed": _run_fixed, "amaranth": _rtl_runner("amaranth"),
-           "icarus": _rtl_runner("icarus"), "verilator": _rtl_runner("verilator"),
-           "board": _run_board}

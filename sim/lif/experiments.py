@@ -24,6 +24,7 @@ from ...golden import budget
 from ...golden import lif as golden
 from ...golden.metrics import victor_purpura
 from ...hdl.lif import LifConfig, LifTwin
+from ..engines.registry import estimate_seconds
 from .engines import LifProgram, engine_config, run_lif
 
 __all__ = ["SkinResult", "skin_protocol", "press_spread", "skin_grid", "skin_3x3", "QuantRow",
@@ -220,7 +221,6 @@ def quantization_estimate(n_inputs: int, n_neurons: int, n_steps: int, n_bits: i
     weight matrix and its copies (float, per format raw and rounded), the input spikes (and
     their float copy for the golden model), the spike rasters; the golden layer's products and
     each format's twin run at the registry's speed."""
-    from ..engines.registry import estimate_seconds
     n_core = max(8, n_neurons)
     w = budget.array_bytes(n_inputs, n_core)
     nbytes = (budget.BASE_BYTES + (4 + 3 * n_bits) * w

@@ -62,6 +62,7 @@ from functools import lru_cache
 import numpy as np
 
 from ...golden import lif as golden
+from ...golden.izhikevich import spike_times
 from ...hdl.lib.fixed import ROUNDINGS, FixedPointError
 from ...hdl.lif.config import DECAYS, FORMS, LifSet
 from ..sweep import (BLOCK_SAME_DT_KEYS, Point, SweepSpec, ok_row, refused, register_battery,
@@ -241,7 +242,7 @@ def golden_lif_trains(bat: LifBattery, dt_ms: float, n_steps: int,
                                            u_rest=s.v_reset,
                                            refractory_steps=s.refractory_steps, dtype=dtype)
         for j, n in enumerate(idx):
-            trains[n] = (np.flatnonzero(res.spikes[:, j]) + 1.0) * dt_ms
+            trains[n] = spike_times(np.flatnonzero(res.spikes[:, j]), dt_ms)
     return trains
 
 

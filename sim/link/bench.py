@@ -1,4 +1,4 @@
-"""cocotb bench for the generated :class:`cuneate.hdl.link.LinkedCore` Verilog.
+"""cocotb bench for the generated :class:`cuneate.hdl.link.LinkedTop` Verilog.
 
 A UART model (cocotbext-uart) plays the host: the test ``play`` sends each chunk of bytes given
 in the configuration (hex strings, each followed by a gap in clock cycles) on ``rx`` at the
@@ -6,7 +6,7 @@ link's baud rate, records every byte the device sends on ``tx`` for ``total_cycl
 reports them (hex) with the cycle counts. With ``watch_writes`` it also reports every current
 the link writes toward the core (``[neuron, raw unsigned]`` per cycle the link's ``i_wr_en`` is
 set). The caller decodes the frames and checks them against the protocol model and the
-bit-exact twin (tests/sim/test_link_cocotb.py).
+bit-exact twin (tests/sim/link/test_cocotb.py).
 """
 
 from __future__ import annotations
@@ -55,14 +55,19 @@ async def play(dut):
     writes = []
 
     async def watch_writes():
-        # the link's write port is registered: after each clock edge it holds the write the
-        # core takes at the next one; woken only when a burst of writes starts
-        link = dut.link
+        # the link's write stream is registered: after each clock edge it holds the write the
+        # core takes at the next one (a core takes every write offered); woken only when a
+        # burst of writes starts. The payload packs the address and the value
+        # (hdl.lib.payload.write_layout).
+        valid, payload = dut.link.payload__write__valid, dut.link.payload__write__payload
+        lay = cfg["write_layout"]
+        aw, vo, vw = lay["addr_bits"], lay["value_offset"], lay["value_bits"]
         while True:
-            await RisingEdge(link.i_wr_en)
+            await RisingEdge(valid)
             await ReadOnly()
-            while int(link.i_wr_en.value):
-                writes.append([int(link.i_wr_addr.value), int(link.i_wr_data.value)])
+            while int(valid.value):
+                word = int(payload.value)
+                writes.append([word & ((1 << aw) - 1), (word >> vo) & ((1 << vw) - 1)])
                 await RisingEdge(dut.clk)
                 await ReadOnly()
 

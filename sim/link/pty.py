@@ -22,15 +22,22 @@ default scene without one) until interrupted: it prints the device path to give 
 
 from __future__ import annotations
 
+import argparse
 import errno
 import fcntl
 import os
 import select
+import signal
 import threading
+import time
 import tty
+from pathlib import Path
 
 from ...hdl.link import LinkConfig
-from .engines import BOARD_CLOCKS_PER_BIT, VerilatorSerial, board_link_config
+from ..network.scene import scene_layer
+from ..scenes.afferent import build_neurons, core_config, n_driven, scene_channel_plan
+from ..scenes.scene import default_scene, example_path, load_scene
+from .engines import BOARD_CLOCKS_PER_BIT, VerilatorSerial, board_link
 
 __all__ = ["PtyBoard", "PtyBoardError", "scene_link", "main"]
 
@@ -45,16 +52,12 @@ class PtyBoard:
     Parameters
     ----------
     config
-        The core (an :class:`~cuneate.hdl.izhikevich.IzhikevichConfig`: the link is sized to
-        it as the ``board`` engine sizes it, :func:`~cuneate.sim.link.engines
-        .board_link_config`) or the link itself (a :class:`~cuneate.hdl.link.LinkConfig`; with
-        a fan-out, the board top is :class:`~cuneate.hdl.link.LinkedFanoutCore`), or a network
-        and its link, the pair :func:`~cuneate.sim.link.engines.board_network_config` or
-        :func:`~cuneate.sim.link.engines.board_fanout_network_config` gives (board top
-        :class:`~cuneate.hdl.link.LinkedNetwork`, or with a fan-out
-        :class:`~cuneate.hdl.link.LinkedFanoutNetwork`).
+        The block (a configuration or payload spec: the link is sized to it as the ``board``
+        engine sizes it, :func:`~cuneate.sim.link.engines.board_link`) or the link itself (a
+        :class:`~cuneate.hdl.link.LinkConfig`); the board top is its
+        :class:`~cuneate.hdl.link.LinkedTop`.
     clocks_per_bit
-        Clocks per UART bit on the simulated line (for a core configuration).
+        Clocks per UART bit on the simulated line (for a block's configuration).
     build_root
         Where compiled harnesses are cached (default: the ``verilator-fast`` cache).
     poll_s
@@ -80,21 +83,10 @@ class PtyBoard:
 
     def __init__(self, config, clocks_per_bit: int = BOARD_CLOCKS_PER_BIT, build_root=None,
                  poll_s: float = 0.05, reply_s: float = 0.002):
-        network = None
-        if isinstance(config, tuple):           # a network and its link
-            network, config = config
         self.lcfg = config if isinstance(config, LinkConfig) else \
-            board_link_config(config, clocks_per_bit)
+            board_link(config, clocks_per_bit)
         self.poll_s, self.reply_s = poll_s, reply_s
-        top = None
-        if network is not None:
-            from ...hdl.link import LinkedFanoutNetwork, LinkedNetwork
-            top = (LinkedNetwork if self.lcfg.fanout is None else LinkedFanoutNetwork)(
-                network, self.lcfg)
-        elif self.lcfg.fanout is not None:      # channels in, the fan-out on chip
-            from ...hdl.link import LinkedFanoutCore
-            top = LinkedFanoutCore(self.lcfg)
-        self.serial = VerilatorSerial(self.lcfg, build_root=build_root, top=top)
+        self.serial = VerilatorSerial(self.lcfg, build_root=build_root)
         self.bytes_to_device = 0
         self.bytes_to_host = 0
         self.error: BaseException | None = None
@@ -223,35 +215,22 @@ class PtyBoard:
 def scene_link(scene, clocks_per_bit: int = BOARD_CLOCKS_PER_BIT):
     """The board an afferent scene streams to, as the ``board`` engine sizes it (what
     :class:`PtyBoard` serves), holding the scene's trials or ``hardware.board_trials`` of them
-    as ``cuneate build`` does: its core's link, or with ``hardware.fanout`` the link of the
-    core fed by the scene's channel fan-out (:func:`~cuneate.sim.link.engines
-    .board_fanout_config`); with a cuneate layer the ``(network, link)`` pair of the
-    afferent -> cuneate network (behind the fan-out when the scene streams channels)."""
-    from ..network.scene import scene_layer
-    from ..scenes.afferent import build_neurons, core_config, n_driven, scene_channel_plan
-    from .engines import board_fanout_config, board_fanout_network_config, board_network_config
+    as ``cuneate build`` does: the link of its core, or with a cuneate layer of the
+    afferent -> cuneate network, behind the scene's channel fan-out with
+    ``hardware.fanout``."""
     k = scene["hardware"]["board_trials"] or n_driven(scene)[0]
     neurons = build_neurons(scene, k)
     cfg = core_config(scene, k)
     fan = scene_channel_plan(scene).config.first(len(neurons)) if scene["hardware"]["fanout"] \
         else None
     layer = scene_layer(scene, neurons, cfg)
-    if layer is not None:
-        return board_network_config(layer.network, clocks_per_bit) if fan is None else \
-            board_fanout_network_config(layer.network, fan, clocks_per_bit)
-    if fan is None:
-        return board_link_config(cfg, clocks_per_bit)
-    return board_fanout_config(cfg, fan, clocks_per_bit)
+    block = cfg if layer is None else layer.network
+    return board_link(block, clocks_per_bit, fanout=fan)
 
 
 def main(argv=None) -> int:
     """Serve the board for a scene's core (a scene file or shipped example name; the default
     scene without one) on a pty until interrupted."""
-    import argparse
-    import signal
-    import time
-    from pathlib import Path
-    from ..scenes.scene import default_scene, example_path, load_scene
     p = argparse.ArgumentParser(prog="python -m cuneate.sim.link.pty",
                                 description="serve a simulated board on a pseudo-terminal")
     p.add_argument("scene", nargs="?", default=None,

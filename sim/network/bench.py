@@ -29,28 +29,20 @@ import time
 from collections import Counter
 
 import cocotb
-from cocotb.clock import Clock
-from cocotb.triggers import FallingEdge, RisingEdge
+from cocotb.triggers import FallingEdge
 
 import numpy as np
 
 from cuneate.hdl.network import NetworkConfig
 from cuneate.sim.coincidence.scoreboard import CoincidenceChecker
-from cuneate.sim.engines.bench import bench_config, bench_report
+from cuneate.sim.engines.bench import bench_config, bench_report, start_in_reset
 from cuneate.sim.izhikevich.scoreboard import SweepChecker
 
 
 async def _start(dut):
     """Clock, reset, inputs idle, the spike stream always read."""
-    cocotb.start_soon(Clock(dut.clk, 10, unit="ns").start())
-    dut.rst.value = 1
-    for s in (dut.tick, dut.i_wr_en, dut.i_wr_addr, dut.i_wr_data):
-        s.value = 0
-    dut.out_ready.value = 1
-    await RisingEdge(dut.clk)
-    await RisingEdge(dut.clk)
-    await FallingEdge(dut.clk)
-    dut.rst.value = 0
+    await start_in_reset(dut, (dut.tick, dut.i_wr_en, dut.i_wr_addr, dut.i_wr_data,
+                               dut.clamp_clear), (dut.out_ready,))
 
 
 @cocotb.test()

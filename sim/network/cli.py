@@ -4,20 +4,19 @@ cuneate network (:mod:`cuneate.hdl.network`), with the coincidence detector's op
 
 from __future__ import annotations
 
-
 import numpy as np
 
+from ...hdl.network import SWEEP_EXTRA, NetworkConfig, generate_network, synth_resources
 from ..cli.options import (CliError, CommandGroups, add_block_commands, build_config,
-                           finite_float, nonneg_int, output_dir, positive_int, print_run,
-                           run_ticks)
+                           finite_float, generate_faced, nonneg_int, output_dir, positive_int,
+                           print_run, run_ticks)
 from ..coincidence.cli import add_coincidence_options, coincidence_kwargs, print_resources
+from ..izhikevich.cli import parse_param_set
 
 __all__ = ["register"]
 
 
 def _network_from_args(args, clock_default=None):
-    from ...hdl.network import SWEEP_EXTRA, NetworkConfig
-    from ..izhikevich.cli import parse_param_set
     det = coincidence_kwargs(args)
     det.pop("update_hz")
     clock = det.pop("clock_hz", None)
@@ -78,8 +77,9 @@ def cmd_simulate_network(args) -> int:
 
 
 def cmd_generate_network(args) -> int:
-    from ...hdl.network import generate_network, synth_resources
     cfg = _network_from_args(args, clock_default=40e6)
+    if args.face != "none":
+        return generate_faced(args, cfg, "network")
     print_resources(args, cfg, generate_network(output_dir(args.out), cfg, name=args.name),
                     synth_resources)
     print(f"afferent -> cuneate network: {cfg.n_afferents} afferents, {cfg.n_sources} sources "
@@ -104,7 +104,8 @@ def _add_network_options(p) -> None:
 def register(groups: CommandGroups) -> None:
     sn, _ = add_block_commands(groups, "network", "the afferent -> cuneate network", 100.0,
                                _add_network_options, cmd_simulate_network,
-                               cmd_generate_network, "afferent_cuneate_network", 15)
+                               cmd_generate_network, "afferent_cuneate_network", 15,
+                               faces=True)
     sn.add_argument("--current", type=finite_float, nargs="+", default=[20.0],
                     help="afferent currents (mV/ms): one value or one per afferent")
 

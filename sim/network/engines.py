@@ -12,11 +12,10 @@ engines, one spike convention for both populations (update of tick ``T`` -> ``(T
     cocotb on its Verilog (bench :mod:`cuneate.sim.network.bench`, test ``engine``; Icarus runs
     the yosys-lowered netlist);
 ``board``
-    the board top :class:`cuneate.hdl.link.LinkedNetwork` (the network behind the UART link)
-    compiled by Verilator behind a simulated serial line, driven by the host stack
-    (:class:`cuneate.sim.link.engines.BoardTransport`): the changed currents written in
-    lockstep, spikes of both populations back in SPIKES frames (cuneate neuron ``j`` as id
-    ``n_afferents + j``), every host and device counter checked.
+    the network behind the UART link (:mod:`cuneate.sim.engines.board`).
+
+:class:`NetworkEngine` is the block's engine interface; each engine implements it and
+registers itself (:func:`~cuneate.sim.engines.registry.implements`).
 """
 
 from __future__ import annotations
@@ -27,15 +26,14 @@ from pathlib import Path
 import numpy as np
 
 from ...golden import coincidence as gcun
+from ...golden import izhikevich as giz
+from ...hdl.network import AfferentCuneateNetwork, NetworkTwin, network_verilog
 from ..engines.amaranth import simulate
-from ..engines.registry import check_engine
-from ..engines.run import EngineRun, unwrap_ticks
+from ..engines.engine import BlockEngine
+from ..engines.registry import engine_for, implements
+from ..engines.run import EngineRun, times_from_pairs, unwrap_ticks
 
-__all__ = ["NetworkRun", "run_network", "current_writes", "current_runs"]
-
-#: A network run is an :class:`~cuneate.sim.engines.run.EngineRun` with the populations
-#: ``afferent`` and ``cuneate``.
-NetworkRun = EngineRun
+__all__ = ["NetworkEngine", "run_network", "current_writes", "current_runs"]
 
 
 def current_writes(cfg, currents) -> dict[int, list[tuple[int, int]]]:
@@ -54,25 +52,48 @@ def current_writes(cfg, currents) -> dict[int, list[tuple[int, int]]]:
     return writes
 
 
-def run_network(engine: str, cfg, currents, build_dir: Path | None = None) -> NetworkRun:
-    """Run the network (:class:`cuneate.hdl.network.NetworkConfig`) with host currents
-    ``(n_ticks, n_afferents)`` (mV/ms, written before each tick) on ``engine``. Spike times use
-    the golden convention for both populations (update of tick ``T`` -> ``(T + 1) dt``); the
-    golden engine runs the float64 afferents and feeds their spikes, stamped one tick later,
-    to the float64 cuneate model."""
-    from ...golden import izhikevich as giz
-    from ...hdl.network import NetworkTwin
-    check_engine("network", engine)
-    if cfg.tick_source != "external":               # the engines tick the network themselves
-        cfg = type(cfg)(**(cfg.to_kwargs() | {"tick_source": "external"}))
-    cur = np.asarray(currents, dtype=np.float64)
-    writes = current_writes(cfg, cur)
-    n, N, M, F, S = cur.shape[0], cfg.n_afferents, cfg.n_targets, cfg.first_source, \
-        cfg.n_sources
-    dt = cfg.dt_ms
-    t0 = time.perf_counter()
-    counters: dict = {}
-    if engine == "golden":
+class NetworkEngine(BlockEngine):
+    """The afferent -> cuneate network on one engine: :meth:`run` host currents."""
+
+    block = "network"
+
+    def run(self, cfg, cur: np.ndarray) -> EngineRun:
+        """Host currents ``cur`` ``(n_ticks, n_afferents)`` (mV/ms, written before each tick)
+        on ``cfg`` (external tick): both populations' spikes."""
+        n, N, M = cur.shape[0], cfg.n_afferents, cfg.n_targets
+        t0 = time.perf_counter()
+        spikes, counters = self.spikes(cfg, cur, n)
+        return EngineRun(self.name, cfg.dt_ms, n, spikes, wall_s=time.perf_counter() - t0,
+                         counters=counters, populations={"afferent": (0, N), "cuneate": (N, M)})
+
+    def spikes(self, cfg, cur: np.ndarray, n: int):
+        """``(spike times of the afferents then the cuneate neurons, counters)``: by default
+        from :meth:`pairs` on the host's writes (:func:`current_writes`)."""
+        pa, pc, counters = self.pairs(cfg, current_writes(cfg, cur), n)
+        dt = cfg.dt_ms
+        return times_from_pairs(pa, cfg.n_afferents, dt) + \
+            times_from_pairs(pc, cfg.n_targets, dt), counters
+
+    def pairs(self, cfg, writes: dict, n_ticks: int):
+        """``(afferent (tick, index) pairs, cuneate pairs, counters)``; by default through
+        :meth:`transport` (the changed currents written in lockstep, one write per run of
+        consecutive afferents; spike ids ``n_afferents + j`` are cuneate neuron ``j``)."""
+        got, counters = self.stream(cfg, {k: current_runs(w) for k, w in writes.items()},
+                                    n_ticks)
+        N = cfg.n_afferents
+        pairs = list(zip(got.tick.tolist(), got.neuron.tolist()))
+        return ([(t, i) for t, i in pairs if i < N], [(t, i - N) for t, i in pairs if i >= N],
+                counters)
+
+
+@implements("network", "golden", speed=8e5)
+class NetworkGolden(NetworkEngine):
+    """The float64 afferents feeding their spikes, stamped one tick later, to the float64
+    cuneate model."""
+
+    def spikes(self, cfg, cur, n):
+        current_writes(cfg, cur)                    # the same refusals as the other engines
+        N, F, S, dt = cfg.n_afferents, cfg.first_source, cfg.n_sources, cfg.dt_ms
         params = [cfg.afferent_param_sets[s] for s in cfg.core.neuron_sets]
         r = giz.simulate(params, cur, n_steps=n, n_neurons=N, dt_ms=dt)
         aff = [np.asarray(s, dtype=np.float64) for s in r.spikes_ms]
@@ -81,66 +102,93 @@ def run_network(engine: str, cfg, currents, build_dir: Path | None = None) -> Ne
                                   dt_ms=dt, J=1.0, weights=det.weights_real,
                                   params=[det.param_sets[s] for s in det.target_sets_],
                                   tau_rise_ms=det.tau_rise_ms, tau_decay_ms=det.tau_decay_ms)
-        cun = [np.asarray(s, dtype=np.float64) for s in g.spikes_ms]
-    else:
-        if engine == "fixed":
-            tw = NetworkTwin(cfg)
-            pa, pc = [], []
-            for k in range(n):
-                for i, raw in writes.get(k, []):
-                    tw.core.I[i] = raw
-                a, c = tw.tick()
-                pa += [(k, int(i)) for i in np.flatnonzero(a)]
-                pc += [(k, int(t)) for t in np.flatnonzero(c)]
-            counters = {"link_count": sum(1 for _, i in pa if F <= i < F + S),
-                        "merged_count": tw.det.merged}
-        elif engine == "amaranth":
-            pa, pc, counters = _run_network_amaranth(cfg, writes, n)
-        elif engine == "board":
-            pa, pc, counters = _run_network_board(cfg, writes, n)
-        else:
-            pa, pc, counters = _run_network_cocotb(engine, cfg, writes, n, build_dir)
-        aff = [np.array([(k + 1) * dt for k, i in sorted(pa) if i == j]) for j in range(N)]
-        cun = [np.array([(k + 1) * dt for k, t in sorted(pc) if t == j]) for j in range(M)]
-    return EngineRun(engine, dt, n, aff + cun, wall_s=time.perf_counter() - t0,
-                     counters=counters, populations={"afferent": (0, N), "cuneate": (N, M)})
+        return aff + [np.asarray(s, dtype=np.float64) for s in g.spikes_ms], {}
 
 
-def _run_network_amaranth(cfg, writes: dict, n_ticks: int):
-    from ...hdl.network import AfferentCuneateNetwork
-    dut = AfferentCuneateNetwork(cfg)
-    stream, out = [], {}
+@implements("network", "fixed", speed=8e4)
+class NetworkFixed(NetworkEngine):
+    """:class:`~cuneate.hdl.network.NetworkTwin`."""
 
-    async def tb(ctx):
-        ctx.set(dut.out_ready, 1)
-
-        async def step():
-            if ctx.get(dut.out_valid):
-                stream.append((ctx.get(dut.out_population), ctx.get(dut.out_tick),
-                               ctx.get(dut.out_index)))
-            await ctx.tick()
+    def pairs(self, cfg, writes, n_ticks):
+        F, S = cfg.first_source, cfg.n_sources
+        tw = NetworkTwin(cfg)
+        pa, pc = [], []
         for k in range(n_ticks):
-            while ctx.get(dut.busy):
-                await step()
             for i, raw in writes.get(k, []):
-                ctx.set(dut.i_wr_en, 1)
-                ctx.set(dut.i_wr_addr, i)
-                ctx.set(dut.i_wr_data, raw)
-                await step()
-            ctx.set(dut.i_wr_en, 0)
-            ctx.set(dut.tick, 1)
-            await step()
-            ctx.set(dut.tick, 0)
-        while ctx.get(dut.busy) or ctx.get(dut.out_valid):
-            await step()
-        for _ in range(8):
-            await step()
-        for k in ("tick_count", "link_count", "merged_count", "cuneate_overflow_count",
-                  "afferent_overflow", "overrun_count"):
-            out[k] = ctx.get(getattr(dut, k))
+                tw.core.I[i] = raw
+            a, c = tw.tick()
+            pa += [(k, int(i)) for i in np.flatnonzero(a)]
+            pc += [(k, int(t)) for t in np.flatnonzero(c)]
+        return pa, pc, {"link_count": sum(1 for _, i in pa if F <= i < F + S),
+                        "merged_count": tw.det.merged}
 
-    simulate(dut, tb, cfg.clock_hz)
-    return _split_stream(cfg, stream, n_ticks) + (out,)
+
+@implements("network", "amaranth", speed=5e3)
+class NetworkAmaranth(NetworkEngine):
+    """The Amaranth simulator on :class:`~cuneate.hdl.network.AfferentCuneateNetwork`."""
+
+    def pairs(self, cfg, writes, n_ticks):
+        dut = AfferentCuneateNetwork(cfg)
+        stream, out = [], {}
+
+        async def tb(ctx):
+            ctx.set(dut.out_ready, 1)
+
+            async def step():
+                if ctx.get(dut.out_valid):
+                    stream.append((ctx.get(dut.out_population), ctx.get(dut.out_tick),
+                                   ctx.get(dut.out_index)))
+                await ctx.tick()
+            for k in range(n_ticks):
+                while ctx.get(dut.busy):
+                    await step()
+                for i, raw in writes.get(k, []):
+                    ctx.set(dut.i_wr_en, 1)
+                    ctx.set(dut.i_wr_addr, i)
+                    ctx.set(dut.i_wr_data, raw)
+                    await step()
+                ctx.set(dut.i_wr_en, 0)
+                ctx.set(dut.tick, 1)
+                await step()
+                ctx.set(dut.tick, 0)
+            while ctx.get(dut.busy) or ctx.get(dut.out_valid):
+                await step()
+            for _ in range(8):
+                await step()
+            for k in ("tick_count", "link_count", "merged_count", "cuneate_overflow_count",
+                      "afferent_overflow", "overrun_count"):
+                out[k] = ctx.get(getattr(dut, k))
+
+        simulate(dut, tb, cfg.clock_hz)
+        return _split_stream(cfg, stream, n_ticks) + (out,)
+
+
+@implements("network", "icarus", speed=5e3)
+@implements("network", "verilator", speed=5e4)
+class NetworkCocotb(NetworkEngine):
+    """cocotb on the network's Verilog (Icarus: the yosys-lowered netlist)."""
+
+    def pairs(self, cfg, writes, n_ticks):
+        rep = self.engine_bench(lambda low: network_verilog(cfg, lowered=low),
+                                "afferent_cuneate_network",
+                                {"network": cfg.to_kwargs(), "ticks": n_ticks,
+                                 "writes": {str(k): v for k, v in writes.items()}})
+        pa, pc = _split_stream(cfg, [tuple(x) for x in rep["stream"]], n_ticks)
+        return pa, pc, rep["counters"]
+
+
+def run_network(engine: str, cfg, currents, build_dir: Path | None = None) -> EngineRun:
+    """Run the network (:class:`cuneate.hdl.network.NetworkConfig`) with host currents
+    ``(n_ticks, n_afferents)`` (mV/ms, written before each tick) on ``engine``: an
+    :class:`~cuneate.sim.engines.run.EngineRun` with the populations ``afferent`` and
+    ``cuneate``. Spike times use
+    the golden convention for both populations (update of tick ``T`` -> ``(T + 1) dt``); the
+    golden engine runs the float64 afferents and feeds their spikes, stamped one tick later,
+    to the float64 cuneate model."""
+    impl = engine_for("network", engine, build_dir=build_dir)
+    if cfg.tick_source != "external":               # the engines tick the network themselves
+        cfg = type(cfg)(**(cfg.to_kwargs() | {"tick_source": "external"}))
+    return impl.run(cfg, np.asarray(currents, dtype=np.float64))
 
 
 def current_runs(writes: list[tuple[int, int]]) -> list[tuple[int, list[int]]]:
@@ -155,27 +203,6 @@ def current_runs(writes: list[tuple[int, int]]) -> list[tuple[int, list[int]]]:
     return runs
 
 
-def _run_network_board(cfg, writes: dict, n_ticks: int):
-    from ..link.engines import BoardTransport
-    tr = BoardTransport()
-    tr.open(cfg)
-    try:
-        for k in sorted(writes):
-            for first, raw in current_runs(writes[k]):
-                tr.write_currents(k, first, raw)
-        tr.run(n_ticks)
-        got = tr.collect()
-        counters = tr.check()
-    finally:
-        tr.close()
-    counters |= {f"board_{k}": v for k, v in tr.figures().items()}
-    N = cfg.n_afferents
-    pairs = list(zip(got.tick.tolist(), got.neuron.tolist()))
-    pa = [(t, i) for t, i in pairs if i < N]
-    pc = [(t, i - N) for t, i in pairs if i >= N]
-    return pa, pc, counters
-
-
 def _split_stream(cfg, stream, n_ticks):
     pa = [(t, i) for p, t, i in stream if p == 0]
     pc = [(t, i) for p, t, i in stream if p == 1]
@@ -183,15 +210,3 @@ def _split_stream(cfg, stream, n_ticks):
     pa = list(zip(unwrap_ticks([t for t, _ in pa], w), [i for _, i in pa]))
     pc = list(zip(unwrap_ticks([t for t, _ in pc], w), [i for _, i in pc]))
     return pa, pc
-
-
-def _run_network_cocotb(simulator: str, cfg, writes: dict, n_ticks: int,
-                        build_dir: Path | None):
-    from ...hdl.network import network_verilog
-    from ..engines.cocotb import run_engine_bench
-    rep = run_engine_bench(simulator, lambda low: network_verilog(cfg, lowered=low),
-                           "afferent_cuneate_network", "network",
-                           {"network": cfg.to_kwargs(), "ticks": n_ticks,
-                            "writes": {str(k): v for k, v in writes.items()}}, build_dir)
-    pa, pc = _split_stream(cfg, [tuple(x) for x in rep["stream"]], n_ticks)
-    return pa, pc, rep["counters"]

@@ -14,7 +14,8 @@ its own layer.
 The layer is the detector of the on-chip afferent -> cuneate network
 (:class:`~cuneate.hdl.network.NetworkConfig`): every afferent of the scene's core is a source,
 targets run trial-major, and a weight of 0 disconnects a pair (a target outside a source's
-trial or field). Engines (:data:`LAYER_ENGINES`):
+trial or field). Engines (those whose Izhikevich implementation runs the layer,
+:func:`layer_engines`):
 
 ``golden``
     the float64 cuneate model (:func:`cuneate.golden.coincidence.simulate_cuneate`) on the
@@ -38,15 +39,24 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ...golden.izhikevich import spike_ticks, to_params
+from ...hdl.coincidence import CoincidenceConfig
 from ...hdl.coincidence.config import CYCLES_PER_TARGET_EXTRA
+from ...hdl.lib.config import ConfigError
 from ...hdl.network import NetworkConfig
 from ...hdl.network.config import SWEEP_EXTRA
+from ..coincidence.engines import run_coincidence
+from ..engines.registry import (block_engines, estimate_seconds, implementation,
+                                refuse_engines_outside)
 
-__all__ = ["CuneateLayer", "LAYER_ENGINES", "validate_layer", "scene_layer", "layer_network",
+__all__ = ["CuneateLayer", "layer_engines", "validate_layer", "scene_layer", "layer_network",
            "layer_config", "run_layer", "check_layer_engines", "layer_estimate"]
 
-#: the engines that run an afferent scene's cuneate layer
-LAYER_ENGINES = ("golden", "fixed", "board")
+def layer_engines() -> tuple[str, ...]:
+    """The engines that run an afferent scene's cuneate layer: on the host after the
+    afferents (golden, fixed: :func:`run_layer`) or on chip (board)."""
+    return tuple(e for e in block_engines("izhikevich")
+                 if implementation("izhikevich", e).layer)
 
 
 def validate_layer(V, sections: dict, pops: list, projs: list) -> None:
@@ -67,7 +77,6 @@ def validate_layer(V, sections: dict, pops: list, projs: list) -> None:
         V.err(f"{key}.encoding", "a cuneate population is driven by spikes (encoding = "
                                  "\"spikes\")")
     c["encoding"], c["preset"] = "spikes", c["preset"] or "RS"
-    from ...golden.izhikevich import to_params
     try:
         to_params(c["preset"])
     except ValueError as exc:
@@ -112,10 +121,11 @@ def validate_layer(V, sections: dict, pops: list, projs: list) -> None:
     if missing:
         V.err("projection", f"the cuneate layer needs a projection from {missing[0]!r} to "
                             f"{c['name']!r} (its weight and delays)")
+    ok = layer_engines()
     for i, e in enumerate(sections["run"]["engines"]):
-        if e not in LAYER_ENGINES:
+        if e not in ok:
             V.err(f"run.engines[{i}]", f"engine {e!r} does not run the cuneate layer (engines "
-                                       f"that do: {', '.join(LAYER_ENGINES)})")
+                                       f"that do: {', '.join(ok)})")
     # one trial's detector, as every trial's: each neuron listens to some afferent, and the
     # detector holds its weights, delays and tick (as it is refused on chip)
     by_name = {p["name"]: p for p in pops}
@@ -134,7 +144,6 @@ def validate_layer(V, sections: dict, pops: list, projs: list) -> None:
             V.err(f"population[{ci}].gratings", f"cuneate neuron {j}'s field (gratings "
                                                 f"{', '.join(map(str, f))}) holds none of its "
                                                 f"inputs' afferents")
-    from ...hdl.lib.config import ConfigError
     try:
         layer_config(delays, weights, c["preset"], sections["hardware"]["update_hz"],
                      sections["hardware"]["rounding"])
@@ -186,7 +195,6 @@ def layer_config(delays, weights, preset: str, update_hz: float, rounding: str =
     (ticks) and ``weights`` (mV/ms), ``(n_targets, n_sources)``, targets of Izhikevich set
     ``preset``, at ``update_hz`` and a clock that holds a tick's work: its refusals are the
     layer's (validation builds one trial's)."""
-    from ...hdl.coincidence import CoincidenceConfig
     d, w = np.asarray(delays, dtype=np.int64), np.asarray(weights, dtype=np.float64)
     M, N = w.shape
     det = {"n_sources": N, "n_targets": M, "delays_ticks": d.tolist(), "weights": w.tolist(),
@@ -266,7 +274,6 @@ def layer_estimate(scene, trials: int, n_sources: int, n_ticks: float,
     cn = next((p for p in scene.populations if p["model"] == "cuneate"), None)
     if cn is None:
         return 0.0, 0.0
-    from ..engines.registry import estimate_seconds
     pairs = float(cn["size"]) * trials * n_sources
     synapses = float(trials) * sum(p["size"] for p in scene.populations
                                    if p["name"] in cn["inputs"])
@@ -276,53 +283,29 @@ def layer_estimate(scene, trials: int, n_sources: int, n_ticks: float,
             seconds += synapses * n_ticks / 2e7
         elif e == "fixed":
             seconds += pairs * n_ticks / 1e8
-        elif e == "board":                          # the detector's cycles, on the board's clock
+        elif implementation("izhikevich", e).layer == "chip":  # the detector's cycles on chip
             seconds += estimate_seconds("izhikevich", e, pairs * n_ticks)
     return 150.0 * pairs, seconds
 
 
 def check_layer_engines(scene, engines) -> None:
     """Refuse (one line) an engine of ``engines`` that does not run the scene's cuneate layer."""
-    bad = [e for e in engines if e not in LAYER_ENGINES]
-    if bad and any(p["model"] == "cuneate" for p in scene.populations):
-        raise ValueError(f"population model \"cuneate\": engine {bad[0]!r} does not run the "
-                         f"cuneate layer (engines that do: {', '.join(LAYER_ENGINES)})")
+    if not any(p["model"] == "cuneate" for p in scene.populations):
+        return
+    refuse_engines_outside(engines, layer_engines(), 'population model "cuneate"', "cuneate layer")
 
 
 def run_layer(engine: str, layer: CuneateLayer, afferent_ms: list, n_ticks: int):
-    """The layer's spike trains (ms, one array per target) and counters on ``engine``
-    (``golden`` or ``fixed``) from that engine's afferent trains ``afferent_ms`` (ms, golden
-    convention: the update of tick ``k`` at ``(k + 1) dt``)."""
+    """The layer's spike trains (ms, one array per target) and counters on ``engine``'s
+    coincidence detector (:func:`~cuneate.sim.coincidence.engines.run_coincidence`: golden, the
+    float64 model; fixed, the twin, bit for bit the network's) from that engine's afferent
+    trains ``afferent_ms`` (ms, golden convention: the update of tick ``k`` at ``(k + 1) dt``),
+    each spike stamped as the network stamps it (the update of sweep ``k`` at detector tick
+    ``k + 1``)."""
     det = layer.network.det
-    dt = det.dt_ms
-    N = layer.weights.shape[1]
-    aff = [np.asarray(s, dtype=np.float64) for s in afferent_ms]
-    aff += [np.zeros(0)] * (N - len(aff))
-    if engine == "golden":
-        from ...golden import coincidence as gcun
-        from ...golden import izhikevich as giz
-        # each target's drive from its own synapses (direct summation), then every target
-        # integrated at once: simulate_cuneate's scheme, without the disconnected pairs
-        grid = np.arange(n_ticks) * dt
-        drive = np.zeros((n_ticks, layer.n_targets))
-        for k in range(layer.n_targets):
-            src = np.flatnonzero(layer.weights[k])
-            if src.size:
-                drive[:, k] = gcun.psp_drive([aff[s] for s in src], layer.delays[k, src] * dt,
-                                             grid, J=1.0, weights=layer.weights[k, src],
-                                             tau_rise_ms=det.tau_rise_ms,
-                                             tau_decay_ms=det.tau_decay_ms)[:, 0]
-        r = giz.simulate([det.param_sets[s] for s in det.target_sets_], drive, n_steps=n_ticks,
-                         n_neurons=layer.n_targets, dt_ms=dt, scheme="euler")
-        out = [np.asarray(s, dtype=np.float64) for s in r.spikes_ms]
-        return out, {"spikes": int(sum(len(s) for s in out))}
-    if engine != "fixed":
-        raise ValueError(f"the cuneate layer runs on golden and fixed here, on board on chip; "
-                         f"not on {engine!r}")
-    from ...hdl.coincidence import CoincidenceTwin
-    tw = CoincidenceTwin(det)
-    # the update of sweep k (spike at (k + 1) dt) is stamped with detector tick k + 1
-    out = tw.run([np.rint(s / dt).astype(np.int64) for s in aff], n_ticks)
-    counters = {"spikes": int(sum(len(s) for s in out)), "events": tw.events,
-                "merged": tw.merged} | {f"clamp_{k}": v for k, v in tw.clamp_counts.items()}
-    return out, counters
+    ticks = [spike_ticks(s, det.dt_ms) + 1 for s in afferent_ms]
+    ticks += [np.zeros(0, dtype=np.int64)] * (det.n_sources - len(ticks))
+    run = run_coincidence(engine, det, ticks, n_ticks)
+    out = [np.asarray(s, dtype=np.float64) for s in run.spikes_ms]
+    return out, {"spikes": int(run.counts().sum()), "events": run.counters["events"],
+                 "merged": run.merged} | {f"clamp_{k}": v for k, v in run.clamp_counts.items()}

@@ -182,7 +182,7 @@ def _budget(args, mapped, steps: int) -> dict:
 
 
 def cmd_simulate(args) -> int:
-    from .engines import run_network
+    from .engines import run_dict, run_network
     from .graph import NirError
     mapped = mapped_from_args(args, args.graph)
     if args.input:
@@ -197,7 +197,7 @@ def cmd_simulate(args) -> int:
         run = run_network(args.engine, mapped, x, build_dir=build)
     except NirError as exc:
         raise CliError(f"cuneate simulate nir: {exc}") from None
-    out = run.to_dict() | {"graph": args.graph, "scheme": mapped.scheme}
+    out = run_dict(run, mapped) | {"graph": args.graph, "scheme": mapped.scheme}
     if args.json:
         print(json.dumps(out, default=float))
         return 0
@@ -228,9 +228,8 @@ def cmd_spiketouch(args) -> int:
 def register(groups: CommandGroups) -> None:
     s = groups.simulate.add_parser("nir", help="a NIR graph on the LIF cores")
     s.add_argument("graph", metavar="GRAPH.nir")
-    engines = engine_choices("nir")
-    s.add_argument("--engine", choices=engines, default="golden",
-                   help=f"{', '.join(engines)} (default golden)")
+    s.add_argument("--engine", choices=engine_choices("nir"), metavar="ENGINE", default="golden",
+                   help="%(choices)s (default golden)")
     s.add_argument("--input", default=None, metavar="FILE",
                    help="input spikes or values (steps x inputs): .npy, .npz or .csv")
     s.add_argument("--steps", type=positive_int, default=200,

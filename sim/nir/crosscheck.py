@@ -35,6 +35,11 @@ from pathlib import Path
 
 import numpy as np
 
+from ...golden.nir import delay_inputs
+from .engines import run_network
+from .graph import layers_of
+from .mapping import map_graph
+
 __all__ = ["peer_python", "run_peer", "crosscheck_graph", "compare", "TOLERANCE"]
 
 #: per-neuron |count difference| allowed against snnTorch: the measured worst cases with margin
@@ -107,7 +112,6 @@ def _for_peer(graph, x: np.ndarray, dt: float):
     """snnTorch's graph (the input Delay removed) and its input (the Delay applied)."""
     import nir
 
-    from ...golden.nir import delay_inputs
     nodes = dict(graph.nodes)
     edges = list(graph.edges)
     for k, v in list(nodes.items()):
@@ -128,9 +132,6 @@ def compare(py: str, graph, x: np.ndarray, engines=("golden",), schemes=("euler"
     """Spike counts per output neuron on cuneate's ``engines`` (each ``scheme``) against
     snnTorch's. Returns per pair the counts, max and mean |difference|, and whether it is
     within :data:`TOLERANCE` (when a tolerance is stated for the pair)."""
-    from .engines import run_network
-    from .graph import layers_of
-    from .mapping import map_graph
     dt = 1.0 / update_hz
     chain = layers_of(graph)
     shift = len(chain.layers) - 1

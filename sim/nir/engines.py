@@ -17,12 +17,16 @@ layer's spikes ``(steps, n_outputs)`` (update ``k`` -> ``(k + 1) dt``) or, for a
 
 The hardware engines run like a host: the biases written once, then per step the input spikes
 as events and a tick, the network holding the tick until its cores have settled.
+
+A run is an :class:`~cuneate.sim.engines.run.EngineRun`: the last layer's spike times, or a
+readout's membrane in ``values`` (``v``). :class:`NirEngine` is the block's engine interface;
+each engine implements it and registers itself
+(:func:`~cuneate.sim.engines.registry.implements`).
 """
 
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -30,40 +34,28 @@ import numpy as np
 from ...golden.nir import simulate_layers
 from ...hdl.nir import NirNetwork, NirNetworkTwin, nir_network_verilog
 from ..engines.amaranth import simulate, spikes_then_tick
-from ..engines.registry import check_engine
-from ..engines.run import TickUnwrap
+from ..engines.cocotb import run_bench
+from ..engines.engine import BlockEngine
+from ..engines.registry import engine_for, implements
+from ..engines.run import EngineRun, TickUnwrap, spike_times
 from .graph import NirError
 from .mapping import MappedNetwork
 
-__all__ = ["NirRun", "run_network", "input_spikes", "host_program"]
+__all__ = ["NirEngine", "run_network", "input_spikes", "host_program", "run_dict"]
 
 
-@dataclass
-class NirRun:
-    """One engine's run: ``spikes`` (steps, n_out) bool or None, ``v`` (steps, n_out) or None,
-    ``clamps`` (counts per kind and layer, hardware engines), wall time."""
-
-    engine: str
-    dt_s: float
-    steps: int
-    spikes: np.ndarray | None
-    v: np.ndarray | None
-    clamps: dict
-    wall_s: float
-
-    def counts(self) -> np.ndarray:
-        return self.spikes.sum(axis=0) if self.spikes is not None else np.zeros(0, np.int64)
-
-    def to_dict(self) -> dict:
-        d = {"engine": self.engine, "dt_s": self.dt_s, "steps": self.steps,
-             "clamps": self.clamps, "wall_s": self.wall_s}
-        if self.spikes is not None:
-            d["spike_counts"] = self.counts().tolist()
-            d["spikes_s"] = [((np.flatnonzero(self.spikes[:, i]) + 1) * self.dt_s).tolist()
-                             for i in range(self.spikes.shape[1])]
-        if self.v is not None:
-            d["v_last"] = self.v[-1].tolist()
-        return d
+def run_dict(run: EngineRun, mapped: MappedNetwork) -> dict:
+    """A run as ``simulate nir --json`` prints it: times in seconds, spike counts, the
+    readout's last membrane."""
+    d = {"engine": run.engine, "dt_s": mapped.dt, "steps": run.n_ticks,
+         "clamps": run.clamp_counts, "wall_s": run.wall_s}
+    if run.spikes_ms is not None:
+        d["spike_counts"] = run.counts().tolist()
+        d["spikes_s"] = [spike_times(run.spike_ticks(i), mapped.dt).tolist()
+                         for i in range(len(run.spikes_ms))]
+    if run.values is not None:
+        d["v_last"] = run.values[-1].tolist()
+    return d
 
 
 def input_spikes(mapped: MappedNetwork, inputs) -> np.ndarray:
@@ -83,47 +75,93 @@ def input_spikes(mapped: MappedNetwork, inputs) -> np.ndarray:
     return x.astype(bool)
 
 
+class NirEngine(BlockEngine):
+    """A NIR network on one engine: :meth:`run` the first layer's input spikes."""
+
+    block = "nir"
+
+    def run(self, mapped: MappedNetwork, x: np.ndarray, scoreboard: bool = False) -> EngineRun:
+        """Input spikes ``x`` ``(steps, n_inputs)``: the last layer's spikes, or a readout's
+        membrane."""
+        t0 = time.perf_counter()
+        raster, v, clamps = self.outputs(mapped, x, scoreboard)
+        dt_ms = mapped.dt * 1e3
+        spikes = None if raster is None else \
+            [spike_times(np.flatnonzero(raster[:, i]), dt_ms) for i in range(raster.shape[1])]
+        return EngineRun(self.name, dt_ms, int(x.shape[0]), spikes, clamps, {},
+                         time.perf_counter() - t0, values=v)
+
+    def outputs(self, mapped: MappedNetwork, x: np.ndarray, scoreboard: bool):
+        """``(spike raster (steps, n_out) or None, readout membrane or None, clamps)``."""
+        raise NotImplementedError
+
+
+@implements("nir", "golden", speed=2e6)
+class NirGolden(NirEngine):
+    """NIR's equations in float64 on the grid, unquantized."""
+
+    def outputs(self, mapped, x, scoreboard):
+        res = simulate_layers(mapped.chain.layers, x.astype(np.float64), mapped.dt,
+                              mapped.scheme)[-1]
+        return res.spikes, (res.v if mapped.config.readout else None), {}
+
+
+@implements("nir", "fixed", speed=2e5)
+class NirFixed(NirEngine):
+    """The bit-exact chain of LIF twins."""
+
+    def outputs(self, mapped, x, scoreboard):
+        run = NirNetworkTwin(mapped.config, mapped.currents_raw).run(x)
+        readout = mapped.config.readout
+        return (None if readout else run.spikes[-1][:, :mapped.n_outputs],
+                _v_float(mapped, run.v_raw) if readout else None,
+                {f"layer{i}": c["counts"] for i, c in enumerate(run.clamps)})
+
+
+class _NirHost(NirEngine):
+    """The hardware engines: a host program (:func:`host_program`) on the network."""
+
+    def outputs(self, mapped, x, scoreboard):
+        n = mapped.n_outputs
+        rep = self.report(mapped, host_program(mapped, x), scoreboard)
+        if mapped.config.readout:
+            v, spikes = _v_float(mapped, np.asarray(rep["out_v"], dtype=np.int64)), None
+        else:
+            v, spikes = None, np.zeros((x.shape[0], n), dtype=bool)
+            for i, k in rep["out_spikes"]:
+                if i < n and k < x.shape[0]:
+                    spikes[k, i] = True
+        return spikes, v, (rep if scoreboard else rep.get("clamps", {}))
+
+    def report(self, mapped, prog: dict, scoreboard: bool) -> dict:
+        raise NotImplementedError
+
+
+@implements("nir", "amaranth", speed=3e3)
+class NirAmaranth(_NirHost):
+    """The Amaranth simulator on :class:`~cuneate.hdl.nir.NirNetwork`."""
+
+    def report(self, mapped, prog, scoreboard):
+        return _run_amaranth(mapped, prog)
+
+
+@implements("nir", "icarus", speed=3e3)
+@implements("nir", "verilator", speed=3e4)
+class NirCocotb(_NirHost):
+    """cocotb on the generated Verilog; ``scoreboard``: the per-cycle scoreboard bench."""
+
+    def report(self, mapped, prog, scoreboard):
+        return run_bench(self.name, nir_network_verilog(mapped.config), "nir_network", "nir",
+                         prog | {"network": mapped.config.to_kwargs()}, self.build_dir,
+                         testcase="scoreboard" if scoreboard else "engine").report
+
+
 def run_network(engine: str, mapped: MappedNetwork, inputs, build_dir: Path | None = None,
-                scoreboard: bool = False) -> NirRun:
+                scoreboard: bool = False) -> EngineRun:
     """Run ``inputs`` on ``engine`` (see the module docstring). ``scoreboard`` (icarus,
     verilator): the per-cycle scoreboard bench instead of the plain engine bench."""
-    check_engine("nir", engine)
-    x = input_spikes(mapped, inputs)
-    t0 = time.perf_counter()
-    n = mapped.n_outputs
-    readout = mapped.config.readout
-    clamps: dict = {}
-    if engine == "golden":
-        src = x.astype(np.float64)
-        res = simulate_layers(mapped.chain.layers, src, mapped.dt, mapped.scheme)[-1]
-        spikes, v = res.spikes, (res.v if readout else None)
-    elif engine == "fixed":
-        run = NirNetworkTwin(mapped.config, mapped.currents_raw).run(x)
-        spikes = None if readout else run.spikes[-1][:, :n]
-        v = _v_float(mapped, run.v_raw) if readout else None
-        clamps = {f"layer{i}": c["counts"] for i, c in enumerate(run.clamps)}
-    else:
-        prog = host_program(mapped, x)
-        if engine == "amaranth":
-            rep = _run_amaranth(mapped, prog)
-        else:
-            from ..engines.cocotb import run_bench
-            rep = run_bench(engine, nir_network_verilog(mapped.config), "nir_network", "nir",
-                            prog | {"network": mapped.config.to_kwargs()}, build_dir,
-                            testcase="scoreboard" if scoreboard else "engine").report
-        spikes = np.zeros((x.shape[0], n), dtype=bool)
-        for i, k in rep["out_spikes"]:
-            if i < n and k < x.shape[0]:
-                spikes[k, i] = True
-        v = None
-        if readout:
-            v = _v_float(mapped, np.asarray(rep["out_v"], dtype=np.int64))
-            spikes = None
-        clamps = rep.get("clamps", {})
-        if scoreboard:
-            clamps = rep
-    return NirRun(engine, mapped.dt, int(x.shape[0]), spikes, v, clamps,
-                  time.perf_counter() - t0)
+    impl = engine_for("nir", engine, build_dir=build_dir)
+    return impl.run(mapped, input_spikes(mapped, inputs), scoreboard)
 
 
 def _v_float(mapped: MappedNetwork, v_raw) -> np.ndarray:

@@ -20,6 +20,16 @@ neurons, which NIR cannot express: they travel in the Output node's metadata
 ``cuneate_update_hz``): a documented extension that other tools skip, so they compute the PSP
 currents (correctly) and stop there.
 
+**Learning** (the learning scenes' layer, :mod:`cuneate.hdl.plasticity`, with its learned
+weights): ``Input`` (the S afferent spike trains) -> ``Linear`` (``M x S``: each CN's weight of
+each afferent, mV/ms, 0 where it has no synapse) -> ``LI`` (``tau`` = ``tau_syn``, ``r = tau``:
+a spike of weight ``w`` starts the excitation at ``w``) -> ``Output``, and beside it the lumped
+interneuron: ``Input`` -> ``Linear`` (``1 x S`` of ones) -> ``LI`` (``tau_syn``) -> ``Scale``
+(``-g``, to every CN) -> ``Output``: the CNs' net drive ``E - g H``. The Izhikevich CNs and the
+AIDP rule travel in the Output node's metadata (``cuneate_extension = "izhikevich+aidp"``,
+``cuneate_izhikevich``, ``cuneate_aidp`` and ``cuneate_layer`` as JSON, ``cuneate_sources``: each
+synapse's afferent, so a learned weight of 0 stays a synapse).
+
 The first layer's **Izhikevich afferents** are refused (:func:`refuse_afferents`): NIR has no
 Izhikevich node and no other node approximates one.
 
@@ -36,7 +46,7 @@ import numpy as np
 from .graph import NirError
 
 __all__ = ["skin_graph", "skin_from_graph", "ridge_graph", "ridge_from_graph",
-           "refuse_afferents", "scene_graph"]
+           "learning_graph", "learning_from_graph", "refuse_afferents", "scene_graph"]
 
 EXT = "cuneate_extension"
 
@@ -160,9 +170,82 @@ def ridge_from_graph(graph) -> dict:
             "update_hz": hz}
 
 
+def learning_graph(cfg, weights=None):
+    """The learning layer ``cfg`` (:class:`~cuneate.hdl.plasticity.PlasticityConfig`) with
+    ``weights`` (``(M, K)`` mV/ms; default its initial ones) as a NIR graph (see the module
+    docstring)."""
+    import nir
+    M, K, S = cfg.n_targets, cfg.n_synapses, cfg.n_sources
+    w = cfg.weights_real if weights is None else np.asarray(weights, dtype=np.float64)
+    if w.shape != (M, K):
+        raise NirError(f"learned weights must be ({M}, {K}), got {w.shape}")
+    full = np.zeros((M, S))
+    for j in range(M):
+        full[j, cfg.src[j]] = w[j]
+    tau = cfg.tau_syn_ms / 1000.0
+    kw = cfg.to_kwargs()
+    layer = {k: kw[k] for k in ("tau_syn_ms", "g_inh", "current_limit", "update_hz",
+                                "clock_hz", "weight_bits", "trace_frac_bits",
+                                "drive_int_bits", "drive_frac_bits", "sigmoid_bits",
+                                "operand_width", "rounding", "target_sets")}
+    nodes = {"input": nir.Input(input_type=np.array([S])),
+             "synapses": nir.Linear(weight=full),
+             "excitation": nir.LI(tau=np.full(M, tau), r=np.full(M, tau), v_leak=np.zeros(M)),
+             "interneuron_in": nir.Linear(weight=np.ones((1, S))),
+             "interneuron": nir.LI(tau=np.full(1, tau), r=np.full(1, tau),
+                                   v_leak=np.zeros(1)),
+             "inhibition": nir.Linear(weight=np.full((M, 1), -float(cfg.g_inh))),
+             "output": nir.Output(output_type=np.array([M]), metadata={
+                 EXT: "izhikevich+aidp", "cuneate_izhikevich": json.dumps(kw["param_sets"]),
+                 "cuneate_aidp": json.dumps(kw["rule"]), "cuneate_layer": json.dumps(layer),
+                 "cuneate_sources": np.asarray(cfg.src, dtype=np.int64)})}
+    edges = [("input", "synapses"), ("synapses", "excitation"), ("excitation", "output"),
+             ("input", "interneuron_in"), ("interneuron_in", "interneuron"),
+             ("interneuron", "inhibition"), ("inhibition", "output")]
+    return nir.NIRGraph(nodes=nodes, edges=edges)
+
+
+def learning_from_graph(graph) -> dict:
+    """The learning layer's keywords (:meth:`~cuneate.hdl.plasticity.PlasticityConfig
+    .from_kwargs`: sources, weights, rule, the layer's constants) of a graph written by
+    :func:`learning_graph`; the weights are the graph's (learned) ones."""
+    nodes = graph.nodes
+    for k in ("synapses", "excitation", "interneuron", "inhibition", "output"):
+        if k not in nodes:
+            raise NirError(f"not a cuneate learning graph: no node {k!r}")
+    meta = dict(nodes["output"].metadata or {})
+    ext = meta.get(EXT)
+    ext = ext.decode() if isinstance(ext, bytes) else ext
+    if ext != "izhikevich+aidp":
+        raise NirError("node 'output' (Output): no cuneate Izhikevich+AIDP extension in its "
+                       "metadata (the CNs' parameters and the learning rule)")
+
+    def js(key):
+        x = meta[key]
+        return json.loads(x.decode() if isinstance(x, bytes) else str(x))
+    src = np.asarray(meta["cuneate_sources"]).astype(np.int64)
+    full = np.asarray(nodes["synapses"].weight, dtype=np.float64)
+    M, S = full.shape
+    if src.ndim != 2 or src.shape[0] != M or src.min() < 0 or src.max() >= S:
+        raise NirError("node 'output': cuneate_sources does not fit node 'synapses' "
+                       f"({M} x {S})")
+    mask = np.zeros_like(full, dtype=bool)
+    for j in range(M):
+        mask[j, src[j]] = True
+    if np.any(full[~mask] != 0):
+        raise NirError("node 'synapses' (Linear): a weight where no synapse is "
+                       "(cuneate_sources)")
+    layer = js("cuneate_layer")
+    return {"n_sources": S, "sources": src.tolist(),
+            "weights": [full[j, src[j]].tolist() for j in range(M)], "rule": js("cuneate_aidp"),
+            "param_sets": js("cuneate_izhikevich")} | layer
+
+
 def scene_graph(scene):
     """The NIR graph of a scene's second layer: a skin scene's LIF layer, a ridge scene's
-    coincidence detector; afferent scenes are refused (:func:`refuse_afferents`)."""
+    coincidence detector, a learning scene's layer with its initial weights (its report writes
+    the learned ones, ``learned_<engine>.nir``); afferent scenes are refused
+    (:func:`refuse_afferents`)."""
     kind = scene.kind
     if kind == "skin":
         from ..scenes.skin import LIF_PRESETS
@@ -173,6 +256,10 @@ def scene_graph(scene):
         lif = {"tau_m_ms": glif.TAU_M_EXC_MS, "v_th": glif.V_TH, "v_reset": glif.V_RESET,
                "v_rest": glif.V_REST, "t_ref_ms": glif.T_REF_EXC_MS} | LIF_PRESETS[p["preset"]]
         return skin_graph(rows * cols, fe["force_offset_mV"], fe["force_gain_mV_per_N"], lif)
+    if kind == "learning":               # the layer before learning (a run writes the learnt)
+        from ..plasticity.protocol import layer_config
+        n_aff = len(scene.populations[0]["gratings"]) * len(scene["learning"]["afferent_gains"])
+        return learning_graph(layer_config(scene, n_aff))
     if kind == "ridge":
         from ..coincidence.experiments import detector_config
         from ..scenes.ridge import spec_of

@@ -37,6 +37,7 @@ import numpy as np
 from ...golden.nir import LEAKY, SPIKING, SYNAPTIC, step_constants
 from ...hdl.lib.config import ConfigError
 from ...hdl.lib.fixed import FixedPointError, QFormat
+from ...hdl.lif import LifConfig
 from ...hdl.lif.config import MAX_INPUT_DELAY
 from ...hdl.nir import NirNetworkConfig
 from .graph import GraphChain, NirError
@@ -217,7 +218,6 @@ def map_graph(chain: GraphChain, update_hz: float = DEFAULT_UPDATE_HZ, scheme: s
     map exactly; the report gives the scale)."""
     if weight_scale not in ("pow2", "max"):
         raise NirError(f"weight_scale must be 'pow2' or 'max', got {weight_scale!r}")
-    from ...hdl.lif import LifConfig
     dt = 1.0 / float(update_hz)
     opts = {"weight_bits": int(weight_bits), "weight_frac_bits": weight_frac_bits,
             "v_frac_bits": int(v_frac_bits), "operand_width": int(operand_width),

@@ -34,6 +34,13 @@ from pathlib import Path
 
 import numpy as np
 
+from ...golden.tactile import MATERIALS, GraspSpec, apply_effects, synthesize_grasp
+from ...hdl.lif import lif_verilog
+from .crosscheck import peer_python
+from .engines import run_network
+from .graph import layers_of, read_graph
+from .mapping import map_graph
+
 __all__ = ["synthesize", "run_spiketouch", "format_table", "SEED_FIGURES", "CONFIGS"]
 
 STEPS = 100
@@ -71,7 +78,6 @@ def _encode(dl: np.ndarray, fs_hz: float, contact_ms: float, stop_nm: float) -> 
 
 def synthesize(n_per_class: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
     """``x`` (trials, STEPS, inputs) spikes and ``y`` (trials,) material labels."""
-    from ...golden.tactile import MATERIALS, GraspSpec, apply_effects, synthesize_grasp
     rng = np.random.default_rng(seed)
     spec = GraspSpec()
     xs, ys = [], []
@@ -103,7 +109,6 @@ def _accuracy(counts: np.ndarray, y: np.ndarray) -> float:
 
 
 def _engine_counts(engine, mapped, x, build_dir=None) -> np.ndarray:
-    from .engines import run_network
     counts = []
     for trial in x:
         xs = np.vstack([trial, np.zeros((1, trial.shape[1]))])       # one flush step
@@ -114,7 +119,6 @@ def _engine_counts(engine, mapped, x, build_dir=None) -> np.ndarray:
 def _hdl_subset(mapped, x, y, build: Path, gap: int = 40) -> dict:
     """The subset's trials back to back (``gap`` empty steps between) on Verilator and on the
     fixed engine: spikes equal, and the accuracy of the Verilator run."""
-    from .engines import run_network
     pad = np.zeros((gap, x.shape[2]))
     seq = np.vstack([np.vstack([t, pad]) for t in x])
     hdl = run_network("verilator", mapped, seq, build_dir=build)
@@ -128,7 +132,6 @@ def _hdl_subset(mapped, x, y, build: Path, gap: int = 40) -> dict:
 
 def _resources(mapped_by_bits: dict, out: Path) -> list:
     from ...hdl.flow.synth import synthesize
-    from ...hdl.lif import lif_verilog
     rows = []
     for bits, mapped in mapped_by_bits.items():
         cfg = mapped.config.layers[0]
@@ -143,9 +146,6 @@ def _resources(mapped_by_bits: dict, out: Path) -> list:
 def run_spiketouch(out: Path, quick: bool = False, hdl_trials: int = 20, seed: int = 0,
                    log=print) -> SpikeTouchResult:
     """The whole experiment (see the module docstring); writes ``out/spiketouch.json``."""
-    from .crosscheck import peer_python
-    from .graph import layers_of, read_graph
-    from .mapping import map_graph
     out = Path(out)
     py, why = peer_python()
     if py is None:

@@ -23,15 +23,25 @@ from pathlib import Path
 import numpy as np
 
 from ...golden import izhikevich as golden
+from ...golden.budget import BASE_BYTES, array_bytes
 from ...golden.fbg import IIRFilter, design_bandpass
+from ...hdl.izhikevich import PIPELINE_DEPTH
+from ...hdl.izhikevich.range import search_estimate
+from ...hdl.lib.config import MIN_NEURONS
 from ...hdl.lib.fixed import QFormat
-from ..decode import decode_trials, decoded_neurons
-from ..engines.registry import ENGINES as ENGINE_TRAITS, block_engines
+from .. import progress as prog
+from ..engines.registry import ENGINES as ENGINE_TRAITS
+from ..engines.registry import block_engines, engine_for, estimate_seconds
+from ..engines.waves import FORMATS, Waves, wave_files
 from ..fanout.scene import channel_plan, check_fanout_engines, scene_fanout
-from ..report import front_end_detail
 from ..host.driver import AfferentEncoding, FbgDriver
+from ..izhikevich.engines import engine_core
 from ..network.scene import check_layer_engines, layer_estimate, run_layer, scene_layer
-from .runner import agreement as train_agreement
+from ..report import format_run as fmt_run
+from ..report import front_end_detail, summary_dict
+from ..report import write_report as write
+from ..spikes import write_spikes
+from .runner import decode_engines, decoders_agreement, engines_agreement
 from .scene import Scene
 from .stimulus import synthesize
 
@@ -102,10 +112,6 @@ def estimate(scene: Scene, engines: list[str], n_samples: int | None = None) -> 
     and their synthesis, the front end's arrays (shifts, currents, raw currents), the golden
     engine's per-tick currents, the batch engines' write schedules and the spikes; the state
     range search, each engine's updates (or cycles) at the registry's speed."""
-    from ...golden.budget import BASE_BYTES, array_bytes
-    from ...hdl.izhikevich import PIPELINE_DEPTH
-    from ...hdl.izhikevich.range import search_estimate
-    from ..engines.registry import estimate_seconds
     sen, hw = scene["sensor"], scene["hardware"]
     fs = sen["sample_rate_hz"]
     if n_samples is None:
@@ -113,7 +119,7 @@ def estimate(scene: Scene, engines: list[str], n_samples: int | None = None) -> 
     trials, n = n_driven(scene)
     hold = max(1, round(hw["update_hz"] / fs))
     n_ticks = float(n_samples) * hold
-    n_core = max(n, 8)
+    n_core = max(n, MIN_NEURONS)
     per_sample = array_bytes(n_samples, n)
     nbytes = (BASE_BYTES + REPORT_BYTES + 4 * array_bytes(trials, n_samples, sen["channels"])
               + 6 * per_sample + 200.0 * n_ticks / 16e3 * n * 16)      # spikes at <= 200 Hz
@@ -174,7 +180,6 @@ def build_neurons(scene: Scene, n_trials: int) -> Neurons:
 def build_izhikevich(scene: Scene, neurons: Neurons):
     """The Izhikevich core for the scene's Izhikevich neurons (one parameter set per preset),
     sized to them; refused if they do not fit the hardware clock's capacity."""
-    from ..izhikevich.engines import engine_core
     hw = scene["hardware"]
     n = len(neurons)
     capacity = int(hw["clock_hz"] // hw["update_hz"])
@@ -257,8 +262,6 @@ def run_golden(ctx) -> tuple[list, dict]:
 
 def _run_transport(engine):
     def run(ctx):
-        from ..izhikevich.engines import make_transport
-        from ..engines.waves import FORMATS
         kw = {"progress": ctx.get("progress")}
         if engine != "fixed":
             bd = ctx.get("build_dir")
@@ -266,12 +269,13 @@ def _run_transport(engine):
         if engine in FORMATS and ctx.get("waves"):
             kw["waves"] = ctx["waves"]
         kw.update(ctx.get("engine_options", {}).get(engine, {}))
+        impl = engine_for("izhikevich", engine, **kw)
         fan = ctx.get("fanout")                 # channels streamed, fanned out on chip
-        tr, drv, raw = make_transport(engine, **kw), ctx["driver"], ctx["raw"]
-        if fan is not None:
-            from ..fanout.scene import fanout_transport
-            tr, drv, raw = fanout_transport(engine, fan, kw), fan.driver, fan.raw
-        layer = ctx.get("layer") if engine == "board" else None   # the network on chip
+        if fan is None:
+            tr, drv, raw = impl.transport(), ctx["driver"], ctx["raw"]
+        else:
+            tr, drv, raw = impl.fanout_transport(fan.config), fan.driver, fan.raw
+        layer = ctx.get("layer") if impl.layer == "chip" else None   # the network on chip
         try:
             tr.open(ctx["config"] if layer is None else layer.network)
             res = drv.stream(tr, None, ctx["n_ticks"], raw=raw)
@@ -308,7 +312,6 @@ def waves_request(scene: Scene, waves=None):
     ``run.waves_ticks``; ``None`` when neither asks for waveforms."""
     if waves is not None or not scene["run"]["waves"]:
         return waves
-    from ..engines.waves import Waves
     r = scene["run"]
     return Waves(Path(r["waves"]), r["waves_start_tick"], r["waves_ticks"])
 
@@ -353,8 +356,10 @@ def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None =
     ``build``: another kind's stimulus (``synth(scene)``, returning what :func:`synthesize`
     does) and neuron table (``build(scene, n_trials)``, as :func:`build_neurons`) run through
     the same machinery (texture scenes); only the afferent decoders ("tree", "knn") decode
-    here."""
-    from .. import progress as prog
+    here.
+
+    Its phases: the stimulus, the front end, the engines' context (trials in turn), the
+    engines, the cuneate layer, decoding, the engines' agreement."""
     timing: dict = {}
 
     def say(msg):
@@ -365,6 +370,56 @@ def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None =
     names = list(engines or scene.engines)
     check_fanout_engines(scene, names)
     check_layer_engines(scene, names)
+    classes, trial_class, traces, infos, effect_counts = _run_stimulus(
+        scene, names, synth, say, timing, t0)
+    build = build or build_neurons
+    fe = _run_front_end(scene, names, traces, infos, build, in_turn, say, timing)
+    neurons, cfg, blocks, currents, sat, n_ticks = (fe[k] for k in (
+        "neurons", "config", "blocks", "currents", "sat", "n_ticks"))
+    ctx = {"config": cfg, "driver": fe["driver"], "neurons": neurons, "currents": currents,
+           "raw": fe["raw"], "n_ticks": n_ticks, "build_dir": build_dir,
+           "waves": _within(waves_request(scene, waves), n_ticks),
+           "engine_options": engine_options or {}, "fanout": fe["fanout"],
+           "layer": fe["layer"], "layer_spikes": {}}
+    turn, layer = None, fe["layer"]
+    if in_turn:                                 # k trials at a time on the board's core
+        from .in_turn import in_turn as turn_context
+        nk = build(scene, in_turn)
+        turn, ctx = turn_context(scene, ctx, len(traces), nk, _build_blocks(scene, nk)[0])
+        layer = ctx["layer"]
+        say(f"trials in turn: {turn.k} at a time, {turn.n_groups} groups")
+    if layer is not None:
+        blocks.append(layer.describe())
+    for e in names:
+        if e not in ENGINES:
+            raise ValueError(f"unknown engine {e!r}; known: {', '.join(ENGINES)}")
+    results = _run_engines(names, ctx, say, timing)
+    ran_sp = {e: results[e][0] for e in names}        # the engines' own neurons
+    spikes = {e: turn.unfold(s) for e, s in ran_sp.items()} if turn else ran_sp
+    counters = {e: results[e][1] for e in names}
+    if "board" in counters:
+        _board_link_budget(scene, ctx, counters, ran_sp, cfg.update_hz)
+    timing["engines_s"] = {e: results[e][2] for e in names}
+    lay = _run_cuneate_layer(layer, ctx, names, ran_sp, turn, len(traces), timing)
+    decoded = decode_engines(scene, spikes, neurons, lay, trial_class, classes, timing)
+    agreement = engines_agreement(spikes, lay, cfg.dt_ms)
+    dec_agree = decoders_agreement(decoded, scene["decoder"]["tolerance"])
+    ran = {"effects": list(effect_counts) if effect_counts else
+           ([] if scene["stimulus"]["kind"] == "recorded" else ["strain"]),
+           "effect_counts": effect_counts, "blocks": blocks, "engines": list(spikes),
+           "front_end": sorted({f"{e.mode}" for e in neurons.encoding}),
+           "front_end_detail": front_end_detail(scene, neurons),
+           "stimulus": scene["stimulus"]["kind"]} | ({"in_turn": turn.describe()} if turn else {})
+    files = wave_files(ctx["waves"], list(spikes), cfg.clock_hz)
+    return SceneRun(scene, classes, trial_class, traces, infos, neurons, currents, sat, cfg,
+                    cfg.dt_ms, n_ticks, spikes, counters, decoded, agreement, ran, timing,
+                    dec_agree, files=files, layer=lay)
+
+
+def _run_stimulus(scene: Scene, names: list, synth, say, timing: dict, t0: float):
+    """The stimulus (``synth`` or :func:`synthesize`): classes, each trial's class, traces,
+    their infos and the effects' counts; a recorded one's budget checked now its length is
+    known (``t0``: the run's start)."""
     n_grasps = scene["scene"]["trials"] * len(scene.classes())
     with prog.step(f"synthesizing the stimulus ({n_grasps} trial(s))"):
         classes, trial_class, traces, infos, effect_counts = (synth or synthesize)(scene)
@@ -374,9 +429,16 @@ def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None =
         check_budget(scene, names, n_samples=traces[0].shape[0])
     say(f"stimulus: {len(traces)} trial(s) of {traces[0].shape[0]} samples x "
         f"{traces[0].shape[1]} grating(s) ({timing['stimulus_s']:.2f} s)")
+    return classes, trial_class, traces, infos, effect_counts
+
+
+def _run_front_end(scene: Scene, names: list, traces, infos, build, in_turn, say,
+                   timing: dict) -> dict:
+    """The neurons, the core configuration and blocks, the driver's currents (quantized, with
+    their saturation counts, the gaps held and the samples past the run's end counted), the
+    fan-out and the cuneate layer (none in turn: the board's is built then)."""
     t0 = time.perf_counter()
     with prog.step("front end: filtering and quantizing the currents"):
-        build = build or build_neurons
         neurons = build(scene, len(traces))
         cfg, blocks = _build_blocks(scene, neurons)
         drv, currents, gaps = front_end(scene, neurons, traces, infos, cfg)
@@ -394,23 +456,15 @@ def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None =
         say(f"warning: latency of {drv.latency_ticks} ticks puts {sat['samples_past_end']} of "
             f"{sat['samples']} samples past the run's end: never applied")
     timing["front_end_s"] = time.perf_counter() - t0
-    ctx = {"config": cfg, "driver": drv, "neurons": neurons, "currents": currents, "raw": raw,
-           "n_ticks": n_ticks, "build_dir": build_dir,
-           "waves": _within(waves_request(scene, waves), n_ticks),
-           "engine_options": engine_options or {}, "fanout": fan, "layer": layer,
-           "layer_spikes": {}}
-    turn = None
-    if in_turn:                                 # k trials at a time on the board's core
-        from .in_turn import in_turn as turn_context
-        nk = build(scene, in_turn)
-        turn, ctx = turn_context(scene, ctx, len(traces), nk, _build_blocks(scene, nk)[0])
-        layer = ctx["layer"]
-        say(f"trials in turn: {turn.k} at a time, {turn.n_groups} groups")
-    if layer is not None:
-        blocks.append(layer.describe())
-    for e in names:
-        if e not in ENGINES:
-            raise ValueError(f"unknown engine {e!r}; known: {', '.join(ENGINES)}")
+    return {"neurons": neurons, "config": cfg, "blocks": blocks, "driver": drv,
+            "currents": currents, "raw": raw, "sat": sat, "fanout": fan, "layer": layer,
+            "n_ticks": n_ticks}
+
+
+def _run_engines(names: list, ctx: dict, say, timing: dict) -> dict:
+    """Each engine on ``ctx``: ``{engine: (spikes, counters, seconds)}``. HDL simulators run
+    in their own processes: they start first, in the background (one at a time, the machine's
+    other core serves the Python engines), overlapped with the Python engines."""
     results: dict = {}
 
     def one(e):
@@ -420,9 +474,6 @@ def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None =
         results[e] = (sp, cnt, time.perf_counter() - t0)
         say(f"engine {e}: {sum(len(x) for x in sp)} spikes ({results[e][2]:.1f} s)")
 
-    # HDL simulators run in their own processes: start them first, in the background (one at
-    # a time, the machine's other core serves the Python engines), and overlap them with the
-    # Python engines
     background = [e for e in names if ENGINE_TRAITS[e].background]
     t_all = time.perf_counter()
     pool = None
@@ -445,99 +496,47 @@ def run(scene: Scene, engines: list[str] | None = None, build_dir: Path | None =
             finally:
                 pool.shutdown()
     timing["engines_wall_s"] = time.perf_counter() - t_all
-    ran_sp = {e: results[e][0] for e in names}        # the engines' own neurons
-    spikes = {e: turn.unfold(s) for e, s in ran_sp.items()} if turn else ran_sp
-    counters = {e: results[e][1] for e in names}
-    if "board" in counters:
-        from ..host.uart import run_budget
-        f, c = ctx["fanout"], ctx["config"]
-        written = (f.config.n_channels, f.config.S.width) if f else (c.n_neurons, c.I.width)
-        counters["board"]["link_budget"] = run_budget(
-            counters["board"], ctx["n_ticks"] / cfg.update_hz, *written,
-            scene["sensor"]["sample_rate_hz"], cfg.update_hz,
-            sum(map(len, ran_sp["board"])) + sum(map(len, ctx["layer_spikes"].get("board", []))))
-    eng_t = {e: results[e][2] for e in names}
-    timing["engines_s"] = eng_t
-    lay = {}
-    if layer is not None:
-        t0 = time.perf_counter()
-        M = layer.per_trial
-        lay = {"population": layer.population, "spikes": dict(ctx["layer_spikes"]),
-               "trial": [t for t in range(len(traces)) for _ in range(M)],
-               "index": list(range(M)) * len(traces), "counters": {}}
-        for e in names:
-            if e not in lay["spikes"]:
-                with prog.step(f"cuneate layer on {e} ({layer.n_targets} neurons)"):
-                    lay["spikes"][e], lay["counters"][e] = run_layer(
-                        e, ctx["layer"], ran_sp[e], ctx["n_ticks"])
-        if turn:
-            lay["spikes"] = {e: turn.unfold(s, layer.per_trial) for e, s in lay["spikes"].items()}
-        timing["layer_s"] = time.perf_counter() - t0
+    return results
+
+
+def _board_link_budget(scene: Scene, ctx: dict, counters: dict, ran_sp: dict,
+                       update_hz: float) -> None:
+    """The board engine's UART link budget for the run (in its counters; ``update_hz``: the
+    scene's core's)."""
+    from ..host.uart import run_budget
+    f, c = ctx["fanout"], ctx["config"]
+    written = (f.config.n_channels, f.config.S.width) if f else (c.n_neurons, c.I.width)
+    counters["board"]["link_budget"] = run_budget(
+        counters["board"], ctx["n_ticks"] / update_hz, *written,
+        scene["sensor"]["sample_rate_hz"], update_hz,
+        sum(map(len, ran_sp["board"])) + sum(map(len, ctx["layer_spikes"].get("board", []))))
+
+
+def _run_cuneate_layer(layer, ctx: dict, names: list, ran_sp: dict, turn, n_trials: int,
+                       timing: dict) -> dict:
+    """The cuneate layer's spikes on each engine (those its engine did not run alongside
+    come from its own afferents' spikes), by trial and index; ``{}`` without a layer."""
+    if layer is None:
+        return {}
     t0 = time.perf_counter()
-    dec = scene["decoder"]
-    decoded = {}
-    if dec["kind"] in ("tree", "knn"):
-        for e, sp in spikes.items():
-            d_sp, d_trial, d_index = decoded_neurons(dec["population"], sp, neurons, lay, e)
-            noun = scene.trial_noun
-            with prog.step(f"decoding {e} ({dec['kind']} on {dec['features']} features of "
-                           f"{dec['population'] or 'every afferent'}, {noun}-grouped"
-                           + (" and published protocols)" if dec["features"] == "isi"
-                              else ")")):
-                decoded[e] = decode_trials(
-                    d_sp, d_trial, d_index, trial_class, classes, dec["kind"],
-                    dec["features"], dec["cv_folds"], dec["max_depth"], dec["neighbours"],
-                    scene["scene"]["seed"], dec["window_ms"], dec["decision"],
-                    dec["permutations"], noun=noun)
-    timing["decode_s"] = time.perf_counter() - t0
-    agreement = {}
-    names = list(spikes)
-    ref = "fixed" if "fixed" in spikes else None
+    M = layer.per_trial
+    lay = {"population": layer.population, "spikes": dict(ctx["layer_spikes"]),
+           "trial": [t for t in range(n_trials) for _ in range(M)],
+           "index": list(range(M)) * n_trials, "counters": {}}
     for e in names:
-        if e == ref:
-            continue
-        other = ref or names[0]
-        if e == other:
-            continue
-        agreement[f"{e} vs {other}"] = train_agreement(spikes[e], spikes[other], cfg.dt_ms)
-        if lay:
-            agreement[f"{lay['population']}: {e} vs {other}"] = train_agreement(
-                lay["spikes"][e], lay["spikes"][other], cfg.dt_ms)
-    dec_agree = {}
-    if "golden" in decoded:
-        tol = dec["tolerance"]
-        for e, d in decoded.items():
-            g = decoded["golden"]
-            if e == "golden" or d.accuracy is None or g.accuracy is None:
-                continue
-            diff = abs(d.accuracy - g.accuracy)
-            dec_agree[f"{e} vs golden"] = {"difference": diff, "tolerance": tol,
-                                           "within": bool(diff <= tol)}
-    ran = {"effects": list(effect_counts) if effect_counts else
-           ([] if scene["stimulus"]["kind"] == "recorded" else ["strain"]),
-           "effect_counts": effect_counts, "blocks": blocks, "engines": list(spikes),
-           "front_end": sorted({f"{e.mode}" for e in neurons.encoding}),
-           "front_end_detail": front_end_detail(scene, neurons),
-           "stimulus": scene["stimulus"]["kind"]} | ({"in_turn": turn.describe()} if turn else {})
-    files = {}
-    wv = ctx["waves"]
-    if wv:
-        from ..engines.waves import FORMATS, time_axis
-        wrote = [e for e in names if e in FORMATS]
-        files["waves"] = wv.to_dict() | {
-            "files": {e: {"dump": str(wv.path(e)), "gtkw": str(wv.path(e).with_suffix(".gtkw")),
-                          "time_axis": time_axis(e, cfg.clock_hz)} for e in wrote},
-            "note": "" if wrote else " (no engine of this run writes waveforms: amaranth, "
-                                     "icarus or verilator do)"}
-    return SceneRun(scene, classes, trial_class, traces, infos, neurons, currents, sat, cfg,
-                    cfg.dt_ms, n_ticks, spikes, counters, decoded, agreement, ran, timing,
-                    dec_agree, files=files, layer=lay)
+        if e not in lay["spikes"]:
+            with prog.step(f"cuneate layer on {e} ({layer.n_targets} neurons)"):
+                lay["spikes"][e], lay["counters"][e] = run_layer(
+                    e, ctx["layer"], ran_sp[e], ctx["n_ticks"])
+    if turn:
+        lay["spikes"] = {e: turn.unfold(s, layer.per_trial) for e, s in lay["spikes"].items()}
+    timing["layer_s"] = time.perf_counter() - t0
+    return lay
 
 
 # --------------------------------------------------------------------------- results
 def summary(run: SceneRun) -> dict:
     """The run as a JSON-ready dictionary (``run.json``)."""
-    from ..report import summary_dict
     return summary_dict(run)
 
 
@@ -545,7 +544,6 @@ def write_spike_files(run: SceneRun, out: Path) -> dict:
     """Write ``spikes_<engine>.npz`` per engine into ``out`` (:mod:`cuneate.sim.spikes`:
     neuron table population, trial, grating, class; the cuneate layer's neurons after the
     afferents, grating -1); returns ``{engine: file name}``."""
-    from ..spikes import write_spikes
     nn, lay = run.neurons, run.layer
     pop, trial, grating = list(nn.population), list(nn.trial), list(nn.grating)
     if lay:
@@ -565,7 +563,6 @@ def write_spike_files(run: SceneRun, out: Path) -> dict:
 def write_report(run: SceneRun, out: Path) -> Path:
     """Write the spike files, ``index.html``, ``run.json`` and figures into ``out``; returns
     the HTML path."""
-    from ..report import write_report as write
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     run.files["spikes"] = write_spike_files(run, out)
@@ -579,5 +576,4 @@ def write_report(run: SceneRun, out: Path) -> Path:
 
 def format_run(run: SceneRun) -> str:
     """The lines ``cuneate run`` prints for an afferent scene."""
-    from ..report import format_run as fmt_run
     return fmt_run(run)

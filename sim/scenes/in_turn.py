@@ -19,6 +19,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..engines.run import spike_ticks, spike_times
+from ..fanout.scene import ChannelPlan
+from ..host.driver import FbgDriver
+from ..network.scene import scene_layer
+
 __all__ = ["InTurn", "in_turn"]
 
 
@@ -60,9 +65,9 @@ class InTurn:
             for s in trains[j * w:(j + 1) * w]:
                 s = np.asarray(s, dtype=np.float64)
                 # the update of sweep T is at (T + 1) dt; window g holds sweeps g n .. g n + n - 1
-                ticks = np.rint(s / self.dt_ms).astype(np.int64) - 1 - g * self.n_ticks
+                ticks = spike_ticks(s, self.dt_ms) - g * self.n_ticks
                 keep = (ticks >= 0) & (ticks < self.n_ticks)
-                out.append((ticks[keep] + 1) * self.dt_ms)
+                out.append(spike_times(ticks[keep], self.dt_ms))
         return out
 
     def describe(self) -> dict:
@@ -76,9 +81,6 @@ def in_turn(scene, ctx: dict, n_trials: int, nk, cfg):
     ``ctx`` (the run's context for every trial side by side: its driver, currents, raw
     currents, channel plan, cuneate layer, sweeps) with the board's core, neurons, driver,
     folded currents, channel plan and layer and the groups' sweeps."""
-    from ..fanout.scene import ChannelPlan
-    from ..host.driver import FbgDriver
-    from ..network.scene import scene_layer
     per = len(ctx["neurons"]) // n_trials
     k = len(nk) // per
     if not 1 <= k <= n_trials:

@@ -44,6 +44,8 @@ KINDS: dict[str, SceneKind] = {k.name: k for k in (
               "ridges sliding over two sensors: SA/FA afferents into coincidence detectors"),
     SceneKind("texture", ("textures",), "izhikevich",
               "textures slid under the MEMS fingertip: SA afferents, the seeds' decoders"),
+    SceneKind("learning", ("learning",), "plasticity",
+              "a cuneate layer learning the fingertip's stimuli on chip (AIDP)"),
 )}
 
 

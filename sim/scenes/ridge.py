@@ -35,6 +35,12 @@ from pathlib import Path
 
 import numpy as np
 
+from ..coincidence.experiments import (RidgeSpec, detector_config, format_ridge, ridge_estimate,
+                                       ridge_experiment, ridge_problem)
+from ..engines.registry import ENGINES, block_engines, check_engine
+from ..report import DPI, board_link_line, files_html, html_table, pyplot, write_page
+from ..spikes import write_spikes
+
 __all__ = ["validate", "RidgeSceneRun", "run", "summary", "write_report", "format_run",
            "same_counts", "spec_of", "estimate"]
 
@@ -136,7 +142,6 @@ def validate(V, raw: dict, sections: dict, pops: list, projs: list) -> None:
     if sc["trials"] < 2:
         V.err("scene.trials", "a ridge scene needs at least 2 trials per angle (half train "
                               "the lookup table)")
-    from ..coincidence.experiments import ridge_problem
     bad = ridge_problem(spec_of(_Sections(sections, pops, projs)))
     if bad is not None:
         V.err(f"stimulus.{bad[0]}", bad[1])
@@ -154,7 +159,6 @@ class _Sections:
 
 def spec_of(scene):
     """The :class:`~cuneate.sim.coincidence.experiments.RidgeSpec` of a ridge scene."""
-    from ..coincidence.experiments import RidgeSpec
     st, sc, hw = scene["stimulus"], scene["scene"], scene["hardware"]
     pops = {p["name"]: p for p in scene.populations}
     aff = st["_afferents"]
@@ -181,7 +185,6 @@ def spec_of(scene):
 def estimate(scene, engines: list[str]) -> dict:
     """Memory (bytes) and time (s) of the ridge scene on ``engines``
     (:func:`cuneate.sim.coincidence.experiments.ridge_estimate` of its experiment)."""
-    from ..coincidence.experiments import ridge_estimate
     return ridge_estimate(spec_of(scene), engines)
 
 
@@ -199,8 +202,6 @@ class RidgeSceneRun:
 
 def run(scene, engines=None, build_dir=None, progress=False, log=None):
     """Run a ridge scene on its engines (or ``engines``)."""
-    from ..coincidence.experiments import detector_config, ridge_experiment
-    from ..engines.registry import ENGINES, block_engines, check_engine
     say = log or (lambda msg: None)
     names = list(engines or scene.engines)
     for e in names:
@@ -248,8 +249,6 @@ def same_counts(a, b) -> dict:
 
 def format_run(run: RidgeSceneRun) -> str:
     """The lines ``cuneate run`` prints for a ridge scene."""
-    from ..coincidence.experiments import format_ridge
-    from ..report import board_link_line
     out = [f"{run.scene.name}: engines {', '.join(run.results)}"]
     first_e, first = next(iter(run.results.items()))
     for e, r in run.results.items():
@@ -269,7 +268,6 @@ def write_spike_files(run: RidgeSceneRun, out: Path) -> dict:
     afferents (SA and FA of the upper sensor, then of the lower: gratings 0, 0, 1, 1) and the
     cuneate neurons (grating -1), times from the trial's start, its class the ridge angle;
     returns ``{engine: file}``."""
-    from ..spikes import write_spikes
     sa, fa = (next(n for n, k in run.scene["stimulus"]["_afferents"].items() if k == kind)
               for kind in ("SA", "FA"))
     cn = next(p["name"] for p in run.scene.populations if p["model"] == "cuneate")
@@ -296,7 +294,6 @@ def write_spike_files(run: RidgeSceneRun, out: Path) -> dict:
 def write_report(run: RidgeSceneRun, out: Path) -> Path:
     """Write the spike files, ``index.html``, ``run.json`` and one figure per engine into
     ``out``."""
-    from ..report import DPI, board_link_line, files_html, html_table, pyplot, write_page
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     run.files = {"spikes": write_spike_files(run, out)}

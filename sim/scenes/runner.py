@@ -1,18 +1,25 @@
 """Running a scene of any kind, and what every kind compares between engines.
 
 :func:`run_scene` looks the scene's kind up in the registry (:mod:`cuneate.sim.scenes.registry`)
-and runs it with the kind's module; :func:`agreement` compares two engines' spike trains.
+and runs it with the kind's module; :func:`agreement` compares two engines' spike trains,
+:func:`engines_agreement` every engine's with the reference's, :func:`decode_engines` decodes
+each engine's spikes and :func:`decoders_agreement` holds their accuracies to golden's.
 """
 
 from __future__ import annotations
 
+import time
 from pathlib import Path
 
 import numpy as np
 
+from ...golden import budget, metrics
+from .. import progress as prog
+from ..decode import decode_trials, decoded_neurons
 from .registry import kind_module
 
-__all__ = ["run_scene", "agreement", "kind_of", "check_budget"]
+__all__ = ["run_scene", "agreement", "kind_of", "check_budget", "decode_engines",
+           "engines_agreement", "decoders_agreement"]
 
 
 def kind_of(run_or_scene) -> str:
@@ -32,7 +39,6 @@ def run_scene(scene, engines: list[str] | None = None, build_dir: Path | None = 
     The kind's estimate of the run's memory and time is checked first
     (:func:`check_budget`): a run that would exhaust the machine's memory or exceed the time
     limit in force is refused before anything is allocated."""
-    from .. import progress as prog
     if progress and prog.mode() == "quiet":
         prog.configure("auto")
     check_budget(scene, list(engines or scene.engines))
@@ -53,7 +59,6 @@ def run_scene(scene, engines: list[str] | None = None, build_dir: Path | None = 
 def check_budget(scene, engines: list[str], **known) -> dict:
     """The kind's ``estimate(scene, engines, **known)`` checked against the memory and time
     limits (:func:`cuneate.golden.budget.check`; ``BudgetError`` refuses, one line)."""
-    from ...golden import budget
     est = kind_module(scene.kind).estimate(scene, engines, **known)
     budget.check(f"the scene ({est['what']})", est["bytes"], est["seconds"],
                  "fewer trials or neurons, a shorter scene.duration_ms, a lower update rate "
@@ -66,7 +71,6 @@ def agreement(a: list, b: list, dt_ms: float) -> dict:
     trains, spike-count differences, Victor-Purpura distance at q = 5/s
     (:data:`~cuneate.golden.metrics.VP_Q_PER_MS`, the sweep's and the README's) and the
     fraction of spikes within one tick of ``dt_ms``."""
-    from ...golden import metrics
     cnt_a = np.array([len(s) for s in a])
     cnt_b = np.array([len(s) for s in b])
     vp = [metrics.victor_purpura(x, y, metrics.VP_Q_PER_MS) for x, y in zip(a, b)]
@@ -79,3 +83,59 @@ def agreement(a: list, b: list, dt_ms: float) -> dict:
             "mean_victor_purpura": float(np.mean(vp)) if vp else 0.0,
             "victor_purpura_q_per_s": 1000.0 * metrics.VP_Q_PER_MS,
             "fraction_within_1_tick": float(np.mean(within)) if within else None}
+
+
+def engines_agreement(spikes: dict, lay: dict, dt_ms: float) -> dict:
+    """Each engine's spike trains against the reference ("fixed" if it ran, else the first
+    engine), the afferents' and the cuneate layer's."""
+    out = {}
+    names = list(spikes)
+    ref = "fixed" if "fixed" in spikes else None
+    for e in names:
+        if e == ref:
+            continue
+        other = ref or names[0]
+        if e == other:
+            continue
+        out[f"{e} vs {other}"] = agreement(spikes[e], spikes[other], dt_ms)
+        if lay:
+            out[f"{lay['population']}: {e} vs {other}"] = agreement(
+                lay["spikes"][e], lay["spikes"][other], dt_ms)
+    return out
+
+
+def decoders_agreement(decoded: dict, tol: float) -> dict:
+    """Each engine's decoding accuracy against golden's, within ``decoder.tolerance``."""
+    dec_agree = {}
+    if "golden" in decoded:
+        for e, d in decoded.items():
+            g = decoded["golden"]
+            if e == "golden" or d.accuracy is None or g.accuracy is None:
+                continue
+            diff = abs(d.accuracy - g.accuracy)
+            dec_agree[f"{e} vs golden"] = {"difference": diff, "tolerance": tol,
+                                           "within": bool(diff <= tol)}
+    return dec_agree
+
+
+def decode_engines(scene, spikes: dict, neurons, lay: dict, trial_class, classes,
+                   timing: dict) -> dict:
+    """Each engine's spikes decoded (the afferent decoders, "tree" and "knn"; none else)."""
+    t0 = time.perf_counter()
+    dec = scene["decoder"]
+    decoded = {}
+    if dec["kind"] in ("tree", "knn"):
+        for e, sp in spikes.items():
+            d_sp, d_trial, d_index = decoded_neurons(dec["population"], sp, neurons, lay, e)
+            noun = scene.trial_noun
+            with prog.step(f"decoding {e} ({dec['kind']} on {dec['features']} features of "
+                           f"{dec['population'] or 'every afferent'}, {noun}-grouped"
+                           + (" and published protocols)" if dec["features"] == "isi"
+                              else ")")):
+                decoded[e] = decode_trials(
+                    d_sp, d_trial, d_index, trial_class, classes, dec["kind"],
+                    dec["features"], dec["cv_folds"], dec["max_depth"], dec["neighbours"],
+                    scene["scene"]["seed"], dec["window_ms"], dec["decision"],
+                    dec["permutations"], noun=noun)
+    timing["decode_s"] = time.perf_counter() - t0
+    return decoded

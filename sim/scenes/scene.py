@@ -20,9 +20,10 @@ from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
 
+from ..engines.registry import UnknownEngine, check_engine
 from .registry import KINDS, kind_for, kind_module
-from .schema import (EFFECT_NAMES, EFFECT_PARAMS, F, MEMS_EFFECT_PARAMS, NUM, POPULATION,
-                     PROJECTION, RECORDING, SCHEMA, SceneError, Validator)
+from .schema import (EFFECT_NAMES, EFFECT_PARAMS, MEMS_EFFECT_PARAMS, NUM, POPULATION, PROJECTION,
+                     RECORDING, SCHEMA, F, SceneError, Validator)
 
 __all__ = ["SceneError", "Scene", "load_scene", "parse_scene", "default_scene",
            "DEFAULT_SCENE_TOML", "example_path", "example_names"]
@@ -81,7 +82,8 @@ engines = ["golden", "fixed", "verilator"]
 
 #: what one trial is, by stimulus kind
 TRIAL_NOUNS = {"grasp": "grasp", "slide": "slide", "pulses": "pulse", "recorded": "recording",
-               "ridges": "ridge", "press": "press"}
+               "ridges": "ridge", "press": "press",
+               "learning": "presentation"}
 
 
 @dataclass
@@ -129,7 +131,7 @@ class Scene:
             return [f"{a:+g} deg" for a in st["ridge_angles_deg"]]
         if st["kind"] == "press":
             return [f"taxel {st['press_taxel']}"]
-        if st["kind"] == "textures":
+        if st["kind"] in ("textures", "learning"):
             return [t if isinstance(t, str) else t["name"] for t in st["textures"]]
         if st["recordings"]:
             return list(dict.fromkeys(r["label"] for r in st["recordings"]))
@@ -148,21 +150,44 @@ class Scene:
 
 
 def parse_scene(text: str, source: str = "<scene>", base_dir: Path | None = None) -> Scene:
-    """Validate TOML ``text``; errors name ``source``."""
+    """Validate TOML ``text``; errors name ``source``. The checks run in a fixed order (the
+    first problem found is the one reported): the sections against the schema, the sensor, the
+    stimulus, the front end, the hardware and engines, the decoder, the populations and
+    projections, what this build runs, the trials a board and a core hold."""
     try:
         raw = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise SceneError(f"{source}: not valid TOML: {exc}") from None
     V = Validator(source)
-    sections = {}
+    sections = _schema_sections(V, raw)
+    taxels = sections["sensor"]["kind"] == "taxels"
+    mems = sections["sensor"]["kind"] == "mems"
+    _check_sensor(V, raw, sections, taxels, mems)
+    kind = _scene_kind(sections, taxels, mems)
+    _check_stimulus(V, sections, mems, base_dir)
+    _check_frontend(V, sections, taxels, mems)
+    _check_hardware(V, sections)
+    _check_engines(V, sections, kind)
+    _check_decoder(V, sections, kind)
+    pops, projs = _populations_and_projections(V, raw, sections, kind, taxels, mems)
+    _check_what_this_build_runs(V, sections, pops, projs, kind)
+    scene = Scene(source, sections, pops, projs, base_dir, kind.name)
+    _check_trials_fit(V, scene)
+    return scene
+
+
+def _schema_sections(V, raw: dict) -> dict:
+    """Every section of the schema checked and its defaults filled; an unknown one refused."""
     for k in raw:
         if k not in SCHEMA and k not in ("population", "projection"):
             V.err(k, f"unknown section (known: {', '.join([*SCHEMA, 'population', 'projection'])})")
-    for sec, schema in SCHEMA.items():
-        sections[sec] = V.table(sec, raw.get(sec, {}), schema, sec)
+    return {sec: V.table(sec, raw.get(sec, {}), schema, sec) for sec, schema in SCHEMA.items()}
+
+
+def _check_sensor(V, raw: dict, sections: dict, taxels: bool, mems: bool) -> None:
+    """[sensor]: a MEMS fingertip's defaults and grid, a taxel skin's (no optical effects),
+    the effects and their parameter tables, the saturation range."""
     sensor = sections["sensor"]
-    taxels = sensor["kind"] == "taxels"
-    mems = sensor["kind"] == "mems"
     if mems:
         # a MEMS fingertip's own defaults (16 tethers, its sample rate, the seeds' 20 kHz ...)
         kind_module("texture").fill_defaults(V, raw, sections)
@@ -201,38 +226,26 @@ def parse_scene(text: str, source: str = "<scene>", base_dir: Path | None = None
     lo, hi = ("min_mV", "max_mV") if mems else ("min_nm", "max_nm")
     if sat and not sat[lo] < sat[hi]:
         V.err("sensor.saturation", f"{lo} ({sat[lo]:g}) must be below {hi} ({sat[hi]:g})")
-    st = sections["stimulus"]
-    kind = kind_for(st["kind"])
+
+
+def _scene_kind(sections: dict, taxels: bool, mems: bool):
+    """The scene's kind: its stimulus's, a taxel skin's or MEMS fingertip's for the kinds an
+    afferent stimulus would otherwise take."""
+    kind = kind_for(sections["stimulus"]["kind"])
     if taxels and kind.name == "afferent":
         kind = KINDS["skin"]            # its checks say what a taxel sensor takes
     if mems and kind.name == "afferent":
         kind = KINDS["texture"]         # a MEMS fingertip's recorded traces, say
+    return kind
+
+
+def _check_stimulus(V, sections: dict, mems: bool, base_dir: Path | None) -> None:
+    """[stimulus] by kind (the loading window needs a grasp); recorded files resolved against
+    ``base_dir``."""
+    st, channels = sections["stimulus"], sections["sensor"]["channels"]
     if st["kind"] == "grasp":
-        from ...golden.tactile import MATERIALS
-        if not st["materials"]:
-            V.err("stimulus.materials", "must not be empty")
-        mats = []
-        for i, m in enumerate(st["materials"]):
-            if isinstance(m, str):
-                if m not in MATERIALS:
-                    V.err(f"stimulus.materials[{i}]", f"unknown material {m!r} (known: "
-                          f"{', '.join(MATERIALS)}; or give a table with name, young_MPa)")
-                mats.append(m)
-            else:
-                mats.append(V.table(f"stimulus.materials[{i}]", m, {
-                    "name": F(str, required=True), "young_MPa": F(NUM, required=True, lo=1e-6,
-                                                                  hi=1e7),
-                    "poisson": F(NUM, 0.4, lo=0, hi=0.499),
-                    "diameter_mm": F(NUM, 30.0, lo=1e-3, hi=1e4),
-                    "height_mm": F(NUM, 150.0, lo=1e-3, hi=1e5)}))
-        names = [m if isinstance(m, str) else m["name"] for m in mats]
-        if len(set(names)) != len(names):
-            V.err("stimulus.materials", "names a material twice")
-        st["materials"] = mats
-        if len(st["coupling_microstrain_per_N"]) != sensor["channels"]:
-            V.err("stimulus.coupling_microstrain_per_N",
-                  f"needs one value per channel ({sensor['channels']}), got "
-                  f"{len(st['coupling_microstrain_per_N'])}")
+        _check_materials(V, st)
+        _check_coupling(V, st, channels)
         if any(c <= 0 for c in st["coupling_microstrain_per_N"]):
             V.err("stimulus.coupling_microstrain_per_N", "out of range: values must be > 0")
     if sections["frontend"]["window"] == "loading" and st["kind"] != "grasp":
@@ -244,31 +257,72 @@ def parse_scene(text: str, source: str = "<scene>", base_dir: Path | None = None
         if len(set(amps)) != len(amps):
             V.err("stimulus.pulse_amplitudes_N", f"lists an amplitude twice ({', '.join(amps)}): "
                                                  f"each amplitude is one class")
-        if len(st["coupling_microstrain_per_N"]) != sensor["channels"]:
-            V.err("stimulus.coupling_microstrain_per_N",
-                  f"needs one value per channel ({sensor['channels']}), got "
-                  f"{len(st['coupling_microstrain_per_N'])}")
+        _check_coupling(V, st, channels)
     if st["kind"] == "slide" and (not st["periods_mm"] or any(p <= 0 for p in st["periods_mm"])):
         V.err("stimulus.periods_mm", "must list periods > 0")
     if st["recordings"] and not (mems and st["kind"] == "recorded"):
         V.err("stimulus.recordings", "one table per recorded trial of a MEMS fingertip "
                                      "(sensor.kind = \"mems\", stimulus.kind = \"recorded\")")
     if st["kind"] == "recorded":
-        if st["file"] and st["recordings"]:
-            V.err("stimulus.file", "give either file (one trial) or recordings (a table per "
-                                   "trial), not both")
-        if not st["file"] and not st["recordings"]:
-            V.err("stimulus.file", "missing required key for a recorded stimulus")
+        _check_recorded(V, st, base_dir)
 
-        def here(f):
-            p = Path(f)
-            return str(base_dir / p if not p.is_absolute() and base_dir is not None else p)
-        if st["file"]:
-            st["file"] = here(st["file"])
-        st["recordings"] = [V.table(f"stimulus.recordings[{i}]", r, RECORDING)
-                            for i, r in enumerate(st["recordings"])]
-        for r in st["recordings"]:
-            r["file"] = here(r["file"])
+
+def _check_materials(V, st: dict) -> None:
+    """A grasp's materials: known names or tables (name, young_MPa ...), each once."""
+    from ...golden.tactile import MATERIALS
+    if not st["materials"]:
+        V.err("stimulus.materials", "must not be empty")
+    mats = []
+    for i, m in enumerate(st["materials"]):
+        if isinstance(m, str):
+            if m not in MATERIALS:
+                V.err(f"stimulus.materials[{i}]", f"unknown material {m!r} (known: "
+                      f"{', '.join(MATERIALS)}; or give a table with name, young_MPa)")
+            mats.append(m)
+        else:
+            mats.append(V.table(f"stimulus.materials[{i}]", m, {
+                "name": F(str, required=True), "young_MPa": F(NUM, required=True, lo=1e-6,
+                                                              hi=1e7),
+                "poisson": F(NUM, 0.4, lo=0, hi=0.499),
+                "diameter_mm": F(NUM, 30.0, lo=1e-3, hi=1e4),
+                "height_mm": F(NUM, 150.0, lo=1e-3, hi=1e5)}))
+    names = [m if isinstance(m, str) else m["name"] for m in mats]
+    if len(set(names)) != len(names):
+        V.err("stimulus.materials", "names a material twice")
+    st["materials"] = mats
+
+
+def _check_coupling(V, st: dict, channels: int) -> None:
+    """One strain coupling per channel."""
+    if len(st["coupling_microstrain_per_N"]) != channels:
+        V.err("stimulus.coupling_microstrain_per_N",
+              f"needs one value per channel ({channels}), got "
+              f"{len(st['coupling_microstrain_per_N'])}")
+
+
+def _check_recorded(V, st: dict, base_dir: Path | None) -> None:
+    """A recorded stimulus: a file or a table per trial (not both), paths resolved against
+    ``base_dir``."""
+    if st["file"] and st["recordings"]:
+        V.err("stimulus.file", "give either file (one trial) or recordings (a table per "
+                               "trial), not both")
+    if not st["file"] and not st["recordings"]:
+        V.err("stimulus.file", "missing required key for a recorded stimulus")
+
+    def here(f):
+        p = Path(f)
+        return str(base_dir / p if not p.is_absolute() and base_dir is not None else p)
+    if st["file"]:
+        st["file"] = here(st["file"])
+    st["recordings"] = [V.table(f"stimulus.recordings[{i}]", r, RECORDING)
+                        for i, r in enumerate(st["recordings"])]
+    for r in st["recordings"]:
+        r["file"] = here(r["file"])
+
+
+def _check_frontend(V, sections: dict, taxels: bool, mems: bool) -> None:
+    """[frontend]: a given filter (both coefficient lists, stable), else the band edges below
+    Nyquist (an FBG sensor's)."""
     fe = sections["frontend"]
     if (fe["filter_b"] is None) != (fe["filter_a"] is None):
         V.err("frontend.filter_a" if fe["filter_a"] is None else "frontend.filter_b",
@@ -281,12 +335,16 @@ def parse_scene(text: str, source: str = "<scene>", base_dir: Path | None = None
             V.err("frontend.filter_a", str(exc))
         if not rep.stable:
             V.err("frontend.filter_a", f"unstable filter: {rep.message}")
-    fs = sensor["sample_rate_hz"]
+    fs = sections["sensor"]["sample_rate_hz"]
     if not taxels and not mems and fe["filter_b"] is None and \
             not 0 < fe["filter_low_hz"] < fe["filter_high_hz"] < fs / 2:
         V.err("frontend.filter_high_hz", f"band edges must satisfy 0 < filter_low_hz < "
                                          f"filter_high_hz < sample_rate_hz/2 = {fs / 2:g}")
-    hw = sections["hardware"]
+
+
+def _check_hardware(V, sections: dict) -> None:
+    """[hardware]: whole ticks per sample, at least one clock cycle per tick."""
+    hw, fs = sections["hardware"], sections["sensor"]["sample_rate_hz"]
     ratio = hw["update_hz"] / fs
     if abs(ratio - round(ratio)) > 1e-9 or round(ratio) < 1:
         V.err("hardware.update_hz", f"must be a whole multiple of sensor.sample_rate_hz "
@@ -294,27 +352,37 @@ def parse_scene(text: str, source: str = "<scene>", base_dir: Path | None = None
                                     f"ticks, got ratio {ratio:g}")
     if hw["clock_hz"] / hw["update_hz"] < 1:
         V.err("hardware.clock_hz", "must be >= update_hz")
-    from ..engines.registry import UnknownEngine, check_engine
-    for i, e in enumerate(sections["run"]["engines"]):
+
+
+def _check_engines(V, sections: dict, kind) -> None:
+    """[run].engines: each runs the scene's block (and the channel fan-out if asked), at least
+    one, each once."""
+    engines = sections["run"]["engines"]
+    for i, e in enumerate(engines):
         try:
             check_engine(kind.block, e)
         except UnknownEngine as exc:
             V.err(f"run.engines[{i}]", str(exc))
-    if hw["fanout"]:
-        from ..fanout.scene import FANOUT_SCENE_ENGINES
+    if sections["hardware"]["fanout"]:
+        from ..fanout.scene import fanout_scene_engines
+        ok = fanout_scene_engines()
         if kind.block != "izhikevich":
             V.err("hardware.fanout", "the channel fan-out feeds afferent scenes' Izhikevich "
                                      "afferents")
-        for i, e in enumerate(sections["run"]["engines"]):
-            if e not in FANOUT_SCENE_ENGINES:
+        for i, e in enumerate(engines):
+            if e not in ok:
                 V.err(f"run.engines[{i}]", f"engine {e!r} does not run the channel fan-out "
                                            f"(hardware.fanout; engines that do: "
-                                           f"{', '.join(FANOUT_SCENE_ENGINES)})")
-    if not sections["run"]["engines"]:
+                                           f"{', '.join(ok)})")
+    if not engines:
         V.err("run.engines", "must name at least one engine")
-    if len(set(sections["run"]["engines"])) != len(sections["run"]["engines"]):
+    if len(set(engines)) != len(engines):
         V.err("run.engines", "names an engine twice")
-    dec = sections["decoder"]
+
+
+def _check_decoder(V, sections: dict, kind) -> None:
+    """[decoder]: the window inside the run, an afferent scene's decoder kinds."""
+    dec, st = sections["decoder"], sections["stimulus"]
     if dec["window_ms"] is not None and (len(dec["window_ms"]) != 2
                                          or not dec["window_ms"][0] < dec["window_ms"][1]):
         V.err("decoder.window_ms", "must be [start, end] with start < end")
@@ -326,11 +394,16 @@ def parse_scene(text: str, source: str = "<scene>", base_dir: Path | None = None
                                        f"would be decoded")
     if kind.name == "afferent":
         _check_afferent_decoder(V, dec, st, sections["scene"]["trials"])
-    # populations and projections
-    pops_raw = raw.get("population", [])
+
+
+def _populations_and_projections(V, raw: dict, sections: dict, kind, taxels: bool,
+                                 mems: bool) -> tuple[list, list]:
+    """The [[population]] tables (defaults by model and kind), the scene kind's own checks,
+    each population's sensor and wiring, the [[projection]] tables."""
     for key in ("population", "projection"):
         if isinstance(raw.get(key), dict):
             V.err(key, f"wrong type: write [[{key}]] (an array of tables), not [{key}]")
+    pops_raw = raw.get("population", [])
     if not isinstance(pops_raw, list) or not pops_raw:
         V.err("population", "at least one [[population]] table is required")
     pops = []
@@ -342,8 +415,21 @@ def parse_scene(text: str, source: str = "<scene>", base_dir: Path | None = None
     projs = []
     if ridges:
         projs = _projections(V, raw, [p["name"] for p in pops])
+    if raw.get("learning") and kind.name != "learning":
+        V.err("learning", "the learning protocol belongs to learning scenes (stimulus.kind = "
+                          "\"learning\")")
     if kind.name != "afferent":
         kind_module(kind).validate(V, raw, sections, pops, projs)
+    _check_population_sensors(V, pops, kind, taxels, mems)
+    _check_population_wiring(V, pops, sections["sensor"]["channels"])
+    if not ridges:
+        projs = _projections(V, raw, [p["name"] for p in pops])
+    return pops, projs
+
+
+def _check_population_sensors(V, pops: list, kind, taxels: bool, mems: bool) -> None:
+    """Each population's encoding (default by model) against the sensor: LIF and force on a
+    taxel skin, an SA threshold in afferent scenes, opponent pairs on a MEMS fingertip."""
     for i, p in enumerate(pops):
         if p["encoding"] is None:
             p["encoding"] = "spikes" if p["model"] == "cuneate" else "FA"
@@ -360,6 +446,11 @@ def parse_scene(text: str, source: str = "<scene>", base_dir: Path | None = None
             V.err(f"population[{i}].pairs", "opponent pairs are a MEMS fingertip's "
                                             "(sensor.kind = \"mems\"); FBG afferents take "
                                             "gratings")
+
+
+def _check_population_wiring(V, pops: list, channels: int) -> None:
+    """Each population's name (unique), inputs, preset, and gratings (one neuron each) or
+    size (a spike-driven population's)."""
     names = [p["name"] for p in pops]
     for i, p in enumerate(pops):
         key = f"population[{i}]"
@@ -377,11 +468,11 @@ def parse_scene(text: str, source: str = "<scene>", base_dir: Path | None = None
         if p["encoding"] == "spikes" and not p["inputs"]:
             V.err(f"{key}.inputs", "a population driven by spikes needs inputs")
         if p["encoding"] != "spikes":
-            g = p["gratings"] if p["gratings"] is not None else list(range(sensor["channels"]))
+            g = p["gratings"] if p["gratings"] is not None else list(range(channels))
             for j, x in enumerate(g):
-                if not 0 <= x < sensor["channels"]:
+                if not 0 <= x < channels:
                     V.err(f"{key}.gratings[{j}]", f"out of range: grating {x} (the sensor has "
-                                                  f"{sensor['channels']} channels)")
+                                                  f"{channels} channels)")
             p["gratings"] = g
             if p["size"] is not None and p["size"] != len(g):
                 V.err(f"{key}.size", f"a sensor-driven population has one neuron per grating "
@@ -389,9 +480,12 @@ def parse_scene(text: str, source: str = "<scene>", base_dir: Path | None = None
             p["size"] = len(g)
         elif p["size"] is None:
             V.err(f"{key}.size", "missing required key for a spike-driven population")
-    if not ridges:
-        projs = _projections(V, raw, names)
-    # only what this build can simulate
+
+
+def _check_what_this_build_runs(V, sections: dict, pops: list, projs: list, kind) -> None:
+    """Only what this build simulates: cuneate populations and projections in ridge scenes and
+    an afferent scene's cuneate layer, a decoded population of an afferent scene."""
+    dec, names = sections["decoder"], [p["name"] for p in pops]
     for i, p in enumerate(pops):
         if p["model"] == "cuneate" and kind.name not in ("ridge", "afferent"):
             V.err(f"population[{i}].model", "cuneate populations run in ridge scenes and as "
@@ -399,7 +493,7 @@ def parse_scene(text: str, source: str = "<scene>", base_dir: Path | None = None
     if kind.name == "afferent":
         from ..network.scene import validate_layer
         validate_layer(V, sections, pops, projs)
-    elif projs and not ridges:
+    elif projs and kind.name != "ridge":
         V.err("projection[0]", "projections (coincidence delays) run in ridge scenes and into "
                                "the cuneate layer of afferent scenes")
     if dec["population"] and (kind.name != "afferent" or dec["population"] not in names):
@@ -407,20 +501,24 @@ def parse_scene(text: str, source: str = "<scene>", base_dir: Path | None = None
                                     f"its populations ({', '.join(names)}), or every afferent "
                                     f"(\"\")" if kind.name == "afferent" else
               "only afferent scenes decode a chosen population")
-    scene = Scene(source, sections, pops, projs, base_dir, kind.name)
+
+
+def _check_trials_fit(V, scene: Scene) -> None:
+    """The trials a board holds (``hardware.board_trials``) and the Izhikevich neurons of every
+    trial on one core."""
+    hw, st = scene["hardware"], scene["stimulus"]
     n_trials = scene.n_trials()
-    in_turn = kind.name in ("afferent", "texture") and st["kind"] != "recorded"
+    in_turn = scene.kind in ("afferent", "texture") and st["kind"] != "recorded"
     if hw["board_trials"] is not None and (not in_turn or hw["board_trials"] > n_trials):
         V.err("hardware.board_trials", f"a board holds some of an afferent scene's trials "
                                        f"(1 .. {n_trials})" if in_turn else "a board holds some "
               "of the trials of an afferent or texture scene with synthesized trials")
-    need = n_trials * sum(p["size"] for p in pops if p["model"] == "izhikevich")
+    need = n_trials * sum(p["size"] for p in scene.populations if p["model"] == "izhikevich")
     capacity = int(hw["clock_hz"] // hw["update_hz"])
     if need > capacity:
         V.err("hardware.clock_hz", f"the scene needs {need} Izhikevich neurons ({n_trials} "
                                    f"trials) but one core at {hw['clock_hz']:g} Hz / "
                                    f"{hw['update_hz']:g} Hz holds {capacity}")
-    return scene
 
 
 def _projections(V, raw: dict, names: list) -> list:

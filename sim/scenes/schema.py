@@ -20,7 +20,8 @@ EFFECT_NAMES = ("strain", "temperature", "noise", "resolution", "saturation",
                 "dropped_samples", "crosstalk")
 #: Neuron models a scene may name (``cuneate`` is the coincidence block's cuneate neurons).
 MODELS = ("izhikevich", "lif", "cuneate")
-STIMULUS_KINDS = ("grasp", "slide", "pulses", "recorded", "press", "ridges", "textures")
+STIMULUS_KINDS = ("grasp", "slide", "pulses", "recorded", "press", "ridges", "textures",
+                  "learning")
 
 
 class SceneError(ValueError):
@@ -187,6 +188,37 @@ SCHEMA: dict = {
                 # texture scenes (kind "vp"): the Victor-Purpura cost, in time and in space
                 "q_per_s": F(NUM, 5.0, lo=0, hi=1e6),
                 "q_per_mm": F(NUM, None, lo=0, hi=1e6)},
+    # a learning scene (stimulus.kind = "learning"): the thesis's protocol and the layer
+    "learning": {"presentations": F(int, 300, lo=1, hi=100_000),
+                 "test_presentations": F(int, 40, lo=2, hi=10_000),
+                 "jitter_ms": F(NUM, 5.0, lo=0, hi=1e3),
+                 "window_ms": F(list, [200.0, 700.0], items=NUM),
+                 "gap_ms": F(NUM, 50.0, lo=0, hi=1e4),
+                 "order_seed": F(int, 2, lo=0, hi=2**32 - 1),
+                 "anatomy_seed": F(int, 3, lo=0, hi=2**32 - 1),
+                 "afferent_gains": F(list, [0.5, 0.7, 1.0, 1.4, 2.0], items=NUM),
+                 "cns": F(int, 16, lo=1, hi=4096),
+                 "synapses_per_cn": F(int, 20, lo=1, hi=4096),
+                 "initial_weight_max": F(NUM, 3.6, lo=0, hi=1e3),
+                 "cn_preset": F(str, "RS"),
+                 "update_hz": F(NUM, 2000.0, lo=10, hi=1e6),
+                 "tau_syn_ms": F(NUM, 6.4, lo=1e-3, hi=1e4),
+                 "g_inh": F(NUM, 0.3, lo=0, hi=1e3),
+                 "current_limit": F(NUM, 64.0, lo=1e-3, hi=1e4),
+                 "tau_rise_ms": F(NUM, 4.0, lo=1e-3, hi=1e4),
+                 "tau_decay_ms": F(NUM, 12.5, lo=1e-3, hi=1e4),
+                 "tau_1_ms": F(NUM, 21.0, lo=1e-3, hi=1e4),
+                 "latency_ms": F(NUM, 1.0, lo=0, hi=1e3),
+                 "theta": F(NUM, 0.0, lo=-1e3, hi=1e3),
+                 "eta": F(NUM, 2e-6, lo=0, hi=1e3),
+                 "w_max": F(NUM, 6.0, lo=1e-3, hi=1e3),
+                 "w_pot": F(NUM, 4.5, lo=-1e3, hi=1e3),
+                 "w_dep": F(NUM, 0.5, lo=-1e3, hi=1e3),
+                 "slope": F(NUM, 0.5, lo=1e-6, hi=1e3),
+                 "strong_fraction": F(NUM, 0.5, lo=0, hi=1),
+                 "snapshot_every": F(int, 50, lo=1, hi=100_000),
+                 # golden's pair-based STDP on the same protocol, beside AIDP
+                 "compare_stdp": F(bool, False)},
     "run": {"engines": F(list, ["golden", "fixed", "verilator"], items=str),
             "waves": F(str, "", max_len=4096),
             "waves_start_tick": F(int, 0, lo=0),

@@ -29,6 +29,15 @@ from pathlib import Path
 
 import numpy as np
 
+from ...golden.budget import BASE_BYTES, array_bytes
+from ...hdl.lib.fixed import QFormat
+from ..engines.registry import ENGINES, check_engine, estimate_seconds
+from ..lif.engines import engine_config
+from ..lif.experiments import skin_grid, skin_protocol
+from ..report import (DPI, board_link_line, files_html, fmt, fmt_distinct, html_table, pyplot,
+                      write_page)
+from ..spikes import write_spikes
+
 __all__ = ["LIF_PRESETS", "validate", "SkinSceneRun", "run", "summary", "write_report",
            "format_run", "estimate"]
 
@@ -76,7 +85,6 @@ def validate(V, raw: dict, sections: dict, pops: list, projs: list) -> None:
     if raw.get("scene", {}).get("trials", 1) != 1:
         V.err("scene.trials", "a press stimulus is deterministic: one trial")
     sc["trials"] = 1
-    from ..lif.experiments import skin_protocol
     hold = int(round(hw["update_hz"] / sen["sample_rate_hz"]))
     force, _ = skin_protocol(st["press_widths_ms"], st["press_amplitudes_N"],
                              st["press_base_amplitude_N"], st["press_base_width_ms"],
@@ -113,7 +121,6 @@ def validate(V, raw: dict, sections: dict, pops: list, projs: list) -> None:
     raw_hw = raw.get("hardware", {})
     hw["current_int_bits"] = raw_hw.get("current_int_bits", LIF_CURRENT_FORMAT[0])
     hw["current_frac_bits"] = raw_hw.get("current_frac_bits", LIF_CURRENT_FORMAT[1])
-    from ...hdl.lib.fixed import QFormat
     fmt = QFormat(hw["current_int_bits"], hw["current_frac_bits"])
     f_max = max(st["press_amplitudes_N"] + [st["press_base_amplitude_N"]])
     ends = [fe["force_offset_mV"], fe["force_offset_mV"] + fe["force_gain_mV_per_N"] * f_max]
@@ -136,8 +143,6 @@ def estimate(scene, engines: list[str]) -> dict:
     """Memory (bytes) and time (s) of the skin scene on ``engines``: the force and current
     arrays per tick and taxel (and each engine's program), each engine's updates (or cycles)
     at the registry's speed."""
-    from ...golden.budget import BASE_BYTES, array_bytes
-    from ..engines.registry import ENGINES, estimate_seconds
     rows, cols = scene["sensor"]["grid"]
     n = rows * cols
     n_ticks = scene["scene"]["duration_ms"] * scene["hardware"]["update_hz"] / 1000.0
@@ -171,7 +176,6 @@ class SkinSceneRun:
 def core_keywords(scene) -> dict:
     """The LIF core keywords of the scene (current format, rounding, its population's preset):
     what the engines and a board for the scene share."""
-    from ...hdl.lib.fixed import QFormat
     hw, p = scene["hardware"], scene.populations[0]
     return {"current_format": QFormat(hw["current_int_bits"], hw["current_frac_bits"]),
             "rounding": hw["rounding"], "param_sets": [dict(LIF_PRESETS[p["preset"]])]}
@@ -180,9 +184,6 @@ def core_keywords(scene) -> dict:
 def run(scene, engines: list[str] | None = None, build_dir: Path | None = None,
         progress: bool = False, log=None) -> SkinSceneRun:
     """Run a taxel-skin scene on its engines (or ``engines``)."""
-    from ..engines.registry import ENGINES, check_engine
-    from ..lif.engines import engine_config
-    from ..lif.experiments import skin_grid
     from .runner import agreement
     say = log or (lambda msg: None)
     st, sen, fe, hw = scene["stimulus"], scene["sensor"], scene["frontend"], scene["hardware"]
@@ -250,7 +251,6 @@ def summary(run: SkinSceneRun) -> dict:
 
 def format_run(run: SkinSceneRun) -> str:
     """The lines ``cuneate run`` prints for a skin scene."""
-    from ..report import board_link_line
     rows, cols = run.scene["sensor"]["grid"]
     out = [f"{run.scene.name}: {rows}x{cols} taxels, pressed taxel "
            f"{run.scene['stimulus']['press_taxel']}, engines {', '.join(run.results)}"]
@@ -269,7 +269,6 @@ def format_run(run: SkinSceneRun) -> str:
 
 
 def _figures(run: SkinSceneRun, out: Path) -> list[str]:
-    from ..report import DPI, pyplot
     plt = pyplot()
     names = []
     first = next(iter(run.results.values()))
@@ -311,7 +310,6 @@ def _figures(run: SkinSceneRun, out: Path) -> list[str]:
 def write_spike_files(run: SkinSceneRun, out: Path) -> dict:
     """``spikes_<engine>.npz`` per engine (:mod:`cuneate.sim.spikes`): one neuron per taxel,
     its grating the taxel index, the class the pressed taxel; returns ``{engine: file}``."""
-    from ..spikes import write_spikes
     pop = run.scene.populations[0]["name"]
     files = {}
     for e, r in run.results.items():
@@ -327,8 +325,6 @@ def write_spike_files(run: SkinSceneRun, out: Path) -> dict:
 
 def write_report(run: SkinSceneRun, out: Path) -> Path:
     """Write ``index.html``, ``run.json`` and figures into ``out``; returns the HTML path."""
-    from ..report import (board_link_line, files_html, fmt, fmt_distinct, html_table,
-                          write_page)
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     run.files = {"spikes": write_spike_files(run, out)}

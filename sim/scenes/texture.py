@@ -39,9 +39,17 @@ from pathlib import Path
 
 import numpy as np
 
+from ...golden.textures import Texture, texture
+from .. import progress as prog
+from ..decode import TEXTURE_DECODERS, confusions
+from ..report import (agreement_html, engine_figures, files_html, fmt, html_table, pyplot, ran_html,
+                      save_figure, summary_dict, write_page)
+from . import afferent
+from .afferent import write_spike_files
 from .texture_grid import GridRun, format_grid, grid_summary, run_grid, write_grid
-from .texture_trials import (DEFAULTS, SEEDS, condition_scene, conditions, core_cost, is_grid,
-                             pct as _pct, protocol, run_single)
+from .texture_trials import DEFAULTS, SEEDS, condition_scene, conditions, core_cost, is_grid
+from .texture_trials import pct as _pct
+from .texture_trials import protocol, run_single
 
 __all__ = ["fill_defaults", "validate", "estimate", "run", "summary", "write_report",
            "format_run"]
@@ -71,8 +79,8 @@ def fill_defaults(V, raw: dict, sections: dict) -> None:
         sections["scene"]["duration_ms"] = protocol(sections).duration_ms
 
 
-def _texture(V, i: int, t):
-    from ...golden.textures import Texture, texture
+def validated_texture(V, i: int, t):
+    """The texture named or described by ``stimulus.textures[i]`` (``V.err`` refuses it)."""
     if isinstance(t, dict):
         unknown = set(t) - set(Texture.__dataclass_fields__) - {"like"}
         if unknown or "name" not in t:
@@ -99,7 +107,7 @@ def validate(V, raw: dict, sections: dict, pops: list, projs: list) -> None:
     if st["kind"] == "textures":
         if not st["textures"]:
             V.err("stimulus.textures", "must not be empty")
-        names = [_texture(V, i, t).name for i, t in enumerate(st["textures"])]
+        names = [validated_texture(V, i, t).name for i, t in enumerate(st["textures"])]
         if len(set(names)) != len(names):
             V.err("stimulus.textures", "names a texture twice")
     if hw["fanout"]:
@@ -148,7 +156,6 @@ def estimate(scene, engines: list[str], n_samples: int | None = None) -> dict:
     """Memory (bytes) and time (s): the afferent machinery's estimate of each condition
     (:func:`cuneate.sim.scenes.afferent.estimate`), the synthesis of every trial, and the VP
     matrices; a grid's conditions share its workers."""
-    from . import afferent
     conds = conditions(scene)
     workers = scene["grid"]["workers"] if len(conds) > 1 else 1
     nbytes, seconds = 0.0, 0.0
@@ -179,7 +186,6 @@ def run(scene, engines=None, build_dir=None, progress=False, log=None, waves=Non
 
 def summary(run) -> dict:
     """The run as a JSON-ready dictionary (``run.json``)."""
-    from ..report import summary_dict
     if isinstance(run, GridRun):
         return grid_summary(run)
     a = run.afferent
@@ -212,7 +218,6 @@ def _rows_text(d, e: str) -> list[str]:
 
 def format_run(run) -> str:
     """The lines ``cuneate run`` prints for a texture scene."""
-    from ..decode import confusions
     if isinstance(run, GridRun):
         return format_grid(run)
     a = run.afferent
@@ -291,7 +296,6 @@ def _fig_signals(run, out: Path, plt) -> list[tuple[str, str]]:
     axes[-1][0].set_xlabel("time (ms)")
     axes[0][0].legend(fontsize=6)
     fig.tight_layout()
-    from ..report import save_figure
     save_figure(fig, out / "signals.png")
     fig, ax = plt.subplots(figsize=(8, 3.4))
     v = a.trial_info[firsts[0]]["tethers_V"]
@@ -310,7 +314,6 @@ def _fig_signals(run, out: Path, plt) -> list[tuple[str, str]]:
 
 def _fig_decoding(run, e: str, d, out: Path, plt) -> list[tuple[str, str]]:
     from sklearn.metrics import ConfusionMatrixDisplay
-    from ..report import save_figure
     names = []
     h = d.headline
     D = d.matrices[h.channel]
@@ -350,8 +353,6 @@ def _fig_decoding(run, e: str, d, out: Path, plt) -> list[tuple[str, str]]:
 
 
 def _decoding_html(run) -> str:
-    from ..decode import TEXTURE_DECODERS, confusions
-    from ..report import html_table
     a = run.afferent
     head_rows, chan_rows, recall_rows, conf_rows, vp_rows = [], [], [], [], []
     for e, d in run.decoding.items():
@@ -399,14 +400,10 @@ vector, VP distances summed).</p>
 def write_report(run, out: Path) -> Path:
     """Write the spike files, figures, ``run.json`` and ``index.html`` into ``out``; returns
     the HTML path."""
-    from .. import progress as prog
-    from ..report import (agreement_html, engine_figures, files_html, fmt, html_table,
-                          pyplot, ran_html, write_page)
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     if isinstance(run, GridRun):
         return write_grid(run, out)
-    from .afferent import write_spike_files
     a = run.afferent
     a.files["spikes"] = write_spike_files(a, out)
     with prog.step("writing the texture report"):

@@ -12,8 +12,14 @@ from pathlib import Path
 
 import numpy as np
 
-from .texture_trials import SEEDS, condition_scene, conditions, pct as _pct, run_single, \
-    trains_by_channel
+from .. import progress as prog
+from ..decode import decode_conditions
+from ..provenance import provenance
+from ..report import html_table, pyplot, save_figure, write_page
+from ..sweep import dask_connect, dask_map
+from .texture_trials import SEEDS, condition_scene, conditions
+from .texture_trials import pct as _pct
+from .texture_trials import run_single, trains_by_channel
 
 __all__ = ["GridRun", "run_condition", "spatial_rows", "run_grid", "grid_table", "grid_notes",
            "format_grid", "write_grid", "grid_summary"]
@@ -56,7 +62,6 @@ def spatial_rows(scene, cells: list) -> list[dict]:
     """The spatial VP (and the temporal one beside it) across the velocities at the scene's
     force and across the forces at its velocity: spikes within the slide, as times from its
     start (ms) or positions (mm, times the trial's velocity)."""
-    from ..decode import decode_conditions
     st, dec = scene["stimulus"], scene["decoder"]
     q_t = dec["q_per_s"] / 1000.0
     q_x = dec["q_per_mm"] if dec["q_per_mm"] is not None else \
@@ -92,8 +97,6 @@ def spatial_rows(scene, cells: list) -> list[dict]:
 def run_grid(scene, engines=None, build_dir=None, progress=False, log=None) -> GridRun:
     """Every condition of the scene's grid (Dask, :func:`cuneate.sim.sweep.dask_map`), then
     the spatial VP."""
-    from .. import progress as prog
-    from ..sweep import dask_connect, dask_map
     g = scene["grid"]
     names = list(engines or scene.engines)
     conds = conditions(scene)
@@ -119,7 +122,6 @@ def run_grid(scene, engines=None, build_dir=None, progress=False, log=None) -> G
 
 def grid_summary(run) -> dict:
     """A grid's ``run.json``: each condition's decoding (not its trains), the spatial VP."""
-    from ..provenance import provenance
     return {"scene": run.scene.name, "source": run.scene.source, "kind": "texture grid",
             "cells": [{k: v for k, v in c.items() if k != "trains"} for c in run.cells],
             "spatial": run.spatial, "timing": run.timing, "seeds": SEEDS,
@@ -195,7 +197,6 @@ def format_grid(run) -> str:
 
 
 def write_grid(run, out: Path) -> Path:
-    from ..report import html_table, pyplot, save_figure, write_page
     plt = pyplot()
     figs = []
     for e in run.cells[0]["decoding"]:

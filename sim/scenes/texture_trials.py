@@ -11,6 +11,19 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ...golden import mems
+from ...golden.mems import pair_names
+from ...golden.sliding import Protocol, prepare, slide_loads, surface_extent
+from ...golden.textures import surface, texture
+from .. import progress as prog
+from ..decode import decode_textures
+from ..host.driver import AfferentEncoding
+from ..host.traces import TraceError, load_trace
+from . import afferent
+from .afferent import Neurons
+from .scene import Scene
+from .stimulus import merge_counts
+
 __all__ = ["DEFAULTS", "SEEDS", "protocol", "conditions", "is_grid", "condition_scene",
            "synthesize", "build_neurons", "TextureRun", "channel_names", "trains_by_channel",
            "decode_run", "run_single", "core_cost", "pct"]
@@ -29,7 +42,6 @@ SEEDS = {"rate": "68 %", "rate + CV": "68-93 % by channel (78 % in the short pap
 
 def protocol(scene):
     """The platform's :class:`~cuneate.golden.sliding.Protocol` of a texture scene."""
-    from ...golden.sliding import Protocol
     st = scene["stimulus"]
     return Protocol(force_N=st["force_mN"] / 1000.0, velocity_mm_per_s=st["velocity_mm_per_s"],
                     slide_mm=st["slide_mm"], rest_ms=st["rest_ms"], indent_ms=st["indent_ms"],
@@ -53,7 +65,6 @@ def is_grid(scene) -> bool:
 
 def condition_scene(scene, force_mN: float, velocity_mm_per_s: float):
     """``scene`` at one condition, without its grid: the scene one cell runs."""
-    from .scene import Scene
     sec = copy.deepcopy(scene.sections)
     sec["stimulus"]["force_mN"] = float(force_mN)
     sec["stimulus"]["velocity_mm_per_s"] = float(velocity_mm_per_s)
@@ -71,8 +82,6 @@ def synthesize(scene):
     (``S``: per trial the eight opponent signals ``(n_samples, 8)`` in V; ``infos``: the trial's
     drawn parameters, with its 16 tethers' outputs under ``"tethers_V"``) - what
     :func:`cuneate.sim.scenes.afferent.run` takes as a stimulus."""
-    from ...golden import mems
-    from .stimulus import merge_counts
     st, sen, sc = scene["stimulus"], scene["sensor"], scene["scene"]
     fs = sen["sample_rate_hz"]
     params = {e: sen[e] for e in sen["effects"]}
@@ -80,8 +89,6 @@ def synthesize(scene):
     counts: dict = {}
     if st["kind"] == "recorded":
         return _recorded(scene, rng, params)
-    from ...golden.sliding import prepare, slide_loads, surface_extent
-    from ...golden.textures import surface, texture
     prot = protocol(scene)
     xr, yr = surface_extent(prot)
     classes = scene.classes()
@@ -103,9 +110,6 @@ def synthesize(scene):
 def _recorded(scene, rng, params):
     """A MEMS fingertip's recorded trials (``stimulus.file``, or one ``recordings`` table per
     trial): 16 tethers each, cut to the shortest recording (the trials share one core's run)."""
-    from ...golden import mems
-    from ..host.traces import TraceError, load_trace
-    from .stimulus import merge_counts
     st, sen = scene["stimulus"], scene["sensor"]
     recs = st["recordings"] or [{"file": st["file"], "label": st["label"]}]
     trs = [load_trace(r["file"], time_key=st["time_key"], data_key=st["data_key"],
@@ -134,8 +138,6 @@ def build_neurons(scene, n_trials: int):
     """The afferents of ``n_trials`` trials (trial-major, then population, then pair): SA
     encodings ``I = (K/R) S`` above ``S_th``, with ``S`` in volts (the driver's unit of 1000
     "pm" makes its input the signal itself, its threshold in mV)."""
-    from ..host.driver import AfferentEncoding
-    from .afferent import Neurons
     fe, fs = scene["frontend"], scene["sensor"]["sample_rate_hz"]
     nn = Neurons()
     for t in range(n_trials):
@@ -170,7 +172,6 @@ class TextureRun:
 
 def channel_names(scene) -> list[str]:
     """The decoded channels (one per population and pair) as the report names them."""
-    from ...golden.mems import pair_names
     names = pair_names()
     many = len(scene.populations) > 1
     return [f"{p['name']} {names[g]}" if many else names[g]
@@ -186,7 +187,6 @@ def trains_by_channel(spikes, n_trials: int, channels: list[str]) -> dict:
 
 def decode_run(scene, arun) -> dict:
     """The texture decoding of every engine of an afferent-machinery run ``arun``."""
-    from ..decode import decode_textures
     dec = scene["decoder"]
     if dec["kind"] == "none":
         return {}
@@ -204,8 +204,6 @@ def run_single(scene, engines=None, build_dir=None, progress=False, log=None, wa
     """One condition: the afferent machinery (``in_turn``: its trials that many at a time, as
     a board holding them plays them, :mod:`cuneate.sim.scenes.in_turn`), then the texture
     decoders."""
-    from .. import progress as prog
-    from . import afferent
     arun = afferent.run(scene, engines, build_dir, progress, log, waves=waves,
                         synth=synthesize, build=build_neurons, in_turn=in_turn)
     t0 = time.perf_counter()

@@ -63,7 +63,7 @@ def test_a_ridge_scene_builds_the_network_behind_the_link(tmp_path, capsys):
     assert rows[3_000_000]["real_time"]
     assert rows[3_000_000]["in_load"] == pytest.approx(53 * 4000 / 300_000)
     v = (tmp_path / "b" / "cuneate_ulx3s_core.v").read_text()
-    assert "module cuneate_ulx3s_core" in v and "module \\cuneate_ulx3s_core.network.det" in v
+    assert "module cuneate_ulx3s_core" in v and "module \\cuneate_ulx3s_core.payload.network.det" in v
 
 
 def test_the_skin_scene_builds_the_lif_core_behind_the_link(tmp_path, capsys):
@@ -185,10 +185,10 @@ def test_the_whole_hand_bitstream_meets_timing(tmp_path, capsys):
     print("\n" + (tmp_path / "cuneate_ulx3s.report.txt").read_text())
 
 
-@pytest.mark.parametrize("scene, leds", [("skin_3x3", 2), ("ridge4k", 2), ("whole_hand", 3)])
-def test_a_scenes_board_top_elaborates_for_the_ulx3s(tmp_path, scene, leds):
+@pytest.mark.parametrize("scene", ["skin_3x3", "ridge4k", "whole_hand"])
+def test_a_scenes_board_top_elaborates_for_the_ulx3s(tmp_path, scene):
     """The board top of each kind in the ULX3S platform (amaranth's build files, no tools):
-    the PLL, the UART, a LED for running and overflow, and for the fan-out its clamp."""
+    the PLL, the UART, a LED each for running, overflow and a clamp."""
     from cuneate.boards.build import size_blocks
     from cuneate.boards.scene import scene_request
     from cuneate.boards.targets import TARGETS
@@ -198,11 +198,11 @@ def test_a_scenes_board_top_elaborates_for_the_ulx3s(tmp_path, scene, leds):
     sc = parse_scene(example_text("ridge_angle") + "\n[hardware]\nupdate_hz = 4000\n",
                      "ridge4k.toml") if scene == "ridge4k" else load_scene(example_path(scene))
     sized = size_blocks(t, scene_request(sc, t), None, None)
-    plan = t["platform"]().prepare(BoardTop(sized["top"](), sized["pll"], True), name="top")
+    plan = t["platform"]().prepare(BoardTop(sized["link"], sized["pll"], True), name="top")
     il, lpf = (plan.files[f"top.{x}"] for x in ("il", "lpf"))
     il, lpf = (f.decode() if isinstance(f, bytes) else f for f in (il, lpf))
     assert "EHXPLLL" in il and "uart_0__rx" in lpf and "uart_0__tx" in lpf
-    assert [f"led_{i}__io" in lpf for i in range(4)] == [i < leds for i in range(4)]
+    assert [f"led_{i}__io" in lpf for i in range(4)] == [True, True, True, False]
 
 
 def test_a_sweep_too_short_for_the_blocks_is_refused():
@@ -224,5 +224,5 @@ def test_a_sweep_too_short_for_the_blocks_is_refused():
         size_blocks(t, scene_request(sc, t, real_time=False), None, None)
     msg = str(err.value)
     assert "\n" not in msg and "no clock plan holds the scene's lif_core" in msg
-    assert "a sweep of 3500 cycles cannot hold the LIF core's 4096 cycles of work and the " \
+    assert "a sweep of 3500 cycles cannot hold the lif_core's 4096 cycles of work and the " \
            "link's 16 idle ones" in msg and "(fmax limit)" in msg

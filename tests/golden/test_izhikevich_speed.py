@@ -28,7 +28,8 @@ def assert_same(ref, fast):
 
 
 @pytest.mark.parametrize("scheme", ["euler", "izhikevich"])
-@pytest.mark.parametrize("dtype", [np.float64, np.float32])
+# float64 in the default lane, float32 (its own compiled loops) in the long lane
+@pytest.mark.parametrize("dtype", [np.float64, pytest.param(np.float32, marks=pytest.mark.long)])
 def test_same_spikes_and_state_mixed_sets_all_current_forms(scheme, dtype):
     n, steps = 40, 3000
     params = [MIX[i % len(MIX)] for i in range(n)]

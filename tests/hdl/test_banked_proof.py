@@ -38,25 +38,22 @@ def test_the_proof_catches_the_fault(mutant, registered, tmp_path):
     assert check in r.failed, r
 
 
-def test_a_write_landing_in_the_wrong_bank_is_caught(tmp_path, monkeypatch):
+def test_a_write_landing_in_the_wrong_bank_is_caught(tmp_path):
     """Every bank written (the bank decode of the write enable left out): the RAM's word at
     the tracked address goes wrong at the first write to another bank."""
     from amaranth import Module
 
-    from cuneate.hdl.lib import banked
-    real = banked.prefetched_memory
+    from cuneate.hdl.lib.banked import prefetched_memory
 
     def every_bank(m: Module, name, shape, depth, init, read_addr, shapes, **kw):
-        mem = real(m, name, shape, depth, init, read_addr, shapes, **kw)
+        mem = prefetched_memory(m, name, shape, depth, init, read_addr, shapes, **kw)
         for b, bank in enumerate(mem.banks[1:], 1):
             stray = bank.write_port()
             lo = (mem.bank_depth - 1).bit_length()
             m.d.comb += [stray.addr.eq(mem.wr_addr[:lo]), stray.data.eq(mem.wr_data),
                          stray.en.eq(mem.wr_en)]
         return mem
-    from cuneate.hdl.lib import banked_proof
-    monkeypatch.setattr(banked_proof, "prefetched_memory", every_bank)
-    r = prove_banked(tmp_path, 10, 4, mode="bmc", k=3)
+    r = prove_banked(tmp_path, 10, 4, mode="bmc", k=3, memory=every_bank)
     assert r.status == "fail" and "the_RAM_s_word_at_t" in r.failed, r
 
 

@@ -5,7 +5,7 @@ by a shallow bounded run from the initial state."""
 import numpy as np
 import pytest
 
-from cuneate.hdl.coincidence import core as coincidence_core
+from cuneate.hdl.coincidence import CoincidenceDetector
 from cuneate.hdl.coincidence.datapath import history_slot
 from cuneate.hdl.coincidence.formal_core import (MUTANTS, coincidence_proof_config,
                                                  induction_depth, prove_coincidence,
@@ -31,6 +31,8 @@ def test_the_history_slot_is_the_ring_index_of_the_delayed_tick():
     assert np.array_equal(history_slot(slot, delay, D), (slot - delay) % D)
 
 
+# the long lane (CI); the wider detector in the release lane
+@pytest.mark.long
 def test_the_detector_equals_its_one_tick_reference_for_every_input_sequence(tmp_path):
     """k-induction at a target's period + 2 (k = 10 for 2 sources; about 20 s with yices):
     base case and step both pass, for every tick, input spike and clamp-clear sequence."""
@@ -39,7 +41,7 @@ def test_the_detector_equals_its_one_tick_reference_for_every_input_sequence(tmp
     assert r.passed and r.mode == "prove" and r.depth == induction_depth(cfg) == 10, r
 
 
-@pytest.mark.long
+@pytest.mark.release
 def test_a_wider_detector_equals_its_one_tick_reference(tmp_path):
     """Three sources, three targets on two parameter sets, a five-tick history, every delay
     from 0 to 4 (k = 11)."""
@@ -61,11 +63,18 @@ def test_the_detector_proof_catches_the_fault(mutant, tmp_path):
     assert check in r.failed, r
 
 
-def test_a_datapath_fault_in_the_detector_is_caught(tmp_path, v_one_high):
+class _VOneHigh(CoincidenceDetector):
+    @staticmethod
+    def update_state(cfg, *args):
+        out = dict(CoincidenceDetector.update_state(cfg, *args))
+        out["v"] = out["v"] + 1
+        return out
+
+
+def test_a_datapath_fault_in_the_detector_is_caught(tmp_path):
     """The detector's update stage gives v + 1 (the reference keeps the true stage function)."""
-    v_one_high(coincidence_core)
     r = prove_coincidence(coincidence_proof_config(), tmp_path, mode="bmc", depth=10,
-                          timeout_s=600)
+                          timeout_s=600, detector=_VOneHigh)
     assert r.status == "fail" and "tracked_update_upd_v" in r.failed, r
 
 
@@ -79,8 +88,7 @@ def test_the_history_address_is_the_delayed_ticks_slot_for_every_slot_and_delay(
     assert r.passed and r.mode == "bmc", r
 
 
-def test_a_ring_address_without_the_wrap_is_caught(tmp_path, monkeypatch):
-    from cuneate.hdl.coincidence import formal_core
-    monkeypatch.setattr(formal_core, "history_slot", lambda slot, delay, depth: slot - delay)
-    r = prove_history_slot(coincidence_proof_config(), tmp_path)
+def test_a_ring_address_without_the_wrap_is_caught(tmp_path):
+    r = prove_history_slot(coincidence_proof_config(), tmp_path,
+                           slot=lambda slot, delay, depth: slot - delay)
     assert r.status == "fail" and "history_slot_in_the_ring" in r.failed, r

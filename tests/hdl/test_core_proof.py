@@ -4,7 +4,7 @@ each found by a shallow bounded run from the initial state (default lane, second
 
 import pytest
 
-from cuneate.hdl.izhikevich import IzhikevichConfig, datapath
+from cuneate.hdl.izhikevich import IzhikevichConfig, IzhikevichCore, datapath
 from cuneate.hdl.izhikevich.formal_core import (MUTANTS, induction_depth, proof_config,
                                                 prove_core)
 from cuneate.sim.hardcases import record
@@ -30,6 +30,8 @@ def cfg():
     return proof_config()
 
 
+# the long lane (CI), beside the proofs the mutants break
+@pytest.mark.long
 @pytest.mark.parametrize("mutant", sorted(EXPECTED))
 def test_the_proof_catches_the_fault(cfg, mutant, tmp_path):
     """A bounded run from the initial state, just deep enough, finds a counterexample in the
@@ -41,12 +43,24 @@ def test_the_proof_catches_the_fault(cfg, mutant, tmp_path):
     assert check in r.failed, r
 
 
-def test_a_datapath_fault_in_the_core_is_caught(cfg, tmp_path, v_one_high):
-    """The core built with a faulty last stage (v one LSB high; the reference keeps the true
-    stage functions, bound at import) fails at the tracked neuron's first update: the
-    uninterpreted products do not hide the arithmetic around them."""
-    v_one_high(datapath, "select_step", "v_next")
-    r = prove_core(cfg, tmp_path, mode="bmc", depth=induction_depth(cfg), timeout_s=600)
+def _select_v_one_high(cfg, x):
+    out = dict(datapath.select_step(cfg, x))
+    out["v_next"] = out["v_next"] + 1
+    return out
+
+
+class _VOneHigh(IzhikevichCore):
+    """The core with a faulty last step: v one LSB high."""
+
+    STEPS = IzhikevichCore.STEPS[:-1] + (IzhikevichCore.STEPS[-1].with_fn(_select_v_one_high),)
+
+
+def test_a_datapath_fault_in_the_core_is_caught(cfg, tmp_path):
+    """The core built with a faulty last step (v one LSB high; the reference keeps the true
+    steps) fails at the tracked neuron's first update: the uninterpreted products do not hide
+    the arithmetic around them."""
+    r = prove_core(cfg, tmp_path, mode="bmc", depth=induction_depth(cfg), timeout_s=600,
+                   core=_VOneHigh)
     assert r.status == "fail", r
     assert "tracked_update_upd_v" in r.failed, r
 
@@ -95,7 +109,9 @@ def test_the_default_configuration_core_equals_the_one_step_datapath(tmp_path):
 
 
 @pytest.mark.long
-@pytest.mark.parametrize("depth", [6, 7, 8, 9])
+# the deepest in CI; the depths between in the release lane (make test-release)
+@pytest.mark.parametrize("depth", [*[pytest.param(d, marks=pytest.mark.release) for d in (6, 7, 8)],
+                                   9])
 def test_every_deeper_pipeline_equals_the_one_step_datapath(depth, tmp_path):
     """k-induction of every deeper pipeline on its smallest core (N = depth + 1: a neuron is
     fetched again as its registered write-back lands - at depths 5-8 its memories are read a

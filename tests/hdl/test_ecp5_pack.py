@@ -11,6 +11,7 @@ import json
 import random
 import shutil
 import subprocess
+import sys
 
 import pytest
 from amaranth import Module, Signal, signed
@@ -117,9 +118,15 @@ endmodule
 
 
 def _ram_model() -> str:
-    """A DP16KD in the 1024 x 18 mode on both ports: write on A (``WEA``, byte enables
-    ``ADA0/1``), read on either port into its latch at the clock when ``CE``; with
-    ``REGMODE = "OUTREG"`` the latch goes through the output register (enable ``OCE``)."""
+    """A DP16KD (Lattice TN1264) in the modes yosys maps to: 2048 x 9 and 1024 x 18 on either
+    port, and 512 x 36 (port A writes ``DIB:DIA`` with byte enables ``ADA0..3``, port B reads
+    into ``DOB:DOA``). A port reads into its latch at the clock when ``CE``; a write with
+    ``WE`` updates the word and sets the latch per ``WRITEMODE`` (``NORMAL``: unchanged,
+    ``WRITETHROUGH``: the new word, ``READBEFOREWRITE``: the old one). With ``REGMODE =
+    "OUTREG"`` the latch goes through the output register (enable ``OCE``; in the 36-bit mode
+    port B's ``REGMODE_B``/``OCEB`` for all 36 bits). Contents from ``INITVAL_00..3F`` (18 of
+    every 20 bits, as yosys's ``brams_map_16kd.v`` writes them); ``RST`` clears the latch at
+    the clock (both netlists' block RAMs tie it low)."""
     def bus(p, n):
         return ", ".join(f"{p}{i}" for i in reversed(range(n)))
     ports = ", ".join(f"input {bus(f'DI{s}', 18)}, input {bus(f'AD{s}', 14)}, "
@@ -130,16 +137,29 @@ def _ram_model() -> str:
         body.append(f"""
   wire [17:0] di{s} = {{{bus(f'DI{s}', 18)}}};
   wire [13:0] ad{s} = {{{bus(f'AD{s}', 14)}}};
-  reg [17:0] latch{s} = 0, oreg{s} = 0;
+  localparam W{s} = DATA_WIDTH_{s};
+  // the first 9-bit unit of the word and how many units it spans
+  wire [10:0] u{s} = W{s} == 9 ? ad{s}[13:3] : W{s} == 18 ? {{ad{s}[13:4], 1'b0}}
+                    : {{ad{s}[13:5], 2'b0}};
+  localparam N{s} = W{s} / 9;
+  reg [35:0] latch{s} = 0, oreg{s} = 0, old{s}, new{s};
+  integer k{s};
   always @(posedge CLK{s}) begin
-    if (CE{s} && WE{s}) begin
-      if (ad{s}[0]) mem[ad{s}[13:4]][8:0] <= di{s}[8:0];
-      if (ad{s}[1]) mem[ad{s}[13:4]][17:9] <= di{s}[17:9];
-    end
-    if (CE{s} && !WE{s}) latch{s} <= mem[ad{s}[13:4]];
+    old{s} = 0;
+    for (k{s} = 0; k{s} < N{s}; k{s} = k{s} + 1) old{s}[k{s} * 9 +: 9] = mem[u{s} + k{s}];
+    if (CE{s} && WE{s} && !(W{s} == 36 && "{s}" == "B")) begin
+      new{s} = old{s};
+      for (k{s} = 0; k{s} < N{s}; k{s} = k{s} + 1)
+        if (W{s} == 9 || ad{s}[k{s}]) begin
+          new{s}[k{s} * 9 +: 9] = k{s} >= 2 ? diB[(k{s} - 2) * 9 +: 9] : di{s}[k{s} * 9 +: 9];
+          mem[u{s} + k{s}] <= new{s}[k{s} * 9 +: 9];
+        end
+      if (WRITEMODE_{s} == "WRITETHROUGH") latch{s} <= new{s};
+      else if (WRITEMODE_{s} == "READBEFOREWRITE") latch{s} <= old{s};
+    end else if (CE{s}) latch{s} <= old{s};
+    if (RST{s}) latch{s} <= 0;
     if (OCE{s}) oreg{s} <= latch{s};
-  end
-  assign {{{bus(f'DO{s}', 18)}}} = REGMODE_{s} == "OUTREG" ? oreg{s} : latch{s};""")
+  end""")
     return f"""
 module DP16KD({ports});
   parameter DATA_WIDTH_A = 18, DATA_WIDTH_B = 18;
@@ -149,15 +169,21 @@ module DP16KD({ports});
   parameter WRITEMODE_A = "NORMAL", WRITEMODE_B = "NORMAL";
   parameter CLKAMUX = "CLKA", CLKBMUX = "CLKB";
   parameter INIT_DATA = "STATIC";
-  // the initial contents: zeros (the test's memory has none)
-  {" ".join(f"parameter INITVAL_{i:02X} = 0;" for i in range(64))}
-  reg [17:0] mem [0:1023];
+  {" ".join(f"parameter [319:0] INITVAL_{i:02X} = 0;" for i in range(64))}
+  localparam [20479:0] INIT = {{{", ".join(f"INITVAL_{i:02X}" for i in reversed(range(64)))}}};
+  reg [8:0] mem [0:2047];
   integer i;
-  initial for (i = 0; i < 1024; i = i + 1) mem[i] = 0;
-  initial if (DATA_WIDTH_A != 18 || DATA_WIDTH_B != 18) begin
-    $display("DP16KD model: 1024 x 18 mode only"); $finish;
+  initial for (i = 0; i < 2048; i = i + 1) mem[i] = INIT[(i / 2) * 20 + (i % 2) * 9 +: 9];
+  initial if (DATA_WIDTH_A != 9 && DATA_WIDTH_A != 18 && DATA_WIDTH_A != 36
+              || DATA_WIDTH_B != 9 && DATA_WIDTH_B != 18 && DATA_WIDTH_B != 36
+              || (DATA_WIDTH_A == 36) != (DATA_WIDTH_B == 36)) begin
+    $display("DP16KD model: 9, 18 or (both ports) 36 bits only"); $finish;
   end
 {"".join(body)}
+  wire [35:0] outA = REGMODE_A == "OUTREG" ? oregA : latchA;
+  wire [35:0] outB = REGMODE_B == "OUTREG" ? oregB : latchB;
+  assign {{{bus('DOA', 18)}}} = DATA_WIDTH_A == 36 ? outB[17:0] : outA[17:0];
+  assign {{{bus('DOB', 18)}}} = DATA_WIDTH_B == 36 ? outB[35:18] : outB[17:0];
 endmodule
 """
 
@@ -171,21 +197,28 @@ def netlists(tmp_path_factory):
     packed = json.loads((d / "products.json").read_text())
     report = pack_registers(packed)
     (d / "packed.json").write_text(json.dumps(packed))
-    (d / "mult18x18d.v").write_text(_mult_model())
-    (d / "dp16kd.v").write_text(_ram_model())
     for netlist, top in ((plain, "plain_top"), (packed, "packed_top")):
-        only_top = {"modules": {"products": netlist["modules"]["products"]}}
-        (d / f"{top}.json").write_text(json.dumps(only_top))
-        # the cells become yosys's ECP5 models and the models above (yosys's DP16KD has its
-        # parameters only), flattened into plain Verilog (Icarus does not read the models'
-        # elaboration-time checks)
-        run_yosys(d, f"read_json {top}.json; rename products {top}; "
-                     f"read_verilog -DNO_INCLUDES +/ecp5/cells_sim.v +/ecp5/cells_ff.vh; "
-                     f"delete DP16KD; read_verilog "
-                     f"mult18x18d.v dp16kd.v; hierarchy -top {top}; proc; flatten; "
-                     f"opt_clean; "
-                     f"write_verilog -noattr {top}.v")
+        _simulation_verilog(d, netlist, "products", top)
     return d, plain, packed, report
+
+
+def _simulation_verilog(d, netlist: dict, module: str, top: str, models: dict | None = None):
+    """``d/<top>.v``: module ``module`` of ``netlist`` renamed ``top``, its cells become
+    yosys's ECP5 models, the multiplier model above and ``models`` (cell type: Verilog, in
+    place of yosys's), flattened into plain Verilog (Icarus does not read the models'
+    elaboration-time checks); the DP16KD instances stay, for Icarus to simulate
+    ``d/dp16kd.v`` (yosys's DP16KD has its parameters only). Writes the models into ``d``."""
+    models = {"MULT18X18D": _mult_model(), **(models or {})}
+    for kind, text in models.items():
+        (d / f"{kind.lower()}.v").write_text(text)
+    (d / "dp16kd.v").write_text(_ram_model())
+    (d / f"{top}.json").write_text(json.dumps({"modules": {module: netlist["modules"][module]}}))
+    run_yosys(d, f"read_json {top}.json; rename {module} {top}; "
+                 f"read_verilog -DNO_INCLUDES +/ecp5/cells_sim.v +/ecp5/cells_ff.vh; "
+                 f"delete DP16KD {' '.join(models)}; read_verilog -lib dp16kd.v; "
+                 f"read_verilog {' '.join(f'{k.lower()}.v' for k in models)}; "
+                 f"hierarchy -top {top}; proc; flatten; opt_clean; "
+                 f"write_verilog -noattr {top}.v")
 
 
 def _cells(netlist, kind):
@@ -271,7 +304,7 @@ module tb;
 endmodule
 """)
     comp = subprocess.run(["iverilog", "-g2012", "-o", "sim.vvp", "plain_top.v",
-                           "packed_top.v", "tb.v"],
+                           "packed_top.v", "dp16kd.v", "tb.v"],
                           cwd=d, capture_output=True, text=True)
     assert comp.returncode == 0, comp.stderr[-2000:]
     run = subprocess.run(["vvp", "-n", "sim.vvp"], cwd=d, capture_output=True, text=True)
@@ -335,3 +368,159 @@ def test_command_line_rewrites_the_file_and_refuses_bad_input(netlists, tmp_path
     assert main([]) == 2
     err = capsys.readouterr().err
     assert "bad.json" in err and "usage" in err
+
+
+# The board: the ULX3S top over an 8-neuron core (40 cycles a sweep, 4 clocks a UART bit)
+BOARD_CPB = 4
+BOARD_CORE = dict(n_neurons=8, clock_hz=16e3 * 40, update_hz=16e3, spike_fifo_depth=16)
+# the pads: an input pad's pin drives O, an output pad's I drives the pin (yosys's model,
+# flattened, leaves an input pad's O undriven)
+IO_MODEL = """
+module TRELLIS_IO(inout B, input I, input T, output O);
+  parameter DIR = "INPUT";
+  assign O = B;
+  if (DIR != "INPUT") assign B = I;
+endmodule
+"""
+PLL_MODEL = """
+module EHXPLLL(input CLKI, CLKFB, RST, STDBY, PHASESEL0, PHASESEL1, PHASEDIR, PHASESTEP,
+               PHASELOADREG, PLLWAKESYNC, ENCLKOP, ENCLKOS, ENCLKOS2, ENCLKOS3,
+               output CLKOP, CLKOS, CLKOS2, CLKOS3, LOCK, INTLOCK, REFCLK, CLKINTFB);
+  // the test's clock passes through; locked after 16 input clocks
+  %s
+  reg [4:0] n = 0;
+  always @(posedge CLKI) if (!n[4]) n <= n + 1;
+  assign CLKOP = CLKI, LOCK = n[4];
+endmodule
+"""
+
+
+def _uart_bytes(bits: str, cpb: int) -> bytes:
+    """The 8N1 bytes of a line sampled once a clock (``bits``: '0'/'1' per cycle)."""
+    out, i = bytearray(), 1
+    while i < len(bits):
+        if bits[i - 1] == "1" and bits[i] == "0":
+            mid = i + cpb // 2
+            if mid + 9 * cpb >= len(bits):
+                break
+            out.append(sum(int(bits[mid + (k + 1) * cpb]) << k for k in range(8)))
+            i = mid + 9 * cpb
+        else:
+            i += 1
+    return bytes(out)
+
+
+def test_the_packing_platform_packs_between_yosys_and_nextpnr():
+    """An ECP5 board's build script runs the packing on yosys's netlist, in the build
+    directory, before nextpnr-ecp5 reads it; a platform of another family is refused."""
+    from cuneate.boards.targets import TARGETS
+    from cuneate.boards.top import BoardTop
+    from cuneate.hdl.flow.ecp5_pack import packing_platform
+    from cuneate.hdl.link import link_config
+    t = TARGETS["ulx3s"]
+    lc = link_config(BOARD_CORE, clocks_per_bit=BOARD_CPB, batch_sweeps=32, batch_capacity=40)
+    script = packing_platform(t["platform"]()).prepare(
+        BoardTop(lc, t["pll"], True), name="top").files["build_top.sh"]
+    lines = (script.decode() if isinstance(script, bytes) else script).splitlines()
+    at = {tool: next(i for i, ln in enumerate(lines) if ln.startswith(f'"${tool}"'))
+          for tool in ("YOSYS", "PYTHON", "NEXTPNR_ECP5")}
+    assert at["YOSYS"] < at["PYTHON"] < at["NEXTPNR_ECP5"]
+    assert lines[at["PYTHON"]].endswith(
+        "-m cuneate.hdl.flow.ecp5_pack top.json --report top.pack.json")
+    assert "--json top.json" in lines[at["NEXTPNR_ECP5"]]
+    with pytest.raises(ValueError, match="ECP5"):
+        packing_platform(TARGETS["icebreaker"]["platform"]())
+
+
+@pytest.mark.long
+def test_a_packed_board_top_equals_the_unpacked_one_every_cycle(tmp_path):
+    """The ULX3S board top (PLL, UART pins, LEDs, the link and an 8-neuron core), built by
+    the packing platform's own build script (``packing_platform``: yosys, then the packing
+    in the build directory; nextpnr and ecppack replaced by ``true``), its netlist kept just
+    before the packing: both netlists, simulated by Icarus side by side from the same UART
+    frames (currents, then 96 sweeps), drive the same tx and LEDs every cycle, and tx
+    carries the spike frames of a running core."""
+    import numpy as np
+    from cuneate.boards.targets import TARGETS
+    from cuneate.boards.top import BoardTop
+    from cuneate.hdl.flow.ecp5_pack import packing_platform
+    from cuneate.hdl.flow.tools import yowasp_env
+    from cuneate.hdl.link import link_config
+    from cuneate.hdl.link.codec import (MSG_SPIKES, OP_STEP, FrameDecoder, control_message,
+                                        encode_frame, parse_spikes, write_message)
+    target = TARGETS["ulx3s"]
+    lc = link_config(BOARD_CORE, clocks_per_bit=BOARD_CPB, batch_sweeps=32, batch_capacity=40)
+    plan = packing_platform(target["platform"]()).prepare(
+        BoardTop(lc, target["pll"], True), name="top")
+    wrap = tmp_path / "python_keeping_the_netlist"
+    wrap.write_text(f'#!/bin/sh\ncp top.json top.unpacked.json\nexec "{sys.executable}" "$@"\n')
+    wrap.chmod(0o755)
+    plan.execute_local(tmp_path, env=yowasp_env("ecp5") | {
+        "PYTHON": str(wrap), "NEXTPNR_ECP5": "true", "ECPPACK": "true"})
+    rep = json.loads((tmp_path / "top.pack.json").read_text())
+    assert rep["multipliers"] == 4 and rep["inputs_packed"] >= 2 and rep["outputs_packed"] >= 1
+    plain = json.loads((tmp_path / "top.unpacked.json").read_text())
+    packed = json.loads((tmp_path / "top.json").read_text())
+    fabric = [sum(c["type"] == "TRELLIS_FF" for c in n["modules"]["top"]["cells"].values())
+              for n in (plain, packed)]
+    assert fabric[0] - fabric[1] == rep["ffs_removed"] + rep["ram_ffs_removed"] > 0
+    pll = next(c for c in plain["modules"]["top"]["cells"].values() if c["type"] == "EHXPLLL")
+    models = {"EHXPLLL": PLL_MODEL % " ".join(f"parameter {k} = 0;" for k in pll["parameters"]),
+              "TRELLIS_IO": IO_MODEL}
+    for netlist, top in ((plain, "plain_top"), (packed, "packed_top")):
+        _simulation_verilog(tmp_path, netlist, "top", top, models)
+
+    rng = np.random.default_rng(5)
+    cur = lc.core.I.to_raw(rng.uniform(10.0, 60.0, 8))
+    wire = encode_frame(write_message(0, 0, 0, cur, lc.current_width)) + \
+        encode_frame(control_message(1, OP_STEP, 96))
+    bits = "".join("0" + "".join(str((b >> i) & 1) for i in range(8)) + "1" for b in wire)
+    cycles = 40 + len(bits) * BOARD_CPB + 96 * 40 + 3000
+    rx = "1" * 40 + "".join(c * BOARD_CPB for c in bits)
+    rx += "1" * (cycles - len(rx))
+    (tmp_path / "rx.mem").write_text("\n".join(rx) + "\n")
+    ports = ("uart_0__tx__io", "uart_tx_enable_0__io", "led_0__io", "led_1__io", "led_2__io")
+
+    def inst(top, k):
+        outs = ", ".join(f".{p}(o{k}[{i}])" for i, p in enumerate(ports))
+        return (f"  {top} u{k}(.clk25_0__io(clk_pin), .uart_0__rx__io(rx_pin), {outs});\n")
+    (tmp_path / "tb.v").write_text(f"""
+`timescale 1ns/1ps
+module tb;
+  reg clk = 0, rx = 1;
+  wire clk_pin = clk, rx_pin = rx;      // the pins are the I/O buffers' (inout) pads
+  reg rxmem [0:{cycles - 1}];
+  wire [{len(ports) - 1}:0] o0, o1;
+  integer t, errors = 0, unknown = 0;
+  always #5 clk = ~clk;
+{inst("plain_top", 0)}{inst("packed_top", 1)}
+  initial begin
+    $readmemb("rx.mem", rxmem);
+    for (t = 0; t < {cycles}; t = t + 1) begin
+      rx = rxmem[t];
+      @(posedge clk); #1;
+      if (o0 !== o1) begin
+        errors = errors + 1;
+        if (errors < 5) $display("MISMATCH cycle %0d: %b / %b", t, o0, o1);
+      end
+      if (t >= 40 && (^o0) === 1'bx) unknown = unknown + 1;
+      $write("%b", o0[0]);
+    end
+    $display("");
+    $display("CYCLES %0d ERRORS %0d UNKNOWN %0d", t, errors, unknown);
+    $finish;
+  end
+endmodule
+""")
+    comp = subprocess.run(["iverilog", "-g2012", "-o", "board.vvp", "plain_top.v",
+                           "packed_top.v", "dp16kd.v", "tb.v"], cwd=tmp_path, capture_output=True,
+                          text=True)
+    assert comp.returncode == 0, comp.stderr[-2000:]
+    run = subprocess.run(["vvp", "-n", "board.vvp"], cwd=tmp_path, capture_output=True,
+                         text=True)
+    assert f"CYCLES {cycles} ERRORS 0 UNKNOWN 0" in run.stdout, run.stdout[-2000:]
+    tx = run.stdout.split("CYCLES")[0].strip().splitlines()[-1]
+    frames = FrameDecoder().feed(_uart_bytes(tx, BOARD_CPB))
+    spikes = [s for f in frames if f.type == MSG_SPIKES for s in parse_spikes(f)[2]]
+    # three batches of 32 sweeps, the driven neurons spiking in them
+    assert sum(f.type == MSG_SPIKES for f in frames) == 3 and len(spikes) >= 8, frames

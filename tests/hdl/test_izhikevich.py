@@ -157,8 +157,10 @@ def _behaviour_config(letter):
                             u_init=[b.u0] * 8)
 
 
+# the presets in the default lane, the twenty behaviours in the long lane
 @pytest.mark.parametrize("which", ["RS", "IB", "CH", "FS", "LTS", "RZ"] +
-                         [f"behaviour {k}" for k in "ABCDEFGHIJKLMNOPQRS"])
+                         [pytest.param(f"behaviour {k}", marks=pytest.mark.long)
+                          for k in "ABCDEFGHIJKLMNOPQRS"])
 def test_one_step_bound_over_the_whole_clamp_box(which):
     """Single-set cores get the tightest derived formats: from random states filling the whole
     box [v_floor, v_th) x [u_lo, u_hi] and currents over the accepted range, no clamp acts and

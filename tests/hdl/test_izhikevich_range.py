@@ -156,7 +156,7 @@ def test_search_battery_reaches_deeper_than_constant_currents():
     assert r.v_min_search < -210 and r.n_stimuli > 90
 
 
-@pytest.mark.long
+@pytest.mark.release
 def test_long_full_scale_runs_never_clamp():
     """10 s of every preset under the search's extremes (constant ends, flips every 100 ms and
     every 1 ms, and a slow ramp), 64 neurons per preset, compared with golden."""
@@ -231,18 +231,22 @@ def test_compiled_search_names_the_same_divergence():
 
 def test_the_worst_accepted_update_rate_builds_in_seconds():
     """A configuration at the highest update rate the scene schema accepts (10 MHz, dt =
-    1e-4 ms: 5 million search steps) with two parameter sets builds within a generous bound
-    (under a second on an idle 2-core machine; a minute and more before the search was
-    compiled)."""
+    1e-4 ms: 5 million search steps) with two parameter sets builds, no clamp able to act,
+    within a generous bound of this process's CPU time (under a second on an idle 2-core
+    machine; a minute and more before the search was compiled). The search's compiled loop
+    is loaded first (a build at the default rate), so a cold compile cache is not timed, and
+    CPU time, not wall time, is bounded, so that other work on the machine is not timed
+    either."""
     import time
     from cuneate.hdl.izhikevich import range as rng_mod
     from cuneate.sim.scenes.schema import SCHEMA
     rate = SCHEMA["hardware"]["update_hz"].hi
+    IzhikevichConfig(n_neurons=8, param_sets=("RS", "FS"), neuron_sets=[0, 1] * 4)
     rng_mod._cached.cache_clear()
-    t0 = time.perf_counter()
+    t0 = time.process_time()
     cfg = IzhikevichConfig(n_neurons=8, clock_hz=rate * 8, update_hz=rate,
                            param_sets=("RS", "FS"), neuron_sets=[0, 1] * 4)
-    took = time.perf_counter() - t0
-    print(f"\n{rate:g} Hz, RS + FS: configuration built in {took:.2f} s")
+    took = time.process_time() - t0
+    print(f"\n{rate:g} Hz, RS + FS: configuration built in {took:.2f} s of CPU")
     assert cfg.dt_ms == 1000.0 / rate and not any(cfg.clamp_can_act.values())
-    assert took < 20.0
+    assert took < 10.0

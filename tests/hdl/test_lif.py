@@ -9,7 +9,7 @@ import pytest
 from cuneate.golden import lif as golden
 from cuneate.hdl.lif import (CLAMP_KINDS, PIPELINE_DEPTH, ConfigError, LifConfig, LifCore,
                              LifTwin)
-from cuneate.sim.engines.amaranth import simulate, write_currents
+from cuneate.sim.engines.amaranth import simulate, spikes_then_tick, write_currents
 
 
 # ---------------------------------------------------------------------------------- refusals
@@ -352,14 +352,7 @@ def test_host_weight_writes():
                 ctx.set(dut.w_wr_data, LifTwin.pack_weights(cfg, row))
                 await ctx.tick()
                 ctx.set(dut.w_wr_en, 0)
-            for s in np.flatnonzero(x[sweep]):
-                ctx.set(dut.in_valid, 1)
-                ctx.set(dut.in_source, int(s))
-                await ctx.tick()
-            ctx.set(dut.in_valid, 0)
-            ctx.set(dut.tick, 1)
-            await ctx.tick()
-            ctx.set(dut.tick, 0)
+            await spikes_then_tick(ctx, dut, np.flatnonzero(x[sweep]), ctx.tick, True)
             for _ in range(N + 6):
                 if ctx.get(dut.upd_valid):
                     i = ctx.get(dut.upd_index)

@@ -4,7 +4,7 @@ datapath (hdl/lif/formal_core.py), and the faults it must catch."""
 import pytest
 from amaranth.hdl import Fragment
 
-from cuneate.hdl.lif import core as lif_core
+from cuneate.hdl.lif import LifCore
 from cuneate.hdl.lif.formal_core import MUTANTS, LifCoreProof, lif_proof_config, prove_lif
 
 EXPECTED = {
@@ -43,10 +43,18 @@ def test_the_lif_proof_catches_the_fault(mutant, tmp_path):
     assert check in r.failed, r
 
 
-def test_a_datapath_fault_in_the_lif_core_is_caught(tmp_path, v_one_high):
+class _VOneHigh(LifCore):
+    @staticmethod
+    def update_state(cfg, *args):
+        out = dict(LifCore.update_state(cfg, *args))
+        out["v"] = out["v"] + 1
+        return out
+
+
+def test_a_datapath_fault_in_the_lif_core_is_caught(tmp_path):
     """The core's last stage gives v + 1 (the reference keeps the true stage function)."""
-    v_one_high(lif_core)
-    r = prove_lif(lif_proof_config(), tmp_path, mode="bmc", depth=7, timeout_s=600)
+    r = prove_lif(lif_proof_config(), tmp_path, mode="bmc", depth=7, timeout_s=600,
+                  core=_VOneHigh)
     assert r.status == "fail" and "tracked_update_upd_v" in r.failed, r
 
 
@@ -70,16 +78,18 @@ def test_the_lif_core_with_synaptic_traces_equals_the_one_step_datapath(kwargs, 
     assert r.passed and r.mode == "prove" and r.depth == 7, r
 
 
-def test_a_trace_fault_is_caught(tmp_path, monkeypatch):
+class _TraceOneHigh(LifCore):
+    @staticmethod
+    def trace_update(cfg, ys, ps):
+        out = list(LifCore.trace_update(cfg, ys, ps))
+        return [out[0] + 1] + out[1:]
+
+
+def test_a_trace_fault_is_caught(tmp_path):
     """The core's trace update gives the first trace one LSB high (the reference keeps the
     true ``trace_update``)."""
-    true_update = lif_core.trace_update
-
-    def faulty(cfg, ys, ps):
-        out = list(true_update(cfg, ys, ps))
-        return [out[0] + 1] + out[1:]
-    monkeypatch.setattr(lif_core, "trace_update", faulty)
-    r = prove_lif(lif_proof_config(**SYNAPSES), tmp_path, mode="bmc", depth=7, timeout_s=600)
+    r = prove_lif(lif_proof_config(**SYNAPSES), tmp_path, mode="bmc", depth=7, timeout_s=600,
+                  core=_TraceOneHigh)
     assert r.status == "fail" and "tracked_update_upd_xd_ampa" in r.failed, r
 
 
@@ -93,14 +103,16 @@ def test_the_lif_core_with_input_spikes_equals_the_one_step_datapath(writable, t
     assert r.passed and r.mode == "prove", r
 
 
-def test_an_input_spike_fault_is_caught(tmp_path, monkeypatch):
+class _IgnoresSource0(LifCore):
+    @staticmethod
+    def gather_input(cfg, I, x, w, traces=None):
+        return LifCore.gather_input(cfg, I, [x[0] & 0] + list(x[1:]), w, traces)
+
+
+def test_an_input_spike_fault_is_caught(tmp_path):
     """The core ignores source 0's spikes (the reference keeps the true ``gather_input``):
     the first update of a sweep with that spike active breaks the tracked update."""
-    true_gather = lif_core.gather_input
-
-    def faulty(cfg, I, x, w, traces=None):
-        return true_gather(cfg, I, [x[0] & 0] + list(x[1:]), w, traces)
-    monkeypatch.setattr(lif_core, "gather_input", faulty)
-    r = prove_lif(lif_proof_config(**INPUTS), tmp_path, mode="bmc", depth=8, timeout_s=600)
+    r = prove_lif(lif_proof_config(**INPUTS), tmp_path, mode="bmc", depth=8, timeout_s=600,
+                  core=_IgnoresSource0)
     assert r.status == "fail" and r.step == 7, r
     assert "tracked_update_upd_acc" in r.failed, r

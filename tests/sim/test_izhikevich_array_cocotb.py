@@ -57,11 +57,9 @@ def _run(simulator, case, spec, build_root):
 
 
 def _lane(simulator, case):
-    """The default lane runs both depths and the per-core sets on Icarus and the deepest on
-    Verilator (which compiles each design, the slower first run); Verilator's reference depth
-    and per-core sets run in the long lane."""
-    marks = pytest.mark.long if simulator == "verilator" and case != f"k3_n12_depth" \
-        f"{max(PIPELINE_STAGES)}" else ()
+    """The default lane runs both depths and the per-core sets on Icarus; Verilator (which
+    compiles each design, the slower first run) runs them in the long lane."""
+    marks = pytest.mark.long if simulator == "verilator" else ()
     return pytest.param(simulator, case, marks=marks, id=f"{simulator}-{case}")
 
 

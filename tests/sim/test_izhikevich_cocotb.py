@@ -63,18 +63,25 @@ for _depth in PIPELINE_STAGES:
         "sweeps": 600, "current_range": [-5.0, 120.0], "writes_per_sweep": 1.5}
 CASES[f"depth{max(PIPELINE_STAGES)}_clamps"] = dict(
     CASES["clamps"], core=dict(CASES["clamps"]["core"], pipeline_stages=max(PIPELINE_STAGES)))
-# the default lane runs the reference depth and the deepest; the depths between (also proven
-# by k-induction in the long lane) run in the long lane, as do the 2200-sweep full-scale run
-# and the deepest pipeline's clamps on Verilator (Icarus runs them in the default lane)
-LONG_CASES = {(s, f"depth{d}_back_to_back") for d in PIPELINE_STAGES for s in SIMULATORS
-              if d not in (min(PIPELINE_STAGES), max(PIPELINE_STAGES))}
-LONG_CASES |= {("verilator", "full_scale_long"),
-               ("verilator", f"depth{max(PIPELINE_STAGES)}_clamps")}
+# the default lane runs the reference depth and the deepest; the depths between run on Icarus
+# in the long lane (on Verilator, as their k-induction, in the release lane), as do the
+# deepest pipeline's clamps on Verilator (Icarus runs them, and the 2200-sweep full-scale run,
+# in the default lane; the full-scale run on Verilator is in the release lane)
+_BETWEEN = [d for d in PIPELINE_STAGES if d not in (min(PIPELINE_STAGES), max(PIPELINE_STAGES))]
+LONG_CASES = {("icarus", f"depth{d}_back_to_back") for d in _BETWEEN}
+LONG_CASES |= {("verilator", f"depth{max(PIPELINE_STAGES)}_clamps")}
+RELEASE_CASES = {("verilator", f"depth{d}_back_to_back") for d in _BETWEEN}
+RELEASE_CASES |= {("verilator", "full_scale_long")}
+
+
+def _lane(case):
+    return (pytest.mark.long if case in LONG_CASES else
+            pytest.mark.release if case in RELEASE_CASES else ())
 
 
 @pytest.mark.cocotb
 @pytest.mark.parametrize("simulator,case", [
-    pytest.param(s, c, id=f"{s}-{c}", marks=pytest.mark.long if (s, c) in LONG_CASES else ())
+    pytest.param(s, c, id=f"{s}-{c}", marks=_lane((s, c)))
     for s in SIMULATORS for c in CASES])
 def test_scoreboard(simulator, case, build_root):
     spec = dict(CASES[case], seed=11)

@@ -123,7 +123,7 @@ def test_scoreboard(simulator, case, build_root):
 
 @pytest.mark.cocotb
 @pytest.mark.parametrize("simulator,sweeps", [
-    pytest.param("verilator", 2500, marks=pytest.mark.long, id="verilator-2500"),
+    pytest.param("verilator", 2500, marks=pytest.mark.release, id="verilator-2500"),
     *[pytest.param(s, 10000, marks=pytest.mark.release, id=f"{s}-10000") for s in SIMULATORS]])
 def test_scoreboard_long(simulator, sweeps, build_root):
     """Thousands of sweeps of two parameter sets with input spikes and AMPA/GABA traces: steady

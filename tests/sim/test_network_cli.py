@@ -60,6 +60,7 @@ def test_changing_currents_are_written_before_their_tick():
     assert len(f.afferent_ms[2]) == 0
 
 
+@pytest.mark.long
 @pytest.mark.cocotb
 @pytest.mark.parametrize("simulator", SIMULATORS)
 def test_simulate_network_on_hdl_simulators_matches_twin(simulator, capsys, tmp_path):

@@ -16,7 +16,9 @@ DET = dict(n_sources=5, n_targets=3, delays_ticks=[[0, 0, 0, 3, 3], [0] * 5, [3,
 
 
 @pytest.mark.cocotb
-@pytest.mark.parametrize("simulator", SIMULATORS)
+# Verilator in the default lane, Icarus (slower on this netlist) in the long lane
+@pytest.mark.parametrize("simulator", [pytest.param(s, marks=pytest.mark.long)
+                                       if s == "icarus" else s for s in SIMULATORS])
 def test_network_scoreboard(simulator, build_root):
     # 48 afferents, the last five are the detector's sources: the core's sweep outlasts the
     # detector's tick, so the sweep boundary decides when the last neurons' spikes are stamped

@@ -242,3 +242,26 @@ def test_commands(tmp_path, capsys):
         assert main(argv) == 2
         err = capsys.readouterr().err.strip()
         assert len(err.splitlines()) == 1 and err.startswith("cuneate"), err
+
+
+def test_a_learned_layer_round_trips_through_nir(tmp_path):
+    """The learning layer with learned weights (one of them 0, still a synapse) written as a
+    NIR file and read back: the same configuration, weight for weight in its format."""
+    from cuneate.golden.aidp import AidpParams
+    from cuneate.hdl.plasticity import PlasticityConfig
+    from cuneate.sim.nir.export import learning_from_graph, learning_graph
+    cfg = PlasticityConfig(n_sources=5, sources=[[0, 3, 4], [1, 2, 3]],
+                           rule=AidpParams(eta=3e-6, w_max=5.0), g_inh=0.25,
+                           clock_hz=2000.0 * 60)
+    learned = np.array([[4.9, 0.0, 0.37], [1.25, 2.0, 4.0]])
+    nir.write(tmp_path / "layer.nir", learning_graph(cfg, learned))
+    back = PlasticityConfig.from_kwargs(learning_from_graph(read_graph(tmp_path /
+                                                                       "layer.nir")))
+    assert np.array_equal(back.src, cfg.src) and np.array_equal(back.weights_real, learned)
+    assert np.array_equal(back.weights_raw, cfg.W.to_raw(learned))
+    assert back.rule == cfg.rule and back.g_inh == 0.25 and back.update_hz == 2000.0
+    assert back.step_table == cfg.step_table and list(back.param_sets) == ["RS"]
+    g = learning_graph(cfg, learned)
+    g.nodes["synapses"].weight[0, 1] = 1.0                  # a weight where no synapse is
+    with pytest.raises(NirError, match="a weight where no synapse is"):
+        learning_from_graph(g)

@@ -92,7 +92,7 @@ def test_engines_that_do_not_run_the_fanout_are_refused(tmp_path, capsys):
                      "--out", str(tmp_path / "o")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert err == [f"cuneate run: {p}: hardware.fanout: engine 'verilator' does not run the "
-                   f"channel fan-out (engines that do: golden, fixed, board)"]
+                   f"channel fan-out (engines that do: golden, fixed, board, axi)"]
 
 
 def test_the_whole_hand_streams_channels_not_afferents():
@@ -130,7 +130,9 @@ def whole_hand_slice():
                                     'engines = ["fixed", "board"]'), "whole_hand_slice.toml")
 
 
-@pytest.mark.long
+# the release lane: the fan-out on board equals fixed spike for spike in CI
+# (test_fixed_and_board_run_the_fanout_spike_for_spike); this is the whole hand's size
+@pytest.mark.release
 def test_the_whole_hand_slice_on_board_equals_fixed():
     run = afferent.run(whole_hand_slice())
     a, b = run.spikes["fixed"], run.spikes["board"]

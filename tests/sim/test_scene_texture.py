@@ -11,6 +11,7 @@ import pytest
 from cuneate.sim import cli
 from cuneate.sim.scenes import run_scene
 from cuneate.sim.scenes.scene import SceneError, example_path, load_scene, parse_scene
+from scene_text import scene_with
 
 SMALL = """
 [scene]
@@ -40,9 +41,7 @@ engines = ["golden", "fixed"]
 
 
 def _scene(text=SMALL, **subs):
-    for a, b in subs.items():
-        text = text.replace(a, b)
-    return parse_scene(text, "t.toml")
+    return scene_with(text, **subs)
 
 
 @pytest.fixture(scope="module")

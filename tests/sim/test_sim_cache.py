@@ -47,6 +47,7 @@ def test_verilator_model_is_built_once_and_reused(tmp_path, monkeypatch):
     assert c.spikes_ms[:8] == a.spikes_ms and sum(map(len, c.spikes_ms)) > 0
 
 
+@pytest.mark.long
 @pytest.mark.cocotb
 def test_cache_off_builds_in_the_run_directory(tmp_path, monkeypatch):
     monkeypatch.setenv("CUNEATE_SIM_CACHE", "off")

@@ -12,6 +12,8 @@ from cuneate.sim.izhikevich.sweep import SweepPoint, battery, grid
 from cuneate.sim.sweep import SweepSpec, evaluate, pareto_front, reference_trains, run_sweep
 
 
+# the long lane (CI): a local Dask cluster starts its workers
+@pytest.mark.long
 def test_small_sweep_on_a_local_dask_cluster(tmp_path, capsys):
     out = tmp_path / "s"
     assert main(["sweep", "--out", str(out), "--update-hz", "16000", "--operand-width", "18,14",
@@ -65,6 +67,8 @@ def test_interrupted_sweep_resumes_from_its_cache(tmp_path):
     assert pts[0].key(SweepSpec(duration_ms=200.0)) != pts[0].key(spec)
 
 
+# the long lane (CI): a battery of 20 behaviours
+@pytest.mark.long
 def test_the_published_behaviours_are_a_battery_of_the_sweep():
     """The 19 expressible panels (own parameters, initial state and stimulus) run on every
     engine of a sweep; the core holds every published stimulus without a clamp, float32 keeps

@@ -119,8 +119,10 @@ def _faulty_verilog(cfg, fault, monkeypatch):
         return izhikevich_verilog(cfg)
 
 
+# the long lane (CI): one fault; the other in the release lane
+@pytest.mark.long
 @pytest.mark.parametrize("fault", [f if f == "flipped-product-bit" else
-                                   pytest.param(f, marks=pytest.mark.long) for f in FAULTS])
+                                   pytest.param(f, marks=pytest.mark.release) for f in FAULTS])
 def test_dump_checker_catches_injected_faults_verilator(
         fault, tmp_path, monkeypatch):
     cfg = flag_config()

@@ -1,0 +1,41 @@
+"""Sipeed Tang Nano 9K (Gowin GW1NR-LV9QN88PC6/I5): bitstream (``.fs``) with yosys
+``synth_gowin``, nextpnr-himbaechel (gowin) and apycula's ``gowin_pack``.
+
+UART: the on-board BL702 (USB-JTAG and USB-serial, the second USB serial port on the host),
+FPGA pins 17 (tx) and 18 (rx). Clock plans: the 27 MHz oscillator (pin 52) through an
+``rPLL``: 48 MHz (27 / 9 x 16, VCO 768 MHz; 3000 cycles per 16 kHz sweep, 16 clocks per bit
+at 3 Mbaud), 54 MHz (27 x 2, VCO 864 MHz; 3375 cycles, 18 clocks a bit) and 72 MHz (27 / 3 x
+8, VCO 576 MHz; 4500 cycles, 24 clocks a bit). Running and overflow on LEDs 0 and 1 (active
+low on the board).
+"""
+
+from __future__ import annotations
+
+from .platforms import amaranth_board, himbaechel_gowin
+from .pll import gowin_rpll
+from .top import open_flow_target, oscillator_plans
+
+__all__ = ["TARGET", "rpll_plans"]
+
+
+#: the 27 MHz oscillator's rPLL dividers (IDIV_SEL, FBDIV_SEL, ODIV_SEL) by output clock (MHz)
+RPLL_27 = {48: (8, 15, 16), 54: (0, 1, 16), 72: (2, 7, 8), 90: (2, 9, 8)}
+
+
+def rpll_plans(family: str, *mhz: int) -> list:
+    """The clock plans at ``mhz`` from a Gowin ``family``'s 27 MHz oscillator (3 Mbaud)."""
+    return oscillator_plans(27.0, *((f, 3e6, gowin_rpll(family, 27.0, *RPLL_27[f]))
+                                    for f in mhz))
+
+
+PLANS = rpll_plans("gw1n", 48, 54, 72)
+
+# GW1NR-9: 8640 LUT4, 6480 flip-flops, 26 BSRAM of 18 Kbit, 20 18x18 multipliers
+TARGET = open_flow_target(
+    "tang_nano_9k", "Sipeed Tang Nano 9K, Gowin GW1NR-9 C6/I5: bitstream (yosys, "
+    "nextpnr-himbaechel, gowin_pack)", "gowin", "GW1NR-LV9QN88PC6/I5",
+    amaranth_board("tang_nano_9k", "TangNano9kPlatform", himbaechel_gowin), PLANS,
+    {"LUT": 8640, "FF": 6480, "BRAM": 26, "DSP": 20},
+    # board-build fmax bound (MHz) for the sizing: the 1000-neuron build at 48 MHz, seed 1 (measured; the largest build's three seeds are in benchmarks/boards.md)
+    link_fmax_mhz=57.3, loader_board="tangnano9k",
+    uart="the BL702's USB serial port (pins 17 tx, 18 rx)")

@@ -1,0 +1,123 @@
+"""Every block that runs on the board engine, behind the bus faces, on Icarus and Verilator with
+the cocotbext-axi bus models (:mod:`cuneate.sim.axi.bench`): writes from an AxiStreamSource with
+random gaps, spikes into an AxiStreamSink with random back-pressure, registers over an
+AxiLiteMaster (cocotbext-wishbone's WishboneMaster on the Wishbone face). Checked against the
+block's payload twin (:func:`cuneate.sim.axi.scoreboard.check_face`): every sweep's spike ids
+and its TLAST, the empty sweeps' markers, the constants, every counter, the refusals answered
+with an error, the clamp flags as the twin's (a clamp provoked) and cleared over the bus.
+
+Default lane: the LIF core behind the AXI face and behind the Wishbone face, on both
+simulators. Long lane: the Izhikevich array and the network behind the AXI face, and the channel
+fan-out in front of the array, the LIF core and the network.
+"""
+
+import numpy as np
+import pytest
+
+from cuneate.hdl.fanout import FanoutConfig
+from cuneate.hdl.izhikevich import IzhikevichConfig
+from cuneate.hdl.lif import LifConfig
+from cuneate.hdl.network import NetworkConfig
+from cuneate.sim.axi.scoreboard import check_face, run_face
+from cuneate.sim.axi.transport import axi_spec
+from cuneate.sim.engines.toolchain import SIMULATORS
+
+SWEEPS = 24
+N_NET, S_NET, M_NET = 12, 8, 2
+
+
+def _izhikevich():
+    return axi_spec(IzhikevichConfig(n_neurons=8, clock_hz=16e3, update_hz=1e3,
+                                     spike_fifo_depth=16,
+                                     current_range=(-5.0, 100.0)), n_cores=2)
+
+
+def _lif():
+    return axi_spec(LifConfig(n_neurons=8, update_hz=1e3,
+                                  current_range=(-5.0, 100.0)))
+
+
+def _network():
+    rng = np.random.default_rng(3)
+    return axi_spec(NetworkConfig(
+        n_afferents=N_NET, first_source=2,
+        detector=dict(n_sources=S_NET, n_targets=M_NET,
+                      delays_ticks=rng.integers(0, 4, (M_NET, S_NET)).tolist(),
+                      weights=np.round(rng.uniform(6, 12, (M_NET, S_NET)), 2).tolist(),
+                      max_delay_ticks=4),
+        clock_hz=4e3 * 50, update_hz=4e3, tick_source="external"))
+
+
+def _fanout(inner):
+    """Four channels in front of ``inner``'s afferents (gains that saturate a current at
+    the largest samples)."""
+    spec = inner()
+    n = spec.info.n_written
+    rng = np.random.default_rng(4)
+    I = spec.info.value_format
+    fan = FanoutConfig(n_channels=4, channel=[i % 4 for i in range(n)],
+                       gain=[float(g) for g in np.round(rng.uniform(6, 0.4 * I.max_value, n), 2)],
+                       current_format=I,
+                       rectify=["positive", "abs", "none", "positive"] * (n // 4),
+                       sample_max=4.0, sample_width=12)
+    return axi_spec(spec, fanout=fan)
+
+
+#: block -> (its spec, the written values' range (a current, or a channel sample), the extreme
+#: value that provokes a clamp: the largest or the smallest raw value)
+BLOCKS = {
+    "izhikevich_array": (_izhikevich, (10.0, 60.0), "max"),
+    "lif": (_lif, (20.0, 90.0), "max"),
+    "network": (_network, (10.0, 60.0), "min"),
+    "fanout+izhikevich_array": (lambda: _fanout(_izhikevich), (-1.5, 3.0), "max"),
+    "fanout+lif": (lambda: _fanout(_lif), (-0.5, 2.0), "max"),
+    "fanout+network": (lambda: _fanout(_network), (-1.5, 3.0), "max"),
+}
+
+
+def schedule(spec, lo, hi, extreme, seed=2) -> dict:
+    """Every value at sweep 0, a part of them at sweep 9 (two bursts), and at sweep 16 the
+    ``extreme`` value of the format (a clamp) for the first two, a burst."""
+    info = spec.info
+    fmt, n = info.value_format, info.n_written
+    rng = np.random.default_rng(seed)
+    raw = lambda k: [int(v) for v in np.atleast_1d(fmt.to_raw(rng.uniform(lo, hi, k)))]
+    return {0: [(0, raw(n))], 9: [(1, raw(3)), (n // 2, raw(2))], 16: [(0, [getattr(fmt, f"{extreme}_raw")] * 2)]}
+
+
+def _check(simulator, block, face, build_root):
+    make, (lo, hi), extreme = BLOCKS[block]
+    spec = make()
+    sched = schedule(spec, lo, hi, extreme)
+    report = run_face(simulator, spec, face, sched, SWEEPS,
+                      build_root / f"{face}_{block}_{simulator}", seed=7)
+    got = check_face(spec, sched, SWEEPS, report)
+    print(f"\n{simulator} {face} {block}: {got}")
+    assert got["spikes"] > 0
+    # the network's twin flags no clamp under these writes; every other block is made to clamp
+    assert got["clamp_flags"] != 0 or block == "network"
+
+
+#: the default lane's block (the cheapest Verilator build); the others run in the long lane
+DEFAULT = "lif"
+LONG = [b for b in BLOCKS if b != DEFAULT]
+
+
+@pytest.mark.cocotb
+@pytest.mark.parametrize("simulator", SIMULATORS)
+def test_axi_face(simulator, build_root):
+    _check(simulator, DEFAULT, "axi", build_root)
+
+
+@pytest.mark.cocotb
+@pytest.mark.parametrize("simulator", SIMULATORS)
+def test_wishbone_face(simulator, build_root):
+    _check(simulator, DEFAULT, "wishbone", build_root)
+
+
+@pytest.mark.cocotb
+@pytest.mark.long
+@pytest.mark.parametrize("simulator", SIMULATORS)
+@pytest.mark.parametrize("block", LONG)
+def test_axi_face_long(simulator, block, build_root):
+    _check(simulator, block, "axi", build_root)
