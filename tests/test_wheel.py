@@ -85,6 +85,8 @@ def test_the_wheel_holds_every_package_and_data_file(installed):
     assert not any(n.startswith(("cuneate/tests/", "cuneate/benchmarks/")) for n in names)
 
 
+# the long lane (CI): builds and installs the wheel in a fresh environment
+@pytest.mark.long
 def test_installed_wheel_runs_doctor_and_simulate(installed):
     env_dir, _, base = installed
     r = _run(env_dir, base, "doctor", "--json")

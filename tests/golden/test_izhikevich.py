@@ -162,6 +162,8 @@ def test_divergence_is_detected_and_named():
                  dt_ms=0.5)
 
 
+# the long lane (CI): float32 compiles loops of its own
+@pytest.mark.long
 def test_float32_runs_in_float32():
     r = simulate("RS", 10.0, duration_ms=50, dtype=np.float32)
     assert r.v.dtype == np.float32

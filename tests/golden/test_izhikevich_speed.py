@@ -118,6 +118,8 @@ def test_threads_progress_and_kernel_choice():
         golden.simulate("RS", 10.0, n_steps=10, kernel="cuda")
 
 
+# the long lane (CI): blocks of every partial size
+@pytest.mark.long
 def test_blocks_partial_block_buffer_growth_and_divergence_order():
     """Several blocks of neurons (the last partial), mixed sets, a 2-D current with many
     spikes (the spike buffer grows mid-run): same bits as the reference loop on one and two

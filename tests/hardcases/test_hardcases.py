@@ -137,6 +137,8 @@ def test_filter_with_quantized_coefficients_outside_the_unit_circle_is_refused()
 STATE = st.tuples(st.floats(0.0, 1.0), st.floats(0.0, 1.0), st.floats(0.0, 1.0))
 
 
+# the long lane (CI): six random configurations, each through the Amaranth simulator
+@pytest.mark.long
 @settings(max_examples=6, deadline=None, phases=[Phase.explicit, Phase.reuse, Phase.generate])
 @given(rounding=st.sampled_from(["nearest", "truncate"]),
        width=st.sampled_from([18, 20]),

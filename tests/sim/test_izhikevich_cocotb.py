@@ -63,13 +63,18 @@ for _depth in PIPELINE_STAGES:
         "sweeps": 600, "current_range": [-5.0, 120.0], "writes_per_sweep": 1.5}
 CASES[f"depth{max(PIPELINE_STAGES)}_clamps"] = dict(
     CASES["clamps"], core=dict(CASES["clamps"]["core"], pipeline_stages=max(PIPELINE_STAGES)))
-# the default lane runs the reference depth and the deepest; the depths between run on Icarus
-# in the long lane (on Verilator, as their k-induction, in the release lane), as do the
-# deepest pipeline's clamps on Verilator (Icarus runs them, and the 2200-sweep full-scale run,
-# in the default lane; the full-scale run on Verilator is in the release lane)
+# the depths between the reference depth and the deepest run on Icarus in the long lane (on
+# Verilator, as their k-induction, in the release lane), as do the deepest pipeline's clamps on
+# Verilator (Icarus runs them in the default lane)
 _BETWEEN = [d for d in PIPELINE_STAGES if d not in (min(PIPELINE_STAGES), max(PIPELINE_STAGES))]
 LONG_CASES = {("icarus", f"depth{d}_back_to_back") for d in _BETWEEN}
 LONG_CASES |= {("verilator", f"depth{max(PIPELINE_STAGES)}_clamps")}
+# each depth on one simulator in the default lane (5 on Icarus, 9 on Verilator), the other in
+# the long lane; the default core on Verilator in the default lane, on Icarus in the long lane,
+# as is the 2200-sweep full-scale run (on Verilator in the release lane)
+LONG_CASES |= {("verilator", f"depth{min(PIPELINE_STAGES)}_back_to_back"),
+               ("icarus", f"depth{max(PIPELINE_STAGES)}_back_to_back"),
+               ("icarus", "n2500_default"), ("icarus", "full_scale_long")}
 RELEASE_CASES = {("verilator", f"depth{d}_back_to_back") for d in _BETWEEN}
 RELEASE_CASES |= {("verilator", "full_scale_long")}
 

@@ -15,6 +15,8 @@ def _run(build_dir, current=25.0, n=8):
                    build_dir=build_dir)
 
 
+# the long lane (CI): compiles a Verilator model twice
+@pytest.mark.long
 @pytest.mark.cocotb
 def test_verilator_model_is_built_once_and_reused(tmp_path, monkeypatch):
     cache = tmp_path / "cache"

@@ -51,6 +51,8 @@ def test_small_sweep_on_a_local_dask_cluster(tmp_path, capsys):
     assert set(pareto) == {"updates_per_bio_s", "state_bits", "multipliers"}
 
 
+# the long lane (CI): a sweep run twice
+@pytest.mark.long
 def test_interrupted_sweep_resumes_from_its_cache(tmp_path):
     spec = SweepSpec(duration_ms=100.0)
     pts = grid(update_hz=(16e3,), operand_width=(18,), floats=("float32",))
@@ -104,6 +106,8 @@ def test_the_published_behaviours_are_a_battery_of_the_sweep():
     assert abs(int(euler[q]) - fixed[q]) == 1
 
 
+# the long lane (CI): 20 behaviours on three engines
+@pytest.mark.long
 def test_the_price_of_float32_parity_on_the_behaviours():
     """Over 1 s of the published behaviours the default core (sQ10.8 currents, 18-bit operands)
     changes two counts against float64 Euler: bistability (P), whose 0.24 mV/ms holding current

@@ -130,8 +130,8 @@ def test_cuneate_stream_through_the_pty_board_agrees_with_the_fixed_engine(tmp_p
     (["stream", "ulx3s", "--port", "/dev/does-not-exist"],
      "cuneate stream: cannot open /dev/does-not-exist: "),
     (["stream", "ulx3s"], "cuneate stream: name the board's serial port: --port PORT"),
-    (["stream", "orangecrab", "--port", "/dev/ttyUSB0"],
-     "cuneate stream: unknown board 'orangecrab'; known: ulx3s, "),
+    (["stream", "nosuchboard", "--port", "/dev/ttyUSB0"],
+     "cuneate stream: unknown board 'nosuchboard'; known: ulx3s, "),
     (["stream", "ulx3s", "--port", "/dev/ttyUSB0", "skin_3x3"],
      "is a skin scene; a board streams afferent scenes"),
 ], ids=["missing-port", "no-port", "unknown-board", "not-afferent"])
