@@ -122,7 +122,9 @@ def test_every_reachable_clamp_kind_is_exercised_and_equal(name):
     assert acted["current"] == cfg.current_clamp
 
 
-@pytest.mark.parametrize("name", sorted(CONFIGS))
+# the configurations at the default rate in the default lane, at 20 kHz in the long lane
+@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.long) if "dt20k" in n else n
+                                  for n in sorted(CONFIGS)])
 def test_long_run_equal_spikes_state_and_clamp_accounting(name):
     """2000 sweeps with currents over (and beyond) the accepted range: identical spike trains,
     final state and clamp bookkeeping; then per-sweep stepping with changing currents."""

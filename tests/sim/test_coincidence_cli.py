@@ -59,7 +59,9 @@ def test_poisson_inputs_golden_and_fixed_agree(capsys):
 
 
 @pytest.mark.cocotb
-@pytest.mark.parametrize("simulator", SIMULATORS)
+# Icarus in the default lane, Verilator in the long lane (its scoreboard runs in the default)
+@pytest.mark.parametrize("simulator", [pytest.param(s, marks=pytest.mark.long)
+                                       if s == "verilator" else s for s in SIMULATORS])
 def test_simulate_on_hdl_simulators_matches_twin(simulator, capsys, tmp_path):
     hw = _sim(capsys, "--engine", simulator, "--build-dir", str(tmp_path), *BASE)
     tw = _sim(capsys, "--engine", "fixed", *BASE)

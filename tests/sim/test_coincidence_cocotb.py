@@ -62,7 +62,9 @@ def test_scoreboard(simulator, case, build_root):
 
 
 @pytest.mark.cocotb
-@pytest.mark.parametrize("simulator", SIMULATORS)
+# Icarus in the default lane, Verilator in the long lane (its scoreboard runs in the default)
+@pytest.mark.parametrize("simulator", [pytest.param(s, marks=pytest.mark.long)
+                                       if s == "verilator" else s for s in SIMULATORS])
 def test_engine_equals_twin(simulator, build_root):
     cfg = CoincidenceConfig(n_sources=2, n_targets=2, delays_ticks=[[0, 16], [16, 0]],
                             max_delay_ticks=32)

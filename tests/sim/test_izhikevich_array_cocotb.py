@@ -57,9 +57,9 @@ def _run(simulator, case, spec, build_root):
 
 
 def _lane(simulator, case):
-    """The default lane runs both depths and the per-core sets on Icarus; Verilator (which
-    compiles each design, the slower first run) runs them in the long lane."""
-    marks = pytest.mark.long if simulator == "verilator" else ()
+    """The default lane runs both depths on Icarus; Verilator (which compiles each design, the
+    slower first run) runs them in the long lane, as do the per-core sets on both."""
+    marks = pytest.mark.long if simulator == "verilator" or case == "k3_n12_per_core_sets" else ()
     return pytest.param(simulator, case, marks=marks, id=f"{simulator}-{case}")
 
 

@@ -74,7 +74,8 @@ LONG_CASES |= {("verilator", f"depth{max(PIPELINE_STAGES)}_clamps")}
 # as is the 2200-sweep full-scale run (on Verilator in the release lane)
 LONG_CASES |= {("verilator", f"depth{min(PIPELINE_STAGES)}_back_to_back"),
                ("icarus", f"depth{max(PIPELINE_STAGES)}_back_to_back"),
-               ("icarus", "n2500_default"), ("icarus", "full_scale_long")}
+               ("icarus", "n2500_default"), ("icarus", "full_scale_long"),
+               ("verilator", "clamps"), ("verilator", "n240_mixed")}
 RELEASE_CASES = {("verilator", f"depth{d}_back_to_back") for d in _BETWEEN}
 RELEASE_CASES |= {("verilator", "full_scale_long")}
 

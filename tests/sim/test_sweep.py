@@ -248,6 +248,8 @@ def test_hardcases_summary_prints_the_records(tmp_path, capsys):
     assert main(["hardcases", "summary", "--dir", str(tmp_path / "none")]) == 2
 
 
+# the long lane (CI): a sweep repeated
+@pytest.mark.long
 def test_repeats_keep_the_fastest_host_time_and_the_same_accuracy(tmp_path):
     spec = SweepSpec(duration_ms=100.0)
     pts = grid(update_hz=(16e3,), operand_width=(18,), floats=())

@@ -201,7 +201,9 @@ def test_damaged_frames_are_counted_never_accepted(structured):
           f"({', '.join(f'{k}={c[k]}' for k in COUNTER_NAMES if c[k])}), 0 accepted")
 
 
-@pytest.mark.parametrize("per_core_sets", [False, True], ids=["one-set", "sets-per-core"])
+# one set in the default lane, sets per core in the long lane
+@pytest.mark.parametrize("per_core_sets", [False, pytest.param(True, marks=pytest.mark.long)],
+                         ids=["one-set", "sets-per-core"])
 def test_the_link_serves_an_array_of_cores(per_core_sets):
     """Two cores of 8 behind the link (global ids 0..15): currents written over the link
     reach the right core, and the spike frames carry, per sweep, exactly the model's spikes

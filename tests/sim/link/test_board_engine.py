@@ -81,7 +81,7 @@ DEFAULT_KINDS = ("bit", "drop", "insert")
 
 
 @pytest.mark.parametrize("kinds", [
-    pytest.param(DEFAULT_KINDS, id="bit-drop-insert"),
+    pytest.param(DEFAULT_KINDS, id="bit-drop-insert", marks=pytest.mark.long),
     pytest.param(tuple(k for k in KINDS if k not in DEFAULT_KINDS), id="the-others",
                  marks=pytest.mark.long)])
 def test_every_fault_injected_on_the_line_is_detected_and_counted(kinds):
