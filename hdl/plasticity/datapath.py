@@ -23,7 +23,7 @@ from __future__ import annotations
 
 from amaranth import Cat
 
-from ..lib.fixed import clamp_flagged, narrow, round_shift, select
+from ..lib.fixed import clamp_flagged, narrow, product, round_shift, select
 from ..lib.synapses import trace_products, trace_update
 from .config import CLAMP_KINDS, OPS, PlasticityConfig
 
@@ -56,7 +56,7 @@ def drive_product(cfg: PlasticityConfig, C, Z):
     multiplier."""
     cq = narrow(round_shift(C, cfg.c_shift, cfg.rounding), cfg.CQ, cfg.cq_bounds,
                 "local calcium operand")
-    return round_shift(cq * Z, cfg.q_shift, cfg.rounding)
+    return round_shift(product(cq, Z, "drive product"), cfg.q_shift, cfg.rounding)
 
 
 def integrate(cfg: PlasticityConfig, L, q):
@@ -80,7 +80,7 @@ def step_index(cfg: PlasticityConfig, w, dq):
 
 def weight_delta(cfg: PlasticityConfig, dq, factor):
     """The step ``round(D factor)`` in weight LSBs (one multiplier)."""
-    return round_shift(dq * factor, cfg.T_frac, cfg.rounding)
+    return round_shift(product(dq, factor, "weight step"), cfg.T_frac, cfg.rounding)
 
 
 def weight_update(cfg: PlasticityConfig, w, dw):
@@ -95,7 +95,7 @@ def interneuron(cfg: PlasticityConfig, H, n):
                 (cfg.inh.t_bounds[0] >> (cfg.trace_frac_bits - cfg.HQ.frac_bits),
                  (cfg.inh.t_bounds[1] >> (cfg.trace_frac_bits - cfg.HQ.frac_bits)) + 1),
                 "interneuron operand")
-    inh = round_shift(hq * cfg.G.raw, cfg.g_shift, cfg.rounding)
+    inh = round_shift(product(hq, cfg.G.raw, "inhibition"), cfg.g_shift, cfg.rounding)
     return inh, H + (n << cfg.trace_frac_bits)
 
 

@@ -49,7 +49,6 @@ from amaranth.asserts import AnyConst, AnySeq
 from amaranth.hdl import Fragment
 
 from ..flow.sby import SOLVER
-from ..lib import synapses
 from ..lib.formal import (ProofResult, UninterpretedProducts, assert_all, assume_all,
                           harness_rtlil, run_proof)
 from . import datapath as dp
@@ -118,7 +117,7 @@ class StageProof(Elaboratable):
         n = cfg.n_targets * cfg.n_synapses
         cls = SynapseStage if self.mutant is None else _mutant_stage(self.mutant)
         dut = cls(cfg, observe=True)
-        products = UninterpretedProducts((dp.__file__, synapses.__file__))
+        products = UninterpretedProducts()
         with products.role("design"):
             m.submodules.dut = Fragment.get(dut, platform)
         fmts = [f for _, f in cfg.synapse_fields]
