@@ -70,7 +70,6 @@ def _proof_target(args):
     if args.mutant in FANOUT_MUTANTS:
         raise CliError(f"cuneate prove {args.target}: mutant {args.mutant} is the fan-out's "
                        f"(cuneate prove fanout)")
-    from ...hdl.plasticity.formal_core import MUTANTS as STAGE_MUTANTS
     if args.mutant in set(STAGE_MUTANTS) - {"skipped_write"}:
         raise CliError(f"cuneate prove {args.target}: mutant {args.mutant} is the learning "
                        f"stage's (cuneate prove plasticity)")
@@ -195,7 +194,6 @@ def _report(args, records: list, detail, where) -> int:
     """Print proof ``records`` (JSON with ``--json``, else one line each: ``detail(rec)`` after
     the mode and depth, a failure's properties after ``where(rec)``); 0 when every one
     passed."""
-    import json
     if args.json:
         print(json.dumps(records))
     else:
