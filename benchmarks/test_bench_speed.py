@@ -206,20 +206,19 @@ def cocotb_scoreboard_rate(simulator: str, build_root: Path, case: str = "n240_m
 
 def cocotb_engine_rate(simulator: str, build_root: Path, n: int = 240,
                        sweeps: int = 100) -> dict:
-    from cuneate.sim.izhikevich.engines import engine_config, run_cocotb_engine
+    from cuneate.sim.izhikevich.engines import run_engine
 
-    p = golden.PRESETS["RS"]
-    cfg = engine_config({"a": p.a, "b": p.b, "c": p.c, "d": p.d}, n, UPDATE_HZ)
-    currents = np.linspace(0.0, 40.0, cfg.n_neurons)
+    core = {"param_sets": (golden.PRESETS["RS"].as_tuple(),), "update_hz": UPDATE_HZ}
+    currents = np.linspace(0.0, 40.0, n)
     t0 = time.perf_counter()
-    run = run_cocotb_engine(simulator, cfg, currents, sweeps,
-                            build_root / f"engine_n{n}_{simulator}")
+    run = run_engine(simulator, core, currents, sweeps * 1000.0 / UPDATE_HZ,
+                     build_root / f"engine_n{n}_{simulator}")
     total = time.perf_counter() - t0
-    r = run.report
+    r = run.counters
     return {"simulator": simulator, "test": f"engine n{n} x {sweeps} sweeps",
-            "neurons": cfg.n_neurons, "cycles": r["cycles"], "sim_wall_s": r["wall_s"],
+            "neurons": n, "cycles": r["cycles"], "sim_wall_s": r["wall_s"],
             "cycles_per_s": r["cycles"] / r["wall_s"], "build_and_run_s": total,
-            "spikes": sum(len(s) for s in r["spike_sweeps"])}
+            "spikes": int(run.counts().sum())}
 
 
 @pytest.mark.parametrize("simulator", ["icarus", "verilator"])
@@ -264,13 +263,12 @@ def amaranth_rate(n: int = 16, cycles: int = 4000) -> list[dict]:
 
     # (b) the `amaranth` engine of `cuneate simulate` (testbench-driven, external tick)
     from cuneate.golden.izhikevich import PRESETS
-    from cuneate.sim.izhikevich.engines import run_hardware_engine
-    params = dict(zip("abcd", PRESETS["RS"].as_tuple()))
+    from cuneate.sim.izhikevich.engines import run_engine
+    core = {"param_sets": (PRESETS["RS"].as_tuple(),), "update_hz": UPDATE_HZ}
     currents = list(np.linspace(0.0, 40.0, n))
     sweeps = cycles // n
     t0 = time.perf_counter()
-    _, spikes = run_hardware_engine("amaranth", params, currents, sweeps * 1000.0 / UPDATE_HZ,
-                                    update_hz=UPDATE_HZ)
+    spikes = run_engine("amaranth", core, currents, sweeps * 1000.0 / UPDATE_HZ).spikes_ms
     run_s = time.perf_counter() - t0
     rows.append({"mode": "amaranth engine (external tick)", "neurons": n,
                  "cycles": sweeps * n, "setup_s": 0.0, "run_s": run_s,

@@ -62,8 +62,8 @@ from ..engines.waves import WindowedVcd, write_gtkw
 from ..fanout.engines import FanoutTransport
 from ..host.transport import SpikeBatch, Transport, TransportError, sweep_count
 
-__all__ = ["IzhikevichEngine", "EngineRun", "engine_core", "run_engine", "engine_config",
-           "run_hardware_engine", "run_cocotb_engine", "run_amaranth_sweeps", "MIN_NEURONS",
+__all__ = ["IzhikevichEngine", "EngineRun", "engine_core", "run_engine",
+           "MIN_NEURONS",
            "TwinTransport", "CocotbTransport", "AmaranthTransport", "VerilatorFastTransport",
            "make_transport", "PROTOCOL", "WAVE_ENGINES"]
 
@@ -92,12 +92,6 @@ def engine_core(core: dict, n: int) -> IzhikevichConfig:
     return IzhikevichConfig.from_kwargs(kw)
 
 
-def engine_config(params: dict, n: int, update_hz: float) -> IzhikevichConfig:
-    """Core configuration for ``n`` neurons with one parameter set ``params`` (a, b, c, d)."""
-    return engine_core({"param_sets": ((params["a"], params["b"], params["c"], params["d"]),),
-                        "update_hz": update_hz}, n)
-
-
 # ----------------------------------------------------------------------------------------------
 # whole runs with constant currents
 
@@ -116,56 +110,6 @@ def _amaranth_window(cfg: IzhikevichConfig, waves):
         write_gtkw(path.with_suffix(".gtkw"), path, "amaranth",
                    izhikevich_verilog(cfg, "izhikevich_core"), "izhikevich_core")
     return window, finish
-
-
-def run_amaranth_sweeps(cfg: IzhikevichConfig, cur, n_sweeps: int, progress=None, waves=None):
-    """The core in the Amaranth simulator with constant currents ``cur`` (mV/ms, one per neuron
-    of ``cfg``), ticks every ``n_neurons`` cycles; returns the spike sweeps per neuron, the
-    clamp counts per kind and the sticky flags. ``waves``: a
-    :class:`~cuneate.sim.engines.waves.Waves` window to dump."""
-    dut = IzhikevichCore(cfg)
-    window, finish = _amaranth_window(cfg, waves)
-    N = cfg.n_neurons
-    raw = cfg.I.to_raw(cur)
-    spikes = [[] for _ in range(N)]
-    counts = {k: 0 for k in CLAMP_KINDS}
-    out = {}
-
-    async def bench(ctx):
-        ctx.set(dut.spike_ready, 1)
-        await write_currents(ctx, dut, raw[:N])
-        unwrap = TickUnwrap(cfg.sweep_number_width)
-        for c in range(n_sweeps * N + cfg.pipeline_stages + cfg.spike_fifo_depth + 4):
-            ctx.set(dut.tick, int(c % N == 0 and c // N < n_sweeps))
-            await ctx.tick()
-            if ctx.get(dut.sweep_done):
-                for k in CLAMP_KINDS:
-                    counts[k] += ctx.get(getattr(dut, f"sweep_clamps_{k}"))
-                done_sweeps = c // N + 1
-                if window is not None:
-                    window.on = waves.covers(done_sweeps)
-                if progress is not None and done_sweeps % 1000 == 0:
-                    progress(done_sweeps)
-            if ctx.get(dut.spike_valid):
-                spikes[ctx.get(dut.spike_index)].append(unwrap(ctx.get(dut.spike_sweep)))
-        assert not ctx.get(dut.overrun) and not ctx.get(dut.spike_overflow)
-        out["sticky"] = ctx.get(dut.clamp_flags)
-
-    simulate(dut, bench, vcd=window)
-    finish()
-    sticky = {k: bool(out["sticky"] >> i & 1) for i, k in enumerate(CLAMP_KINDS)}
-    return spikes, counts, sticky
-
-
-def run_cocotb_engine(simulator: str, cfg: IzhikevichConfig, cur, n_sweeps: int,
-                      build_dir: Path | None, progress=None, waves=None):
-    """Generate the core for ``cfg`` and run the cocotb ``engine`` bench (in ``build_dir`` or a
-    scratch directory); returns the :class:`~cuneate.sim.engines.cocotb.CocotbRun` (its report
-    has the spike sweeps and the clamp counters). ``waves``: a window to dump."""
-    return run_bench(simulator, izhikevich_verilog(cfg), "izhikevich_core", "izhikevich",
-                     {"core": cfg.to_kwargs(), "currents": list(map(float, cur)),
-                      "sweeps": n_sweeps}, build_dir, testcase="engine", progress=progress,
-                     waves=waves)
 
 
 class IzhikevichEngine(BlockEngine):
@@ -253,8 +197,39 @@ class IzhikevichAmaranth(IzhikevichEngine):
     writes_waves = True
 
     def sweeps(self, cfg, cur, n_sweeps, n):
-        spikes, counts, sticky = run_amaranth_sweeps(cfg, cur, n_sweeps, self.progress,
-                                                     self.waves)
+        """The core with constant currents ``cur``, a tick every ``n_neurons`` cycles: the
+        spikes, clamp counts per kind and sticky flags it reports."""
+        dut = IzhikevichCore(cfg)
+        window, finish = _amaranth_window(cfg, self.waves)
+        N, waves, progress = cfg.n_neurons, self.waves, self.progress
+        raw = cfg.I.to_raw(cur)
+        spikes = [[] for _ in range(N)]
+        counts = {k: 0 for k in CLAMP_KINDS}
+        out = {}
+
+        async def bench(ctx):
+            ctx.set(dut.spike_ready, 1)
+            await write_currents(ctx, dut, raw[:N])
+            unwrap = TickUnwrap(cfg.sweep_number_width)
+            for c in range(n_sweeps * N + cfg.pipeline_stages + cfg.spike_fifo_depth + 4):
+                ctx.set(dut.tick, int(c % N == 0 and c // N < n_sweeps))
+                await ctx.tick()
+                if ctx.get(dut.sweep_done):
+                    for k in CLAMP_KINDS:
+                        counts[k] += ctx.get(getattr(dut, f"sweep_clamps_{k}"))
+                    done_sweeps = c // N + 1
+                    if window is not None:
+                        window.on = waves.covers(done_sweeps)
+                    if progress is not None and done_sweeps % 1000 == 0:
+                        progress(done_sweeps)
+                if ctx.get(dut.spike_valid):
+                    spikes[ctx.get(dut.spike_index)].append(unwrap(ctx.get(dut.spike_sweep)))
+            assert not ctx.get(dut.overrun) and not ctx.get(dut.spike_overflow)
+            out["sticky"] = ctx.get(dut.clamp_flags)
+
+        simulate(dut, bench, vcd=window)
+        finish()
+        sticky = {k: bool(out["sticky"] >> i & 1) for i, k in enumerate(CLAMP_KINDS)}
         return _times(spikes, n, cfg.dt_ms), counts, sticky, {}
 
     def transport(self) -> Transport:
@@ -269,10 +244,12 @@ class IzhikevichCocotb(IzhikevichEngine):
     writes_waves = True
 
     def sweeps(self, cfg, cur, n_sweeps, n):
-        rep = run_cocotb_engine(self.name, cfg, cur, n_sweeps, self.build_dir, self.progress,
-                                self.waves).report
+        rep = run_bench(self.name, izhikevich_verilog(cfg), "izhikevich_core", "izhikevich",
+                        {"core": cfg.to_kwargs(), "currents": list(map(float, cur)),
+                         "sweeps": n_sweeps}, self.build_dir, testcase="engine",
+                        progress=self.progress, waves=self.waves).report
         return (_times(rep["spike_sweeps"], n, cfg.dt_ms), rep["clamp_counts"],
-                rep["clamp_sticky"], {})
+                rep["clamp_sticky"], {"cycles": rep["cycles"], "wall_s": rep["wall_s"]})
 
     def transport(self) -> Transport:
         return CocotbTransport(self.name, self.build_dir, progress=self.progress,
@@ -316,16 +293,6 @@ def run_engine(engine: str, core: dict, currents, duration_ms: float,
             raise ValueError(f"current {x:g} is outside the core's input format {cfg.I} "
                              f"[{cfg.I.min_value:g}, {cfg.I.max_value:g}]")
     return impl.run(cfg, cur, n_sweeps, n)
-
-
-def run_hardware_engine(engine: str, params: dict, currents, duration_ms: float,
-                        update_hz: float = 16e3, clock_hz: float | None = None,
-                        build_dir: Path | None = None):
-    """Run ``engine`` with one parameter set (a, b, c, d); returns ``(dt_ms, spikes_ms)``."""
-    core = {"param_sets": ((params["a"], params["b"], params["c"], params["d"]),),
-            "update_hz": update_hz}
-    r = run_engine(engine, core, currents, duration_ms, build_dir)
-    return r.dt_ms, r.spikes_ms
 
 
 def make_transport(engine: str, **kw) -> Transport:

@@ -8,6 +8,7 @@ from cuneate.golden import izhikevich as golden
 from cuneate.golden.metrics import compare_trains
 from cuneate.sim.cli import main
 from cuneate.sim.engines.toolchain import SIMULATORS
+from cuneate.sim.izhikevich.engines import run_engine
 
 ARGS = ["simulate", "izhikevich", "--preset", "RS", "--neurons", "3", "--current", "4", "10",
         "30", "--duration-ms", "150", "--json"]
@@ -21,9 +22,8 @@ def run_cli(capsys, argv):
 
 @pytest.fixture(scope="module")
 def fixed_result():
-    from cuneate.sim.izhikevich.engines import run_hardware_engine
-    params = dict(zip("abcd", golden.PRESETS["RS"].as_tuple()))
-    return run_hardware_engine("fixed", params, [4.0, 10.0, 30.0], 150.0)
+    core = {"param_sets": (golden.PRESETS["RS"].as_tuple(),)}
+    return run_engine("fixed", core, [4.0, 10.0, 30.0], 150.0).spikes_ms
 
 
 @pytest.mark.parametrize("engine", ["fixed", "amaranth"])
@@ -32,7 +32,7 @@ def test_python_engines_identical(engine, capsys, fixed_result):
     assert rc == 0
     res = json.loads(out)
     assert res["engine"] == engine and res["model"] == "izhikevich" and res["dt_ms"] == 0.0625
-    assert res["spikes_ms"] == fixed_result[1]
+    assert res["spikes_ms"] == fixed_result
     assert sum(len(s) for s in res["spikes_ms"]) > 5
 
 
@@ -43,7 +43,7 @@ def test_hdl_engines_identical(simulator, capsys, fixed_result, build_root):
                                            str(build_root / f"engine_{simulator}")])
     assert rc == 0, err
     res = json.loads(out)
-    assert res["engine"] == simulator and res["spikes_ms"] == fixed_result[1]
+    assert res["engine"] == simulator and res["spikes_ms"] == fixed_result
 
 
 def test_fixed_engine_agreement_with_golden_rs_i10(capsys):
