@@ -198,7 +198,7 @@ def cmd_simulate(args) -> int:
            "params": _param_dicts(cfg), "target_sets": list(cfg.target_sets_),
            "delays_ms": (cfg.delays * dt).tolist(), "weights": cfg.weights_real.tolist(),
            "input_ms": [(np.asarray(k) * dt).tolist() for k in ins],
-           "spikes_ms": spikes, "merged_inputs": run.merged,
+           "spikes_ms": spikes, "merged_inputs": run.counters.get("merged_count", 0),
            "accepted_current_range": [cfg.i_lo, cfg.i_hi],
            "formats": {"weight": str(cfg.W), "xd": str(cfg.traces[0].T),
                        "xr": str(cfg.traces[1].T), "I": str(cfg.iz.I), "V": str(cfg.iz.V),

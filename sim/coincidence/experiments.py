@@ -279,8 +279,8 @@ def ridge_experiment(engine: str = "fixed", spec: RidgeSpec | None = None,
         pad[:, :4] = cur
         run = run_network(engine, ncfg, pad, build_dir=build_dir)
         aff_ticks = [(np.asarray(sp) / dt).round().astype(np.int64)
-                     for sp in run.afferent_ms[:4]]
-        run.spikes_ms = run.cuneate_ms
+                     for sp in run.population("afferent")[:4]]
+        run.spikes_ms = run.population("cuneate")
         engine = f"{engine} (on-chip network)"
     else:
         aff_ticks = afferent_spikes(spec, cur, fixed=engine != "golden")

@@ -37,9 +37,9 @@ class EngineRun:
     each other. ``clamp_counts``: updates clamped per kind (``None`` where the engine cannot
     see them: the ``board`` engine's link carries spikes, not clamps, golden has none);
     ``clamp_sticky``: the sticky flags (per kind, or the block's bit mask); ``counters``: what
-    the engine counted besides (writes, merged input events, link events, a simulator's
-    cycles and wall time, ...). ``values``: what a block puts out besides spikes, one row per
-    tick (the channel fan-out's afferent currents in mV/ms, one row per sample; a NIR
+    the engine counted besides (writes, input events merged into an earlier one of their tick:
+    ``merged_count``, link events, a simulator's cycles and wall time, ...). ``values``: what
+    a block puts out besides spikes, one row per tick (the channel fan-out's afferent currents in mV/ms, one row per sample; a NIR
     readout layer's membrane); ``None`` where there is nothing.
     """
 
@@ -54,29 +54,10 @@ class EngineRun:
     populations: dict = field(default_factory=dict)
     values: np.ndarray | None = None
 
-    @property
-    def n_sweeps(self) -> int:
-        return self.n_ticks
-
-    steps = n_sweeps
-
     def population(self, name: str) -> list:
         """The spike trains of population ``name``."""
         first, count = self.populations[name]
         return self.spikes_ms[first:first + count]
-
-    @property
-    def afferent_ms(self) -> list:
-        return self.population("afferent")
-
-    @property
-    def cuneate_ms(self) -> list:
-        return self.population("cuneate")
-
-    @property
-    def merged(self) -> int:
-        """Input events the block merged with an earlier one of the same tick."""
-        return int(self.counters.get("merged_count", 0))
 
     @property
     def spikes(self) -> np.ndarray | None:
@@ -98,25 +79,6 @@ class EngineRun:
         if self.spikes_ms is None:
             return np.zeros(0, np.int64)
         return np.array([len(s) for s in self.spikes_ms], dtype=np.int64)
-
-    # the names the fan-out's and NIR's callers give the same fields
-    @property
-    def currents(self) -> np.ndarray | None:
-        """The fan-out's afferent currents (:attr:`values`)."""
-        return self.values
-
-    @property
-    def v(self) -> np.ndarray | None:
-        """A readout layer's membrane (:attr:`values`)."""
-        return self.values
-
-    @property
-    def clamps(self) -> dict | None:
-        return self.clamp_counts
-
-    @property
-    def figures(self) -> dict:
-        return self.counters
 
 
 class TickUnwrap:

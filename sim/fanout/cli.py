@@ -241,7 +241,7 @@ def cmd_simulate(args) -> int:
         run = run_fanout(args.engine, cfg, x, build_dir=build_dir)
     except ValueError as exc:
         raise CliError(f"cuneate simulate fanout: {exc}") from None
-    cur = np.asarray(run.currents, dtype=np.float64)
+    cur = np.asarray(run.values, dtype=np.float64)
     lo, hi = cur.min(axis=0), cur.max(axis=0)
     out = {"engine": args.engine, "model": "fanout", "dt_ms": period_ms,
            "duration_ms": n_runs * period_ms, "runs": n_runs, "channels": cfg.n_channels,
@@ -251,7 +251,7 @@ def cmd_simulate(args) -> int:
            "samples": x.tolist(), "currents": cur.tolist(),
            "current_range": np.stack([lo, hi], axis=1).tolist(),
            "saturation": None if run.clamp_counts is None else {"counts": run.clamp_counts},
-           "figures": run.figures}
+           "figures": run.counters}
     if args.engine != "golden":
         out["quantized_samples"] = cfg.S.to_float(cfg.S.to_raw(x)).tolist()
     if args.json:

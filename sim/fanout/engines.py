@@ -1,6 +1,6 @@
 """The channel fan-out's engines: channel samples ``(n_runs, n_channels)`` in, the afferents'
 currents ``(n_runs, n_neurons)`` out (mV/ms), as an
-:class:`~cuneate.sim.engines.run.EngineRun` whose ``values`` (``currents``) hold them.
+:class:`~cuneate.sim.engines.run.EngineRun` whose ``values`` hold them.
 
 ``golden`` evaluates :func:`~cuneate.golden.fanout.fanout_currents` on the samples as given;
 ``fixed`` quantizes them to the sample format (saturating, as the host does) and runs

@@ -58,7 +58,7 @@ def cmd_simulate_network(args) -> int:
         run = run_network(args.engine, cfg, np.tile(cur, (n_ticks, 1)), build_dir=build_dir)
     except ValueError as exc:
         raise CliError(f"cuneate simulate network: {exc}") from None
-    spikes = [[float(t) for t in s] for s in run.afferent_ms + run.cuneate_ms]
+    spikes = [[float(t) for t in s] for s in run.population("afferent") + run.population("cuneate")]
     out = {"engine": args.engine, "model": "network", "dt_ms": cfg.dt_ms, "scheme": "euler",
            "duration_ms": n_ticks * cfg.dt_ms, "neurons": N + cfg.n_targets,
            "populations": [{"name": "afferent", "first": 0, "count": N},

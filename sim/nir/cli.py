@@ -201,7 +201,7 @@ def cmd_simulate(args) -> int:
     if args.json:
         print(json.dumps(out, default=float))
         return 0
-    print(f"{args.graph} on {args.engine}: {run.steps} steps of {mapped.dt * 1e3:g} ms "
+    print(f"{args.graph} on {args.engine}: {run.n_ticks} steps of {mapped.dt * 1e3:g} ms "
           f"({mapped.scheme}), {run.wall_s:.2f} s")
     if run.spikes is not None:
         for i, s in enumerate(out["spikes_s"]):

@@ -54,10 +54,11 @@ def test_changing_currents_are_written_before_their_tick():
     w = current_writes(cfg, cur)
     assert sorted(w) == [0, 100, 150] and w[100] == [(0, int(cfg.core.I.to_raw(40.0)))]
     f, a = (run_network(e, cfg, cur) for e in ("fixed", "amaranth"))
-    for x, y in zip(f.afferent_ms + f.cuneate_ms, a.afferent_ms + a.cuneate_ms):
+    assert len(f.spikes_ms) == len(a.spikes_ms) == cfg.n_afferents + cfg.n_targets
+    for x, y in zip(f.spikes_ms, a.spikes_ms):
         assert np.array_equal(x, y)
-    assert 100 * cfg.dt_ms < f.afferent_ms[0][0] and 150 * cfg.dt_ms < f.afferent_ms[1][0]
-    assert len(f.afferent_ms[2]) == 0
+    aff = f.population("afferent")
+    assert 100 * cfg.dt_ms < aff[0][0] and 150 * cfg.dt_ms < aff[1][0] and len(aff[2]) == 0
 
 
 @pytest.mark.long

@@ -188,8 +188,8 @@ def test_readout_layer_membrane():
     x = _spikes(25, n_in, 0.4)
     gold, fixed = run_network("golden", m, x), run_network("fixed", m, x)
     # 8-bit weights: 0.3 is held as 0.296875 (1 %), the rest of the state error is far below
-    assert np.abs(gold.v - fixed.v).max() < 0.012 * np.abs(gold.v).max()
-    assert np.abs(gold.v).max() > 1.0
+    assert np.abs(gold.values - fixed.values).max() < 0.012 * np.abs(gold.values).max()
+    assert np.abs(gold.values).max() > 1.0
 
 
 # ---------------------------------------------------------------------------------------------

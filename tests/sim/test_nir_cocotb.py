@@ -25,7 +25,7 @@ def test_scoreboard(simulator, build_root):
     x = (np.random.default_rng(5).random((40, 6)) < 0.35).astype(float)
     run = run_network(simulator, mapped, x, build_dir=build_root / f"nir_{simulator}",
                       scoreboard=True)
-    rep = run.clamps
+    rep = run.clamp_counts
     print(f"\n{simulator}: " + json.dumps({k: rep[k] for k in ("layers", "failures",
                                                               "stream_matches")}))
     assert rep["failures"] == [] and rep["stream_matches"]

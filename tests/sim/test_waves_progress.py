@@ -52,7 +52,7 @@ def test_amaranth_writes_a_windowed_vcd_and_gtkw(tmp_path):
         assert s in names, s
     assert times, "no value changes in the window"
     # the window holds 4 of the run's sweeps of 8 cycles (two clock edges each), not all
-    assert run.n_sweeps == 32
+    assert run.n_ticks == 32
     assert 4 * 8 <= len(times) <= (4 + 2) * 8 * 2 + 4
     text = gtkw.read_text()
     assert "sweep_done" in text and "spike_valid" in text and str(dump.resolve()) in text

@@ -116,15 +116,15 @@ def test_engine_runs_its_block_as_the_twin_does(block, engine, build_root):
                       if ENGINES[engine].hdl else None)
     assert got.engine == engine and got.n_ticks == ref.n_ticks and got.dt_ms == ref.dt_ms
     if block == "fanout":
-        assert got.currents.shape == ref.currents.shape
+        assert got.values.shape == ref.values.shape
         if engine == "golden":          # within the bound where the twin's current is not clamped
             cfg, x = _fanout_table()
             x = np.clip(x, cfg.S.min_value, cfg.S.max_value)
-            free = np.abs(got.currents) < cfg.I.max_value
-            err = np.abs(got.currents - ref.currents)
+            free = np.abs(got.values) < cfg.I.max_value
+            err = np.abs(got.values - ref.values)
             assert free.sum() > 0 and np.all(err[free] <= cfg.sample_bound(x)[free])
             return
-        assert np.array_equal(got.currents, ref.currents)
+        assert np.array_equal(got.values, ref.values)
         assert got.clamp_counts == ref.clamp_counts and sum(ref.clamp_counts.values()) > 0
         return
     assert len(got.spikes_ms) == len(ref.spikes_ms)

@@ -62,8 +62,8 @@ def test_board_network_equals_fixed_for_both_populations():
         assert len(a) == len(b)
         assert all(np.array_equal(x, y) for x, y in zip(a, b)), pop
     # every cuneate neuron and every afferent of a sensor fires (the comparison is not empty)
-    assert all(len(x) > 0 for x in ref.cuneate_ms)
-    assert all(len(x) > 0 for x in ref.afferent_ms[:4])
+    assert all(len(x) > 0 for x in ref.population("cuneate"))
+    assert all(len(x) > 0 for x in ref.population("afferent")[:4])
     c = got.counters
     n_spikes = sum(len(x) for x in ref.spikes_ms)
     assert {k: c[k] for k in COUNTERS} == {
@@ -115,7 +115,7 @@ def test_every_spike_train_of_the_ridge_scene_on_board_equals_fixed():
     got = run_network("board", net, pad)
     assert all(np.array_equal(x, y) for x, y in zip(ref.spikes_ms, got.spikes_ms))
     assert len(ref.spikes_ms) == len(got.spikes_ms) == net.n_afferents + net.n_targets
-    assert all(len(x) > 0 for x in ref.cuneate_ms)
+    assert all(len(x) > 0 for x in ref.population("cuneate"))
 
 
 @pytest.mark.long
