@@ -44,7 +44,7 @@ import numpy as np
 
 from . import aidp as gaidp
 from . import stdp as gstdp
-from .izhikevich import to_params
+from .izhikevich import spike_times, to_params
 from .validate import number
 
 __all__ = ["LayerParams", "Presentations", "presentations", "LayerResult", "simulate_layer",
@@ -202,7 +202,7 @@ class LayerResult:
             self.spike_tick < window_ticks
         out = [[np.zeros(0) for _ in range(M)] for _ in range(self.counts.shape[0])]
         for p, k, j in zip(self.spike_pres[keep], self.spike_tick[keep], self.spike_cn[keep]):
-            out[p][j] = np.append(out[p][j], (k + 1) * dt_ms)
+            out[p][j] = np.append(out[p][j], spike_times(k, dt_ms))
         return out
 
 

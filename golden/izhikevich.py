@@ -137,9 +137,10 @@ class DivergenceError(FloatingPointError):
                  bound: float):
         self.neuron, self.step, self.dt_ms, self.v, self.u = neuron, step, dt_ms, v, u
         self.scheme, self.bound = scheme, bound
+        self.t_ms = float(spike_times(step, dt_ms))       # the time of the update's spike
         super().__init__(
             f"Izhikevich state diverged: neuron {neuron}, update {step} "
-            f"(t = {(step + 1) * dt_ms:g} ms), dt = {dt_ms:g} ms, scheme {scheme!r}: "
+            f"(t = {self.t_ms:g} ms), dt = {dt_ms:g} ms, scheme {scheme!r}: "
             f"v = {v!r}, u = {u!r} (bound |state| <= {bound:g}); reduce dt or the input current")
 
 

@@ -102,8 +102,9 @@ class LIFDivergenceError(FloatingPointError):
     def __init__(self, neuron: int, step: int, dt_ms: float, v: float, scheme: str,
                  bound: float):
         self.neuron, self.step, self.dt_ms, self.v, self.scheme = neuron, step, dt_ms, v, scheme
+        self.t_ms = float(spike_times(step, dt_ms))       # the time of the update's spike
         super().__init__(
-            f"LIF state diverged: neuron {neuron}, update {step} (t = {(step + 1) * dt_ms:g} ms), "
+            f"LIF state diverged: neuron {neuron}, update {step} (t = {self.t_ms:g} ms), "
             f"dt = {dt_ms:g} ms, scheme {scheme!r}: v = {v!r} (bound |v| <= {bound:g}); check the "
             f"input current and dt")
 
@@ -394,7 +395,7 @@ def simulate_lif_network(n: int, weights_exc, weights_inh, ext_current, dt_ms: f
                 v_tr[k + 1] = mem.v
                 i_e[k], i_g[k] = IA, IG
             if spiked.any():
-                t_s = (k + 1) * dt
+                t_s = float(spike_times(k, dt))
                 for pre in np.flatnonzero(spiked):
                     if We[pre].any():
                         exc.schedule(t_s + exc.lat, We[pre])

@@ -228,11 +228,11 @@ def _cached(key) -> tuple[SetRange, ...]:
     ext = search(sets, cols_set, v, u, battery, n_steps, dt)
     if isinstance(ext, tuple) and len(ext) == 2:              # a divergence: (step, column)
         k, j = ext
-        s = sets[cols_set[j]]
+        s, t_ms = sets[cols_set[j]], float(golden.spike_times(k, dt))
         raise RangeSearchError(
             f"parameter set {s.label()} diverges for currents in the accepted range "
             f"[{i_lo:g}, {i_hi:g}] mV/ms: under '{names[j % n_stim]}' the state leaves "
-            f"|v|, |u| <= {SEARCH_STATE_BOUND:g} at t = {(k + 1) * dt:g} ms (dt = "
+            f"|v|, |u| <= {SEARCH_STATE_BOUND:g} at t = {t_ms:g} ms (dt = "
             f"{dt:g} ms); narrow the accepted current range (current_range) or use a "
             f"smaller dt")
     v_min, u_min, u_max, v_pre_max = ext

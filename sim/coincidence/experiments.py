@@ -278,8 +278,7 @@ def ridge_experiment(engine: str = "fixed", spec: RidgeSpec | None = None,
         pad = np.zeros((n, ncfg.n_afferents))
         pad[:, :4] = cur
         run = run_network(engine, ncfg, pad, build_dir=build_dir)
-        aff_ticks = [(np.asarray(sp) / dt).round().astype(np.int64)
-                     for sp in run.population("afferent")[:4]]
+        aff_ticks = [giz.spike_ticks(sp, dt) + 1 for sp in run.population("afferent")[:4]]
         run.spikes_ms = run.population("cuneate")
         engine = f"{engine} (on-chip network)"
     else:
@@ -293,7 +292,7 @@ def ridge_experiment(engine: str = "fixed", spec: RidgeSpec | None = None,
             k = (np.asarray(ks, dtype=np.int64) - 1) // per
             np.add.at(out[:, j], k[k < len(angles)], 1)
         return out
-    cn_ticks = [(np.asarray(sp) / dt).round().astype(np.int64) for sp in run.spikes_ms]
+    cn_ticks = [giz.spike_ticks(sp, dt) + 1 for sp in run.spikes_ms]
     counts = per_trial(cn_ticks, cfg.n_targets)
     aff_counts = per_trial(aff_ticks, 4)
     patterns = [tuple(int(j) for j in np.flatnonzero(c)) for c in counts]

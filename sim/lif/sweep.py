@@ -62,7 +62,7 @@ from functools import lru_cache
 import numpy as np
 
 from ...golden import lif as golden
-from ...golden.izhikevich import spike_times
+from ...golden.izhikevich import spike_ticks, spike_times
 from ...hdl.lib.fixed import ROUNDINGS, FixedPointError
 from ...hdl.lif.config import DECAYS, FORMS, LifSet
 from ..sweep import (BLOCK_SAME_DT_KEYS, Point, SweepSpec, ok_row, refused, register_battery,
@@ -350,7 +350,7 @@ def _run_twin(cfg, bat: LifBattery, dt_ms: float, n_steps: int):
                   n=bat.n)
     trains = [np.asarray(s, dtype=np.float64) for s in run.spikes_ms]
     if bat.form == "discrete":          # the twin counts ticks of 1 / update_hz: use steps
-        trains = [np.rint(s / cfg.dt_ms) * dt_ms for s in trains]
+        trains = [spike_times(spike_ticks(s, cfg.dt_ms), dt_ms) for s in trains]
     return trains, run.clamp_counts
 
 

@@ -252,7 +252,7 @@ def run_golden(ctx) -> tuple[list, dict]:
         raise ValueError(
             f"the golden engine diverged: neuron {i} (trial {nn.trial[i]}, population "
             f"{nn.population[i]!r}, grating {nn.grating[i]}) leaves |v|, |u| <= {exc.bound:g} at "
-            f"t = {(exc.step + 1) * exc.dt_ms:g} ms under front-end currents up to {peak:.3g} "
+            f"t = {exc.t_ms:g} ms under front-end currents up to {peak:.3g} "
             f"mV/ms (the core saturates at {cfg.I.max_value:g}); lower the front end's gain "
             f"(frontend.gain_S, frontend.sa_gain, population gain) or the sensor effects' "
             f"size") from None
