@@ -1,16 +1,37 @@
 """Shared by the host-link tests: a trace of held levels, the host driver of three SA gratings,
 the bit-exact twin's stream of it (the reference), the transport contract a stream over a
-link must meet against that reference, a run of raw samples through a transport, and the spike
-frames a board link sends for a run of current writes."""
+link must meet against that reference, a run of raw samples through a transport, the spike
+frames a board link sends for a run of current writes, and a channel fan-out in front of a
+core (one design, so the Verilator builds of the tests that run it are shared)."""
 
 import numpy as np
 
+from cuneate.hdl.fanout import FanoutConfig
+from cuneate.hdl.izhikevich import IzhikevichConfig
 from cuneate.hdl.link.codec import MSG_SPIKES, FrameDecoder
 from cuneate.sim.host.driver import AfferentEncoding, FbgDriver
 from cuneate.sim.host.transport import COUNTERS
 from cuneate.sim.izhikevich.engines import TwinTransport
 
 SA = AfferentEncoding("SA", gain=40.0, unit_pm=1000.0)
+
+#: a core of 30 neurons fed by a fan-out of 4 channels (gains, rectifications, thresholds of
+#: every kind), a sample every ``FANOUT_EVERY`` sweeps
+FANOUT_CORE = IzhikevichConfig(n_neurons=30, clock_hz=4e3 * 30, update_hz=4e3,
+                               spike_fifo_depth=32)
+_rng = np.random.default_rng(11)
+FANOUT = FanoutConfig(n_channels=4, channel=[i % 4 for i in range(30)],
+                      gain=[float(g) for g in np.round(_rng.uniform(4, 30, 30), 2)],
+                      rectify=["positive", "abs", "none"] * 10,
+                      threshold=[0.5 if i % 5 == 0 else None for i in range(30)],
+                      sample_max=4.0, sample_width=12)
+FANOUT_EVERY = 4
+
+
+def fanout_samples(n: int, seed: int = 2) -> np.ndarray:
+    """``n`` raw samples of :data:`FANOUT`'s channels."""
+    rng = np.random.default_rng(seed)
+    return FANOUT.S.to_raw(rng.uniform(-1.5, 3.0, (n, FANOUT.n_channels)))
 
 
 def held_levels(n_samples: int, seed: int = 1) -> np.ndarray:

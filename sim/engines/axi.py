@@ -2,19 +2,21 @@
 writes in and spikes out, AXI4-Lite registers), compiled by Verilator with its C++ bus harness
 and driven through :class:`~cuneate.sim.axi.transport.AxiTransport` by the host's transport
 contract, as ``board`` drives the UART face. Each block's engine interface runs its inputs
-through the transport (:class:`~cuneate.sim.engines.board.FaceEngine`); each run's counters
+through the transport (:class:`~cuneate.sim.engines.board.FaceEngine`), the channel fan-out's
+in front of the block too (:data:`~cuneate.sim.fanout.engines.FRONT`); each run's counters
 hold the bus's figures (``axi_*``: cycles, beats and register accesses each way).
 """
 
 from __future__ import annotations
 
+from ..fanout.engines import FRONT, FanoutFront
 from ..izhikevich.engines import IzhikevichEngine
 from ..lif.engines import LifEngine
 from ..network.engines import NetworkEngine
 from .board import FaceEngine
 from .registry import implements
 
-__all__ = ["AxiEngine", "AxiIzhikevich", "AxiLif", "AxiNetwork"]
+__all__ = ["AxiEngine", "AxiIzhikevich", "AxiLif", "AxiNetwork", "AxiFanoutFront"]
 
 
 class AxiEngine(FaceEngine):
@@ -27,9 +29,7 @@ class AxiEngine(FaceEngine):
 
 @implements("izhikevich", "axi", speed=1e6)
 class AxiIzhikevich(AxiEngine, IzhikevichEngine):
-    """The core (or array) behind the AXI face, in a scene also behind the channel fan-out."""
-
-    fanout = True
+    """The core (or array) behind the AXI face."""
 
 
 @implements("lif", "axi", speed=1e5)
@@ -40,3 +40,9 @@ class AxiLif(AxiEngine, LifEngine):
 @implements("network", "axi", speed=1e5)
 class AxiNetwork(AxiEngine, NetworkEngine):
     """The afferent -> cuneate network behind the AXI face."""
+
+
+@implements(FRONT, "axi", speed=1e6)
+class AxiFanoutFront(AxiEngine, FanoutFront):
+    """The channel fan-out in front of a block behind the AXI face (the fan-out's payload
+    adapter in the AXI top)."""

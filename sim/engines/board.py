@@ -3,25 +3,29 @@ Verilator behind a simulated serial line (:class:`~cuneate.sim.link.engines.Boar
 opened for the block's configuration), driven by the real host stack.
 
 One class per block it runs, each registered with
-:func:`~cuneate.sim.engines.registry.implements`: the Izhikevich core (and, in a scene, the
-channel fan-out before it or the afferent -> cuneate network behind the link), the LIF core and
-the network. The engine gives its transport (:meth:`BoardEngine.transport`); each block's
-engine interface runs its inputs through it (its default ``sweeps`` or ``pairs``: the block's
-currents written for their ticks, the ticks stepped, the spike frames read back, every counter
-of the transport contract checked and the device's own error counters). The link carries
-spikes alone: no clamp counts, no input spikes; each run's counters hold the line's figures
-(``board_*``: cycles, bytes and frames each way).
+:func:`~cuneate.sim.engines.registry.implements`: the Izhikevich core (in a scene also as the
+afferents of the afferent -> cuneate network behind the link), the LIF core, the network, and
+the channel fan-out on chip in front of any of them
+(:data:`~cuneate.sim.fanout.engines.FRONT`). The engine gives its transport
+(:meth:`BoardEngine.transport`); each block's engine interface runs its inputs through it (its
+default ``sweeps`` or ``pairs``: the block's currents written for their ticks, the ticks
+stepped, the spike frames read back, every counter of the transport contract checked and the
+device's own error counters). The link carries spikes alone: no clamp counts, no input
+spikes; each run's counters hold the line's figures (``board_*``: cycles, bytes and frames each
+way).
 """
 
 from __future__ import annotations
 
+from ..fanout.engines import FRONT, FanoutFront
 from ..izhikevich.engines import IzhikevichEngine
 from ..lif.engines import LifEngine
 from ..network.engines import NetworkEngine
 from .engine import BlockEngine
 from .registry import implements
 
-__all__ = ["FaceEngine", "BoardEngine", "BoardIzhikevich", "BoardLif", "BoardNetwork"]
+__all__ = ["FaceEngine", "BoardEngine", "BoardIzhikevich", "BoardLif", "BoardNetwork",
+           "BoardFanoutFront"]
 
 
 class FaceEngine(BlockEngine):
@@ -46,7 +50,9 @@ class FaceEngine(BlockEngine):
     def closed(self, transport, counters) -> dict:
         return counters | {f"{self.name}_{k}": v for k, v in transport.figures().items()}
 
-    def fanout_transport(self, fanout):
+    def front(self, fanout, inner):
+        """The channel fan-out ``fanout`` on chip in front of the block (``inner``, this
+        engine's implementation of it, needs nothing more): the transport built with it."""
         return self.transport(fanout=fanout)
 
 
@@ -67,7 +73,7 @@ class BoardIzhikevich(BoardEngine, IzhikevichEngine):
     """The core behind the link (:class:`~cuneate.hdl.link.LinkedTop`), in a scene also behind
     the channel fan-out or as the afferents of the afferent -> cuneate network."""
 
-    layer, fanout = "chip", True
+    layer = "chip"
 
 
 @implements("lif", "board", speed=1e3)
@@ -78,3 +84,9 @@ class BoardLif(BoardEngine, LifEngine):
 @implements("network", "board", speed=1e4)
 class BoardNetwork(BoardEngine, NetworkEngine):
     """The network behind the link (:class:`~cuneate.hdl.link.LinkedTop`)."""
+
+
+@implements(FRONT, "board", speed=1e5)
+class BoardFanoutFront(BoardEngine, FanoutFront):
+    """The channel fan-out on chip in front of a block behind the link
+    (:class:`~cuneate.hdl.link.LinkedTop` of the fan-out's payload adapter)."""

@@ -71,12 +71,14 @@ class BlockEngine:
         """The engine's host transport, not yet opened; refused by an engine without one."""
         raise ValueError(f"engine {self.name!r} has no transport for the {self.block} block")
 
-    def stream(self, config, writes: dict, n_ticks: int) -> tuple[SpikeBatch, dict]:
+    def stream(self, config, writes: dict, n_ticks: int,
+               transport: Transport | None = None) -> tuple[SpikeBatch, dict]:
         """Drive ``writes`` (``{tick: [(first, raw values), ...]}``) and ``n_ticks`` ticks
-        through :meth:`transport` opened for ``config``; every counter of the transport
-        contract checked (:func:`~cuneate.sim.host.transport.check_counters`). Returns the
-        spikes and the counters."""
-        tr = self.transport()
+        through ``transport`` (by default :meth:`transport`) opened for ``config``; every
+        counter of the transport contract checked
+        (:func:`~cuneate.sim.host.transport.check_counters`). Returns the spikes and the
+        counters."""
+        tr = self.transport() if transport is None else transport
         try:
             tr.open(config)
             for k in sorted(writes):

@@ -39,8 +39,9 @@ class EngineRun:
     ``clamp_sticky``: the sticky flags (per kind, or the block's bit mask); ``counters``: what
     the engine counted besides (writes, input events merged into an earlier one of their tick:
     ``merged_count``, link events, a simulator's cycles and wall time, ...). ``values``: what
-    a block puts out besides spikes, one row per tick (the channel fan-out's afferent currents in mV/ms, one row per sample; a NIR
-    readout layer's membrane); ``None`` where there is nothing.
+    a block puts out besides spikes, one row per tick (the channel fan-out's afferent currents
+    in mV/ms, one row per sample; a NIR readout layer's membrane); ``None`` where there is
+    nothing.
     """
 
     engine: str

@@ -6,8 +6,14 @@ currents ``(n_runs, n_neurons)`` out (mV/ms), as an
 ``fixed`` quantizes them to the sample format (saturating, as the host does) and runs
 :class:`~cuneate.hdl.fanout.FanoutTwin`; ``icarus`` and ``verilator`` run the same quantized
 samples through the generated Verilog (the bench's ``engine`` test: channel writes through the
-handshake, one run per sample). :class:`FanoutTransport` puts the fan-out's twin in front of
-another engine's transport (a scene that streams channels).
+handshake, one run per sample).
+
+The fan-out is also an adapter in front of another block (a scene that streams channels;
+:func:`~cuneate.hdl.lib.payload.payload_spec`'s ``fanout``): its engines register for
+:data:`FRONT` (:class:`FanoutFront`: raw channel samples in, the spikes of the block behind it
+out, :func:`run_front`). ``fixed`` puts the fan-out's twin in front of the block's twin
+(:class:`FanoutTransport`); ``board`` and ``axi`` (:mod:`cuneate.sim.engines.board`,
+:mod:`cuneate.sim.engines.axi`) hold it on chip in front of the block behind their face.
 """
 
 from __future__ import annotations
@@ -23,7 +29,11 @@ from ..engines.registry import engine_for, implements
 from ..engines.run import EngineRun
 from ..host.transport import Transport
 
-__all__ = ["FanoutEngine", "run_fanout", "FanoutTransport"]
+__all__ = ["FanoutEngine", "run_fanout", "FRONT", "FanoutFront", "run_front",
+           "FanoutTransport"]
+
+#: The name the fan-out's engines register under as an adapter in front of another block.
+FRONT = "fanout_front"
 
 
 class FanoutEngine(BlockEngine):
@@ -82,6 +92,49 @@ def run_fanout(engine: str, cfg: FanoutConfig, samples, build_dir=None) -> Engin
     if x.ndim != 2 or x.shape[1] != cfg.n_channels:
         raise ValueError(f"samples must be (n_runs, {cfg.n_channels}), got shape {x.shape}")
     return impl.run(cfg, x)
+
+
+class FanoutFront(BlockEngine):
+    """The channel fan-out in front of another block on one engine: :meth:`front` the
+    transport a scene streams its channels through, :meth:`run` raw channel samples into the
+    spikes of the block behind it. By default the fan-out's twin stands in front of the
+    block's engine's transport (:class:`FanoutTransport`)."""
+
+    block = FRONT
+
+    def front(self, fanout: FanoutConfig, inner: BlockEngine) -> Transport:
+        """The transport of the fan-out ``fanout`` in front of ``inner`` (this engine's
+        implementation of the block behind it), to be opened for that block's
+        configuration."""
+        return FanoutTransport(inner.transport(), fanout)
+
+    def run(self, fanout: FanoutConfig, config, writes: dict, n_ticks: int,
+            block: str = "izhikevich") -> EngineRun:
+        """Raw channel samples ``writes`` (``{tick: [(first channel, raw samples), ...]}``)
+        through ``fanout`` in front of ``block`` (configuration ``config``) for ``n_ticks``
+        ticks, every counter of the transport contract checked: the spikes of the
+        ``fanout.n_neurons`` neurons it feeds (no clamps seen: ``None``; the counters hold
+        what the transport counted)."""
+        inner = engine_for(block, self.name, build_dir=self.build_dir, progress=self.progress,
+                           waves=self.waves)
+        t0 = time.perf_counter()
+        got, counters = self.stream(config, writes, n_ticks, self.front(fanout, inner))
+        return EngineRun(self.name, config.dt_ms, n_ticks,
+                         got.times_ms(config.dt_ms, fanout.n_neurons), None, None,
+                         time.perf_counter() - t0, counters)
+
+
+@implements(FRONT, "fixed", speed=2e6)
+class FanoutFrontFixed(FanoutFront):
+    """The fan-out's twin in front of the block's twin."""
+
+
+def run_front(engine: str, fanout: FanoutConfig, config, writes: dict, n_ticks: int,
+              block: str = "izhikevich", build_dir=None) -> EngineRun:
+    """Raw channel samples through the fan-out in front of ``block`` on ``engine``
+    (:meth:`FanoutFront.run`)."""
+    return engine_for(FRONT, engine, build_dir=build_dir).run(fanout, config, writes, n_ticks,
+                                                              block)
 
 
 class FanoutTransport(Transport):

@@ -10,12 +10,13 @@ afferents with the front end's rectification, SA afferents gated at their thresh
 Outside a trial's loading window (``frontend.window = "loading"``) its channels carry 0, so
 every current is 0 as the host-side front end makes it.
 
-Engines (those whose Izhikevich implementation says it runs the fan-out,
-:func:`fanout_scene_engines`): ``fixed`` runs the fan-out twin in front of the Izhikevich twin
-(:class:`~cuneate.sim.fanout.engines.FanoutTransport`), ``board`` the board top with the
-fan-out (:class:`~cuneate.hdl.link.LinkedTop`); ``golden`` integrates the float
-currents as without the fan-out, so the fixed engines' difference from golden includes the samples'
-quantization (the fan-out's bound: :meth:`~cuneate.hdl.fanout.FanoutConfig.sample_bound`).
+Engines (:func:`fanout_scene_engines`): those registered for the fan-out in front of a block
+(:data:`~cuneate.sim.fanout.engines.FRONT`): ``fixed`` runs the fan-out twin in front of the
+Izhikevich twin (:class:`~cuneate.sim.fanout.engines.FanoutTransport`), ``board`` and ``axi``
+the fan-out on chip in front of the block behind their face; and ``golden``, which integrates
+the float currents as without the fan-out, so the fixed engines' difference from golden
+includes the samples' quantization (the fan-out's bound:
+:meth:`~cuneate.hdl.fanout.FanoutConfig.sample_bound`).
 """
 
 from __future__ import annotations
@@ -25,20 +26,22 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...hdl.fanout import FanoutConfig
-from ..engines.registry import block_engines, engine_for, implementation, refuse_engines_outside
+from ..engines.engine import BlockEngine
+from ..engines.registry import ENGINES, block_engines, engine_for, refuse_engines_outside
 from ..host.driver import FbgDriver
 from ..host.transport import Transport
-from .engines import FanoutTransport
+from .engines import FRONT, FanoutTransport
 
 __all__ = ["ChannelPlan", "channel_plan", "scene_fanout", "check_fanout_engines",
            "fanout_transport", "FanoutTransport", "fanout_scene_engines"]
 
 
 def fanout_scene_engines() -> tuple[str, ...]:
-    """The engines that run a scene's channel fan-out (golden needs none: it integrates the
-    float currents): those whose Izhikevich implementation says so."""
-    return tuple(e for e in block_engines("izhikevich")
-                 if implementation("izhikevich", e).fanout)
+    """The engines that run a scene's channel fan-out, in :data:`ENGINES` order: those
+    registered for the fan-out in front of a block, and golden (it needs none: it integrates
+    the float currents)."""
+    front = block_engines(FRONT)
+    return tuple(e for e in ENGINES if e == "golden" or e in front)
 
 
 @dataclass
@@ -123,7 +126,8 @@ def check_fanout_engines(scene, engines) -> None:
     refuse_engines_outside(engines, fanout_scene_engines(), "hardware.fanout", "channel fan-out")
 
 
-def fanout_transport(engine: str, plan: ChannelPlan, kw: dict) -> Transport:
-    """The transport of a fan-out engine (``kw``: its options): the fan-out twin before the
-    fixed engine's twin, or the board top with the fan-out."""
-    return engine_for("izhikevich", engine, **kw).fanout_transport(plan.config)
+def fanout_transport(engine: str, plan: ChannelPlan, inner: BlockEngine, kw: dict) -> Transport:
+    """The transport a scene streams its channels through on ``engine`` (``kw``: its
+    options): the registry's fan-out in front of ``inner``, the engine's implementation of
+    the block the fan-out feeds."""
+    return engine_for(FRONT, engine, **kw).front(plan.config, inner)

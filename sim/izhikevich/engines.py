@@ -59,7 +59,6 @@ from ..engines.registry import engine_for, implements
 from ..engines.run import EngineRun, TickUnwrap, spike_times
 from ..engines.verilator_fast import run_harness
 from ..engines.waves import WindowedVcd, write_gtkw
-from ..fanout.engines import FanoutTransport
 from ..host.transport import SpikeBatch, Transport, TransportError, sweep_count
 
 __all__ = ["IzhikevichEngine", "EngineRun", "engine_core", "run_engine",
@@ -143,14 +142,6 @@ class IzhikevichEngine(BlockEngine):
     #: the layer's model or twin, :func:`~cuneate.sim.network.scene.run_layer`), ``"chip"``
     #: (its transport opens the afferent -> cuneate network) or ``None`` (it does not).
     layer: str | None = None
-    #: Whether the engine runs a scene's channel fan-out (:meth:`fanout_transport`).
-    fanout: bool = False
-
-    def fanout_transport(self, fanout) -> Transport:
-        """The transport of a scene that streams channels: the channel fan-out ``fanout``
-        (:class:`~cuneate.hdl.fanout.FanoutConfig`) in front of the core; by default its twin
-        before this engine's transport."""
-        return FanoutTransport(self.transport(), fanout)
 
 
 def _times(spike_sweeps, n: int, dt_ms: float) -> list[list[float]]:
@@ -161,7 +152,7 @@ def _times(spike_sweeps, n: int, dt_ms: float) -> list[list[float]]:
 class IzhikevichGolden(IzhikevichEngine):
     """The float64 model at the core's dt (forward Euler), the core's parameter sets."""
 
-    layer, fanout = "host", True
+    layer = "host"
 
     def sweeps(self, cfg, cur, n_sweeps, n):
         params = [cfg.params[s] for s in cfg.neuron_sets[:n]]
@@ -178,7 +169,7 @@ class IzhikevichGolden(IzhikevichEngine):
 class IzhikevichFixed(IzhikevichEngine):
     """The bit-exact twin."""
 
-    layer, fanout = "host", True
+    layer = "host"
 
     def sweeps(self, cfg, cur, n_sweeps, n):
         twin = IzhikevichTwin(cfg)

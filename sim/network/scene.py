@@ -308,4 +308,5 @@ def run_layer(engine: str, layer: CuneateLayer, afferent_ms: list, n_ticks: int)
     run = run_coincidence(engine, det, ticks, n_ticks)
     out = [np.asarray(s, dtype=np.float64) for s in run.spikes_ms]
     return out, {"spikes": int(run.counts().sum()), "events": run.counters["events"],
-                 "merged": run.counters.get("merged_count", 0)} | {f"clamp_{k}": v for k, v in run.clamp_counts.items()}
+                 "merged": run.counters.get("merged_count", 0)} | {
+        f"clamp_{k}": v for k, v in run.clamp_counts.items()}

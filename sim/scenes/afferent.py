@@ -33,7 +33,7 @@ from .. import progress as prog
 from ..engines.registry import ENGINES as ENGINE_TRAITS
 from ..engines.registry import block_engines, engine_for, estimate_seconds
 from ..engines.waves import FORMATS, Waves, wave_files
-from ..fanout.scene import channel_plan, check_fanout_engines, scene_fanout
+from ..fanout.scene import channel_plan, check_fanout_engines, fanout_transport, scene_fanout
 from ..host.driver import AfferentEncoding, FbgDriver
 from ..izhikevich.engines import engine_core
 from ..network.scene import check_layer_engines, layer_estimate, run_layer, scene_layer
@@ -270,11 +270,11 @@ def _run_transport(engine):
             kw["waves"] = ctx["waves"]
         kw.update(ctx.get("engine_options", {}).get(engine, {}))
         impl = engine_for("izhikevich", engine, **kw)
-        fan = ctx.get("fanout")                 # channels streamed, fanned out on chip
+        fan = ctx.get("fanout")                 # channels streamed, fanned out in front
         if fan is None:
             tr, drv, raw = impl.transport(), ctx["driver"], ctx["raw"]
         else:
-            tr, drv, raw = impl.fanout_transport(fan.config), fan.driver, fan.raw
+            tr, drv, raw = fanout_transport(engine, fan, impl, kw), fan.driver, fan.raw
         layer = ctx.get("layer") if impl.layer == "chip" else None   # the network on chip
         try:
             tr.open(ctx["config"] if layer is None else layer.network)

@@ -2,7 +2,9 @@
 block's public entry point, equal to the block's twin (``fixed``) spike for spike (and clamp
 for clamp where the engine sees clamps), golden within a spike of it. The pairs come from the
 registry, so a new engine is checked for every block it registers for; engines that run in a
-simulator process of their own (``background``) are in the long lane."""
+simulator process of their own (``background``) are in the long lane. The channel fan-out
+runs alone (``fanout``: its currents) and in front of a core (``fanout_front``: the core's
+spikes, the design the board's fan-out test compiles)."""
 
 import numpy as np
 import pytest
@@ -68,6 +70,15 @@ def _fanout(engine, build_dir):
     return run_fanout(engine, cfg, x, build_dir=build_dir)
 
 
+def _fanout_front(engine, build_dir):
+    from host_stream import FANOUT, FANOUT_CORE, FANOUT_EVERY, fanout_samples
+    from cuneate.sim.fanout.engines import run_front
+    raw = fanout_samples(40)
+    writes = {k * FANOUT_EVERY: [(0, row)] for k, row in enumerate(raw)}
+    return run_front(engine, FANOUT, FANOUT_CORE, writes, len(raw) * FANOUT_EVERY,
+                     build_dir=build_dir)
+
+
 def _nir(engine, build_dir):
     from cuneate.sim.nir.crosscheck import crosscheck_graph
     from cuneate.sim.nir.engines import run_network
@@ -81,7 +92,7 @@ def _nir(engine, build_dir):
 
 #: Block -> its tiny run through its public entry point.
 RUNS = {"izhikevich": _izhikevich, "lif": _lif, "coincidence": _coincidence,
-        "network": _network, "fanout": _fanout, "nir": _nir}
+        "network": _network, "fanout": _fanout, "fanout_front": _fanout_front, "nir": _nir}
 _REFERENCE: dict = {}
 
 

@@ -7,27 +7,18 @@ in effect from its sweep), and the link carried channels, not afferents."""
 import numpy as np
 import pytest
 
-from cuneate.hdl.fanout import FanoutConfig, FanoutTwin
+from cuneate.hdl.fanout import FanoutTwin
 from cuneate.hdl.izhikevich import IzhikevichConfig, IzhikevichTwin
 from cuneate.hdl.lib.config import ConfigError
 from cuneate.hdl.link import LinkConfig, LinkModel
 from cuneate.sim.link.engines import BoardTransport, board_link
+from host_stream import FANOUT as FAN
+from host_stream import FANOUT_CORE as CORE
+from host_stream import FANOUT_EVERY as EVERY
+from host_stream import fanout_samples as samples
 from host_stream import stream_samples
 
-N, C = 30, 4
-CORE = IzhikevichConfig(n_neurons=N, clock_hz=4e3 * N, update_hz=4e3, spike_fifo_depth=32)
-_rng = np.random.default_rng(11)
-FAN = FanoutConfig(n_channels=C, channel=[i % C for i in range(N)],
-                   gain=[float(g) for g in np.round(_rng.uniform(4, 30, N), 2)],
-                   rectify=["positive", "abs", "none"] * (N // 3),
-                   threshold=[0.5 if i % 5 == 0 else None for i in range(N)],
-                   sample_max=4.0, sample_width=12)
-EVERY = 4                                          # sweeps a sample
-
-
-def samples(n: int, seed: int = 2) -> np.ndarray:
-    rng = np.random.default_rng(seed)
-    return FAN.S.to_raw(rng.uniform(-1.5, 3.0, (n, C)))
+N, C = CORE.n_neurons, FAN.n_channels
 
 
 def reference(raw: np.ndarray, n_sweeps: int):
