@@ -1,7 +1,8 @@
 """The engine interface: how one engine runs one block.
 
 Each block defines its engine class (``IzhikevichEngine``, ``LifEngine``, ``CoincidenceEngine``,
-``NetworkEngine``, ``FanoutEngine``, ``NirEngine`` in ``cuneate.sim.<block>.engines``), a
+``NetworkEngine``, ``FanoutEngine`` and, for the fan-out in front of another block,
+``FanoutFront``, ``NirEngine`` in ``cuneate.sim.<block>.engines``), a
 :class:`BlockEngine` whose ``run`` takes the block's configuration and inputs and returns one
 :class:`~cuneate.sim.engines.run.EngineRun`. An engine implements the block by subclassing it
 and registering the subclass (:func:`~cuneate.sim.engines.registry.implements`); the registry
