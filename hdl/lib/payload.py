@@ -37,7 +37,8 @@ from amaranth.lib.wiring import In, Out
 
 from .config import ConfigError
 
-__all__ = ["PayloadInfo", "PayloadSpec", "PayloadTwin", "payload_signature", "write_layout",
+__all__ = ["PayloadInfo", "PayloadSpec", "BlockSpec", "PayloadTwin", "payload_signature",
+           "write_layout",
            "spike_layout", "implements", "payload_spec", "SPECS", "SPIKES_SETTLE"]
 
 #: cycles after ``sweep_done`` by which every spike of the sweep is offered on ``spikes`` (a
@@ -177,6 +178,37 @@ class PayloadSpec:
 
     def to_dict(self) -> dict:
         return self.info.to_dict()
+
+
+class BlockSpec(PayloadSpec):
+    """The spec of one block built from its configuration (:attr:`config`: ``to_kwargs``,
+    ``tick_source``, ``clock_hz``): :meth:`retimed` rebuilds it with the tick external,
+    :meth:`build` refuses an internal tick and makes :meth:`component`."""
+
+    config: object
+
+    @property
+    def external(self) -> bool:
+        return self.config.tick_source == "external"
+
+    def config_from(self, kw: dict):
+        """The configuration of constructor keywords ``kw`` (as ``to_kwargs`` gives them)."""
+        return type(self.config)(**kw)
+
+    def retimed(self, clock_hz: float | None = None) -> "BlockSpec":
+        kw = self.config.to_kwargs() | {"tick_source": "external"}
+        if clock_hz is not None:
+            kw["clock_hz"] = clock_hz
+        return type(self)(self.config_from(kw))
+
+    def component(self) -> wiring.Component:
+        raise NotImplementedError
+
+    def build(self) -> wiring.Component:
+        if not self.external:
+            raise ConfigError(f"a payload's ticks come from its face: the {self.info.block} "
+                              f"needs tick_source='external' (retimed() gives it)")
+        return self.component()
 
 
 #: configuration type -> the spec class that makes it a payload

@@ -18,6 +18,11 @@ presentation (tick within it), the spike counts within each window and the weigh
 ``verilator-fast``
     The Verilog compiled by Verilator with the C++ harness (:mod:`cuneate.sim.plasticity.fast`):
     whole protocols.
+``board``, ``axi``
+    The layer's payload (:mod:`cuneate.hdl.plasticity.payload`) behind the UART link or the
+    AXI face, driven through the face's host transport (:class:`PlasticityFace`): every
+    tick's afferent spikes, each window's end and the readout requests are writes
+    (:func:`face_schedule`), the weights come back in readout sweeps.
 
 The RTL engines read every weight back through the layer's host port at the end.
 """
@@ -33,13 +38,15 @@ import numpy as np
 from ...golden.cuneate_layer import LayerParams, simulate_layer
 from ...hdl.plasticity import CLAMP_KINDS, PlasticityConfig
 from ...hdl.plasticity.core import LearningLayer, learning_verilog
+from ...hdl.plasticity.payload import weights_from_ids, write_addresses
 from ...hdl.plasticity.twin import PlasticityTwin
 from ..engines.amaranth import simulate
 from ..engines.engine import BlockEngine
 from ..engines.registry import engine_for, implements
 from .fast import run_fast
 
-__all__ = ["PlasticityEngine", "LearningRun", "run_learning", "golden_layer"]
+__all__ = ["PlasticityEngine", "PlasticityFace", "LearningRun", "run_learning", "golden_layer",
+           "face_schedule"]
 
 
 @dataclass
@@ -204,6 +211,59 @@ class PlasticityCocotb(PlasticityRtl):
                                  "events": {str(k): v for k, v in by_tick.items()},
                                  "windows": {str(k): a for k, a in windows.items()}})
         return rep["spikes"], rep["weights"], rep["clamp_counts"]
+
+
+class PlasticityFace(PlasticityEngine):
+    """The layer behind a face (an engine with a host transport, :meth:`stream`): the
+    protocol as writes (:func:`face_schedule`), the CNs' spikes and, in the readout sweeps
+    after it, every weight. Face engines see no clamp counts (the faces carry spikes)."""
+
+    def learn(self, cfg, pres, flags, snapshot_every):
+        if snapshot_every:
+            raise ValueError(f"engine {self.name!r} reads the weights once, after the protocol "
+                             f"(snapshot_every must be 0)")
+        writes, n_sweeps = face_schedule(cfg, pres, flags)
+        got, counters = self.stream(cfg, writes, n_sweeps)
+        M, K = cfg.n_targets, cfg.n_synapses
+        n_total = pres.n * pres.n_ticks
+        sweep, ids = got.tick, got.neuron
+        cn = sweep < n_total
+        if np.any(ids[cn] >= M) or np.any(ids[~cn] < M):
+            raise ValueError(f"{self.name}: a CN spike in a readout sweep or a readout id in "
+                             f"a tick")
+        w_raw = np.stack([weights_from_ids(cfg, ids[sweep == n_total + j]) for j in range(M)])
+        sp, st, j = sweep[cn] // pres.n_ticks, sweep[cn] % pres.n_ticks, ids[cn]
+        counts = np.zeros((pres.n, M), np.int64)
+        inside = st < pres.window_ticks
+        np.add.at(counts, (sp[inside], j[inside]), 1)
+        lsb = cfg.W.lsb
+        return LearningRun(self.name, sp, st, j, counts, w_raw.reshape(M, K) * lsb, w_raw,
+                           [(0, cfg.weights_raw * lsb)], extra={"counters": counters})
+
+
+def face_schedule(cfg: PlasticityConfig, pres, flags) -> tuple[dict, int]:
+    """The protocol as a face's writes (``{sweep: [(first address, raw values), ...]}``, the
+    write map of :func:`~cuneate.hdl.plasticity.payload.write_addresses`) and its sweeps: each
+    tick's afferent spikes as one write of every afferent (1: a spike), each presentation's
+    window end before the next one's first tick, then a readout request for every CN and one
+    readout sweep each."""
+    amap = write_addresses(cfg)
+    S, M = cfg.n_sources, cfg.n_targets
+    writes: dict = {}
+
+    def add(k, first, raw):
+        writes.setdefault(int(k), []).append((first, np.asarray(raw, dtype=np.int64)))
+    for p in range(pres.n):
+        a, b = pres.offsets[p], pres.offsets[p + 1]
+        ticks, srcs = pres.ticks[a:b], pres.sources[a:b]
+        for k in np.unique(ticks):
+            vec = np.zeros(S, np.int64)
+            vec[srcs[ticks == k]] = 1
+            add(p * pres.n_ticks + k, 0, vec)
+        add((p + 1) * pres.n_ticks, amap["learn"][0], [int(flags[p])])
+    n_total = pres.n * pres.n_ticks
+    add(n_total, amap["readout"][0], np.ones(M, np.int64))
+    return writes, n_total + M
 
 
 def _schedule(pres, flags):

@@ -17,10 +17,14 @@ import pytest
 from cuneate.hdl.fanout import FanoutConfig
 from cuneate.hdl.izhikevich import IzhikevichConfig
 from cuneate.hdl.lif import LifConfig
+from cuneate.hdl.lib.regmap import stream_format
 from cuneate.hdl.network import NetworkConfig
+from cuneate.hdl.plasticity.payload import weights_from_ids
 from cuneate.sim.axi.scoreboard import check_face, run_face
 from cuneate.sim.axi.transport import axi_spec
 from cuneate.sim.engines.toolchain import SIMULATORS
+from cuneate.sim.plasticity.engines import face_schedule, run_learning
+from learning_case import small_layer
 
 SWEEPS = 24
 N_NET, S_NET, M_NET = 12, 8, 2
@@ -121,3 +125,33 @@ def test_wishbone_face(simulator, build_root):
 @pytest.mark.parametrize("block", LONG)
 def test_axi_face_long(simulator, block, build_root):
     _check(simulator, block, "axi", build_root)
+
+
+def _learning():
+    """Two CNs of three synapses learning over two short presentations, behind the face."""
+    cfg, pres = small_layer()
+    return axi_spec(cfg), pres
+
+
+@pytest.mark.cocotb
+@pytest.mark.parametrize("simulator", SIMULATORS)
+def test_the_learning_layer_learns_behind_the_axi_face(simulator, build_root):
+    """The layer's protocol streamed on s_axis (afferent spikes, window ends, readout
+    requests): every sweep's ids, counters and clamp flags as the payload twin's, and the
+    weights read back in the readout sweeps equal the fixed engine's after learning."""
+    spec, pres = _learning()
+    cfg = spec.config
+    flags = np.array([True, True])
+    sched, n_sweeps = face_schedule(cfg, pres, flags)
+    sched = {k: [(first, raw.tolist()) for first, raw in rows] for k, rows in sched.items()}
+    report = run_face(simulator, spec, "axi", sched, n_sweeps,
+                      build_root / f"axi_learning_{simulator}", seed=7)
+    got = check_face(spec, sched, n_sweeps, report)
+    fixed = run_learning("fixed", cfg, pres, flags)
+    assert got["spikes"] > fixed.spike_cn.size > 0
+    F = 8 * stream_format(spec.info)["spike_field_bytes"]
+    n_total = pres.n * pres.n_ticks
+    weights = [weights_from_ids(cfg, [d & ((1 << F) - 1) for d, _ in report["packets"][s]])
+               for s in range(n_total, n_sweeps)]
+    assert not np.array_equal(fixed.weights_raw, cfg.weights_raw)
+    assert np.array_equal(np.stack(weights), fixed.weights_raw)
