@@ -56,7 +56,9 @@ class PayloadInfo:
     ``populations``: ``(name, first id, count)`` of the spike ids (``n_spike_ids`` in all);
     ``busy_cycles``: the cycles one tick keeps the block busy at worst, the writes of a burst
     and the work after it included (a sweep must hold them); ``max_spikes_per_tick``: the
-    neurons that can fire in one sweep."""
+    neurons that can fire in one sweep; ``write_map``: a block whose write addresses mean
+    different things (the learning layer) names its ranges, ``(name, first, count, meaning)``
+    each (empty: every address is a ``written`` value)."""
 
     block: str
     written: str
@@ -71,6 +73,7 @@ class PayloadInfo:
     clamp_kinds: tuple
     rounding: str = "nearest"
     parts: tuple = field(default=(), compare=False)
+    write_map: tuple = ()
 
     @property
     def value_width(self) -> int:
@@ -106,7 +109,9 @@ class PayloadInfo:
                 "clock_hz": self.clock_hz, "update_hz": self.update_hz,
                 "cycles_per_tick": self.cycles_per_tick, "busy_cycles": self.busy_cycles,
                 "max_spikes_per_tick": self.max_spikes_per_tick,
-                "clamp_kinds": list(self.clamp_kinds), "parts": list(self.parts)}
+                "clamp_kinds": list(self.clamp_kinds), "parts": list(self.parts),
+                "write_map": [{"name": n, "first": f, "count": c, "meaning": d}
+                              for n, f, c, d in self.write_map]}
 
 
 def write_layout(info: PayloadInfo) -> data.StructLayout:

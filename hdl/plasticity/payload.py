@@ -40,13 +40,25 @@ from .config import CLAMP_KINDS, STAGE_LATENCY, PlasticityConfig
 from .core import LearningLayer
 from .twin import PlasticityTwin
 
-__all__ = ["LearningSpec", "LearningPayload", "write_addresses", "readout_ids",
+__all__ = ["LearningSpec", "LearningPayload", "write_addresses", "WRITE_MEANINGS", "readout_ids",
            "weights_from_ids", "READOUT_DIGIT", "SWEEP_WIDTH"]
 
 #: values of one readout digit (a weight leaves byte by byte)
 READOUT_DIGIT = 256
 #: bits of the payload's sweep numbers
 SWEEP_WIDTH = 16
+
+
+#: what a write to each range of :func:`write_addresses` does (the register map states it)
+WRITE_MEANINGS = {
+    "spike": "afferent (address - first) spikes before the next tick when the value is not 0",
+    "weight": "synapse (address - first) = CN * K + m takes the value as its raw weight (its "
+              "calcium and drive restart)",
+    "learn": "a window's end; bit 0 of the value: apply the steps",
+    "readout": "request a readout sweep of CN (address - first): at a tick, instead of "
+               "ticking, the layer sends its K weights byte by byte as ids M + (m B + d) 256 "
+               "+ byte (B bytes a weight)",
+}
 
 
 def write_addresses(cfg: PlasticityConfig) -> dict:
@@ -107,8 +119,8 @@ class LearningSpec(BlockSpec):
             sweep_width=SWEEP_WIDTH, clock_hz=c.clock_hz, update_hz=c.update_hz,
             cycles_per_tick=c.cycles_per_tick, busy_cycles=busy, clamp_kinds=CLAMP_KINDS,
             rounding="truncate",
-            parts=({"block": "learning_layer", "afferents": S, "cns": M, "synapses": K,
-                    "write_addresses": {k: list(v) for k, v in amap.items()}},))
+            parts=({"block": "learning_layer", "afferents": S, "cns": M, "synapses": K},),
+            write_map=tuple((k, first, n, WRITE_MEANINGS[k]) for k, (first, n) in amap.items()))
 
     def config_from(self, kw: dict) -> PlasticityConfig:
         return PlasticityConfig.from_kwargs(kw)
