@@ -6,6 +6,10 @@ block's payload twin (:func:`cuneate.sim.axi.scoreboard.check_face`): every swee
 and its TLAST, the empty sweeps' markers, the constants, every counter, the refusals answered
 with an error, the clamp flags as the twin's (a clamp provoked) and cleared over the bus.
 
+The learning layer behind the AXI face: its protocol streamed as writes, every sweep's ids as
+the payload twin's and the weights of its readout sweeps equal to the fixed engine's after
+learning (Icarus in the default lane, Verilator in the long lane).
+
 Default lane: the LIF core behind the AXI face and behind the Wishbone face, on both
 simulators. Long lane: the Izhikevich array and the network behind the AXI face, and the channel
 fan-out in front of the array, the LIF core and the network.
@@ -134,7 +138,9 @@ def _learning():
 
 
 @pytest.mark.cocotb
-@pytest.mark.parametrize("simulator", SIMULATORS)
+# Icarus in the default lane; Verilator's build (about a minute) in the long lane
+@pytest.mark.parametrize("simulator", [pytest.param(s, marks=pytest.mark.long)
+                                       if s == "verilator" else s for s in SIMULATORS])
 def test_the_learning_layer_learns_behind_the_axi_face(simulator, build_root):
     """The layer's protocol streamed on s_axis (afferent spikes, window ends, readout
     requests): every sweep's ids, counters and clamp flags as the payload twin's, and the
