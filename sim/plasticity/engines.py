@@ -22,7 +22,7 @@ presentation (tick within it), the spike counts within each window and the weigh
     The layer's payload (:mod:`cuneate.hdl.plasticity.payload`) behind the UART link or the
     AXI face, driven through the face's host transport (:class:`PlasticityFace`): every
     tick's afferent spikes, each window's end and the readout requests are writes
-    (:func:`face_schedule`), the weights come back in readout sweeps.
+    (:func:`face_schedule`), the weights come back in readout sweeps (the snapshots too).
 
 The RTL engines read every weight back through the layer's host port at the end.
 """
@@ -46,7 +46,7 @@ from ..engines.registry import engine_for, implements
 from .fast import run_fast
 
 __all__ = ["PlasticityEngine", "PlasticityFace", "LearningRun", "run_learning", "golden_layer",
-           "face_schedule"]
+           "face_schedule", "FacePlan"]
 
 
 @dataclass
@@ -216,54 +216,73 @@ class PlasticityCocotb(PlasticityRtl):
 class PlasticityFace(PlasticityEngine):
     """The layer behind a face (an engine with a host transport, :meth:`stream`): the
     protocol as writes (:func:`face_schedule`), the CNs' spikes and, in the readout sweeps
-    after it, every weight. Face engines see no clamp counts (the faces carry spikes)."""
+    after every ``snapshot_every`` presentations and after the last, every weight. Face
+    engines see no clamp counts (the faces carry spikes)."""
 
     def learn(self, cfg, pres, flags, snapshot_every):
-        if snapshot_every:
-            raise ValueError(f"engine {self.name!r} reads the weights once, after the protocol "
-                             f"(snapshot_every must be 0)")
-        writes, n_sweeps = face_schedule(cfg, pres, flags)
-        got, counters = self.stream(cfg, writes, n_sweeps)
+        plan = face_schedule(cfg, pres, flags, snapshot_every)
+        got, counters = self.stream(cfg, plan.writes, plan.n_sweeps)
         M, K = cfg.n_targets, cfg.n_synapses
-        n_total = pres.n * pres.n_ticks
-        sweep, ids = got.tick, got.neuron
-        cn = sweep < n_total
-        if np.any(ids[cn] >= M) or np.any(ids[~cn] < M):
+        tick = plan.tick_of_sweep[got.tick]
+        cn = tick >= 0
+        if np.any(got.neuron[cn] >= M) or np.any(got.neuron[~cn] < M):
             raise ValueError(f"{self.name}: a CN spike in a readout sweep or a readout id in "
                              f"a tick")
-        w_raw = np.stack([weights_from_ids(cfg, ids[sweep == n_total + j]) for j in range(M)])
-        sp, st, j = sweep[cn] // pres.n_ticks, sweep[cn] % pres.n_ticks, ids[cn]
+        lsb = cfg.W.lsb
+        reads = [np.stack([weights_from_ids(cfg, got.neuron[got.tick == s + j])
+                           for j in range(M)]).reshape(M, K) for _, s in plan.readouts]
+        snaps = [(0, cfg.weights_raw * lsb)] + [(done, w * lsb) for (done, _), w in
+                                                zip(plan.readouts[:-1], reads[:-1])]
+        sp, st, j = tick[cn] // pres.n_ticks, tick[cn] % pres.n_ticks, got.neuron[cn]
         counts = np.zeros((pres.n, M), np.int64)
         inside = st < pres.window_ticks
         np.add.at(counts, (sp[inside], j[inside]), 1)
-        lsb = cfg.W.lsb
-        return LearningRun(self.name, sp, st, j, counts, w_raw.reshape(M, K) * lsb, w_raw,
-                           [(0, cfg.weights_raw * lsb)], extra={"counters": counters})
+        return LearningRun(self.name, sp, st, j, counts, reads[-1] * lsb, reads[-1], snaps,
+                           extra={"counters": counters})
 
 
-def face_schedule(cfg: PlasticityConfig, pres, flags) -> tuple[dict, int]:
-    """The protocol as a face's writes (``{sweep: [(first address, raw values), ...]}``, the
-    write map of :func:`~cuneate.hdl.plasticity.payload.write_addresses`) and its sweeps: each
-    tick's afferent spikes as one write of every afferent (1: a spike), each presentation's
-    window end before the next one's first tick, then a readout request for every CN and one
-    readout sweep each."""
+@dataclass
+class FacePlan:
+    """A protocol as a face's writes: ``writes`` (``{sweep: [(first address, raw values),
+    ...]}``), ``n_sweeps``, the layer's tick of each sweep (``tick_of_sweep``, -1 in a
+    readout sweep) and the readouts (``(presentations done, first readout sweep)``, the last
+    after the protocol)."""
+
+    writes: dict
+    n_sweeps: int
+    tick_of_sweep: np.ndarray
+    readouts: list
+
+
+def face_schedule(cfg: PlasticityConfig, pres, flags, snapshot_every: int = 0) -> FacePlan:
+    """The protocol as a face's writes (the write map of
+    :func:`~cuneate.hdl.plasticity.payload.write_addresses`): each tick's afferent spikes as
+    one write of every afferent (1: a spike), each presentation's window end before the next
+    one's first tick; after every ``snapshot_every`` presentations and after the last, a
+    readout request for every CN with the window end, and one readout sweep each."""
     amap = write_addresses(cfg)
     S, M = cfg.n_sources, cfg.n_targets
     writes: dict = {}
+    ticks_of: list[int] = []
+    readouts: list = []
 
     def add(k, first, raw):
         writes.setdefault(int(k), []).append((first, np.asarray(raw, dtype=np.int64)))
     for p in range(pres.n):
         a, b = pres.offsets[p], pres.offsets[p + 1]
         ticks, srcs = pres.ticks[a:b], pres.sources[a:b]
+        first = len(ticks_of)
         for k in np.unique(ticks):
             vec = np.zeros(S, np.int64)
             vec[srcs[ticks == k]] = 1
-            add(p * pres.n_ticks + k, 0, vec)
-        add((p + 1) * pres.n_ticks, amap["learn"][0], [int(flags[p])])
-    n_total = pres.n * pres.n_ticks
-    add(n_total, amap["readout"][0], np.ones(M, np.int64))
-    return writes, n_total + M
+            add(first + k, 0, vec)
+        ticks_of += range(p * pres.n_ticks, (p + 1) * pres.n_ticks)
+        add(len(ticks_of), amap["learn"][0], [int(flags[p])])
+        if p == pres.n - 1 or (snapshot_every and (p + 1) % snapshot_every == 0):
+            add(len(ticks_of), amap["readout"][0], np.ones(M, np.int64))
+            readouts.append((p + 1, len(ticks_of)))
+            ticks_of += [-1] * M
+    return FacePlan(writes, len(ticks_of), np.asarray(ticks_of, dtype=np.int64), readouts)
 
 
 def _schedule(pres, flags):

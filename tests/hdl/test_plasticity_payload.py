@@ -82,7 +82,8 @@ def drive(spec, writes: dict, n_sweeps: int) -> list[list[int]]:
 def test_the_payload_learns_as_the_twin_and_sends_its_weights_in_readout_sweeps():
     cfg, pres = small_layer()
     flags = np.array([False, True])
-    writes, n_sweeps = face_schedule(cfg, pres, flags)
+    plan = face_schedule(cfg, pres, flags)
+    writes, n_sweeps = plan.writes, plan.n_sweeps
     got = drive(payload_spec(cfg), writes, n_sweeps)
     fixed = run_learning("fixed", cfg, pres, flags)
     M, n_total = cfg.n_targets, pres.n * pres.n_ticks
@@ -103,7 +104,8 @@ def test_a_weight_written_over_the_stream_restarts_its_synapse():
     rng = np.random.default_rng(8)
     w_new = rng.uniform(0, 6, cfg.weights_real.shape)
     written = PlasticityConfig.from_kwargs(cfg.to_kwargs() | {"weights": w_new.tolist()})
-    writes, n_sweeps = face_schedule(cfg, pres, flags)
+    plan = face_schedule(cfg, pres, flags)
+    writes, n_sweeps = plan.writes, plan.n_sweeps
     writes.setdefault(0, []).insert(0, (write_addresses(cfg)["weight"][0],
                                         written.weights_raw.reshape(-1)))
     got = drive(payload_spec(cfg), writes, n_sweeps)

@@ -148,7 +148,8 @@ def test_the_learning_layer_learns_behind_the_axi_face(simulator, build_root):
     spec, pres = _learning()
     cfg = spec.config
     flags = np.array([True, True])
-    sched, n_sweeps = face_schedule(cfg, pres, flags)
+    plan = face_schedule(cfg, pres, flags)
+    sched, n_sweeps = plan.writes, plan.n_sweeps
     sched = {k: [(first, raw.tolist()) for first, raw in rows] for k, rows in sched.items()}
     report = run_face(simulator, spec, "axi", sched, n_sweeps,
                       build_root / f"axi_learning_{simulator}", seed=7)

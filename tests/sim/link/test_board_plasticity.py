@@ -1,13 +1,14 @@
 """The ``board`` engine of the learning layer: its payload behind the UART link
 (:class:`~cuneate.hdl.link.LinkedTop`) compiled by Verilator behind a simulated serial line,
 driven by the host stack. The layer learns on chip from the afferent spikes streamed as
-writes; its CN spikes and the weights read back in the readout sweeps equal the fixed engine's
-(the layer's twin), with every counter of the transport contract clean."""
+writes; its CN spikes and the weights read back in the readout sweeps (after each presentation
+and after the last) equal the fixed engine's (the layer's twin), with every counter of the
+transport contract clean."""
 
 import numpy as np
 import pytest
 
-from cuneate.hdl.plasticity.payload import readout_ids
+from cuneate.hdl.plasticity.payload import readout_ids, write_addresses
 from cuneate.sim.link.engines import board_link
 from cuneate.sim.plasticity.engines import face_schedule, run_learning
 from learning_case import small_layer
@@ -24,20 +25,31 @@ def test_the_board_link_of_the_layer_carries_its_writes_and_a_readout_sweep():
     assert len(readout_ids(cfg, cfg.weights_raw[0])) <= lc.batch_capacity
     assert lc.info.cycles_per_tick >= lc.info.busy_cycles + 16
     assert lc.payload.config.to_kwargs() | {"clock_hz": 0} == cfg.to_kwargs() | {"clock_hz": 0}
-    writes, n_sweeps = face_schedule(cfg, pres, np.ones(pres.n, bool))
-    assert n_sweeps == pres.n * pres.n_ticks + M
+    plan = face_schedule(cfg, pres, np.ones(pres.n, bool))
+    assert plan.n_sweeps == pres.n * pres.n_ticks + M
+    # a snapshot after each presentation: M readout sweeps after each, the ticks go on
+    plan = face_schedule(cfg, pres, np.ones(pres.n, bool), snapshot_every=1)
+    T = pres.n_ticks
+    assert plan.readouts == [(1, T), (2, 2 * T + M)] and plan.n_sweeps == 2 * (T + M)
+    assert plan.tick_of_sweep.tolist() == list(range(T)) + [-1] * M + \
+        list(range(T, 2 * T)) + [-1] * M
+    readout = write_addresses(cfg)["readout"][0]
+    assert [first for first, _ in plan.writes[T]] == [readout - 1, readout]
 
 
 @pytest.mark.long
 def test_the_layer_learns_on_the_board_engine_as_the_twin():
     cfg, pres = small_layer()
     flags = [True, True]
-    board, fixed = (run_learning(e, cfg, pres, flags) for e in ("board", "fixed"))
+    board, fixed = (run_learning(e, cfg, pres, flags, snapshot_every=1)
+                    for e in ("board", "fixed"))
     assert fixed.spike_cn.size > 0 and not np.array_equal(fixed.weights_raw, cfg.weights_raw)
     assert np.array_equal(board.weights_raw, fixed.weights_raw)
     for k in FIELDS:
         assert np.array_equal(getattr(board, k), getattr(fixed, k)), k
+    assert [n for n, _ in board.snapshots] == [n for n, _ in fixed.snapshots] == [0, 1]
+    assert all(np.array_equal(a, b) for (_, a), (_, b) in zip(board.snapshots, fixed.snapshots))
     c = board.extra["counters"]
     assert c["device_spikes_dropped"] == 0 and c["device_seq_gaps"] == 0
-    assert c["spikes"] == fixed.spike_cn.size + cfg.n_targets * len(
+    assert c["spikes"] == fixed.spike_cn.size + 2 * cfg.n_targets * len(
         readout_ids(cfg, cfg.weights_raw[0]))

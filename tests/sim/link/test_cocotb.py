@@ -235,7 +235,8 @@ def test_the_learning_layer_learns_behind_the_link(simulator, build_root):
     cfg, pres = small_layer()
     pres = pres.select([0])
     lc = LinkConfig(cfg, clocks_per_bit=CPB, batch_sweeps=16, batch_capacity=40)
-    writes, n_sweeps = face_schedule(cfg, pres, [True])
+    plan = face_schedule(cfg, pres, [True])
+    writes, n_sweeps = plan.writes, plan.n_sweeps
     msgs, _ = play(simulator, lc, lockstep_chunks(lc, writes, n_sweeps), 6000,
                    build_root / f"link_learning_{simulator}")
     got = [s for m in msgs if m.type == MSG_SPIKES for s in parse_spikes(m)[2]]
