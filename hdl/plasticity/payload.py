@@ -31,7 +31,7 @@ clamp flags are the layer's (:data:`~cuneate.hdl.plasticity.config.CLAMP_KINDS`)
 from __future__ import annotations
 
 import numpy as np
-from amaranth import Cat, Const, Module, Signal
+from amaranth import Cat, Const, Module, Mux, Signal
 from amaranth.lib import wiring
 from amaranth.lib.fifo import SyncFIFOBuffered
 
@@ -196,8 +196,7 @@ class LearningPayload(wiring.Component):
                      self.spikes.payload.eq(fifo.r_data)]
         idle = Signal()
         readouts = Signal(M)
-        self._writes(m, layer, idle, readouts)
-        j = Signal(range(max(M, 2)))
+        requested = self._writes(m, layer, idle)
         syn, digit = Signal(range(K + 1)), Signal(range(B + 1))
         word = Signal(8 * B)
         base = Signal(range(M * K + 1))
@@ -209,7 +208,7 @@ class LearningPayload(wiring.Component):
                 m.d.comb += idle.eq(1)
                 with m.If(self.tick & (readouts != 0)):
                     m.d.comb += take.eq(pick)
-                    m.d.sync += [j.eq(_index(pick)), base.eq(_index(pick) * K), syn.eq(0)]
+                    m.d.sync += [base.eq(_index(pick, K)), syn.eq(0)]
                     m.next = "READ"
                 with m.Elif(self.tick):
                     m.d.comb += layer.tick.eq(1)
@@ -245,7 +244,8 @@ class LearningPayload(wiring.Component):
                 m.next = "IDLE"
         with m.If(layer.spike_valid):
             m.d.comb += [push.eq(1), push_id.eq(layer.spike_target)]
-        self._readouts(m, readouts, take)
+        # readout requests: set by their writes, cleared as their readout starts
+        m.d.sync += readouts.eq((readouts & ~take) | requested)
         overflow, overrun = Signal(), Signal()
         m.d.sync += [overflow.eq(overflow | (layer.spike_valid & ~fifo.w_rdy)),
                      overrun.eq(overrun | (self.tick & ~idle))]
@@ -257,8 +257,9 @@ class LearningPayload(wiring.Component):
         ]
         return m
 
-    def _writes(self, m, layer, idle, readouts):
-        """The write stream's addresses onto the layer's ports (module docstring)."""
+    def _writes(self, m, layer, idle):
+        """The write stream's addresses onto the layer's ports (module docstring); returns
+        the readout request written now (one-hot over the CNs)."""
         amap = write_addresses(self.spec.config)
         w = self.write
         a, v = w.payload.addr, w.payload.value
@@ -279,15 +280,14 @@ class LearningPayload(wiring.Component):
         with m.If(is_learn):
             m.d.comb += [w.ready.eq(idle & ~layer.busy),
                          layer.learn.eq(w.valid & idle & ~layer.busy)]
-        self._requested = Signal(len(readouts), name="requested")
+        requested = Signal(nr, name="requested")
         with m.If(w.valid & is_read):
-            m.d.comb += self._requested.eq(Const(1, len(readouts)) << (a - r0).as_unsigned())
-
-    def _readouts(self, m, readouts, take):
-        """The pending readout requests: set by their writes, cleared as a readout starts."""
-        m.d.sync += readouts.eq((readouts & ~take) | self._requested)
+            m.d.comb += requested.eq(Const(1, nr) << (a - r0).as_unsigned())
+        return requested
 
 
-def _index(onehot):
-    """The index of a one-hot value's set bit."""
-    return sum((i * onehot[i] for i in range(1, len(onehot))), Const(0, range(len(onehot))))
+def _index(onehot, scale: int = 1):
+    """``scale`` times the index of a one-hot value's set bit (a sum of constants, no
+    multiplier)."""
+    return sum((Mux(onehot[i], i * scale, 0) for i in range(1, len(onehot))),
+               Const(0, range(scale * len(onehot) + 1)))

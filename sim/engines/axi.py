@@ -43,6 +43,6 @@ class AxiNetwork(AxiEngine, NetworkEngine):
     """The afferent -> cuneate network behind the AXI face."""
 
 
-@implements("plasticity", "axi", speed=1e6)
+@implements("plasticity", "axi", speed=1e5)
 class AxiPlasticity(AxiEngine, PlasticityFace):
     """The learning layer behind the AXI face (:mod:`cuneate.hdl.plasticity.payload`)."""

@@ -82,7 +82,7 @@ class BoardNetwork(BoardEngine, NetworkEngine):
     """The network behind the link (:class:`~cuneate.hdl.link.LinkedTop`)."""
 
 
-@implements("plasticity", "board", speed=1e5)
+@implements("plasticity", "board", speed=1e4)
 class BoardPlasticity(BoardEngine, PlasticityFace):
     """The learning layer behind the link: its afferent spikes, window ends and readouts
     streamed as writes (:mod:`cuneate.hdl.plasticity.payload`)."""
