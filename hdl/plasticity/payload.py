@@ -11,16 +11,19 @@ write a raw value in the weight's format ``W``:
                                     drive restart)
 ``S + M K``                         a window's end (``learn``), the step applied when bit 0 of
                                     the value is 1
-``S + M K + 1 .. S + M K + M``      a readout request of CN ``a - S - M K - 1``
+``S + M K + 1 .. S + M K + M C``    a readout request of part ``c`` of CN ``j``
+                                    (``a - S - M K - 1 = j C + c``)
 
 Sweeps: a tick with no readout pending is one of the layer's ticks: the spikes of CN ``j``
 are ids ``j``. A tick while readouts are pending is a *readout sweep* instead (the layer does
-not tick, its pending afferent spikes wait): the lowest requested CN's ``K`` weights leave
-as ``K * B`` spikes (``B`` bytes a weight, :data:`READOUT_DIGIT`): byte ``d`` of synapse ``m``
-(value ``x``) is the id ``M + (m B + d) 256 + x``. A host reads a weight back from which ids
-of that population arrived (:func:`weights_from_ids`), whatever order its face delivers them
-in. Over the UART link a readout sweep's ``K B`` spikes must fit a spike batch (79 by
-default; beyond it they are dropped and counted).
+not tick, its pending afferent spikes wait): the lowest request's synapses, part ``c`` of CN
+``j`` (its synapses ``c R .. min(K, (c + 1) R) - 1``, ``R`` the spec's ``readout_synapses``,
+``C = ceil(K / R)`` parts), leave as ``B`` spikes each (``B`` bytes a weight,
+:data:`READOUT_DIGIT`): byte ``d`` of synapse ``m`` (value ``x``) is the id
+``M + (m B + d) 256 + x``. A host reads a CN's weights back from which ids of that
+population its ``C`` readout sweeps sent (:func:`weights_from_ids`), whatever order its
+face delivers them in. ``R`` bounds a readout sweep's spikes (``R B``): a UART link's spike
+batch holds 79 (beyond it they are dropped and counted).
 
 ``busy`` covers a write on offer, a pending window end, a tick and a readout;
 ``overflow`` a CN spike that found the spike FIFO full, ``overrun`` a tick or a window end the
@@ -35,13 +38,14 @@ from amaranth import Cat, Const, Module, Mux, Signal
 from amaranth.lib import wiring
 from amaranth.lib.fifo import SyncFIFOBuffered
 
+from ..lib.config import ConfigError
 from ..lib.payload import BlockSpec, PayloadInfo, PayloadTwin, implements, payload_signature
 from .config import CLAMP_KINDS, STAGE_LATENCY, PlasticityConfig
 from .core import LearningLayer
 from .twin import PlasticityTwin
 
 __all__ = ["LearningSpec", "LearningPayload", "write_addresses", "WRITE_MEANINGS", "readout_ids",
-           "weights_from_ids", "READOUT_DIGIT", "SWEEP_WIDTH"]
+           "weights_from_ids", "readout_parts", "readout_bytes", "READOUT_DIGIT", "SWEEP_WIDTH"]
 
 #: values of one readout digit (a weight leaves byte by byte)
 READOUT_DIGIT = 256
@@ -55,35 +59,48 @@ WRITE_MEANINGS = {
     "weight": "synapse (address - first) = CN * K + m takes the value as its raw weight (its "
               "calcium and drive restart)",
     "learn": "a window's end; bit 0 of the value: apply the steps",
-    "readout": "request a readout sweep of CN (address - first): at a tick, instead of "
-               "ticking, the layer sends its K weights byte by byte as ids M + (m B + d) 256 "
-               "+ byte (B bytes a weight)",
+    "readout": "request a readout sweep of part c of CN j (address - first = j C + c): at a "
+               "tick, instead of ticking, the layer sends the weights of synapses c R .. "
+               "(c + 1) R - 1 byte by byte as ids M + (m B + d) 256 + byte (B bytes a weight)",
 }
 
 
-def write_addresses(cfg: PlasticityConfig) -> dict:
+def readout_parts(cfg: PlasticityConfig, readout_synapses: int | None = None) -> int:
+    """``C``: the readout sweeps of one CN at ``readout_synapses`` synapses each (all ``K``
+    when ``None``)."""
+    K = cfg.n_synapses
+    R = K if readout_synapses is None else int(readout_synapses)
+    if not 1 <= R <= K:
+        raise ConfigError(f"readout_synapses must be 1 .. {K} (synapses a readout sweep sends), "
+                          f"not {readout_synapses}")
+    return -(-K // R)
+
+
+def write_addresses(cfg: PlasticityConfig, readout_synapses: int | None = None) -> dict:
     """The write stream's address map: name -> ``(first, count)`` (module docstring)."""
     S, M, K = cfg.n_sources, cfg.n_targets, cfg.n_synapses
     return {"spike": (0, S), "weight": (S, M * K), "learn": (S + M * K, 1),
-            "readout": (S + M * K + 1, M)}
+            "readout": (S + M * K + 1, M * readout_parts(cfg, readout_synapses))}
 
 
-def _digits(cfg: PlasticityConfig) -> int:
+def readout_bytes(cfg: PlasticityConfig) -> int:
+    """``B``: the bytes (readout spikes) of one weight."""
     return -(-cfg.W.width // 8)
 
 
-def readout_ids(cfg: PlasticityConfig, weights_raw) -> np.ndarray:
-    """The ids a readout sweep of a CN whose weights are ``weights_raw`` (``K`` raw) sends,
-    in the order the payload sends them."""
-    M, B = cfg.n_targets, _digits(cfg)
+def readout_ids(cfg: PlasticityConfig, weights_raw, first: int = 0) -> np.ndarray:
+    """The ids a readout sweep of a CN's synapses ``first, first + 1, ...`` whose weights are
+    ``weights_raw`` (raw) sends, in the order the payload sends them."""
+    M, B = cfg.n_targets, readout_bytes(cfg)
     return np.asarray([M + (m * B + d) * READOUT_DIGIT + (int(w) >> (8 * d)) % READOUT_DIGIT
-                       for m, w in enumerate(weights_raw) for d in range(B)], dtype=np.int64)
+                       for m, w in enumerate(weights_raw, first) for d in range(B)],
+                      dtype=np.int64)
 
 
 def weights_from_ids(cfg: PlasticityConfig, ids) -> np.ndarray:
-    """The ``K`` raw weights of one readout sweep's ids (any order); refuses a sweep that
-    does not hold each synapse's every byte once."""
-    M, K, B = cfg.n_targets, cfg.n_synapses, _digits(cfg)
+    """The ``K`` raw weights of one CN's readout sweeps' ids (any order); refuses ids that
+    do not hold each synapse's every byte once."""
+    M, K, B = cfg.n_targets, cfg.n_synapses, readout_bytes(cfg)
     slot, value = np.divmod(np.asarray(ids, dtype=np.int64) - M, READOUT_DIGIT)
     if np.any(slot < 0) or np.any(slot >= K * B) or len(np.unique(slot)) != K * B \
             or len(slot) != K * B:
@@ -94,28 +111,31 @@ def weights_from_ids(cfg: PlasticityConfig, ids) -> np.ndarray:
     return (byte.reshape(K, B) << (8 * np.arange(B))).sum(axis=1)
 
 
-def readout_cycles(cfg: PlasticityConfig) -> int:
+def readout_cycles(cfg: PlasticityConfig, synapses: int) -> int:
     """A readout sweep's cycles at worst (per synapse: the read's wait for the stage, its
     answer, its bytes), the spike FIFO keeping up."""
-    return cfg.n_synapses * (STAGE_LATENCY + 4 + _digits(cfg)) + 4
+    return synapses * (STAGE_LATENCY + 4 + readout_bytes(cfg)) + 4
 
 
 @implements(PlasticityConfig)
 class LearningSpec(BlockSpec):
-    """The learning layer of ``config``. A tick keeps it busy, at worst, for a burst writing
-    every weight, a window's end, and its tick or a readout sweep."""
+    """The learning layer of ``config``, its readout sweeps sending ``readout_synapses``
+    synapses each (all ``K`` when ``None``). A tick keeps it busy, at worst, for a burst
+    writing every weight, a window's end, and its tick or a readout sweep."""
 
-    def __init__(self, config: PlasticityConfig):
+    def __init__(self, config: PlasticityConfig, readout_synapses: int | None = None):
         self.config = c = config
         S, M, K = c.n_sources, c.n_targets, c.n_synapses
-        amap = write_addresses(c)
+        self.parts = readout_parts(c, readout_synapses)
+        self.readout_synapses = R = K if readout_synapses is None else int(readout_synapses)
+        amap = write_addresses(c, R)
         n_written = sum(n for _, n in amap.values())
         busy = (M * K * (STAGE_LATENCY + 2) + c.learn_cycles
-                + max(c.cycles_needed, readout_cycles(c)) + M + 8)
+                + max(c.cycles_needed, readout_cycles(c, R)) + M + 8)
         self.info = PayloadInfo(
             block="learning_layer", written="spike, weight, window end or readout",
             n_written=n_written, value_format=c.W,
-            populations=(("cuneate", 0, M), ("weight", M, K * _digits(c) * READOUT_DIGIT)),
+            populations=(("cuneate", 0, M), ("weight", M, K * readout_bytes(c) * READOUT_DIGIT)),
             sweep_width=SWEEP_WIDTH, clock_hz=c.clock_hz, update_hz=c.update_hz,
             cycles_per_tick=c.cycles_per_tick, busy_cycles=busy, clamp_kinds=CLAMP_KINDS,
             rounding="truncate",
@@ -125,21 +145,25 @@ class LearningSpec(BlockSpec):
     def config_from(self, kw: dict) -> PlasticityConfig:
         return PlasticityConfig.from_kwargs(kw)
 
+    def options(self) -> dict:
+        return {"readout_synapses": self.readout_synapses}
+
     def component(self) -> "LearningPayload":
         return LearningPayload(self)
 
     def twin(self) -> "LearningPayloadTwin":
-        return LearningPayloadTwin(self.config)
+        return LearningPayloadTwin(self.config, self.readout_synapses)
 
 
 class LearningPayloadTwin(PayloadTwin):
     """The layer's twin (:class:`~cuneate.hdl.plasticity.twin.PlasticityTwin`, attribute
     ``model``) as the payload's writes and sweeps drive it."""
 
-    def __init__(self, cfg: PlasticityConfig):
-        self.cfg = cfg
+    def __init__(self, cfg: PlasticityConfig, readout_synapses: int):
+        self.cfg, self.R = cfg, readout_synapses
+        self.parts = readout_parts(cfg, readout_synapses)
         self.model = PlasticityTwin(cfg, kernel="stages")
-        self.amap = write_addresses(cfg)
+        self.amap = write_addresses(cfg, readout_synapses)
         self.readouts: set[int] = set()
 
     def write(self, addr: int, raw: int) -> None:
@@ -156,9 +180,11 @@ class LearningPayloadTwin(PayloadTwin):
 
     def sweep(self) -> np.ndarray:
         if self.readouts:
-            j = min(self.readouts)
-            self.readouts.discard(j)
-            return readout_ids(self.cfg, self.model.w[j])
+            i = min(self.readouts)
+            self.readouts.discard(i)
+            j, c = divmod(i, self.parts)
+            return readout_ids(self.cfg, self.model.w[j, c * self.R:(c + 1) * self.R],
+                               c * self.R)
         return np.flatnonzero(self.model.tick())
 
     def clamp_flags(self) -> int:
@@ -185,7 +211,7 @@ class LearningPayload(wiring.Component):
     def elaborate(self, platform):
         m = Module()
         cfg = self.spec.config
-        M, K, B = cfg.n_targets, cfg.n_synapses, _digits(cfg)
+        M, K, B = cfg.n_targets, cfg.n_synapses, readout_bytes(cfg)
         m.submodules.layer = layer = self.layer
         ib = len(self.spikes.payload.index)
         m.submodules.fifo = fifo = SyncFIFOBuffered(width=ib + SWEEP_WIDTH, depth=M + 2)
@@ -195,20 +221,25 @@ class LearningPayload(wiring.Component):
                      self.spikes.valid.eq(fifo.r_rdy), fifo.r_en.eq(self.spikes.ready),
                      self.spikes.payload.eq(fifo.r_data)]
         idle = Signal()
-        readouts = Signal(M)
+        C, R = self.spec.parts, self.spec.readout_synapses
+        readouts = Signal(M * C)               # pending requests, bit j C + c
         requested = self._writes(m, layer, idle)
-        syn, digit = Signal(range(K + 1)), Signal(range(B + 1))
+        syn, last, digit = Signal(range(K + 1)), Signal(range(K)), Signal(range(B + 1))
         word = Signal(8 * B)
-        base = Signal(range(M * K + 1))
-        pick = Signal(M)                       # the lowest pending readout, one-hot
+        base = Signal(range(M * K + 1))        # the CN's first synapse (j K)
+        pick = Signal(M * C)                   # the lowest pending request, one-hot
         m.d.comb += pick.eq(readouts & (~readouts + 1))
-        take = Signal(M)
+        take = Signal(M * C)
+        part = [divmod(i, C) for i in range(M * C)]
         with m.FSM(name="payload_fsm"):
             with m.State("IDLE"):
                 m.d.comb += idle.eq(1)
                 with m.If(self.tick & (readouts != 0)):
                     m.d.comb += take.eq(pick)
-                    m.d.sync += [base.eq(_index(pick, K)), syn.eq(0)]
+                    m.d.sync += [base.eq(_select(pick, [j * K for j, _ in part])),
+                                 syn.eq(_select(pick, [c * R for _, c in part])),
+                                 last.eq(_select(pick, [min(K, (c + 1) * R) - 1
+                                                        for _, c in part]))]
                     m.next = "READ"
                 with m.Elif(self.tick):
                     m.d.comb += layer.tick.eq(1)
@@ -236,7 +267,7 @@ class LearningPayload(wiring.Component):
                     with m.If(digit == B - 1):
                         m.d.sync += syn.eq(syn + 1)
                         m.next = "READ"
-                        with m.If(syn == K - 1):
+                        with m.If(syn == last):
                             m.next = "DONE"
             with m.State("DONE"):
                 m.d.comb += self.sweep_done.eq(1)
@@ -259,8 +290,8 @@ class LearningPayload(wiring.Component):
 
     def _writes(self, m, layer, idle):
         """The write stream's addresses onto the layer's ports (module docstring); returns
-        the readout request written now (one-hot over the CNs)."""
-        amap = write_addresses(self.spec.config)
+        the readout request written now (one-hot over the requests)."""
+        amap = write_addresses(self.spec.config, self.spec.readout_synapses)
         w = self.write
         a, v = w.payload.addr, w.payload.value
         (s0, ns), (w0, nw), (l0, _), (r0, nr) = (amap[k] for k in
@@ -286,8 +317,8 @@ class LearningPayload(wiring.Component):
         return requested
 
 
-def _index(onehot, scale: int = 1):
-    """``scale`` times the index of a one-hot value's set bit (a sum of constants, no
-    multiplier)."""
-    return sum((Mux(onehot[i], i * scale, 0) for i in range(1, len(onehot))),
-               Const(0, range(scale * len(onehot) + 1)))
+def _select(onehot, values):
+    """``values[i]`` for the set bit ``i`` of a one-hot value (a sum of constants: no
+    multiplier, no index)."""
+    return sum((Mux(onehot[i], v, 0) for i, v in enumerate(values) if v),
+               Const(0, range(max(values) + 1)))

@@ -38,7 +38,8 @@ import numpy as np
 from ...golden.cuneate_layer import LayerParams, simulate_layer
 from ...hdl.plasticity import CLAMP_KINDS, PlasticityConfig
 from ...hdl.plasticity.core import LearningLayer, learning_verilog
-from ...hdl.plasticity.payload import weights_from_ids, write_addresses
+from ...hdl.plasticity.payload import (LearningSpec, readout_parts, weights_from_ids,
+                                       write_addresses)
 from ...hdl.plasticity.twin import PlasticityTwin
 from ..engines.amaranth import simulate
 from ..engines.engine import BlockEngine
@@ -216,22 +217,31 @@ class PlasticityCocotb(PlasticityRtl):
 class PlasticityFace(PlasticityEngine):
     """The layer behind a face (an engine with a host transport, :meth:`stream`): the
     protocol as writes (:func:`face_schedule`), the CNs' spikes and, in the readout sweeps
-    after every ``snapshot_every`` presentations and after the last, every weight. Face
-    engines see no clamp counts (the faces carry spikes)."""
+    after every ``snapshot_every`` presentations and after the last, every weight
+    (:meth:`readout_synapses` a sweep). Face engines see no clamp counts (the faces carry
+    spikes)."""
+
+    def readout_synapses(self, cfg) -> int | None:
+        """Synapses a readout sweep sends (``None``: a CN's all)."""
+        return None
 
     def learn(self, cfg, pres, flags, snapshot_every):
-        plan = face_schedule(cfg, pres, flags, snapshot_every)
-        got, counters = self.stream(cfg, plan.writes, plan.n_sweeps)
-        M, K = cfg.n_targets, cfg.n_synapses
+        spec = LearningSpec(cfg, self.readout_synapses(cfg))
+        plan = face_schedule(cfg, pres, flags, snapshot_every, spec.readout_synapses)
+        got, counters = self.stream(spec, plan.writes, plan.n_sweeps)
+        M, K, C = cfg.n_targets, cfg.n_synapses, plan.parts
         tick = plan.tick_of_sweep[got.tick]
         cn = tick >= 0
         if np.any(got.neuron[cn] >= M) or np.any(got.neuron[~cn] < M):
             raise ValueError(f"{self.name}: a CN spike in a readout sweep or a readout id in "
                              f"a tick")
         lsb = cfg.W.lsb
-        reads = [np.stack([weights_from_ids(cfg, got.neuron[got.tick == s + j])
-                           for j in range(M)]).reshape(M, K) for _, s in plan.readouts]
-        snaps = [(0, cfg.weights_raw * lsb)] + [(done, w * lsb) for (done, _), w in
+        reads = []                              # raw weights at each readout
+        for i in range(len(plan.readouts)):
+            sweeps = np.flatnonzero(plan.tick_of_sweep == -1 - i).reshape(M, C)
+            reads.append(np.stack([weights_from_ids(cfg, got.neuron[np.isin(got.tick, s)])
+                                   for s in sweeps]).reshape(M, K))
+        snaps = [(0, cfg.weights_raw * lsb)] + [(done, w * lsb) for done, w in
                                                 zip(plan.readouts[:-1], reads[:-1])]
         sp, st, j = tick[cn] // pres.n_ticks, tick[cn] % pres.n_ticks, got.neuron[cn]
         counts = np.zeros((pres.n, M), np.int64)
@@ -244,24 +254,27 @@ class PlasticityFace(PlasticityEngine):
 @dataclass
 class FacePlan:
     """A protocol as a face's writes: ``writes`` (``{sweep: [(first address, raw values),
-    ...]}``), ``n_sweeps``, the layer's tick of each sweep (``tick_of_sweep``, -1 in a
-    readout sweep) and the readouts (``(presentations done, first readout sweep)``, the last
-    after the protocol)."""
+    ...]}``), ``n_sweeps``, the layer's tick of each sweep (``tick_of_sweep``; ``-1 - i`` in
+    the sweeps of readout ``i``: ``parts`` sweeps a CN, CN after CN) and the presentations
+    done at each readout (``readouts``, the last after the protocol)."""
 
     writes: dict
     n_sweeps: int
     tick_of_sweep: np.ndarray
     readouts: list
+    parts: int
 
 
-def face_schedule(cfg: PlasticityConfig, pres, flags, snapshot_every: int = 0) -> FacePlan:
+def face_schedule(cfg: PlasticityConfig, pres, flags, snapshot_every: int = 0,
+                  readout_synapses: int | None = None) -> FacePlan:
     """The protocol as a face's writes (the write map of
     :func:`~cuneate.hdl.plasticity.payload.write_addresses`): each tick's afferent spikes as
     one write of every afferent (1: a spike), each presentation's window end before the next
-    one's first tick; after every ``snapshot_every`` presentations and after the last, a
-    readout request for every CN with the window end, and one readout sweep each."""
-    amap = write_addresses(cfg)
-    S, M = cfg.n_sources, cfg.n_targets
+    one's first tick; after every ``snapshot_every`` presentations and after the last, with
+    the window end, every readout request (``readout_synapses`` synapses a sweep), and one
+    readout sweep each."""
+    amap = write_addresses(cfg, readout_synapses)
+    S, n_req = cfg.n_sources, amap["readout"][1]
     writes: dict = {}
     ticks_of: list[int] = []
     readouts: list = []
@@ -279,10 +292,11 @@ def face_schedule(cfg: PlasticityConfig, pres, flags, snapshot_every: int = 0) -
         ticks_of += range(p * pres.n_ticks, (p + 1) * pres.n_ticks)
         add(len(ticks_of), amap["learn"][0], [int(flags[p])])
         if p == pres.n - 1 or (snapshot_every and (p + 1) % snapshot_every == 0):
-            add(len(ticks_of), amap["readout"][0], np.ones(M, np.int64))
-            readouts.append((p + 1, len(ticks_of)))
-            ticks_of += [-1] * M
-    return FacePlan(writes, len(ticks_of), np.asarray(ticks_of, dtype=np.int64), readouts)
+            add(len(ticks_of), amap["readout"][0], np.ones(n_req, np.int64))
+            ticks_of += [-1 - len(readouts)] * n_req
+            readouts.append(p + 1)
+    return FacePlan(writes, len(ticks_of), np.asarray(ticks_of, dtype=np.int64), readouts,
+                    readout_parts(cfg, readout_synapses))
 
 
 def _schedule(pres, flags):

@@ -79,12 +79,17 @@ def drive(spec, writes: dict, n_sweeps: int) -> list[list[int]]:
     return sweeps
 
 
-def test_the_payload_learns_as_the_twin_and_sends_its_weights_in_readout_sweeps():
+@pytest.mark.parametrize("readout_synapses", [None, 2])
+def test_the_payload_learns_as_the_twin_and_sends_its_weights_in_readout_sweeps(
+        readout_synapses):
+    """All of a CN's synapses in one readout sweep, or two a sweep (two sweeps a CN)."""
     cfg, pres = small_layer()
     flags = np.array([False, True])
-    plan = face_schedule(cfg, pres, flags)
+    spec = LearningSpec(cfg, readout_synapses)
+    R, C = spec.readout_synapses, spec.parts
+    plan = face_schedule(cfg, pres, flags, readout_synapses=readout_synapses)
     writes, n_sweeps = plan.writes, plan.n_sweeps
-    got = drive(payload_spec(cfg), writes, n_sweeps)
+    got = drive(spec, writes, n_sweeps)
     fixed = run_learning("fixed", cfg, pres, flags)
     M, n_total = cfg.n_targets, pres.n * pres.n_ticks
     assert fixed.spike_cn.size > 0 and not np.array_equal(fixed.weights_raw, cfg.weights_raw)
@@ -92,9 +97,12 @@ def test_the_payload_learns_as_the_twin_and_sends_its_weights_in_readout_sweeps(
     for p, k, j in zip(fixed.spike_pres, fixed.spike_tick, fixed.spike_cn):
         want[p * pres.n_ticks + k].append(int(j))
     assert got[:n_total] == want
-    # one CN's weights a readout sweep, in synapse order
+    # a part of a CN's weights a readout sweep, in synapse order
+    assert n_sweeps == n_total + M * C
     for j in range(M):
-        assert got[n_total + j] == readout_ids(cfg, fixed.weights_raw[j]).tolist()
+        for c in range(C):
+            assert got[n_total + j * C + c] == readout_ids(
+                cfg, fixed.weights_raw[j, c * R:(c + 1) * R], c * R).tolist()
 
 
 def test_a_weight_written_over_the_stream_restarts_its_synapse():

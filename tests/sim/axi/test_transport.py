@@ -3,8 +3,8 @@ behind the AXI face (Verilator, the C++ bus harness) gives the fixed engine's sp
 spike, with every counter of the driver's contract clean: the slide-texture example cut to one
 trial of 60 ms, fixed against axi, and the whole default scene, fixed, board and axi (``cuneate
 run --engines fixed,board,axi``); and the learning layer's protocol, its weights read back
-after learning equal to the fixed engine's. All in the long lane (the harness's Verilator build alone
-takes most of a minute)."""
+after learning equal to the fixed engine's. All in the long lane (the harness's Verilator
+build alone takes most of a minute)."""
 
 import numpy as np
 import pytest

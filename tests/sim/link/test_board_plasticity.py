@@ -8,7 +8,10 @@ transport contract clean."""
 import numpy as np
 import pytest
 
-from cuneate.hdl.plasticity.payload import readout_ids, write_addresses
+from cuneate.hdl.plasticity import PlasticityConfig
+from cuneate.hdl.plasticity.payload import (LearningSpec, readout_bytes, readout_ids,
+                                            readout_parts, write_addresses)
+from cuneate.sim.engines.registry import engine_for
 from cuneate.sim.link.engines import board_link
 from cuneate.sim.plasticity.engines import face_schedule, run_learning
 from learning_case import small_layer
@@ -30,11 +33,26 @@ def test_the_board_link_of_the_layer_carries_its_writes_and_a_readout_sweep():
     # a snapshot after each presentation: M readout sweeps after each, the ticks go on
     plan = face_schedule(cfg, pres, np.ones(pres.n, bool), snapshot_every=1)
     T = pres.n_ticks
-    assert plan.readouts == [(1, T), (2, 2 * T + M)] and plan.n_sweeps == 2 * (T + M)
+    assert plan.readouts == [1, 2] and plan.n_sweeps == 2 * (T + M)
     assert plan.tick_of_sweep.tolist() == list(range(T)) + [-1] * M + \
-        list(range(T, 2 * T)) + [-1] * M
+        list(range(T, 2 * T)) + [-2] * M
     readout = write_addresses(cfg)["readout"][0]
     assert [first for first, _ in plan.writes[T]] == [readout - 1, readout]
+
+
+def test_the_board_engine_splits_a_readout_to_fit_a_spike_batch():
+    """The example's layer (16 CNs of 20 synapses, 2 kHz: two sweeps a batch): readout
+    sweeps of 15 synapses, two per CN; a batch of readout sweeps, or of a tick's CN spikes
+    and a readout sweep, fits the batch."""
+    rng = np.random.default_rng(3)
+    cfg = PlasticityConfig(n_sources=80, sources=np.array(
+        [np.sort(rng.choice(80, 20, replace=False)) for _ in range(16)]))
+    R = engine_for("plasticity", "board").readout_synapses(cfg)
+    lc = board_link(LearningSpec(cfg, R))
+    spikes = R * readout_bytes(cfg)
+    assert R == 15 and readout_parts(cfg, R) == 2 and lc.batch_sweeps == 2
+    assert lc.batch_sweeps * spikes <= lc.batch_capacity
+    assert spikes + cfg.n_targets <= lc.batch_capacity
 
 
 @pytest.mark.long
