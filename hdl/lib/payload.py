@@ -200,11 +200,15 @@ class BlockSpec(PayloadSpec):
         """The configuration of constructor keywords ``kw`` (as ``to_kwargs`` gives them)."""
         return type(self.config)(**kw)
 
+    def options(self) -> dict:
+        """The spec's own options besides the configuration (kept when retimed)."""
+        return {}
+
     def retimed(self, clock_hz: float | None = None) -> "BlockSpec":
         kw = self.config.to_kwargs() | {"tick_source": "external"}
         if clock_hz is not None:
             kw["clock_hz"] = clock_hz
-        return type(self)(self.config_from(kw))
+        return type(self)(self.config_from(kw), **self.options())
 
     def component(self) -> wiring.Component:
         raise NotImplementedError

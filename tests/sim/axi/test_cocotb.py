@@ -23,7 +23,7 @@ from cuneate.hdl.izhikevich import IzhikevichConfig
 from cuneate.hdl.lif import LifConfig
 from cuneate.hdl.lib.regmap import stream_format
 from cuneate.hdl.network import NetworkConfig
-from cuneate.hdl.plasticity.payload import weights_from_ids
+from cuneate.hdl.plasticity.payload import LearningSpec, weights_from_ids
 from cuneate.sim.axi.scoreboard import check_face, run_face
 from cuneate.sim.axi.transport import axi_spec
 from cuneate.sim.engines.toolchain import SIMULATORS
@@ -132,9 +132,10 @@ def test_axi_face_long(simulator, block, build_root):
 
 
 def _learning():
-    """Two CNs of three synapses learning over two short presentations, behind the face."""
+    """Two CNs of three synapses learning over two short presentations, behind the face;
+    two synapses a readout sweep (two sweeps a CN)."""
     cfg, pres = small_layer()
-    return axi_spec(cfg), pres
+    return axi_spec(LearningSpec(cfg, readout_synapses=2)), pres
 
 
 @pytest.mark.cocotb
@@ -146,19 +147,20 @@ def test_the_learning_layer_learns_behind_the_axi_face(simulator, build_root):
     requests): every sweep's ids, counters and clamp flags as the payload twin's, and the
     weights read back in the readout sweeps equal the fixed engine's after learning."""
     spec, pres = _learning()
-    cfg = spec.config
+    cfg, C = spec.config, spec.parts
     flags = np.array([True, True])
-    plan = face_schedule(cfg, pres, flags)
-    sched, n_sweeps = plan.writes, plan.n_sweeps
-    sched = {k: [(first, raw.tolist()) for first, raw in rows] for k, rows in sched.items()}
-    report = run_face(simulator, spec, "axi", sched, n_sweeps,
+    plan = face_schedule(cfg, pres, flags, readout_synapses=spec.readout_synapses)
+    sched = {k: [(first, raw.tolist()) for first, raw in rows]
+             for k, rows in plan.writes.items()}
+    report = run_face(simulator, spec, "axi", sched, plan.n_sweeps,
                       build_root / f"axi_learning_{simulator}", seed=7)
-    got = check_face(spec, sched, n_sweeps, report)
+    got = check_face(spec, sched, plan.n_sweeps, report)
     fixed = run_learning("fixed", cfg, pres, flags)
-    assert got["spikes"] > fixed.spike_cn.size > 0
+    assert got["spikes"] > fixed.spike_cn.size > 0 and C == 2
     F = 8 * stream_format(spec.info)["spike_field_bytes"]
     n_total = pres.n * pres.n_ticks
-    weights = [weights_from_ids(cfg, [d & ((1 << F) - 1) for d, _ in report["packets"][s]])
-               for s in range(n_total, n_sweeps)]
+    ids = [[d & ((1 << F) - 1) for d, _ in beats] for beats in report["packets"]]
+    weights = [weights_from_ids(cfg, ids[n_total + j * C] + ids[n_total + j * C + 1])
+               for j in range(cfg.n_targets)]
     assert not np.array_equal(fixed.weights_raw, cfg.weights_raw)
     assert np.array_equal(np.stack(weights), fixed.weights_raw)

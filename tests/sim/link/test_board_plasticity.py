@@ -51,6 +51,7 @@ def test_the_board_engine_splits_a_readout_to_fit_a_spike_batch():
     lc = board_link(LearningSpec(cfg, R))
     spikes = R * readout_bytes(cfg)
     assert R == 15 and readout_parts(cfg, R) == 2 and lc.batch_sweeps == 2
+    assert lc.payload.readout_synapses == R          # kept through the link's retiming
     assert lc.batch_sweeps * spikes <= lc.batch_capacity
     assert spikes + cfg.n_targets <= lc.batch_capacity
 
