@@ -13,10 +13,12 @@ from ..fanout.engines import FRONT, FanoutFront
 from ..izhikevich.engines import IzhikevichEngine
 from ..lif.engines import LifEngine
 from ..network.engines import NetworkEngine
+from ..plasticity.engines import PlasticityFace
 from .board import FaceEngine
 from .registry import implements
 
-__all__ = ["AxiEngine", "AxiIzhikevich", "AxiLif", "AxiNetwork", "AxiFanoutFront"]
+__all__ = ["AxiEngine", "AxiIzhikevich", "AxiLif", "AxiNetwork", "AxiPlasticity",
+           "AxiFanoutFront"]
 
 
 class AxiEngine(FaceEngine):
@@ -40,6 +42,11 @@ class AxiLif(AxiEngine, LifEngine):
 @implements("network", "axi", speed=1e5)
 class AxiNetwork(AxiEngine, NetworkEngine):
     """The afferent -> cuneate network behind the AXI face."""
+
+
+@implements("plasticity", "axi", speed=1e5)
+class AxiPlasticity(AxiEngine, PlasticityFace):
+    """The learning layer behind the AXI face (:mod:`cuneate.hdl.plasticity.payload`)."""
 
 
 @implements(FRONT, "axi", speed=1e6)
