@@ -8,7 +8,7 @@ stimuli's templates), and presents the templates, jittered, to a learning cuneat
 (:mod:`cuneate.sim.plasticity.protocol`: the test presentations, ``learning.presentations`` of
 each stimulus in one pseudo-random order, the test presentations again). Every engine of
 ``run.engines`` (the plasticity block's: golden, fixed, amaranth, icarus, verilator,
-verilator-fast) runs the whole sequence; the report shows the weights before and after, the
+verilator-fast, board, axi) runs the whole sequence; the report shows the weights before and after, the
 learning curves, each CN's selectivity, the stimuli decoded from the CNs before and after
 learning (kNN on spike counts and on Victor-Purpura distances) and how the engines agree.
 """

@@ -72,8 +72,8 @@ def test_the_example_is_the_thesis_protocol():
                                                       "but only 12 afferents"),
     ({"neighbours = 1": "neighbours = 3"}, "decoder.neighbours: 3 neighbours"),
     ({"window_ms = [250, 330]": "window_ms = [250, 9000]"}, "learning.window_ms"),
-    ({'engines = ["golden", "fixed"]': 'engines = ["board"]'},
-     "engine 'board' does not run the plasticity block"),
+    ({'engines = ["golden", "fixed"]': 'engines = ["loihi"]'},
+     "run.engines[0]: unknown engine 'loihi' (the plasticity block runs on: golden"),
     ({"eta = 1e-4": "eta = 1e-12"}, "learning: the step eta = 1e-12 rounds to 0"),
 ])
 def test_a_bad_learning_scene_is_refused_in_one_line(subs, message):
