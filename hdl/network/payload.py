@@ -12,7 +12,7 @@ from amaranth.lib import wiring
 from ..izhikevich.config import CLAMP_KINDS
 from ..lib.config import ConfigError
 from ..lib.payload import (PayloadInfo, PayloadSpec, PayloadTwin, implements,
-                           payload_signature)
+                           payload_signature, write_port)
 from .config import NetworkConfig
 from .core import REPORT_SETTLE, AfferentCuneateNetwork
 from .twin import NetworkTwin
@@ -92,11 +92,9 @@ class NetworkPayload(wiring.Component):
         m = Module()
         m.submodules.network = net = self.network
         N = self.spec.config.n_afferents
-        w, s = self.write, self.spikes
+        s = self.spikes
+        m.d.comb += write_port(self.write, net)
         m.d.comb += [
-            w.ready.eq(1),
-            net.i_wr_en.eq(w.valid), net.i_wr_addr.eq(w.payload.addr),
-            net.i_wr_data.eq(w.payload.value),
             s.valid.eq(net.out_valid), net.out_ready.eq(s.ready),
             s.payload.index.eq(Mux(net.out_population, N + net.out_index, net.out_index)),
             s.payload.sweep.eq(net.out_tick),
