@@ -85,7 +85,8 @@ def test_link_round_trip_and_faults(simulator, build_root):
     msgs, rep = play(simulator, lc, chunks, 8000, build_root / f"link_{simulator}")
 
     spikes = [m for m in msgs if m.type == MSG_SPIKES]
-    assert [(m.tick, m.payload) for m in spikes] == model_frames(LinkModel(lc), good, 80)
+    model = LinkModel(lc)
+    assert [(m.tick, m.payload) for m in spikes] == model_frames(model, good, 80)
     got = [s for m in spikes for s in parse_spikes(m)[2]]
     assert got == twin_spikes(lc.core, cur0, cur1, slice(3, 10), 40, 80) and len(got) > 10
     assert [parse_spikes(m)[1] for m in spikes] == [16] * 5
