@@ -153,6 +153,8 @@ def build_target(board: str, out: Path, n_neurons: int | None = None,
             # nextpnr does not derive the clock through this family's PLL: the plan's clock
             # is its target for every clock (the oscillator's net only feeds the PLL)
             opts += f" --freq {lcfg.core.clock_hz / 1e6:g}"
+        if target.get("nextpnr_extra"):
+            opts += " " + target["nextpnr_extra"]
         plan = platform.prepare(top, name=name, nextpnr_opts=opts,
                                 **target.get("prepare_opts", {}))
         t0 = time.monotonic()

@@ -1,16 +1,16 @@
-"""Lattice CrossLink-NX Evaluation Board (LIFCL-40-9BG400C, Nexus): Verilog and estimate; the
-open flow (yosys ``synth_nexus``, nextpnr-nexus, prjoxide) is wired up but does not reach a
-bitstream on this board (below). amaranth-boards has no board file for it: the platform here
-states the pins this design uses (Lattice's EVN user guide, FPGA-EB-02036; the same pins as
-LiteX-boards' ``lattice_crosslink_nx_evn`` and prjoxide's EVN examples).
+"""Lattice CrossLink-NX Evaluation Board (LIFCL-40-9BG400C, Nexus): bitstream with yosys
+``synth_nexus``, nextpnr-nexus and prjoxide (all from PyPI). amaranth-boards has no board file
+for it: the platform here states the pins this design uses (Lattice's EVN user guide,
+FPGA-EB-02036; the same pins as LiteX-boards' ``lattice_crosslink_nx_evn`` and prjoxide's EVN
+examples).
 
-No bitstream, because no clock reaches the fabric through nextpnr-nexus 0.11: the 12 MHz
-input (L13) packs and places, but the router finds no path from that pad to a global clock
-buffer ("Failed to route arc ... JPADDI_SEIO33_CORE_IOA to ... JCLKI_DCC"); the 125 MHz LVDS
-oscillator's pin (C12) is not in its package database ("constrained to invalid pin"). With a
-board clock on a pin nextpnr-nexus routes to the clock network the flow below is complete:
-yosys 0.70's ``synth_nexus`` output needs :mod:`cuneate.hdl.flow.nexus_carry` between yosys
-and nextpnr (the build runs it), which nextpnr then packs and places.
+Two steps differ from the other open flows. yosys 0.70's ``synth_nexus`` ties the first carry
+input of a chain to a ``VLO`` cell, which nextpnr-nexus refuses ("CIN net driven by non-CCU2
+cell"): :mod:`cuneate.hdl.flow.nexus_carry` runs between yosys and nextpnr and disconnects it (a
+chain root's carry-in is zero). The board clock's pad (L13) reaches its global buffer (DCC)
+through general routing, an arc nextpnr-nexus 0.11's default router (router2) gives up on once
+a core is placed ("Failed to route arc ... JPADDI_SEIO33_CORE_IOA to ... JCLKI_DCC"); router1
+routes it, so this board's builds pass ``--router router1``.
 
 UART: the FT2232H's second channel (the board's USB port), FPGA F18 (tx) and F16 (rx). As the
 board ships, that channel is not wired to the FPGA: 0-ohm resistors on R15 and R17 connect it,
@@ -70,12 +70,12 @@ def platform():
 # LIFCL-40: 39600 LUT4 and flip-flops, 84 EBR of 18 Kbit, 56 18x18 multipliers (the two
 # 512 Kbit LRAMs are not counted by the sizing)
 TARGET = open_flow_target(
-    "crosslink_nx", "Lattice CrossLink-NX Evaluation Board, LIFCL-40-9BG400C: Verilog and "
-    "estimate (nextpnr-nexus routes no board clock), cores of 734 at 12 MHz", "nexus",
+    "crosslink_nx", "Lattice CrossLink-NX Evaluation Board, LIFCL-40-9BG400C: bitstream "
+    "(nextpnr-nexus with router1, prjoxide), cores of 734 at 12 MHz", "nexus",
     "LIFCL-40-9BG400C", platform, oscillator_plans(12.0, (12, 1.5e6, direct())),
     {"LUT": 39600, "FF": 39600, "BRAM": 84, "DSP": 56},
     default_neurons=734, tool_env={"PYTHON": sys.executable}, loader_board=None,
     uart="the FT2232H's port B (the board's USB port) on F18 (out) and F16 (in), once R15 "
          "and R17 are fitted and port B is set to UART",
-    # the open flow stops at routing the board clock (the module's text)
-    bitstream=False)
+    # router2 finds no path from the clock's pad to its DCC (the module's text)
+    nextpnr_extra="--router router1")

@@ -10,7 +10,7 @@ from pathlib import Path
 
 from ..flow.verilog import write_block
 from ..lib.payload import payload_spec
-from ..lib.regmap import regmap_lines, regmap_markdown, stream_format
+from ..lib.regmap import regmap_lines, regmap_markdown, stream_format, write_map_lines
 from .face import FACE_IDLE_CYCLES, face_cycles
 from .top import AxiTop
 
@@ -68,6 +68,8 @@ def write_face(out, config, face: str, name: str, **spec_options) -> dict:
         from ..link.codec import COUNTER_NAMES
         sections = {"the UART face's counters (READ_COUNTERS, in order)":
                     ["  " + ", ".join(COUNTER_NAMES)]}
+        if spec.info.write_map:
+            sections["write addresses (a WRITE frame's first + i)"] = write_map_lines(spec.info)
         return {"files": write_block(out, top, desc, name, sections), "description": desc}
     resets = {"TICK_DIVIDER": spec.info.cycles_per_tick}
     sections = {f"register map ({top.BUS['text']}; offset, name, access, meaning)":

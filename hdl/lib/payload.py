@@ -37,8 +37,9 @@ from amaranth.lib.wiring import In, Out
 
 from .config import ConfigError
 
-__all__ = ["PayloadInfo", "PayloadSpec", "PayloadTwin", "payload_signature", "write_layout",
-           "spike_layout", "write_port", "implements", "payload_spec", "SPECS", "SPIKES_SETTLE"]
+__all__ = ["PayloadInfo", "PayloadSpec", "BlockSpec", "PayloadTwin", "payload_signature",
+           "write_layout", "spike_layout", "write_port", "implements", "payload_spec", "SPECS",
+           "SPIKES_SETTLE"]
 
 #: cycles after ``sweep_done`` by which every spike of the sweep is offered on ``spikes`` (a
 #: core's spike FIFO, a block RAM, delivers a spike pushed with the sweep's last update a few
@@ -55,7 +56,9 @@ class PayloadInfo:
     ``populations``: ``(name, first id, count)`` of the spike ids (``n_spike_ids`` in all);
     ``busy_cycles``: the cycles one tick keeps the block busy at worst, the writes of a burst
     and the work after it included (a sweep must hold them); ``max_spikes_per_tick``: the
-    neurons that can fire in one sweep."""
+    neurons that can fire in one sweep; ``write_map``: a block whose write addresses mean
+    different things (the learning layer) names its ranges, ``(name, first, count, meaning)``
+    each (empty: every address is a ``written`` value)."""
 
     block: str
     written: str
@@ -70,6 +73,7 @@ class PayloadInfo:
     clamp_kinds: tuple
     rounding: str = "nearest"
     parts: tuple = field(default=(), compare=False)
+    write_map: tuple = ()
 
     @property
     def value_width(self) -> int:
@@ -105,7 +109,9 @@ class PayloadInfo:
                 "clock_hz": self.clock_hz, "update_hz": self.update_hz,
                 "cycles_per_tick": self.cycles_per_tick, "busy_cycles": self.busy_cycles,
                 "max_spikes_per_tick": self.max_spikes_per_tick,
-                "clamp_kinds": list(self.clamp_kinds), "parts": list(self.parts)}
+                "clamp_kinds": list(self.clamp_kinds), "parts": list(self.parts),
+                "write_map": [{"name": n, "first": f, "count": c, "meaning": d}
+                              for n, f, c, d in self.write_map]}
 
 
 def write_layout(info: PayloadInfo) -> data.StructLayout:
@@ -184,6 +190,41 @@ class PayloadSpec:
 
     def to_dict(self) -> dict:
         return self.info.to_dict()
+
+
+class BlockSpec(PayloadSpec):
+    """The spec of one block built from its configuration (:attr:`config`: ``to_kwargs``,
+    ``tick_source``, ``clock_hz``): :meth:`retimed` rebuilds it with the tick external,
+    :meth:`build` refuses an internal tick and makes :meth:`component`."""
+
+    config: object
+
+    @property
+    def external(self) -> bool:
+        return self.config.tick_source == "external"
+
+    def config_from(self, kw: dict):
+        """The configuration of constructor keywords ``kw`` (as ``to_kwargs`` gives them)."""
+        return type(self.config)(**kw)
+
+    def options(self) -> dict:
+        """The spec's own options besides the configuration (kept when retimed)."""
+        return {}
+
+    def retimed(self, clock_hz: float | None = None) -> "BlockSpec":
+        kw = self.config.to_kwargs() | {"tick_source": "external"}
+        if clock_hz is not None:
+            kw["clock_hz"] = clock_hz
+        return type(self)(self.config_from(kw), **self.options())
+
+    def component(self) -> wiring.Component:
+        raise NotImplementedError
+
+    def build(self) -> wiring.Component:
+        if not self.external:
+            raise ConfigError(f"a payload's ticks come from its face: the {self.info.block} "
+                              f"needs tick_source='external' (retimed() gives it)")
+        return self.component()
 
 
 #: configuration type -> the spec class that makes it a payload

@@ -30,7 +30,8 @@ from amaranth.lib.wiring import In, Out
 
 __all__ = ["Field", "Register", "REGISTERS", "REGMAP_VERSION", "MAGIC", "MAP_BYTES",
            "WORD_BITS", "COUNTERS", "register", "register_port", "RegisterFile",
-           "constants", "regmap_dict", "regmap_markdown", "regmap_lines", "stream_format"]
+           "constants", "regmap_dict", "regmap_markdown", "regmap_lines", "write_map_lines",
+           "stream_format"]
 
 #: the map's version (major << 16 | minor): a driver checks it with ``MAGIC``
 REGMAP_VERSION = (1 << 16) | 0
@@ -270,7 +271,7 @@ def regmap_dict(info, resets: dict, bus: dict) -> dict:
             "clamp_kinds": list(info.clamp_kinds),
             "populations": [{"name": n, "first": f, "count": c}
                             for n, f, c in info.populations],
-            "streams": stream_format(info)}
+            "streams": stream_format(info), "write_map": info.to_dict()["write_map"]}
 
 
 def regmap_lines(info, resets: dict) -> list[str]:
@@ -285,7 +286,12 @@ def regmap_lines(info, resets: dict) -> list[str]:
                 else f"         [{f.lsb}] {f.name}: {f.doc}" for f in r.fields]
     kinds = ", ".join(f"{i}: {k}" for i, k in enumerate(info.clamp_kinds))
     out.append(f"  CLAMP_FLAGS bits: {kinds or 'none'}")
-    return out
+    return out + write_map_lines(info)
+
+
+def write_map_lines(info) -> list[str]:
+    """The block's write address ranges, a line each (none when every address is a value)."""
+    return [f"  write addresses {f} .. {f + c - 1}: {n}: {d}" for n, f, c, d in info.write_map]
 
 
 def regmap_markdown(info, resets: dict, bus: dict, name: str) -> str:
@@ -319,4 +325,7 @@ def regmap_markdown(info, resets: dict, bus: dict, name: str) -> str:
               f"is {s['spike_tdata_bits']} bits (id in bytes 0 .. {s['spike_field_bytes'] - 1},"
               f" sweep in bytes {s['spike_field_bytes']} .. {2 * s['spike_field_bytes'] - 1}); "
               f"an empty sweep's marker has id {s['marker_id']:#x} and TUSER = 1."]
+    if info.write_map:
+        lines += ["", "Write addresses:", ""] + [
+            f"- `{f}` .. `{f + c - 1}` {n}: {cell(d)}" for n, f, c, d in info.write_map]
     return "\n".join(lines) + "\n"

@@ -10,9 +10,8 @@ from amaranth import Module, Mux
 from amaranth.lib import wiring
 
 from ..izhikevich.config import CLAMP_KINDS
-from ..lib.config import ConfigError
-from ..lib.payload import (PayloadInfo, PayloadSpec, PayloadTwin, implements,
-                           payload_signature, write_port)
+from ..lib.payload import (BlockSpec, PayloadInfo, PayloadTwin, implements, payload_signature,
+                           write_port)
 from .config import NetworkConfig
 from .core import REPORT_SETTLE, AfferentCuneateNetwork
 from .twin import NetworkTwin
@@ -21,7 +20,7 @@ __all__ = ["NetworkSpec", "NetworkPayload"]
 
 
 @implements(NetworkConfig)
-class NetworkSpec(PayloadSpec):
+class NetworkSpec(BlockSpec):
     """The network of ``config``. A tick keeps it busy for its tick work (``cycles_needed``),
     the report's settling and the draining of one spike per afferent and cuneate neuron."""
 
@@ -39,20 +38,7 @@ class NetworkSpec(PayloadSpec):
                    {"block": "coincidence_detector", "neurons": M,
                     "sources": c.n_sources}))
 
-    @property
-    def external(self) -> bool:
-        return self.config.tick_source == "external"
-
-    def retimed(self, clock_hz: float | None = None) -> "NetworkSpec":
-        kw = self.config.to_kwargs() | {"tick_source": "external"}
-        if clock_hz is not None:
-            kw["clock_hz"] = clock_hz
-        return NetworkSpec(NetworkConfig(**kw))
-
-    def build(self) -> "NetworkPayload":
-        if not self.external:
-            raise ConfigError("a payload's ticks come from its face: the network needs "
-                              "tick_source='external' (retimed() gives it)")
+    def component(self) -> "NetworkPayload":
         return NetworkPayload(self)
 
     def twin(self) -> "_NetworkTwin":

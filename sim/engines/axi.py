@@ -11,10 +11,11 @@ from __future__ import annotations
 from ..izhikevich.engines import IzhikevichEngine
 from ..lif.engines import LifEngine
 from ..network.engines import NetworkEngine
+from ..plasticity.engines import PlasticityFace
 from .board import FaceEngine
 from .registry import implements
 
-__all__ = ["AxiEngine", "AxiIzhikevich", "AxiLif", "AxiNetwork"]
+__all__ = ["AxiEngine", "AxiIzhikevich", "AxiLif", "AxiNetwork", "AxiPlasticity"]
 
 
 class AxiEngine(FaceEngine):
@@ -40,3 +41,8 @@ class AxiLif(AxiEngine, LifEngine):
 @implements("network", "axi", speed=1e5)
 class AxiNetwork(AxiEngine, NetworkEngine):
     """The afferent -> cuneate network behind the AXI face."""
+
+
+@implements("plasticity", "axi", speed=1e5)
+class AxiPlasticity(AxiEngine, PlasticityFace):
+    """The learning layer behind the AXI face (:mod:`cuneate.hdl.plasticity.payload`)."""

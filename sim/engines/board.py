@@ -4,11 +4,12 @@ opened for the block's configuration), driven by the real host stack.
 
 One class per block it runs, each registered with
 :func:`~cuneate.sim.engines.registry.implements`: the Izhikevich core (and, in a scene, the
-channel fan-out before it or the afferent -> cuneate network behind the link), the LIF core and
-the network. The engine gives its transport (:meth:`BoardEngine.transport`); each block's
-engine interface runs its inputs through it (its default ``sweeps`` or ``pairs``: the block's
-currents written for their ticks, the ticks stepped, the spike frames read back, every counter
-of the transport contract checked and the device's own error counters). The link carries
+channel fan-out before it or the afferent -> cuneate network behind the link), the LIF core,
+the network and the learning layer. The engine gives its transport
+(:meth:`BoardEngine.transport`); each block's engine interface runs its inputs through it (its
+default ``sweeps`` or ``pairs``: the block's currents written for their ticks, the ticks
+stepped, the spike frames read back, every counter of the transport contract checked and the
+device's own error counters). The link carries
 spikes alone: no clamp counts, no input spikes; each run's counters hold the line's figures
 (``board_*``: cycles, bytes and frames each way).
 """
@@ -18,10 +19,13 @@ from __future__ import annotations
 from ..izhikevich.engines import IzhikevichEngine
 from ..lif.engines import LifEngine
 from ..network.engines import NetworkEngine
+from ...hdl.plasticity.payload import readout_bytes
+from ..plasticity.engines import PlasticityFace
 from .engine import BlockEngine
 from .registry import implements
 
-__all__ = ["FaceEngine", "BoardEngine", "BoardIzhikevich", "BoardLif", "BoardNetwork"]
+__all__ = ["FaceEngine", "BoardEngine", "BoardIzhikevich", "BoardLif", "BoardNetwork",
+           "BoardPlasticity"]
 
 
 class FaceEngine(BlockEngine):
@@ -78,3 +82,17 @@ class BoardLif(BoardEngine, LifEngine):
 @implements("network", "board", speed=1e4)
 class BoardNetwork(BoardEngine, NetworkEngine):
     """The network behind the link (:class:`~cuneate.hdl.link.LinkedTop`)."""
+
+
+@implements("plasticity", "board", speed=1e4)
+class BoardPlasticity(BoardEngine, PlasticityFace):
+    """The learning layer behind the link: its afferent spikes, window ends and readouts
+    streamed as writes (:mod:`cuneate.hdl.plasticity.payload`)."""
+
+    def readout_synapses(self, cfg) -> int:
+        """As many as a spike batch holds beside a tick's CN spikes, ``batch_sweeps``
+        readout sweeps in a batch (at least one synapse)."""
+        from ..link.engines import board_link         # the board top loads when it runs
+        lc = board_link(cfg)
+        per = (lc.batch_capacity - cfg.n_targets) // (lc.batch_sweeps * readout_bytes(cfg))
+        return max(1, min(cfg.n_synapses, per))

@@ -18,6 +18,11 @@ presentation (tick within it), the spike counts within each window and the weigh
 ``verilator-fast``
     The Verilog compiled by Verilator with the C++ harness (:mod:`cuneate.sim.plasticity.fast`):
     whole protocols.
+``board``, ``axi``
+    The layer's payload (:mod:`cuneate.hdl.plasticity.payload`) behind the UART link or the
+    AXI face, driven through the face's host transport (:class:`PlasticityFace`): every
+    tick's afferent spikes, each window's end and the readout requests are writes
+    (:func:`face_schedule`), the weights come back in readout sweeps (the snapshots too).
 
 The RTL engines read every weight back through the layer's host port at the end.
 """
@@ -33,13 +38,16 @@ import numpy as np
 from ...golden.cuneate_layer import LayerParams, simulate_layer
 from ...hdl.plasticity import CLAMP_KINDS, PlasticityConfig
 from ...hdl.plasticity.core import LearningLayer, learning_verilog
+from ...hdl.plasticity.payload import (LearningSpec, readout_parts, weights_from_ids,
+                                       write_addresses)
 from ...hdl.plasticity.twin import PlasticityTwin
 from ..engines.amaranth import simulate
 from ..engines.engine import BlockEngine
 from ..engines.registry import engine_for, implements
 from .fast import run_fast
 
-__all__ = ["PlasticityEngine", "LearningRun", "run_learning", "golden_layer"]
+__all__ = ["PlasticityEngine", "PlasticityFace", "LearningRun", "run_learning", "golden_layer",
+           "face_schedule", "FacePlan"]
 
 
 @dataclass
@@ -204,6 +212,91 @@ class PlasticityCocotb(PlasticityRtl):
                                  "events": {str(k): v for k, v in by_tick.items()},
                                  "windows": {str(k): a for k, a in windows.items()}})
         return rep["spikes"], rep["weights"], rep["clamp_counts"]
+
+
+class PlasticityFace(PlasticityEngine):
+    """The layer behind a face (an engine with a host transport, :meth:`stream`): the
+    protocol as writes (:func:`face_schedule`), the CNs' spikes and, in the readout sweeps
+    after every ``snapshot_every`` presentations and after the last, every weight
+    (:meth:`readout_synapses` a sweep). Face engines see no clamp counts (the faces carry
+    spikes)."""
+
+    def readout_synapses(self, cfg) -> int | None:
+        """Synapses a readout sweep sends (``None``: a CN's all)."""
+        return None
+
+    def learn(self, cfg, pres, flags, snapshot_every):
+        spec = LearningSpec(cfg, self.readout_synapses(cfg))
+        plan = face_schedule(cfg, pres, flags, snapshot_every, spec.readout_synapses)
+        got, counters = self.stream(spec, plan.writes, plan.n_sweeps)
+        M, K, C = cfg.n_targets, cfg.n_synapses, plan.parts
+        tick = plan.tick_of_sweep[got.tick]
+        cn = tick >= 0
+        if np.any(got.neuron[cn] >= M) or np.any(got.neuron[~cn] < M):
+            raise ValueError(f"{self.name}: a CN spike in a readout sweep or a readout id in "
+                             f"a tick")
+        lsb = cfg.W.lsb
+        reads = []                              # raw weights at each readout
+        for i in range(len(plan.readouts)):
+            sweeps = np.flatnonzero(plan.tick_of_sweep == -1 - i).reshape(M, C)
+            reads.append(np.stack([weights_from_ids(cfg, got.neuron[np.isin(got.tick, s)])
+                                   for s in sweeps]).reshape(M, K))
+        snaps = [(0, cfg.weights_raw * lsb)] + [(done, w * lsb) for done, w in
+                                                zip(plan.readouts[:-1], reads[:-1])]
+        sp, st, j = tick[cn] // pres.n_ticks, tick[cn] % pres.n_ticks, got.neuron[cn]
+        counts = np.zeros((pres.n, M), np.int64)
+        inside = st < pres.window_ticks
+        np.add.at(counts, (sp[inside], j[inside]), 1)
+        return LearningRun(self.name, sp, st, j, counts, reads[-1] * lsb, reads[-1], snaps,
+                           extra={"counters": counters})
+
+
+@dataclass
+class FacePlan:
+    """A protocol as a face's writes: ``writes`` (``{sweep: [(first address, raw values),
+    ...]}``), ``n_sweeps``, the layer's tick of each sweep (``tick_of_sweep``; ``-1 - i`` in
+    the sweeps of readout ``i``: ``parts`` sweeps a CN, CN after CN) and the presentations
+    done at each readout (``readouts``, the last after the protocol)."""
+
+    writes: dict
+    n_sweeps: int
+    tick_of_sweep: np.ndarray
+    readouts: list
+    parts: int
+
+
+def face_schedule(cfg: PlasticityConfig, pres, flags, snapshot_every: int = 0,
+                  readout_synapses: int | None = None) -> FacePlan:
+    """The protocol as a face's writes (the write map of
+    :func:`~cuneate.hdl.plasticity.payload.write_addresses`): each tick's afferent spikes as
+    one write of every afferent (1: a spike), each presentation's window end before the next
+    one's first tick; after every ``snapshot_every`` presentations and after the last, with
+    the window end, every readout request (``readout_synapses`` synapses a sweep), and one
+    readout sweep each."""
+    amap = write_addresses(cfg, readout_synapses)
+    S, n_req = cfg.n_sources, amap["readout"][1]
+    writes: dict = {}
+    ticks_of: list[int] = []
+    readouts: list = []
+
+    def add(k, first, raw):
+        writes.setdefault(int(k), []).append((first, np.asarray(raw, dtype=np.int64)))
+    for p in range(pres.n):
+        a, b = pres.offsets[p], pres.offsets[p + 1]
+        ticks, srcs = pres.ticks[a:b], pres.sources[a:b]
+        first = len(ticks_of)
+        for k in np.unique(ticks):
+            vec = np.zeros(S, np.int64)
+            vec[srcs[ticks == k]] = 1
+            add(first + k, 0, vec)
+        ticks_of += range(p * pres.n_ticks, (p + 1) * pres.n_ticks)
+        add(len(ticks_of), amap["learn"][0], [int(flags[p])])
+        if p == pres.n - 1 or (snapshot_every and (p + 1) % snapshot_every == 0):
+            add(len(ticks_of), amap["readout"][0], np.ones(n_req, np.int64))
+            ticks_of += [-1 - len(readouts)] * n_req
+            readouts.append(p + 1)
+    return FacePlan(writes, len(ticks_of), np.asarray(ticks_of, dtype=np.int64), readouts,
+                    readout_parts(cfg, readout_synapses))
 
 
 def _schedule(pres, flags):

@@ -118,11 +118,11 @@ def test_vivado_project_is_written_and_its_tcl_and_xdc_run_against_stubs(tmp_pat
 
 
 @pytest.mark.long
-@pytest.mark.parametrize("board", ["tang_nano_9k"])
+@pytest.mark.parametrize("board", ["tang_nano_9k", "crosslink_nx"])
 def test_a_short_bitstream_per_new_family(board, tmp_path):
-    """Gowin (nextpnr-himbaechel, gowin_pack): a 256-neuron core behind the link placed, routed
-    and packed with timing met at the board's clock. (Nexus has no bitstream: boards/
-    crosslink_nx.py says why.)"""
+    """Gowin (nextpnr-himbaechel, gowin_pack) and Nexus (nextpnr-nexus with router1,
+    prjoxide): a 256-neuron core behind the link placed, routed and packed with timing met at
+    the board's clock."""
     r = build_target(board, tmp_path, n_neurons=256, seed=1)
     t = TARGETS[board]
     bit = tmp_path / f"cuneate_{board}.{t['bitstream_ext']}"
@@ -133,7 +133,8 @@ def test_a_short_bitstream_per_new_family(board, tmp_path):
     print("\n" + (tmp_path / f"cuneate_{board}.report.txt").read_text())
 
 
-NEW_BOARDS = ["tang_nano_9k", "tang_primer_20k", "orangecrab", "colorlight", "butterstick"]
+NEW_BOARDS = ["tang_nano_9k", "tang_primer_20k", "orangecrab", "colorlight", "butterstick",
+              "crosslink_nx"]
 
 
 @pytest.mark.release

@@ -8,6 +8,7 @@ import pytest
 
 from cuneate.hdl.axi.faces import write_face
 from cuneate.hdl.izhikevich import IzhikevichConfig
+from learning_case import small_layer
 
 CFG = IzhikevichConfig(n_neurons=8, clock_hz=16e3 * 64, update_hz=16e3, tick_source="external")
 
@@ -32,3 +33,28 @@ def test_a_bus_face_is_written_with_its_register_map(face, ports, tmp_path):
     md = (tmp_path / f"izh_{face}.regmap.md").read_text().splitlines()
     assert sum(line.startswith("| `0x") for line in md) == len(regs)
     assert len(out["files"]) == 4
+
+
+@pytest.mark.parametrize("face", ["axi", "uart"])
+def test_the_learning_layers_write_map_is_stated_with_its_face(face, tmp_path):
+    """The learning layer's write addresses (spikes, weights, the window's end, readout
+    requests) in the Verilog header, and in the register map's JSON and markdown."""
+    cfg, _ = small_layer()
+    S, M, K = cfg.n_sources, cfg.n_targets, cfg.n_synapses
+    write_face(tmp_path, cfg, face, f"learn_{face}")
+    header = (tmp_path / f"learn_{face}.v").read_text().split("\nmodule ", 1)[0]
+    for line in (f"write addresses 0 .. {S - 1}: spike",
+                 f"write addresses {S} .. {S + M * K - 1}: weight",
+                 f"write addresses {S + M * K} .. {S + M * K}: learn",
+                 f"write addresses {S + M * K + 1} .. {S + M * K + M}: readout"):
+        assert line in header
+    if face == "axi":
+        regmap = json.loads((tmp_path / f"learn_{face}.regmap.json").read_text())
+        assert [(w["name"], w["first"], w["count"]) for w in regmap["write_map"]] == [
+            ("spike", 0, S), ("weight", S, M * K), ("learn", S + M * K, 1),
+            ("readout", S + M * K + 1, M)]
+        regs = {r["name"]: r for r in regmap["registers"]}
+        assert regs["N_WRITTEN"]["value"] == S + M * K + 1 + M
+        assert regs["POPULATIONS"]["value"] == 2 | len(regmap["clamp_kinds"]) << 8
+        md = (tmp_path / f"learn_{face}.regmap.md").read_text()
+        assert "Write addresses:" in md and "readout" in md

@@ -6,6 +6,10 @@ block's payload twin (:func:`cuneate.sim.axi.scoreboard.check_face`): every swee
 and its TLAST, the empty sweeps' markers, the constants, every counter, the refusals answered
 with an error, the clamp flags as the twin's (a clamp provoked) and cleared over the bus.
 
+The learning layer behind the AXI face: its protocol streamed as writes, every sweep's ids as
+the payload twin's and the weights of its readout sweeps equal to the fixed engine's after
+learning (Icarus in the default lane, Verilator in the long lane).
+
 Default lane: the LIF core behind the AXI face and behind the Wishbone face, on both
 simulators. Long lane: the Izhikevich array and the network behind the AXI face, and the channel
 fan-out in front of the array, the LIF core and the network.
@@ -17,10 +21,14 @@ import pytest
 from cuneate.hdl.fanout import FanoutConfig
 from cuneate.hdl.izhikevich import IzhikevichConfig
 from cuneate.hdl.lif import LifConfig
+from cuneate.hdl.lib.regmap import stream_format
 from cuneate.hdl.network import NetworkConfig
+from cuneate.hdl.plasticity.payload import LearningSpec, weights_from_ids
 from cuneate.sim.axi.scoreboard import check_face, run_face
 from cuneate.sim.axi.transport import axi_spec
 from cuneate.sim.engines.toolchain import SIMULATORS
+from cuneate.sim.plasticity.engines import face_schedule, run_learning
+from learning_case import small_layer
 
 SWEEPS = 24
 N_NET, S_NET, M_NET = 12, 8, 2
@@ -121,3 +129,38 @@ def test_wishbone_face(simulator, build_root):
 @pytest.mark.parametrize("block", LONG)
 def test_axi_face_long(simulator, block, build_root):
     _check(simulator, block, "axi", build_root)
+
+
+def _learning():
+    """Two CNs of three synapses learning over two short presentations, behind the face;
+    two synapses a readout sweep (two sweeps a CN)."""
+    cfg, pres = small_layer()
+    return axi_spec(LearningSpec(cfg, readout_synapses=2)), pres
+
+
+@pytest.mark.cocotb
+# Icarus in the default lane; Verilator's build (about a minute) in the long lane
+@pytest.mark.parametrize("simulator", [pytest.param(s, marks=pytest.mark.long)
+                                       if s == "verilator" else s for s in SIMULATORS])
+def test_the_learning_layer_learns_behind_the_axi_face(simulator, build_root):
+    """The layer's protocol streamed on s_axis (afferent spikes, window ends, readout
+    requests): every sweep's ids, counters and clamp flags as the payload twin's, and the
+    weights read back in the readout sweeps equal the fixed engine's after learning."""
+    spec, pres = _learning()
+    cfg, C = spec.config, spec.parts
+    flags = np.array([True, True])
+    plan = face_schedule(cfg, pres, flags, readout_synapses=spec.readout_synapses)
+    sched = {k: [(first, raw.tolist()) for first, raw in rows]
+             for k, rows in plan.writes.items()}
+    report = run_face(simulator, spec, "axi", sched, plan.n_sweeps,
+                      build_root / f"axi_learning_{simulator}", seed=7)
+    got = check_face(spec, sched, plan.n_sweeps, report)
+    fixed = run_learning("fixed", cfg, pres, flags)
+    assert got["spikes"] > fixed.spike_cn.size > 0 and C == 2
+    F = 8 * stream_format(spec.info)["spike_field_bytes"]
+    n_total = pres.n * pres.n_ticks
+    ids = [[d & ((1 << F) - 1) for d, _ in beats] for beats in report["packets"]]
+    weights = [weights_from_ids(cfg, ids[n_total + j * C] + ids[n_total + j * C + 1])
+               for j in range(cfg.n_targets)]
+    assert not np.array_equal(fixed.weights_raw, cfg.weights_raw)
+    assert np.array_equal(np.stack(weights), fixed.weights_raw)

@@ -7,7 +7,9 @@ frame and a missing sequence number are each counted in the right counter; and a
 overruns the receive FIFO while a write waits for its sweep (back-pressure) is counted as
 dropped bytes, with every frame it damaged missing from the accepted count (no silent loss);
 and damaged frames of every corruption class (:mod:`cuneate.sim.link.faults`) are each
-counted, never accepted, while the core's write port receives only intact currents.
+counted, never accepted, while the core's write port receives only intact currents; the
+learning layer behind the link learns from a presentation sent as WRITE frames, its CN spikes
+and the weights of its readout sweeps equal to its twin's (long lane, both simulators).
 Icarus 11 runs the yosys-lowered netlist of the same design (``link_verilog(lowered=True)``):
 it mis-schedules some combinational processes of the transmit FSM in the direct output.
 """
@@ -19,14 +21,17 @@ import pytest
 from link_expect import model_frames, twin_spikes
 
 from cuneate.hdl.izhikevich import IzhikevichTwin
-from cuneate.hdl.link import link_config, link_verilog
+from cuneate.hdl.link import LinkConfig, link_config, link_verilog
 from cuneate.hdl.link.codec import (COUNTER_NAMES, MSG_COUNTERS, MSG_SPIKES, OP_READ_COUNTERS,
                                     OP_STEP, FrameDecoder, Message, cobs_encode,
                                     control_message, encode_frame, parse_counters, parse_spikes,
                                     write_message)
 from cuneate.hdl.link.twin import LinkModel
+from cuneate.hdl.plasticity.payload import weights_from_ids
 from cuneate.sim.engines.cocotb import run_cocotb
 from cuneate.sim.engines.toolchain import SIMULATORS
+from cuneate.sim.plasticity.engines import face_schedule, run_learning
+from learning_case import small_layer
 
 
 CPB = 8
@@ -191,3 +196,44 @@ def test_link_damaged_frames_counted_never_accepted(simulator, build_root):
     print(f"\n{simulator}: {n_bad} damaged frames sent, {damaged_runs} damaged runs, counted "
           f"{refused} ({', '.join(f'{k}={c[k]}' for k in COUNTER_NAMES if c[k])}), "
           f"0 accepted, {len(rep['writes'])} currents written (all intact)")
+
+
+def lockstep_chunks(lc, writes: dict, n_sweeps: int, margin: int = 800) -> list:
+    """A schedule (``{sweep: [(first, raw values), ...]}``) as the host sends it in lockstep:
+    at each sweep with writes, its WRITE frames and a STEP to the next such sweep (the device
+    stopped between), each chunk followed by the cycles its sweeps take."""
+    W, cpt = lc.current_width, lc.info.cycles_per_tick
+    at = sorted(writes) + [n_sweeps]
+    chunks, seq = [], 0
+    for k, nxt in zip(at[:-1], at[1:]):
+        for first, raw in writes[k]:
+            chunks.append((encode_frame(write_message(seq, k, first, raw, W)), 0))
+            seq += 1
+        chunks.append((encode_frame(control_message(seq, OP_STEP, nxt - k)),
+                       (nxt - k) * cpt + margin))
+        seq += 1
+    return chunks
+
+
+@pytest.mark.cocotb
+@pytest.mark.long
+@pytest.mark.parametrize("simulator", SIMULATORS)
+def test_the_learning_layer_learns_behind_the_link(simulator, build_root):
+    """The learning layer behind the UART link: a presentation's afferent spikes, its window's
+    end and the readout requests sent as WRITE frames; the CN spikes and the weights read back
+    in the readout sweeps' SPIKES frames equal the fixed engine's (its twin) after learning."""
+    cfg, pres = small_layer()
+    pres = pres.select([0])
+    lc = LinkConfig(cfg, clocks_per_bit=CPB, batch_sweeps=16, batch_capacity=40)
+    plan = face_schedule(cfg, pres, [True])
+    writes, n_sweeps = plan.writes, plan.n_sweeps
+    msgs, _ = play(simulator, lc, lockstep_chunks(lc, writes, n_sweeps), 6000,
+                   build_root / f"link_learning_{simulator}")
+    got = [s for m in msgs if m.type == MSG_SPIKES for s in parse_spikes(m)[2]]
+    assert all(parse_spikes(m)[0] == 0 for m in msgs if m.type == MSG_SPIKES)
+    fixed = run_learning("fixed", cfg, pres, [True])
+    n_total, M = pres.n_ticks, cfg.n_targets
+    assert fixed.spike_cn.size > 0 and not np.array_equal(fixed.weights_raw, cfg.weights_raw)
+    assert [(k, j) for k, j in got if k < n_total] == list(zip(fixed.spike_tick, fixed.spike_cn))
+    weights = [weights_from_ids(cfg, [j for k, j in got if k == n_total + c]) for c in range(M)]
+    assert np.array_equal(np.stack(weights), fixed.weights_raw)
