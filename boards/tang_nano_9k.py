@@ -11,31 +11,17 @@ low on the board).
 
 from __future__ import annotations
 
-from .platforms import amaranth_board, himbaechel_gowin
-from .pll import gowin_rpll
-from .top import open_flow_target, oscillator_plans
+from .gowin import gowin_target, rpll_plans
 
-__all__ = ["TARGET", "rpll_plans"]
-
-
-#: the 27 MHz oscillator's rPLL dividers (IDIV_SEL, FBDIV_SEL, ODIV_SEL) by output clock (MHz)
-RPLL_27 = {48: (8, 15, 16), 54: (0, 1, 16), 72: (2, 7, 8), 90: (2, 9, 8)}
-
-
-def rpll_plans(family: str, *mhz: int) -> list:
-    """The clock plans at ``mhz`` from a Gowin ``family``'s 27 MHz oscillator (3 Mbaud)."""
-    return oscillator_plans(27.0, *((f, 3e6, gowin_rpll(family, 27.0, *RPLL_27[f]))
-                                    for f in mhz))
+__all__ = ["TARGET"]
 
 
 PLANS = rpll_plans("gw1n", 48, 54, 72)
 
 # GW1NR-9: 8640 LUT4, 6480 flip-flops, 26 BSRAM of 18 Kbit, 20 18x18 multipliers
-TARGET = open_flow_target(
-    "tang_nano_9k", "Sipeed Tang Nano 9K, Gowin GW1NR-9 C6/I5: bitstream (yosys, "
-    "nextpnr-himbaechel, gowin_pack)", "gowin", "GW1NR-LV9QN88PC6/I5",
-    amaranth_board("tang_nano_9k", "TangNano9kPlatform", himbaechel_gowin), PLANS,
-    {"LUT": 8640, "FF": 6480, "BRAM": 26, "DSP": 20},
+TARGET = gowin_target(
+    "tang_nano_9k", "Sipeed Tang Nano 9K, Gowin GW1NR-9 C6/I5", "GW1NR-LV9QN88PC6/I5",
+    "TangNano9kPlatform", PLANS, {"LUT": 8640, "FF": 6480, "BRAM": 26, "DSP": 20},
     # board-build fmax bound (MHz) for the sizing: the 1000-neuron build at 48 MHz, seed 1 (measured; the largest build's three seeds are in benchmarks/boards.md)
     link_fmax_mhz=57.3, loader_board="tangnano9k",
     uart="the BL702's USB serial port (pins 17 tx, 18 rx)")

@@ -11,9 +11,7 @@ bit at 3 Mbaud), 54 MHz (27 x 2, VCO 864 MHz; 3375 cycles, 18 clocks a bit), 72 
 
 from __future__ import annotations
 
-from .platforms import amaranth_board, himbaechel_gowin
-from .tang_nano_9k import rpll_plans
-from .top import open_flow_target
+from .gowin import gowin_target, rpll_plans
 
 __all__ = ["TARGET"]
 
@@ -21,10 +19,9 @@ __all__ = ["TARGET"]
 PLANS = rpll_plans("gw2a", 48, 54, 72, 90)
 
 # GW2A-18: 20736 LUT4, 15552 flip-flops, 46 BSRAM of 18 Kbit, 48 18x18 multipliers
-TARGET = open_flow_target(
-    "tang_primer_20k", "Sipeed Tang Primer 20K (Dock), Gowin GW2A-18 C8/I7: bitstream (yosys, "
-    "nextpnr-himbaechel, gowin_pack)", "gowin", "GW2A-LV18PG256C8/I7",
-    amaranth_board("tang_primer_20k", "TangPrimer20kDockPlatform", himbaechel_gowin), PLANS,
+TARGET = gowin_target(
+    "tang_primer_20k", "Sipeed Tang Primer 20K (Dock), Gowin GW2A-18 C8/I7",
+    "GW2A-LV18PG256C8/I7", "TangPrimer20kDockPlatform", PLANS,
     {"LUT": 20736, "FF": 15552, "BRAM": 46, "DSP": 48},
     # board-build fmax bound (MHz) for the sizing: provisional: the GW1NR-9's measured board-build fmax (the GW2A-18 C8 is the faster family member) until this board's largest build is measured
     link_fmax_mhz=57.3, loader_board="tangprimer20k",

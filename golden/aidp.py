@@ -52,7 +52,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from .validate import number
+from .validate import numbers
 
 __all__ = ["AidpParams", "sigmoid", "window_step"]
 
@@ -74,12 +74,9 @@ class AidpParams:
     slope: float = 0.5
 
     def __post_init__(self):
-        for k in ("tau_rise_ms", "tau_decay_ms", "tau_1_ms", "w_max", "slope"):
-            number(getattr(self, k), f"aidp.{k}", positive=True)
-        for k in ("latency_ms", "eta"):
-            number(getattr(self, k), f"aidp.{k}", nonneg=True)
-        for k in ("theta", "w_pot", "w_dep"):
-            number(getattr(self, k), f"aidp.{k}")
+        numbers(self, "aidp.", positive=("tau_rise_ms", "tau_decay_ms", "tau_1_ms", "w_max",
+                                         "slope"),
+                nonneg=("latency_ms", "eta"), finite=("theta", "w_pot", "w_dep"))
         if not self.tau_rise_ms < self.tau_decay_ms:
             raise ValueError(f"aidp: the local calcium needs tau_rise ({self.tau_rise_ms:g} ms) "
                              f"< tau_decay ({self.tau_decay_ms:g} ms)")

@@ -41,7 +41,7 @@ import numpy as np
 
 from .mems import FINGERTIP, Fingertip, cover_filter, viscoelastic
 from .textures import Surface, Texture
-from .validate import number
+from .validate import number, numbers
 
 __all__ = ["Protocol", "Contact", "CONTACT", "smoothstep", "surface_extent", "prepare",
            "slide_loads", "Prepared"]
@@ -64,11 +64,10 @@ class Protocol:
     jitter_mm: float = 0.05
 
     def __post_init__(self):
-        for k in ("force_N", "velocity_mm_per_s", "slide_mm", "indent_ms", "retract_ms"):
-            number(getattr(self, k), k, positive=True)
-        for k in ("rest_ms", "hold_ms", "spread_force", "spread_velocity", "spread_friction",
-                  "jitter_mm"):
-            number(getattr(self, k), k, nonneg=True)
+        numbers(self, positive=("force_N", "velocity_mm_per_s", "slide_mm", "indent_ms",
+                                "retract_ms"),
+                nonneg=("rest_ms", "hold_ms", "spread_force", "spread_velocity",
+                        "spread_friction", "jitter_mm"))
 
     @property
     def slide_ms(self) -> float:

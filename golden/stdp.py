@@ -31,7 +31,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from .validate import number
+from .validate import numbers
 
 __all__ = ["StdpParams", "step"]
 
@@ -48,10 +48,8 @@ class StdpParams:
     w_max: float = 6.0
 
     def __post_init__(self):
-        for k in ("tau_plus_ms", "tau_minus_ms", "w_max"):
-            number(getattr(self, k), f"stdp.{k}", positive=True)
-        for k in ("a_plus", "a_minus"):
-            number(getattr(self, k), f"stdp.{k}", nonneg=True)
+        numbers(self, "stdp.", positive=("tau_plus_ms", "tau_minus_ms", "w_max"),
+                nonneg=("a_plus", "a_minus"))
 
     def to_dict(self) -> dict:
         return asdict(self)

@@ -54,7 +54,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .validate import number
+from .validate import number, numbers
 
 __all__ = ["Texture", "TEXTURES", "SHAPES", "Surface", "surface", "fractal_field", "texture"]
 
@@ -96,10 +96,9 @@ class Texture:
         if self.mu_kinetic > self.mu_static:
             raise ValueError(f"{self.name}: mu_kinetic ({self.mu_kinetic:g}) exceeds mu_static "
                              f"({self.mu_static:g})")
-        for k in ("period_u_mm", "period_v_mm", "rough_hi_mm", "rough_lo_mm", "feature_mm"):
-            number(getattr(self, k), f"{self.name}: {k}", positive=True)
-        for k in ("amplitude_um", "motif_um", "rough_rms_um", "motif_period_mm"):
-            number(getattr(self, k), f"{self.name}: {k}", nonneg=True)
+        numbers(self, f"{self.name}: ", positive=("period_u_mm", "period_v_mm", "rough_hi_mm",
+                                                  "rough_lo_mm", "feature_mm"),
+                nonneg=("amplitude_um", "motif_um", "rough_rms_um", "motif_period_mm"))
         if not 0.0 < self.hurst <= 1.0:
             raise ValueError(f"{self.name}: hurst must lie in (0, 1], got {self.hurst!r}")
         if self.rough_hi_mm >= self.rough_lo_mm:

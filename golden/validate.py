@@ -9,7 +9,7 @@ from typing import Callable
 
 import numpy as np
 
-__all__ = ["number", "finite_array"]
+__all__ = ["number", "numbers", "finite_array"]
 
 
 def number(value, name: str, *, positive: bool = False, nonneg: bool = False) -> float:
@@ -25,6 +25,14 @@ def number(value, name: str, *, positive: bool = False, nonneg: bool = False) ->
     if nonneg and not v >= 0:
         raise ValueError(f"{name} must be >= 0, got {value!r}")
     return v
+
+
+def numbers(obj, prefix: str = "", *, positive=(), nonneg=(), finite=()) -> None:
+    """:func:`number` on the attributes of ``obj`` named in ``positive`` (``> 0``), then
+    ``nonneg`` (``>= 0``), then ``finite``; an error names the attribute after ``prefix``."""
+    for names, kw in ((positive, {"positive": True}), (nonneg, {"nonneg": True}), (finite, {})):
+        for k in names:
+            number(getattr(obj, k), prefix + k, **kw)
 
 
 def _at_index(idx: tuple[int, ...]) -> str:

@@ -25,7 +25,7 @@ can give), and checks it against the protocol's rules and a reference written he
     master holds AWVALID, WVALID and ARVALID with their payloads until taken (AXI4 A3.2.1).
 
 The Wishbone bank's proof is :mod:`cuneate.hdl.wishbone.formal`. **Mutants** are subclasses of
-the components through their documented hooks (``loadable``, ``room``, ``keep_b``): a beat
+the components through their documented hooks (``loads``, ``keep_b``): a beat
 register loaded while stalled, a write register overwritten while the block holds it, a write
 response withdrawn before it is taken; each proof must fail on its mutant.
 """
@@ -58,9 +58,17 @@ def proof_info(n_neurons: int = 8):
     return payload_spec(cfg).info
 
 
-class _StallLoads(StreamSpikes):
-    def loadable(self, out):
-        return Const(1)
+def _loads_always(side):
+    """The mutant of a stream side (``StreamSpikes``, ``StreamWrites``): its register on offer
+    loaded whatever its state (a beat loaded while stalled, a write overwritten while the block
+    holds it)."""
+    class LoadsAlways(side):
+        def loads(self, reg):
+            return Const(1)
+    return LoadsAlways
+
+
+_StallLoads = _loads_always(StreamSpikes)
 
 
 class SpikesProof(ClockedHarness):
@@ -165,9 +173,7 @@ class SpikesProof(ClockedHarness):
         return m
 
 
-class _Overwrites(StreamWrites):
-    def room(self, w):
-        return Const(1)
+_Overwrites = _loads_always(StreamWrites)
 
 
 class WritesProof(ClockedHarness):

@@ -50,27 +50,33 @@ def axis_out_layout(info) -> data.StructLayout:
                               "tuser": 1})
 
 
-class StreamWrites(wiring.Component):
+class _StreamSide(wiring.Component):
+    """One side of the bus face over the payload ``info``: its ports (:meth:`ports`) and its
+    beat register on offer."""
+
+    def __init__(self, info):
+        self.info = info
+        super().__init__(self.ports(info))
+
+    def loads(self, reg):
+        """The register ``reg`` on offer can take a new beat this cycle (a documented hook:
+        the proof's mutants override it)."""
+        return ~reg.valid | reg.ready
+
+
+class StreamWrites(_StreamSide):
     """``s_axis`` beats in, the payload's ``write`` stream out (see the module docstring).
     ``busy`` and ``pending``: the block works, a tick waits; ``burst_open``: a burst has begun
     and its last beat is not taken; ``hold``: the ticks must wait (a burst open or a value on
     offer to the block); ``count_*`` pulse per beat written, refused, and burst ended.
     The value on offer sits in a register (``write.valid``) until the block takes it."""
 
-    def __init__(self, info):
-        self.info = info
-        super().__init__({
-            "s_axis": In(stream.Signature(axis_in_layout(info))),
-            "write": Out(stream.Signature(write_layout(info))),
-            "busy": In(1), "pending": In(1),
-            "burst_open": Out(1), "hold": Out(1),
-            "count_writes": Out(1), "count_refused": Out(1), "count_bursts": Out(1),
-        })
-
-    def room(self, w):
-        """The offer register can take a beat this cycle (a documented hook: the proof's
-        mutant overrides it)."""
-        return ~w.valid | w.ready
+    @staticmethod
+    def ports(info) -> dict:
+        return {"s_axis": In(stream.Signature(axis_in_layout(info))),
+                "write": Out(stream.Signature(write_layout(info))),
+                "busy": In(1), "pending": In(1), "burst_open": Out(1), "hold": Out(1),
+                "count_writes": Out(1), "count_refused": Out(1), "count_bursts": Out(1)}
 
     def elaborate(self, platform):
         m = Module()
@@ -86,7 +92,7 @@ class StreamWrites(wiring.Component):
         ok = Signal()
         m.d.comb += ok.eq((addr < info.n_written) & fits)
         allowed = self.burst_open | (~self.busy & ~self.pending)
-        m.d.comb += s.ready.eq(self.room(w) & allowed)
+        m.d.comb += s.ready.eq(self.loads(w) & allowed)
         take = s.valid & s.ready
         with m.If(take & ok):
             m.d.sync += [w.valid.eq(1), w.payload.addr.eq(addr),
@@ -102,27 +108,19 @@ class StreamWrites(wiring.Component):
         return m
 
 
-class StreamSpikes(wiring.Component):
+class StreamSpikes(_StreamSide):
     """The payload's ``spikes`` and ``sweep_done`` in, ``m_axis`` beats out (see the module
     docstring). ``tick``: a sweep opens; ``sweep_open``: its TLAST beat is not yet taken;
     ``count_spikes``, ``count_sweeps``, ``count_empty`` pulse per spike beat, TLAST beat and
     empty sweep's marker taken. The beat on offer and the spike waiting behind it are
     registers."""
 
-    def __init__(self, info):
-        self.info = info
-        super().__init__({
-            "spikes": In(stream.Signature(spike_layout(info))),
-            "sweep_done": In(1), "tick": In(1),
-            "m_axis": Out(stream.Signature(axis_out_layout(info))),
-            "sweep_open": Out(1),
-            "count_spikes": Out(1), "count_sweeps": Out(1), "count_empty": Out(1),
-        })
-
-    def loadable(self, out):
-        """The beat register can take a new beat this cycle (a documented hook: the proof's
-        mutant overrides it)."""
-        return ~out.valid | out.ready
+    @staticmethod
+    def ports(info) -> dict:
+        return {"spikes": In(stream.Signature(spike_layout(info))),
+                "sweep_done": In(1), "tick": In(1),
+                "m_axis": Out(stream.Signature(axis_out_layout(info))), "sweep_open": Out(1),
+                "count_spikes": Out(1), "count_sweeps": Out(1), "count_empty": Out(1)}
 
     def elaborate(self, platform):
         m = Module()
@@ -137,7 +135,7 @@ class StreamSpikes(wiring.Component):
         settle = Signal(range(SPIKES_SETTLE + 1), name="settle")
         number = Signal(sw, name="sweep_number")           # the open sweep's number
         free = Signal()
-        m.d.comb += [free.eq(self.loadable(out)),
+        m.d.comb += [free.eq(self.loads(out)),
                      sp.ready.eq(~ended & (~held | free))]
         take = sp.valid & sp.ready
         end = self.sweep_open & done_seen & (settle == 0) & ~sp.valid & ~ended & free

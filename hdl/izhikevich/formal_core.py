@@ -25,7 +25,7 @@ from amaranth import Cat
 
 from ..lib.core_proof import MUTANTS, SweepCoreProof
 from ..flow.sby import SOLVER
-from ..lib.formal import ProofResult, harness_rtlil, run_proof
+from ..lib.formal import ProofResult, harness_depth, harness_rtlil, prove_harness
 from . import datapath
 from .config import CLAMP_KINDS, ConfigError, IzhikevichConfig
 from .core import IzhikevichCore
@@ -113,16 +113,9 @@ def core_harness(cfg: IzhikevichConfig, mutant: str | None = None) -> str:
     return harness_rtlil(IzhikevichCoreProof(cfg, mutant), "core_eq", MEMORIES)
 
 
-def _depth(top: IzhikevichCoreProof) -> int:
-    # the latency + 2: the data registers between the stages need L + 1 cycles of history
-    return top.latency + 2
-
-
 def induction_depth(cfg: IzhikevichConfig) -> int:
     """The k of the k-induction: the core's latency (read from its tags) + 2."""
-    top = IzhikevichCoreProof(cfg)
-    harness_rtlil(top, "core_eq", MEMORIES)
-    return _depth(top)
+    return harness_depth(IzhikevichCoreProof(cfg), "core_eq", MEMORIES)
 
 
 def prove_core(cfg: IzhikevichConfig, workdir: Path, mode: str = "prove",
@@ -132,7 +125,6 @@ def prove_core(cfg: IzhikevichConfig, workdir: Path, mode: str = "prove",
     """Prove (``mode="prove"``: k-induction of ``depth`` steps, default the core's latency + 2)
     or check to a bound (``mode="bmc"``) that the core equals its one-step reference;
     ``core``: a subclass of :class:`IzhikevichCore` to prove instead (a fault of its own)."""
-    top = IzhikevichCoreProof(cfg, mutant, core)
-    il = harness_rtlil(top, "core_eq", MEMORIES)            # one elaboration: the RTLIL and k
-    return run_proof("core equals one-step datapath", il, workdir, "core_eq", mode,
-                     depth or _depth(top), timeout_s, engine, ABSTRACTIONS, solver)
+    return prove_harness("core equals one-step datapath", IzhikevichCoreProof(cfg, mutant, core),
+                         "core_eq", MEMORIES, workdir, mode, depth, timeout_s, engine,
+                         ABSTRACTIONS, solver)

@@ -12,7 +12,7 @@ from amaranth import Module
 from amaranth.lib import wiring
 
 from .config import ConfigError
-from .payload import PayloadSpec, payload_signature
+from .payload import PayloadSpec, payload_signature, write_port
 
 __all__ = ["CorePayload", "CoreSpec"]
 
@@ -60,11 +60,9 @@ class CorePayload(wiring.Component):
     def elaborate(self, platform):
         m = Module()
         m.submodules.core = core = self.core
-        w, s = self.write, self.spikes
+        s = self.spikes
+        m.d.comb += write_port(self.write, core)
         m.d.comb += [
-            w.ready.eq(1),
-            core.i_wr_en.eq(w.valid), core.i_wr_addr.eq(w.payload.addr),
-            core.i_wr_data.eq(w.payload.value),
             s.valid.eq(core.spike_valid), core.spike_ready.eq(s.ready),
             s.payload.index.eq(core.spike_index), s.payload.sweep.eq(core.spike_sweep),
             core.tick.eq(self.tick), self.busy.eq(core.busy),

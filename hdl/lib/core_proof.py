@@ -157,6 +157,12 @@ class SweepCoreProof(Elaboratable):
         self.ports = [self.cd.clk]
         self.latency = None
 
+    @property
+    def induction_depth(self) -> int:
+        """The k of the k-induction: the core's latency (read from its tags when elaborated)
+        + 2, the data registers between the stages needing L + 1 cycles of history."""
+        return self.latency + 2
+
     # --- what a block provides --------------------------------------------------------------
     def core_config(self):
         """The configuration of the core the harness elaborates: ``cfg`` with an external

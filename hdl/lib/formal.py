@@ -39,7 +39,7 @@ from ..flow.sby import SOLVER, FormalError, parse_sby_log, run_sby
 from .fixed import arithmetic_hooks
 
 __all__ = ["ClockedHarness", "UninterpretedProducts", "signal_named", "faulty_write", "delay_line",
-           "free_memories", "harness_rtlil",
+           "free_memories", "harness_rtlil", "harness_depth", "prove_harness",
            "ProofResult", "run_proof", "assert_all", "check_id", "assume_all", "FormalError"]
 
 
@@ -244,6 +244,13 @@ def harness_rtlil(top, name: str, memories=()) -> str:
     return free_memories(rtlil.convert(top, name=name, ports=top.ports), memories)
 
 
+def harness_depth(top, name: str, memories=()) -> int:
+    """The k of the k-induction of the harness ``top``: its ``induction_depth``, which it reads
+    from the design when elaborated."""
+    harness_rtlil(top, name, memories)
+    return top.induction_depth
+
+
 # ----------------------------------------------------------------------------------------------
 # the run
 
@@ -284,3 +291,13 @@ def run_proof(prop: str, il: str, workdir: Path, name: str, mode: str, depth: in
                        solver if engine == "smtbmc" else "abc", secs,
                        info.get("failed", []), info.get("step"), info.get("phase"),
                        list(abstractions))
+
+
+def prove_harness(prop: str, top, name: str, memories, workdir: Path, mode: str,
+                  depth: int | None, timeout_s: float, engine: str = "smtbmc", abstractions=(),
+                  solver: str = SOLVER) -> ProofResult:
+    """:func:`run_proof` of the harness ``top`` (top module ``name``, ``memories`` free) to
+    ``depth``, default its ``induction_depth``: one elaboration gives the RTLIL and k."""
+    il = harness_rtlil(top, name, memories)
+    return run_proof(prop, il, workdir, name, mode, depth or top.induction_depth, timeout_s,
+                     engine, abstractions, solver)

@@ -38,8 +38,8 @@ from amaranth.lib.wiring import In, Out
 from .config import ConfigError
 
 __all__ = ["PayloadInfo", "PayloadSpec", "BlockSpec", "PayloadTwin", "payload_signature",
-           "write_layout",
-           "spike_layout", "implements", "payload_spec", "SPECS", "SPIKES_SETTLE"]
+           "write_layout", "spike_layout", "write_port", "implements", "payload_spec", "SPECS",
+           "SPIKES_SETTLE"]
 
 #: cycles after ``sweep_done`` by which every spike of the sweep is offered on ``spikes`` (a
 #: core's spike FIFO, a block RAM, delivers a spike pushed with the sweep's last update a few
@@ -135,6 +135,13 @@ def payload_signature(info: PayloadInfo) -> wiring.Signature:
         "clamp_flags": Out(max(len(info.clamp_kinds), 1)), "clamp_clear": In(1),
         "overflow": Out(1), "overrun": Out(1),
     })
+
+
+def write_port(write, block) -> list:
+    """The statements handing a payload's ``write`` stream, always ready, to the current write
+    port of ``block`` (``i_wr_en``, ``i_wr_addr``, ``i_wr_data``), a value a cycle."""
+    return [write.ready.eq(1), block.i_wr_en.eq(write.valid),
+            block.i_wr_addr.eq(write.payload.addr), block.i_wr_data.eq(write.payload.value)]
 
 
 class PayloadTwin:

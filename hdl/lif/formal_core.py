@@ -25,7 +25,7 @@ from amaranth.asserts import AnySeq
 
 from ..flow.sby import SOLVER
 from ..lib.core_proof import MUTANTS, SweepCoreProof
-from ..lib.formal import ProofResult, assert_all, assume_all, harness_rtlil, run_proof
+from ..lib.formal import ProofResult, assert_all, assume_all, harness_rtlil, prove_harness
 from .config import CLAMP_KINDS, LifConfig
 from .core import LifCore
 from .datapath import gather_input, leak_operand, leak_product, update_state
@@ -133,14 +133,16 @@ def lif_proof_config(n_neurons: int = 8, **kwargs) -> LifConfig:
                      tick_source="external", **kwargs)
 
 
+#: memories of the core that start with any contents
+MEMORIES = ("state_mem", "cur_mem", "sel_mem", "weight_mem", "trace_mem")
+
+
 def lif_harness(cfg: LifConfig, mutant: str | None = None,
                 core: type | None = None) -> tuple[str, int]:
     """RTLIL of the harness (top ``lif_eq``), the memories' initial contents removed, and the
     core's latency; ``core``: a subclass of :class:`LifCore` to prove instead."""
     top = LifCoreProof(cfg, mutant, core)
-    il = harness_rtlil(top, "lif_eq", ("state_mem", "cur_mem", "sel_mem", "weight_mem",
-                                       "trace_mem"))
-    return il, top.latency
+    return harness_rtlil(top, "lif_eq", MEMORIES), top.latency
 
 
 def prove_lif(cfg: LifConfig, workdir: Path, mode: str = "prove", depth: int | None = None,
@@ -149,6 +151,6 @@ def prove_lif(cfg: LifConfig, workdir: Path, mode: str = "prove", depth: int | N
     """Prove (``mode="prove"``: k-induction of ``depth`` steps, default the core's latency + 2)
     or check to a bound (``mode="bmc"``) that the LIF core equals its one-step reference;
     ``core``: a subclass of :class:`LifCore` to prove instead (a fault of its own)."""
-    il, latency = lif_harness(cfg, mutant, core)
-    return run_proof("LIF core equals one-step datapath", il, workdir, "lif_eq", mode,
-                     depth or latency + 2, timeout_s, engine, ABSTRACTIONS, solver)
+    return prove_harness("LIF core equals one-step datapath", LifCoreProof(cfg, mutant, core),
+                         "lif_eq", MEMORIES, workdir, mode, depth, timeout_s, engine,
+                         ABSTRACTIONS, solver)

@@ -39,6 +39,11 @@ class FrameExecutor(wiring.Component):
             "read_counters": Out(1), "clear_counters": Out(1), "count_late_writes": Out(1),
         })
 
+    def commands(self) -> tuple:
+        """Each control opcode and the strobe it pulses for the tick generator."""
+        return ((OP_START, self.start), (OP_STOP, self.stop), (OP_STEP, self.step),
+                (OP_READ_COUNTERS, self.read_counters), (OP_CLEAR_COUNTERS, self.clear_counters))
+
     def elaborate(self, platform):
         m = Module()
         f, w = self.frame.payload, self.write
@@ -61,16 +66,9 @@ class FrameExecutor(wiring.Component):
                 with m.Elif(self.frame.valid):
                     m.d.comb += self.frame.ready.eq(1)
                     with m.Switch(f.op):
-                        with m.Case(OP_START):
-                            m.d.comb += self.start.eq(1)
-                        with m.Case(OP_STOP):
-                            m.d.comb += self.stop.eq(1)
-                        with m.Case(OP_STEP):
-                            m.d.comb += self.step.eq(1)
-                        with m.Case(OP_READ_COUNTERS):
-                            m.d.comb += self.read_counters.eq(1)
-                        with m.Case(OP_CLEAR_COUNTERS):
-                            m.d.comb += self.clear_counters.eq(1)
+                        for op, strobe in self.commands():
+                            with m.Case(op):
+                                m.d.comb += strobe.eq(1)
             with m.State("WAIT"):
                 with m.If(S > f.tick):
                     m.d.comb += [self.count_late_writes.eq(1), self.frame.ready.eq(1)]

@@ -59,8 +59,8 @@ from amaranth.asserts import AnyConst, AnySeq
 from amaranth.hdl import Fragment
 
 from ..flow.sby import SOLVER
-from ..lib.formal import (ProofResult, assert_all, assume_all, harness_rtlil, run_proof,
-                          signal_named)
+from ..lib.formal import (ProofResult, assert_all, assume_all, harness_depth, harness_rtlil,
+                          prove_harness, signal_named)
 from .codec import (CONTROL_PAYLOAD, CRC_INIT, CRC_RESIDUE, HEADER_BYTES, MAX_FRAME,
                     MIN_FRAME, MSG_CONTROL, MSG_WRITE, OP_CLEAR_COUNTERS, OP_START, VERSION)
 from .config import LinkConfig, link_config
@@ -133,6 +133,12 @@ class DecoderProof(Elaboratable):
         self.latency = None                    # the decision latency, read when elaborated
         self.cd = ClockDomain("sync", reset_less=True)
         self.ports = [self.cd.clk]
+
+    @property
+    def induction_depth(self) -> int:
+        """The decision latency + 5: the executor's output register and the value RAM's
+        pipeline."""
+        return self.latency + 5
 
     def elaborate(self, platform):
         lc, m = self.lcfg, Module()
@@ -430,19 +436,11 @@ def decoder_harness(lcfg: LinkConfig, mutant: str | None = None) -> str:
     return harness_rtlil(DecoderProof(lcfg, mutant), "decoder_eq", MEMORIES)
 
 
-def _depth(top: DecoderProof) -> int:
-    # the decision latency + 5: the executor's output register and the value RAM's
-    # pipeline
-    return top.latency + 5
-
-
 def induction_depth(lcfg: LinkConfig) -> int:
     """The k of the k-induction: the decoder's decision latency (cycles from the delimiter to
     the verdict, read from its states) + 5 (the executor's output register and the value
     RAM's pipeline)."""
-    top = DecoderProof(lcfg)
-    harness_rtlil(top, "decoder_eq", MEMORIES)
-    return _depth(top)
+    return harness_depth(DecoderProof(lcfg), "decoder_eq", MEMORIES)
 
 
 def prove_decoder(lcfg: LinkConfig, workdir: Path, mode: str = "prove",
@@ -453,7 +451,6 @@ def prove_decoder(lcfg: LinkConfig, workdir: Path, mode: str = "prove",
     :func:`induction_depth`) or check to a bound (``mode="bmc"``) that the link's frame
     decoder gives every frame its specified verdict and its executor loses or reorders no
     accepted write."""
-    top = DecoderProof(lcfg, mutant)
-    il = harness_rtlil(top, "decoder_eq", MEMORIES)         # one elaboration: the RTLIL and k
-    return run_proof("link frame decoder meets the wire format", il, workdir, "decoder_eq",
-                     mode, depth or _depth(top), timeout_s, engine, ABSTRACTIONS, solver)
+    return prove_harness("link frame decoder meets the wire format", DecoderProof(lcfg, mutant),
+                         "decoder_eq", MEMORIES, workdir, mode, depth, timeout_s, engine,
+                         ABSTRACTIONS, solver)

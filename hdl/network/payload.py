@@ -10,7 +10,8 @@ from amaranth import Module, Mux
 from amaranth.lib import wiring
 
 from ..izhikevich.config import CLAMP_KINDS
-from ..lib.payload import BlockSpec, PayloadInfo, PayloadTwin, implements, payload_signature
+from ..lib.payload import (BlockSpec, PayloadInfo, PayloadTwin, implements, payload_signature,
+                           write_port)
 from .config import NetworkConfig
 from .core import REPORT_SETTLE, AfferentCuneateNetwork
 from .twin import NetworkTwin
@@ -77,11 +78,9 @@ class NetworkPayload(wiring.Component):
         m = Module()
         m.submodules.network = net = self.network
         N = self.spec.config.n_afferents
-        w, s = self.write, self.spikes
+        s = self.spikes
+        m.d.comb += write_port(self.write, net)
         m.d.comb += [
-            w.ready.eq(1),
-            net.i_wr_en.eq(w.valid), net.i_wr_addr.eq(w.payload.addr),
-            net.i_wr_data.eq(w.payload.value),
             s.valid.eq(net.out_valid), net.out_ready.eq(s.ready),
             s.payload.index.eq(Mux(net.out_population, N + net.out_index, net.out_index)),
             s.payload.sweep.eq(net.out_tick),

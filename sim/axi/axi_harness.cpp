@@ -94,6 +94,20 @@ struct Bus {
         top->s_axis_tlast = 0;
     }
 
+    // an AXI4-Lite transaction's cycles until its response is taken (`taken`, which `cycle`
+    // sets): each cycle `sample` reads the response with the clock low (with the handshake's
+    // edge to come), then `cycle` runs the cycle and drops the request's valids once taken
+    template <class Sample, class Cycle>
+    void until_response(const bool& taken, Sample sample, Cycle cycle) {
+        for (uint64_t c = 0; !taken; c++) {
+            if (c > PATIENCE) exit(6);
+            top->clk = 0;
+            top->eval();
+            sample();
+            cycle();
+        }
+    }
+
     uint8_t axil_write(uint32_t addr, uint32_t data) {
         top->s_axil_awaddr = addr;
         top->s_axil_wdata = data;
@@ -103,16 +117,12 @@ struct Bus {
         top->s_axil_bready = 1;
         bool b = false;
         uint8_t resp = 0;
-        for (uint64_t c = 0; !b; c++) {
-            if (c > PATIENCE) exit(6);
+        until_response(b, [&] { resp = top->s_axil_bresp; }, [&] {
             bool aw, w;
-            top->clk = 0;
-            top->eval();
-            resp = top->s_axil_bresp;           // read with the handshake's edge to come
             cycle_once(nullptr, &aw, &w, &b, nullptr, nullptr);
             if (aw) top->s_axil_awvalid = 0;
             if (w) top->s_axil_wvalid = 0;
-        }
+        });
         top->s_axil_bready = 0;
         reg_writes++;
         return resp;
@@ -124,16 +134,14 @@ struct Bus {
         top->s_axil_rready = 1;
         bool r = false;
         uint32_t data = 0;
-        for (uint64_t c = 0; !r; c++) {
-            if (c > PATIENCE) exit(6);
-            bool ar;
-            top->clk = 0;
-            top->eval();
+        until_response(r, [&] {
             data = top->s_axil_rdata;
             *resp = top->s_axil_rresp;
+        }, [&] {
+            bool ar;
             cycle_once(nullptr, nullptr, nullptr, nullptr, &ar, &r);
             if (ar) top->s_axil_arvalid = 0;
-        }
+        });
         top->s_axil_rready = 0;
         reg_reads++;
         return data;

@@ -68,6 +68,10 @@ def parse_param_set(text: str):
         raise CliError(f"--param-set {text!r}: {exc}") from None
 
 
+#: the state variables' default fraction bits
+STATE_FRAC_BITS = {"v": 18, "u": 20}
+
+
 def add_core_options(p, *, neurons_default: int) -> None:
     """The options that define a core, shared by ``simulate`` and ``generate``."""
     g = p.add_argument_group("core configuration")
@@ -87,12 +91,10 @@ def add_core_options(p, *, neurons_default: int) -> None:
     g.add_argument("--saturation", choices=("refuse", "flag"), default="refuse",
                    help="formats narrower than the proven state range: refuse (default) or "
                         "accept with flagged, counted clamps")
-    g.add_argument("--v-int-bits", type=positive_int, default=None,
-                   help="integer bits of v (default: derived from the proven range)")
-    g.add_argument("--u-int-bits", type=positive_int, default=None,
-                   help="integer bits of u (default: derived from the proven range)")
-    g.add_argument("--v-frac-bits", type=positive_int, default=18)
-    g.add_argument("--u-frac-bits", type=positive_int, default=20)
+    for s, frac in STATE_FRAC_BITS.items():          # each state variable's format
+        g.add_argument(f"--{s}-int-bits", type=positive_int, default=None,
+                       help=f"integer bits of {s} (default: derived from the proven range)")
+        g.add_argument(f"--{s}-frac-bits", type=positive_int, default=frac)
     g.add_argument("--operand-width", type=positive_int, default=18,
                    help="multiplier operand width (default 18)")
     g.add_argument("--y-frac-bits", type=positive_int, default=None,

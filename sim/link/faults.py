@@ -205,35 +205,42 @@ def frame_type(wire: bytes) -> int:
     return cobs_decode(bytes(wire).rstrip(b"\x00"))[1]
 
 
-class OnFrame:
-    """A line fault on the ``nth`` (from 0) frame of type ``typ`` the host writes (a transport
-    writes one frame a call): ``damage(wire) -> wire``; ``hit`` once it acted."""
-
-    def __init__(self, typ: int, damage, nth: int = 0):
-        self.typ, self.damage, self.nth, self.seen, self.hit = typ, damage, nth, 0, False
-
-    def __call__(self, data: bytes) -> bytes:
-        if frame_type(data) == self.typ:
-            self.seen += 1
-            if self.seen == self.nth + 1:
-                self.hit = True
-                return self.damage(data)
-        return data
-
-
-class OnChunk:
-    """A line fault on the ``nth`` (from 0) non-empty chunk of bytes a device sends."""
+class _OnNth:
+    """A line fault on the ``nth`` (from 0) piece of bytes that :meth:`matches`:
+    ``damage(bytes) -> bytes``; ``hit`` once it acted."""
 
     def __init__(self, damage, nth: int):
         self.damage, self.nth, self.seen, self.hit = damage, nth, 0, False
 
+    def matches(self, data: bytes) -> bool:
+        raise NotImplementedError
+
     def __call__(self, data: bytes) -> bytes:
-        if data:
+        if self.matches(data):
             self.seen += 1
             if self.seen == self.nth + 1:
                 self.hit = True
                 return self.damage(data)
         return data
+
+
+class OnFrame(_OnNth):
+    """A line fault on the ``nth`` (from 0) frame of type ``typ`` the host writes (a transport
+    writes one frame a call): ``damage(wire) -> wire``; ``hit`` once it acted."""
+
+    def __init__(self, typ: int, damage, nth: int = 0):
+        super().__init__(damage, nth)
+        self.typ = typ
+
+    def matches(self, data: bytes) -> bool:
+        return frame_type(data) == self.typ
+
+
+class OnChunk(_OnNth):
+    """A line fault on the ``nth`` (from 0) non-empty chunk of bytes a device sends."""
+
+    def matches(self, data: bytes) -> bool:
+        return bool(data)
 
 
 class Recorder:

@@ -133,20 +133,32 @@ def ridge_graph(cfg) -> "object":
     return nir.NIRGraph(nodes=nodes, edges=edges)
 
 
+def _text(x) -> str:
+    """A metadata string as written or as read back from a NIR file (bytes)."""
+    return x.decode() if isinstance(x, bytes) else str(x)
+
+
+def _extension_meta(graph, kind: str, needed: tuple, ext: str, carries: str) -> dict:
+    """The Output node's metadata of a cuneate ``kind`` graph, refused (one line naming it)
+    without one of the ``needed`` nodes or without the ``ext`` extension."""
+    for k in needed:
+        if k not in graph.nodes:
+            raise NirError(f"not a cuneate {kind} graph: no node {k!r}")
+    meta = dict(graph.nodes["output"].metadata or {})
+    if EXT not in meta or _text(meta[EXT]) != ext:
+        raise NirError(f"node 'output' (Output): no cuneate {carries}")
+    return meta
+
+
 def ridge_from_graph(graph) -> dict:
     """The coincidence detector's keywords (``n_sources``, ``n_targets``, ``delays_ticks``,
     ``weights``, ``tau_rise_ms``, ``tau_decay_ms``, ``param_sets``, ``target_sets``,
     ``update_hz``) of a graph written by :func:`ridge_graph`."""
     nodes = graph.nodes
-    for k in ("fanout", "delay", "synapses", "psp_decay", "psp_rise", "output"):
-        if k not in nodes:
-            raise NirError(f"not a cuneate ridge graph: no node {k!r}")
-    meta = dict(nodes["output"].metadata or {})
-    ext = meta.get(EXT)
-    ext = ext.decode() if isinstance(ext, bytes) else ext
-    if ext != "izhikevich":
-        raise NirError("node 'output' (Output): no cuneate Izhikevich extension in its metadata "
-                       "(the cuneate neurons' parameters)")
+    meta = _extension_meta(graph, "ridge", ("fanout", "delay", "synapses", "psp_decay",
+                                            "psp_rise", "output"), "izhikevich",
+                           "Izhikevich extension in its metadata (the cuneate neurons' "
+                           "parameters)")
     hz = float(np.asarray(meta["cuneate_update_hz"]))
     fan = np.asarray(nodes["fanout"].weight)
     syn = np.asarray(nodes["synapses"].weight)
@@ -159,7 +171,7 @@ def ridge_from_graph(graph) -> dict:
         raise NirError(f"node 'delay' (Delay): not whole ticks at {hz:g} Hz")
     w = np.array([syn[t, t * S:(t + 1) * S] for t in range(T)])
     ps = meta["cuneate_izhikevich"]
-    ps = json.loads(ps.decode() if isinstance(ps, bytes) else ps)
+    ps = json.loads(_text(ps))
     return {"n_sources": S, "n_targets": T,
             "delays_ticks": np.round(ticks).astype(np.int64).reshape(T, S).tolist(),
             "weights": w.tolist(),
@@ -210,19 +222,13 @@ def learning_from_graph(graph) -> dict:
     .from_kwargs`: sources, weights, rule, the layer's constants) of a graph written by
     :func:`learning_graph`; the weights are the graph's (learned) ones."""
     nodes = graph.nodes
-    for k in ("synapses", "excitation", "interneuron", "inhibition", "output"):
-        if k not in nodes:
-            raise NirError(f"not a cuneate learning graph: no node {k!r}")
-    meta = dict(nodes["output"].metadata or {})
-    ext = meta.get(EXT)
-    ext = ext.decode() if isinstance(ext, bytes) else ext
-    if ext != "izhikevich+aidp":
-        raise NirError("node 'output' (Output): no cuneate Izhikevich+AIDP extension in its "
-                       "metadata (the CNs' parameters and the learning rule)")
+    meta = _extension_meta(graph, "learning", ("synapses", "excitation", "interneuron",
+                                               "inhibition", "output"), "izhikevich+aidp",
+                           "Izhikevich+AIDP extension in its metadata (the CNs' parameters "
+                           "and the learning rule)")
 
     def js(key):
-        x = meta[key]
-        return json.loads(x.decode() if isinstance(x, bytes) else str(x))
+        return json.loads(_text(meta[key]))
     src = np.asarray(meta["cuneate_sources"]).astype(np.int64)
     full = np.asarray(nodes["synapses"].weight, dtype=np.float64)
     M, S = full.shape

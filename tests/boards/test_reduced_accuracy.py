@@ -2,32 +2,22 @@
 the four presets x 15 currents (3.5..100 mV/ms), 1 s at 16 kHz, spike trains against float64
 Euler, beside float32 Euler and the default 18-bit-operand core."""
 
-import numpy as np
+from wide_battery import wide_battery
 
 from cuneate.boards.sizing import size_core
 from cuneate.boards.targets import TARGETS
-from cuneate.golden import izhikevich as golden
 from cuneate.golden.metrics import compare_populations
-from cuneate.hdl.izhikevich import IzhikevichConfig, IzhikevichTwin
-
-PRESETS = ("RS", "IB", "CH", "FS")
-CURRENTS = [3.5, 4, 5, 6, 8, 10, 12, 15, 20, 25, 30, 40, 50, 70, 100]
+from cuneate.hdl.izhikevich import IzhikevichTwin
 
 
 def test_icebreaker_core_accuracy_against_float64_and_float32():
     board_core = size_core(TARGETS["icebreaker"])["link"].core
-    names = [p for p in PRESETS for _ in CURRENTS]
-    cur = np.array([i for _ in PRESETS for i in CURRENTS], dtype=float)
-    n = len(names)
-    g64 = golden.simulate(names, lambda t: cur, n_neurons=n, duration_ms=1000.0)
-    g32 = golden.simulate(names, lambda t: cur, n_neurons=n, duration_ms=1000.0,
-                          dtype=np.float32)
-    res = {"float32": compare_populations(g64.spikes_ms, g32.spikes_ms, 0.0625, 0.005)}
+    b = wide_battery()
+    g64 = b.g64
+    res = {"float32": compare_populations(g64.spikes_ms, b.g32.spikes_ms, 0.0625, 0.005)}
     for label, ow in (("18-bit core", 18), ("iCEBreaker core", board_core.operand_width)):
-        cfg = IzhikevichConfig(n_neurons=n, clock_hz=16e3 * n, param_sets=PRESETS,
-                               neuron_sets=[PRESETS.index(p) for p in names],
-                               operand_width=ow)
-        res[label] = compare_populations(g64.spikes_ms, IzhikevichTwin(cfg).run(cur, 16000),
+        cfg = b.config(operand_width=ow)
+        res[label] = compare_populations(g64.spikes_ms, IzhikevichTwin(cfg).run(b.cur, 16000),
                                          cfg.dt_ms, 0.005)
     print()
     for k, c in res.items():

@@ -5,6 +5,7 @@ layout (2500 words in five banks of 512), and the faults the proof must catch (s
 import json
 
 import pytest
+from proof_cases import assert_fails_first_at
 
 from cuneate.hdl.lib.banked_proof import MUTANTS, prove_banked
 from cuneate.sim.cli import main
@@ -34,8 +35,7 @@ def test_the_proof_catches_the_fault(mutant, registered, tmp_path):
     check, step = EXPECTED[mutant]
     r = prove_banked(tmp_path, 10, 4, write_register=registered, mode="bmc", k=step + 1,
                      mutant=mutant)
-    assert r.status == "fail" and r.phase == "basecase" and r.step == step, r
-    assert check in r.failed, r
+    assert_fails_first_at(r, check, step)
 
 
 def test_a_write_landing_in_the_wrong_bank_is_caught(tmp_path):

@@ -4,6 +4,7 @@ by a shallow bounded run from the initial state."""
 
 import numpy as np
 import pytest
+from proof_cases import assert_fails_first_at, v_one_high
 
 from cuneate.hdl.coincidence import CoincidenceDetector
 from cuneate.hdl.coincidence.datapath import history_slot
@@ -59,22 +60,13 @@ def test_the_detector_proof_catches_the_fault(mutant, tmp_path):
     check, step = EXPECTED[mutant]
     r = prove_coincidence(coincidence_proof_config(), tmp_path, mode="bmc", depth=step + 1,
                           mutant=mutant, timeout_s=600)
-    assert r.status == "fail" and r.phase == "basecase" and r.step == step, r
-    assert check in r.failed, r
-
-
-class _VOneHigh(CoincidenceDetector):
-    @staticmethod
-    def update_state(cfg, *args):
-        out = dict(CoincidenceDetector.update_state(cfg, *args))
-        out["v"] = out["v"] + 1
-        return out
+    assert_fails_first_at(r, check, step)
 
 
 def test_a_datapath_fault_in_the_detector_is_caught(tmp_path):
     """The detector's update stage gives v + 1 (the reference keeps the true stage function)."""
     r = prove_coincidence(coincidence_proof_config(), tmp_path, mode="bmc", depth=10,
-                          timeout_s=600, detector=_VOneHigh)
+                          timeout_s=600, detector=v_one_high(CoincidenceDetector))
     assert r.status == "fail" and "tracked_update_upd_v" in r.failed, r
 
 

@@ -3,6 +3,7 @@
 each found by a shallow bounded run from the initial state (default lane, seconds each)."""
 
 import pytest
+from proof_cases import assert_fails_first_at
 
 from cuneate.hdl.izhikevich import IzhikevichConfig, IzhikevichCore, datapath
 from cuneate.hdl.izhikevich.formal_core import (MUTANTS, induction_depth, proof_config,
@@ -39,8 +40,7 @@ def test_the_proof_catches_the_fault(cfg, mutant, tmp_path):
     cannot pass either)."""
     check, step = EXPECTED[mutant]
     r = prove_core(cfg, tmp_path, mode="bmc", depth=step + 1, mutant=mutant, timeout_s=600)
-    assert r.status == "fail" and r.phase == "basecase" and r.step == step, r
-    assert check in r.failed, r
+    assert_fails_first_at(r, check, step)
 
 
 def _select_v_one_high(cfg, x):

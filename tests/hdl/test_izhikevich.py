@@ -5,6 +5,8 @@ import json
 
 import numpy as np
 import pytest
+from current_writes import RandomWrites
+from wide_battery import wide_battery
 
 from cuneate.golden import izhikevich as golden
 from cuneate.golden.metrics import compare_populations
@@ -207,21 +209,16 @@ def _run_rtl(cfg, n_sweeps, rng, writes_per_sweep=3, hold_ready=True, tick_sched
     async def bench(ctx):
         ctx.set(dut.spike_ready, int(hold_ready))
         cycle = 0
-        pending = [(n, int(cfg.I.to_raw(rng.uniform(lo, hi)))) for n in range(N)]
+        writes = RandomWrites(cfg, rng, N, lo, hi, writes_per_sweep / N)
         total = tick_schedule[-1] + 3 * N if tick_schedule else (n_sweeps + 1) * cfg.cycles_per_tick
         for cycle in range(total):
             if tick_schedule is not None:
                 ctx.set(dut.tick, int(cycle in tick_schedule))
-            if pending:
-                n, raw = pending.pop(0)
-            elif rng.random() < writes_per_sweep / N:
-                n, raw = int(rng.integers(N)), int(cfg.I.to_raw(rng.uniform(lo, hi)))
-            else:
-                n = None
-            if n is not None:
+            w = writes.next()
+            if w is not None:
                 ctx.set(dut.i_wr_en, 1)
-                ctx.set(dut.i_wr_addr, n)
-                ctx.set(dut.i_wr_data, raw)
+                ctx.set(dut.i_wr_addr, w[0])
+                ctx.set(dut.i_wr_data, w[1])
             else:
                 ctx.set(dut.i_wr_en, 0)
             ctx.set(dut.clamp_clear, int(cycle in clear_at))
@@ -395,17 +392,9 @@ def test_accuracy_parity_with_float32_on_a_wide_battery():
     """The four presets x 15 currents from 3.5 to 100 mV/ms, 1 s. The small battery above is
     dominated by one or two phase-sensitive trains (FS near rheobase), where float32 itself
     keeps only ~20 % of spikes within a tick; over 60 trains the comparison is stable."""
-    presets = ("RS", "IB", "CH", "FS")
-    currents = [3.5, 4, 5, 6, 8, 10, 12, 15, 20, 25, 30, 40, 50, 70, 100]
-    names = [p for p in presets for _ in currents]
-    cur = np.array([i for _ in presets for i in currents], dtype=float)
-    n = len(names)
-    g64 = golden.simulate(names, lambda t: cur, n_neurons=n, duration_ms=1000.0)
-    g32 = golden.simulate(names, lambda t: cur, n_neurons=n, duration_ms=1000.0,
-                          dtype=np.float32)
-    cfg = IzhikevichConfig(n_neurons=n, clock_hz=16e3 * n, param_sets=presets,
-                           neuron_sets=[presets.index(p) for p in names])
-    fixed = IzhikevichTwin(cfg).run(cur, 16000)
+    b = wide_battery()
+    g64, g32, cfg = b.g64, b.g32, b.config()
+    fixed = IzhikevichTwin(cfg).run(b.cur, 16000)
     c32 = compare_populations(g64.spikes_ms, g32.spikes_ms, cfg.dt_ms, 0.005)
     cfx = compare_populations(g64.spikes_ms, fixed, cfg.dt_ms, 0.005)
     print(f"\n60 trains: float32 within +-1 tick {c32['fraction_within_tick']:.4f}, mean VP "

@@ -5,6 +5,7 @@ sweep, each core's spikes in that core's order."""
 
 import numpy as np
 import pytest
+from current_writes import RandomWrites
 
 from cuneate.hdl.izhikevich import (ConfigError, IzhikevichArray, IzhikevichArrayTwin,
                                     IzhikevichConfig)
@@ -19,19 +20,14 @@ def _run(arr, n_sweeps, rng, lo=-5.0, hi=150.0, writes_per_sweep=3):
 
     async def bench(ctx):
         ctx.set(arr.spike_ready, 1)
-        pending = [(n, int(cfg.I.to_raw(rng.uniform(lo, hi)))) for n in range(total)]
+        writes = RandomWrites(cfg, rng, total, lo, hi, writes_per_sweep / N)
         for _ in range((n_sweeps + 1) * cfg.cycles_per_tick):
-            if pending:
-                n, raw = pending.pop(0)
-            elif rng.random() < writes_per_sweep / N:
-                n, raw = int(rng.integers(total)), int(cfg.I.to_raw(rng.uniform(lo, hi)))
-            else:
-                n = None
-            ctx.set(arr.i_wr_en, int(n is not None))
-            if n is not None:
-                ctx.set(arr.i_wr_addr, n)
-                ctx.set(arr.i_wr_data, raw)
-                rec["writes"].append((n, raw))
+            w = writes.next()
+            ctx.set(arr.i_wr_en, int(w is not None))
+            if w is not None:
+                ctx.set(arr.i_wr_addr, w[0])
+                ctx.set(arr.i_wr_data, w[1])
+                rec["writes"].append(w)
             await ctx.tick()
             for k, core in enumerate(arr.cores):
                 if ctx.get(core.upd_valid):

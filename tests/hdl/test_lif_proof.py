@@ -3,6 +3,7 @@ datapath (hdl/lif/formal_core.py), and the faults it must catch."""
 
 import pytest
 from amaranth.hdl import Fragment
+from proof_cases import assert_fails_first_at, v_one_high
 
 from cuneate.hdl.lif import LifCore
 from cuneate.hdl.lif.formal_core import MUTANTS, LifCoreProof, lif_proof_config, prove_lif
@@ -39,22 +40,13 @@ def test_the_lif_proof_catches_the_fault(mutant, tmp_path):
     check, step = EXPECTED[mutant]
     r = prove_lif(lif_proof_config(), tmp_path, mode="bmc", depth=step + 1, mutant=mutant,
                   timeout_s=600)
-    assert r.status == "fail" and r.phase == "basecase" and r.step == step, r
-    assert check in r.failed, r
-
-
-class _VOneHigh(LifCore):
-    @staticmethod
-    def update_state(cfg, *args):
-        out = dict(LifCore.update_state(cfg, *args))
-        out["v"] = out["v"] + 1
-        return out
+    assert_fails_first_at(r, check, step)
 
 
 def test_a_datapath_fault_in_the_lif_core_is_caught(tmp_path):
     """The core's last stage gives v + 1 (the reference keeps the true stage function)."""
     r = prove_lif(lif_proof_config(), tmp_path, mode="bmc", depth=7, timeout_s=600,
-                  core=_VOneHigh)
+                  core=v_one_high(LifCore))
     assert r.status == "fail" and "tracked_update_upd_v" in r.failed, r
 
 

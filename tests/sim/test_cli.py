@@ -5,14 +5,8 @@ import subprocess
 import sys
 
 import pytest
+from cli_run import run_cli
 
-from cuneate.sim.cli import main
-
-
-def run_cli(capsys, argv):
-    rc = main(argv)
-    out = capsys.readouterr()
-    return rc, out.out, out.err
 
 
 def test_doctor_json_reports_required_tools(capsys):

@@ -4,15 +4,9 @@ import json
 import re
 
 import pytest
+from cli_run import run_cli
 
 from cuneate.golden import izhikevich as gz
-from cuneate.sim.cli import main
-
-
-def run_cli(capsys, argv):
-    rc = main(argv)
-    out = capsys.readouterr()
-    return rc, out.out, out.err
 
 
 def one_line_error(capsys, argv):

@@ -3,21 +3,15 @@
 import json
 
 import pytest
+from cli_run import run_cli
 
 from cuneate.golden import izhikevich as golden
 from cuneate.golden.metrics import compare_trains
-from cuneate.sim.cli import main
 from cuneate.sim.engines.toolchain import SIMULATORS
 from cuneate.sim.izhikevich.engines import run_engine
 
 ARGS = ["simulate", "izhikevich", "--preset", "RS", "--neurons", "3", "--current", "4", "10",
         "30", "--duration-ms", "150", "--json"]
-
-
-def run_cli(capsys, argv):
-    rc = main(argv)
-    out = capsys.readouterr()
-    return rc, out.out, out.err
 
 
 @pytest.fixture(scope="module")

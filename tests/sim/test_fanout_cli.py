@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 import pytest
+from cli_run import assert_refused
 
 from cuneate.golden.fanout import fanout_currents
 from cuneate.sim.cli import main
@@ -140,9 +141,7 @@ def test_generate_fanout(capsys, tmp_path):
     (["simulate", "fanout", "--clock-hz", "1e4"], "--clock-hz/--sample-hz: a fan-out run"),
 ])
 def test_refusals_exit_2_with_one_line_naming_the_option(capsys, argv, match):
-    rc = main(argv)
-    err = capsys.readouterr().err
-    assert rc == 2 and match in err and err.count("\n") == 1, err
+    assert_refused(capsys, argv, match)
 
 
 def test_table_file_refusals(capsys, tmp_path):

@@ -5,6 +5,7 @@ import json
 
 import numpy as np
 import pytest
+from cli_run import assert_refused, python_engine_runs, simulate_json
 
 from cuneate.hdl.network import NetworkConfig
 from cuneate.sim.cli import main
@@ -15,22 +16,12 @@ ARGS = ["--delays-ms", "0,0,1,1;0,0,0,0;1,1,0,0", "--current", "20", "30", "15",
         "18", "10", "10", "--duration-ms", "60"]
 
 
-def _sim(capsys, *args):
-    rc = main(["simulate", "network", "--json", *args])
-    out = capsys.readouterr()
-    assert rc == 0, out.err
-    return json.loads(out.out)
-
-
 def test_simulate_network_json_contract_and_engines_agree(capsys):
-    runs = {e: _sim(capsys, "--engine", e, *ARGS) for e in ("golden", "fixed", "amaranth")}
+    runs = python_engine_runs(capsys, "network", *ARGS)
     for e, r in runs.items():
         assert r["model"] == "network" and r["engine"] == e and r["neurons"] == 11
         assert [p["count"] for p in r["populations"]] == [8, 3]
         assert len(r["spikes_ms"]) == 11
-        for s in r["spikes_ms"]:
-            k = np.asarray(s) / r["dt_ms"] - 1          # update k reports at (k+1) dt
-            assert np.allclose(k, np.round(k)) and np.all(k >= 0)
     f, a, g = runs["fixed"], runs["amaranth"], runs["golden"]
     assert f["spikes_ms"] == a["spikes_ms"]
     assert sum(map(len, f["spikes_ms"][8:])) > 0
@@ -65,8 +56,9 @@ def test_changing_currents_are_written_before_their_tick():
 @pytest.mark.cocotb
 @pytest.mark.parametrize("simulator", SIMULATORS)
 def test_simulate_network_on_hdl_simulators_matches_twin(simulator, capsys, tmp_path):
-    hw = _sim(capsys, "--engine", simulator, "--build-dir", str(tmp_path), *ARGS)
-    tw = _sim(capsys, "--engine", "fixed", *ARGS)
+    hw = simulate_json(capsys, "network", "--engine", simulator, "--build-dir", str(tmp_path),
+                       *ARGS)
+    tw = simulate_json(capsys, "network", "--engine", "fixed", *ARGS)
     assert hw["spikes_ms"] == tw["spikes_ms"] and sum(map(len, hw["spikes_ms"][8:])) > 0
     assert hw["counters"]["link_count"] == sum(map(len, tw["spikes_ms"][:4]))
     assert hw["counters"]["afferent_overflow"] == 0 == hw["counters"]["cuneate_overflow_count"]
@@ -99,6 +91,4 @@ def test_generate_network(capsys, tmp_path):
      "n_afferents must be an integer >= 6"),
 ])
 def test_network_refusals_exit_2_with_one_line(capsys, argv, match):
-    rc = main(argv)
-    err = capsys.readouterr().err
-    assert rc == 2 and match in err and err.count("\n") == 1, err
+    assert_refused(capsys, argv, match)

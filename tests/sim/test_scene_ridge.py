@@ -94,13 +94,18 @@ def test_golden_and_fixed_decode_alike_and_only_the_two_blocks_run(monkeypatch):
                                                        "coincidence_detector"]
 
 
+def _run_two_trials(tmp_path, engines):
+    """``cuneate run`` of the example with 2 trials on ``engines``; its output folder."""
+    out = tmp_path / "r"
+    scene = tmp_path / "ridge.toml"
+    scene.write_text(EXAMPLE.replace("trials = 6", "trials = 2"))
+    assert main(["run", str(scene), "--engines", engines, "--out", str(out)]) == 0
+    return out
+
+
 @pytest.mark.cocotb
 def test_ridge_scene_on_verilator_equals_fixed(tmp_path, capsys):
-    out = tmp_path / "r"
-    text = EXAMPLE.replace("trials = 6", "trials = 2")
-    scene = tmp_path / "ridge.toml"
-    scene.write_text(text)
-    assert main(["run", str(scene), "--engines", "fixed,verilator", "--out", str(out)]) == 0
+    out = _run_two_trials(tmp_path, "fixed,verilator")
     summ = json.loads((out / "run.json").read_text())
     assert summ["kind"] == "ridge" and summ["identical_patterns"]["verilator"]
     assert summ["engines"]["verilator"]["counts"] == summ["engines"]["fixed"]["counts"]
@@ -119,11 +124,7 @@ def test_ridge_scene_on_verilator_equals_fixed(tmp_path, capsys):
 
 
 def test_ridge_report_renders(tmp_path, chromium):
-    out = tmp_path / "r"
-    text = EXAMPLE.replace("trials = 6", "trials = 2")
-    scene = tmp_path / "ridge.toml"
-    scene.write_text(text)
-    assert main(["run", str(scene), "--engines", "golden", "--out", str(out)]) == 0
+    out = _run_two_trials(tmp_path, "golden")
     dom, console = chromium(out / "index.html")
     assert console == [] and "ridge angle" in dom and dom.count("<img ") == 1
     # one engine: no table comparing golden with itself; delays in ms

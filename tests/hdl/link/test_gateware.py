@@ -8,6 +8,7 @@ behind the same protocol rules), and every injected fault must show up in the ri
 import numpy as np
 import pytest
 from amaranth.sim import Simulator
+from link_expect import model_frames, twin_spikes
 
 from cuneate.hdl.link import LinkedTop, link_config
 from cuneate.hdl.link.codec import (COUNTER_NAMES, MSG_COUNTERS, MSG_SPIKES, OP_READ_COUNTERS, OP_STEP, FrameDecoder, Message,
@@ -114,25 +115,13 @@ def test_currents_in_spikes_out_and_every_fault_counted():
 
     # the spike frames equal the model's, byte for byte
     model = LinkModel(lc)
-    ref = model.feed(b"".join(good))
-    model.advance(96)
-    ref += model.feed(b"")
-    ref_msgs = FrameDecoder().feed(ref)
-    assert [(m.tick, m.payload) for m in spikes] == [(m.tick, m.payload) for m in ref_msgs]
+    assert [(m.tick, m.payload) for m in spikes] == model_frames(model, good, 96)
     assert [m.tick for m in spikes] == [0, 32, 64]
     got = [s for m in spikes for s in parse_spikes(m)[2]]
     assert len(got) > 5
 
     # and the model's spikes are the twin's with the currents switched at sweep 64
-    from cuneate.hdl.izhikevich import IzhikevichTwin
-    twin = IzhikevichTwin(lc.core)
-    twin.I[:] = cur0
-    expect = []
-    for k in range(96):
-        if k == 64:
-            twin.I[2:7] = cur1[2:7]
-        expect += [(k, int(n)) for n in np.flatnonzero(twin.sweep())]
-    assert got == expect
+    assert got == twin_spikes(lc.core, cur0, cur1, slice(2, 7), 64, 96)
 
     c = parse_counters(counters[0])
     assert counters[0].tick == 96

@@ -3,6 +3,7 @@ specification (hdl/link/formal_core.py): every frame gets its verdict, no accept
 or reordered; the faults the proof must catch."""
 
 import pytest
+from proof_cases import assert_fails_first_at
 
 from cuneate.hdl.link.formal_core import (MUTANTS, decoder_proof_config, induction_depth,
                                           prove_decoder)
@@ -55,8 +56,7 @@ def test_the_fault_has_a_counterexample_from_reset(mutant, tmp_path):
     check, step = FROM_RESET[mutant]
     r = prove_decoder(decoder_proof_config(), tmp_path, mode="bmc", depth=step + 1,
                       mutant=mutant, timeout_s=2400)
-    assert r.status == "fail" and r.phase == "basecase" and r.step == step, r
-    assert check in r.failed, r
+    assert_fails_first_at(r, check, step)
 
 
 @pytest.mark.long

@@ -18,6 +18,7 @@ import json
 
 import numpy as np
 import pytest
+from link_expect import model_frames, twin_spikes
 
 from cuneate.hdl.izhikevich import IzhikevichTwin
 from cuneate.hdl.link import LinkConfig, link_config, link_verilog
@@ -90,20 +91,9 @@ def test_link_round_trip_and_faults(simulator, build_root):
 
     spikes = [m for m in msgs if m.type == MSG_SPIKES]
     model = LinkModel(lc)
-    ref = model.feed(b"".join(good))
-    model.advance(80)
-    ref += model.feed(b"")
-    assert [(m.tick, m.payload) for m in spikes] == \
-        [(m.tick, m.payload) for m in FrameDecoder().feed(ref)]
-    twin = IzhikevichTwin(lc.core)
-    twin.I[:] = cur0
-    expect = []
-    for k in range(80):
-        if k == 40:
-            twin.I[3:10] = cur1[3:10]
-        expect += [(k, int(n)) for n in np.flatnonzero(twin.sweep())]
+    assert [(m.tick, m.payload) for m in spikes] == model_frames(model, good, 80)
     got = [s for m in spikes for s in parse_spikes(m)[2]]
-    assert got == expect and len(got) > 10
+    assert got == twin_spikes(lc.core, cur0, cur1, slice(3, 10), 40, 80) and len(got) > 10
     assert [parse_spikes(m)[1] for m in spikes] == [16] * 5
 
     counters = [m for m in msgs if m.type == MSG_COUNTERS]
