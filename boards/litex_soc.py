@@ -29,7 +29,8 @@ import subprocess
 import sys
 from pathlib import Path
 
-__all__ = ["CuneatePeripheral", "CuneateSoC", "build_soc", "CUNEATE_BASE", "LITEX_VERSION"]
+__all__ = ["CuneatePeripheral", "CuneateSoC", "build_soc", "write_soc", "soc_around",
+           "ulx3s_platform", "CUNEATE_BASE", "LITEX_VERSION"]
 
 LITEX_VERSION = "2024.12"
 CUNEATE_BASE = 0x40000000
@@ -135,16 +136,13 @@ def CuneateSoC(spec, verilog_dir: Path, sys_clk_hz: float, baud: int = 115200):
     _migen()
     from migen import ClockDomain
     from litex.build.generic_platform import IOStandard, Pins, Subsignal
-    from litex.build.lattice import LatticeECP5Platform
     from litex.gen import LiteXModule
     from litex.soc.cores.clock import ECP5PLL
-    from litex.soc.integration.soc import SoCRegion
-    from litex.soc.integration.soc_core import SoCMini
 
     (_, clk, std), (_, tx, _), (_, rx, _) = _ULX3S_IO
     io = [("clk25", 0, Pins(clk), IOStandard(std)),
           ("serial", 0, Subsignal("tx", Pins(tx)), Subsignal("rx", Pins(rx)), IOStandard(std))]
-    platform = LatticeECP5Platform("LFE5U-85F-6BG381C", io, toolchain="trellis")
+    platform = ulx3s_platform(io)
 
     class _CRG(LiteXModule):
         def __init__(self):
@@ -155,12 +153,27 @@ def CuneateSoC(spec, verilog_dir: Path, sys_clk_hz: float, baud: int = 115200):
             pll.create_clkout(self.cd_sys, sys_clk_hz)
             # nextpnr's target: the oscillator's period (it derives the PLL's output)
             platform.add_period_constraint(clk25, 1e9 / 25e6)
+    return soc_around(platform, _CRG, spec, verilog_dir, sys_clk_hz, baud)
+
+
+def ulx3s_platform(io):
+    """LiteX's ECP5 platform of the ULX3S's device (LFE5U-85F-6, trellis) with ``io``."""
+    from litex.build.lattice import LatticeECP5Platform
+    return LatticeECP5Platform("LFE5U-85F-6BG381C", io, toolchain="trellis")
+
+
+def soc_around(platform, crg, spec, verilog_dir: Path, sys_clk_hz: float, baud: int):
+    """A ``SoCMini`` on ``platform`` (its ``serial`` pins) with the clock domain ``sys`` of
+    ``crg()`` (a LiteX module): UARTBone at ``baud``, the peripheral at
+    :data:`CUNEATE_BASE`."""
+    from litex.soc.integration.soc import SoCRegion
+    from litex.soc.integration.soc_core import SoCMini
 
     class _SoC(SoCMini):
         def __init__(self):
             SoCMini.__init__(self, platform, clk_freq=sys_clk_hz, ident="cuneate",
                              ident_version=False)
-            self.crg = _CRG()
+            self.crg = crg()
             self.add_uartbone(baudrate=baud)
             self.cuneate = CuneatePeripheral(platform, spec, verilog_dir)
             self.bus.add_slave("cuneate", self.cuneate.bus,
@@ -185,24 +198,31 @@ def _tool_shims(build_dir: Path) -> Path:
     return shims
 
 
+def write_soc(soc, out: Path, build_name: str, **verilog) -> None:
+    """LiteX's Builder on ``soc`` without running a toolchain: ``out/gateware/<build_name>.v``
+    (with its build script; ``verilog``: options of LiteX's Verilog converter) and the CSR
+    maps ``out/csr.json`` and ``out/csr.csv``."""
+    from litex.soc.integration.builder import Builder
+    builder = Builder(soc, output_dir=str(out), gateware_dir=str(out / "gateware"),
+                      csr_json=str(out / "csr.json"), csr_csv=str(out / "csr.csv"),
+                      compile_software=False)
+    cwd = os.getcwd()
+    try:
+        builder.build(build_name=build_name, run=False, **verilog)
+    finally:
+        os.chdir(cwd)
+
+
 def build_soc(spec, out: Path, sys_clk_hz: float, run: bool = False, baud: int = 115200
               ) -> dict:
     """Write the SoC's gateware into ``out/gateware`` (the block's Verilog beside it) and the
     CSR map (``out/csr.json``); with ``run`` build the bitstream through the shims. Returns
     ``{"gateware", "csr_json", "bitstream"}``."""
     _migen()
-    from litex.soc.integration.builder import Builder
     out = Path(out).resolve()
     gw = out / "gateware"
     gw.mkdir(parents=True, exist_ok=True)
-    soc = CuneateSoC(spec, gw, sys_clk_hz, baud)
-    builder = Builder(soc, output_dir=str(out), gateware_dir=str(gw),
-                      csr_json=str(out / "csr.json"), compile_software=False)
-    cwd = os.getcwd()
-    try:
-        builder.build(build_name="cuneate_litex", run=False)
-    finally:
-        os.chdir(cwd)
+    write_soc(CuneateSoC(spec, gw, sys_clk_hz, baud), out, "cuneate_litex")
     # the yowasp tools see only the build folder: its sources by their relative names
     ys = gw / "cuneate_litex.ys"
     ys.write_text(ys.read_text().replace(f"read_verilog {gw}/", "read_verilog "))
