@@ -19,6 +19,11 @@ The block's Verilog (``cuneate generate BLOCK --face wishbone``) is added to the
 source; :func:`build_soc` writes the SoC's Verilog and, with ``run``, builds the bitstream
 with the yowasp tools through shims named ``yosys``, ``nextpnr-ecp5`` and ``ecppack`` inside
 the build folder (on the build's PATH only).
+
+Simulated (:mod:`~cuneate.boards.litex_sim`): the same SoC with its clock and reset on pins, on
+Icarus 11 and Verilator 5.048 under cocotb, the host on LiteX's ``CommUART`` over UARTBone
+through a pseudo-terminal; spikes, clamp flags and counters equal the twin. Not run: the
+bitstream on a board, ``litex_server``/``RemoteClient`` (the same protocol over TCP).
 """
 
 from __future__ import annotations

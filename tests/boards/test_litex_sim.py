@@ -2,7 +2,11 @@
 LiteX's own ``CommUART`` over UARTBone (a pseudo-terminal bridged to cocotbext-uart on the
 SoC's serial pins): a small Izhikevich core's currents written through the write CSRs, sweeps
 stepped through the Wishbone face, the spike beats popped from the FIFO, the clamp flags and
-the face's counters read; compared with the block's payload twin."""
+the face's counters read; compared with the block's payload twin.
+
+Default lane (about 5 s on Icarus, 8 s on Verilator with its model cached). Without LiteX
+(the ``synth`` extra) both cases skip, and CI fails on them:
+``scripts/check_simulators_ran.py`` counts a skipped simulator case as not passed."""
 
 import numpy as np
 import pytest
@@ -32,6 +36,7 @@ def _schedule(spec) -> dict:
 @pytest.mark.cocotb
 @pytest.mark.parametrize("simulator", SIMULATORS)
 def test_litex_soc_through_uartbone_equals_the_twin(simulator, build_root):
+    pytest.importorskip("litex", reason="LiteX 2024.12 (the synth extra) is not installed")
     from cuneate.boards.litex_sim import run_sim
     spec = _spec()
     sched = _schedule(spec)
