@@ -62,13 +62,38 @@ def write_sim_soc(spec, out: Path, sys_clk_hz: float = SIM_CLOCK_HZ,
     write_soc(soc_around(platform, _CRG, spec, gw, sys_clk_hz, baud), out, SIM_TOP,
               regular_comb=False)
     top = gw / f"{SIM_TOP}.v"
-    top.write_text(re.sub(r" on \d{4}-\d\d-\d\d \d\d:\d\d:\d\d", "", top.read_text()))
+    top.write_text(_canonical(top.read_text()))
     if lowered:
         from ..hdl.flow.verilog import verilog_text
         from ..hdl.wishbone import WishboneTop
         (gw / f"{_BLOCK}.v").write_text(verilog_text(WishboneTop(spec), _BLOCK, lowered=True))
     return {"sources": [gw / f"{_BLOCK}.v", top], "csr_csv": out / "csr.csv",
             "csr_json": out / "csr.json", "baud": baud}
+
+
+def _canonical(text: str) -> str:
+    """LiteX's Verilog with the same bytes for the same design (the simulator cache's key):
+    the banner's dates removed and the combinational processes, which LiteX's simulation
+    flavour emits in an order that changes from run to run, sorted (the order of concurrent
+    processes means nothing in Verilog)."""
+    text = re.sub(r"(?m)^(//.*?)\s*(on )?\d{4}-\d\d-\d\d \d\d:\d\d:\d\d", r"\1", text)
+    head, rest = text.split("// Combinatorial Logic\n", 1)
+    rule, rest = rest.split("\n", 1)
+    comb, tail = rest.split("//" + "-" * 78 + "\n// Synchronous Logic\n", 1)
+    items, cur = [], []
+    for line in comb.splitlines(keepends=True):
+        if not cur and not line.strip():
+            continue
+        cur.append(line)
+        if (cur[0].startswith("always") and line == "end\n") or \
+                (cur[0].startswith("assign") and line.rstrip().endswith(";")):
+            items.append("".join(cur))
+            cur = []
+    if cur or sorted("".join(items).splitlines()) != sorted(
+            x for x in comb.splitlines() if x.strip()):
+        raise ValueError("LiteX's combinational section not in the form expected")
+    return (head + "// Combinatorial Logic\n" + rule + "\n" + "\n".join(sorted(items))
+            + "\n//" + "-" * 78 + "\n// Synchronous Logic\n" + tail)
 
 
 def _pack(info, addr: int, raw: int) -> int:

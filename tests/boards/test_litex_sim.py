@@ -4,7 +4,8 @@ SoC's serial pins): a small Izhikevich core's currents written through the write
 stepped through the Wishbone face, the spike beats popped from the FIFO, the clamp flags and
 the face's counters read; compared with the block's payload twin.
 
-Default lane (about 5 s on Icarus, 8 s on Verilator with its model cached). Without LiteX
+Default lane (about 5 to 8 s on Icarus, 3 s on Verilator with its model cached, 20 s
+without). Without LiteX
 (the ``synth`` extra) both cases skip, and CI fails on them:
 ``scripts/check_simulators_ran.py`` counts a skipped simulator case as not passed."""
 
