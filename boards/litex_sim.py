@@ -20,7 +20,7 @@ import threading
 import time
 from pathlib import Path
 
-from .litex_soc import CUNEATE_BASE, _migen, soc_around, ulx3s_platform, write_soc
+from .litex_soc import CUNEATE_BASE, require_litex, soc_around, ulx3s_platform, write_soc
 
 __all__ = ["write_sim_soc", "host_session", "run_sim", "SIM_TOP", "CLOCKS_PER_BIT",
            "SIM_CLOCK_HZ"]
@@ -38,7 +38,7 @@ def write_sim_soc(spec, out: Path, sys_clk_hz: float = SIM_CLOCK_HZ,
     removed so that the same design has the same bytes, and the block behind the Wishbone
     face; ``lowered``: the block as the yosys-lowered netlist, for Icarus 11) and the CSR
     maps. Returns ``{"sources", "csr_csv", "csr_json", "baud"}``."""
-    _migen()
+    require_litex()
     from migen import ClockDomain
     from litex.build.generic_platform import Pins, Subsignal
     from litex.gen import LiteXModule
@@ -190,7 +190,7 @@ def _host_thread(files: dict, soc: dict, spec, schedule, n_sweeps, result: dict,
 
 
 def run_sim(simulator: str, spec, schedule: dict, n_sweeps: int, build_dir: Path,
-            wall_s: float = 600.0) -> dict:
+            wall_s: float = 120.0) -> dict:
     """The SoC of ``spec`` on ``simulator`` with :func:`host_session` on LiteX's
     ``CommUART``: the session's result, with ``"bench"`` (the bench's report: bytes each
     way, cycles, bits pumped) and ``"sources"``. Raises ``RuntimeError`` naming the host's

@@ -35,7 +35,7 @@ import sys
 from pathlib import Path
 
 __all__ = ["CuneatePeripheral", "CuneateSoC", "build_soc", "write_soc", "soc_around",
-           "ulx3s_platform", "CUNEATE_BASE", "LITEX_VERSION"]
+           "ulx3s_platform", "require_litex", "CUNEATE_BASE", "LITEX_VERSION"]
 
 LITEX_VERSION = "2024.12"
 CUNEATE_BASE = 0x40000000
@@ -44,7 +44,8 @@ _ULX3S_IO = (("clk25", "G2", "LVCMOS33"), ("serial_tx", "L4", "LVCMOS33"),
              ("serial_rx", "M1", "LVCMOS33"))
 
 
-def _migen():
+def require_litex():
+    """Raise ``ImportError`` naming the pinned LiteX unless LiteX and migen import."""
     try:
         import litex  # noqa: F401
         import migen  # noqa: F401
@@ -58,7 +59,7 @@ class CuneatePeripheral:
 
     def __new__(cls, platform, spec, verilog_dir: Path, name: str = "cuneate_wb",
                 spike_fifo_depth: int = 256):
-        _migen()
+        require_litex()
         from migen import ClockSignal, If, Instance, ResetSignal, Signal
         from litex.gen import LiteXModule
         from litex.soc.interconnect import stream, wishbone
@@ -138,7 +139,7 @@ class CuneatePeripheral:
 def CuneateSoC(spec, verilog_dir: Path, sys_clk_hz: float, baud: int = 115200):
     """The ULX3S SoC: a PLL from 25 MHz to ``sys_clk_hz`` (the clock ``spec`` was sized
     for), UARTBone at ``baud`` on the FT231X, the peripheral at :data:`CUNEATE_BASE`."""
-    _migen()
+    require_litex()
     from migen import ClockDomain
     from litex.build.generic_platform import IOStandard, Pins, Subsignal
     from litex.gen import LiteXModule
@@ -223,7 +224,7 @@ def build_soc(spec, out: Path, sys_clk_hz: float, run: bool = False, baud: int =
     """Write the SoC's gateware into ``out/gateware`` (the block's Verilog beside it) and the
     CSR map (``out/csr.json``); with ``run`` build the bitstream through the shims. Returns
     ``{"gateware", "csr_json", "bitstream"}``."""
-    _migen()
+    require_litex()
     out = Path(out).resolve()
     gw = out / "gateware"
     gw.mkdir(parents=True, exist_ok=True)

@@ -5,8 +5,7 @@ stepped through the Wishbone face, the spike beats popped from the FIFO, the cla
 the face's counters read; compared with the block's payload twin.
 
 Default lane (about 5 to 8 s on Icarus, 3 s on Verilator with its model cached, 20 s
-without). Without LiteX
-(the ``synth`` extra) both cases skip, and CI fails on them:
+without). Without LiteX (the ``synth`` extra) both cases skip, and CI fails on them:
 ``scripts/check_simulators_ran.py`` counts a skipped simulator case as not passed."""
 
 import numpy as np
