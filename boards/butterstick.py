@@ -17,12 +17,13 @@ from __future__ import annotations
 import math
 
 from amaranth import Elaboratable, Module, Signal
-from amaranth.lib import io
+from amaranth.lib import io, wiring
+from amaranth.lib.wiring import Out
 
 from .pll import ecp5_pll
 from .top import open_flow_target, oscillator_plans
 
-__all__ = ["TARGET", "VccioControl", "vccio_duty"]
+__all__ = ["TARGET", "VccioControl", "VccioLogic", "vccio_duty", "BUTTERSTICK_IO"]
 
 #: the SYZYGY regulators' feedback network (ButterStick r1.0 schematic, as amaranth-boards
 #: documents it): feedback reference (V), injection, feedback and set resistors (ohm), and the
@@ -42,28 +43,44 @@ def vccio_duty(vccio: float) -> float:
     return vctl / VDAC
 
 
-class VccioControl(Elaboratable):
-    """Three first-order sigma-delta outputs at :func:`vccio_duty` of ``vccio`` and the
-    regulators' enable, raised ``4 RC + 1 ms`` after the domain leaves reset."""
+class VccioLogic(wiring.Component):
+    """The logic of :class:`VccioControl` without the pins (``sync`` domain): ``pdm``, three
+    first-order sigma-delta outputs at :func:`vccio_duty` of ``vccio``, and ``en``, raised
+    ``4 RC + 1 ms`` after the domain leaves reset (also the LiteX SoC's,
+    :mod:`~cuneate.boards.litex_soc`)."""
 
-    def __init__(self, pins, clock_hz: float, vccio: float = 3.3):
-        self.pins, self.clock_hz, self.vccio = pins, clock_hz, vccio
+    def __init__(self, clock_hz: float, vccio: float = 3.3):
+        self.clock_hz, self.vccio = clock_hz, vccio
+        super().__init__({"pdm": Out(3), "en": Out(1)})
 
     def elaborate(self, platform):
         m = Module()
         bits = 10
         step = round(vccio_duty(self.vccio) * (1 << bits))
         boot = int(self.clock_hz * (4 * RC_S + 1e-3))
-        m.submodules.pdm = pdm = io.Buffer("o", self.pins.pdm)
-        m.submodules.en = en = io.Buffer("o", self.pins.en)
         for i in range(3):
             acc = Signal(bits + 1, name=f"sd{i}")
             m.d.sync += acc.eq(acc[:bits] + step)
-            m.d.comb += pdm.o[i].eq(acc[bits])
+            m.d.comb += self.pdm[i].eq(acc[bits])
         count = Signal(range(boot + 1))
         with m.If(count < boot):
             m.d.sync += count.eq(count + 1)
-        m.d.comb += en.o.eq(count == boot)
+        m.d.comb += self.en.eq(count == boot)
+        return m
+
+
+class VccioControl(Elaboratable):
+    """:class:`VccioLogic` on the board's ``vccio_ctrl`` pins."""
+
+    def __init__(self, pins, clock_hz: float, vccio: float = 3.3):
+        self.pins, self.clock_hz, self.vccio = pins, clock_hz, vccio
+
+    def elaborate(self, platform):
+        m = Module()
+        m.submodules.logic = logic = VccioLogic(self.clock_hz, self.vccio)
+        m.submodules.pdm = pdm = io.Buffer("o", self.pins.pdm)
+        m.submodules.en = en = io.Buffer("o", self.pins.en)
+        m.d.comb += [pdm.o.eq(logic.pdm), en.o.eq(logic.en)]
         return m
 
 
@@ -76,12 +93,19 @@ def _with_vccio(pll, clock_hz):
     return build
 
 
+#: the pins a LiteX SoC takes (amaranth-boards' file and the adapter's pins above): the 30 MHz
+#: oscillator, the UART on SYZYGY 0, the SYZYGY regulators' control
+BUTTERSTICK_IO = {"clk30": "B12", "serial_tx": "G2", "serial_rx": "J3",
+                  "vccio_pdm": "V1 E11 T2", "vccio_en": "E12"}
+
+
 def platform():
     from amaranth.build import Attrs
     from amaranth_boards.butterstick import ButterStickPlatform
     from amaranth_boards.resources import UARTResource
     p = ButterStickPlatform()
-    p.add_resources([UARTResource(0, tx="G2", rx="J3",
+    pins = BUTTERSTICK_IO
+    p.add_resources([UARTResource(0, tx=pins["serial_tx"], rx=pins["serial_rx"],
                                   attrs=Attrs(IO_TYPE="LVCMOS33", PULLMODE="UP"))])
     return p
 

@@ -1,5 +1,6 @@
 """The block behind the Wishbone face as a LiteX peripheral (:class:`CuneatePeripheral`) and a
-small LiteX SoC for the ULX3S around it (:class:`CuneateSoC`): no CPU, the host on the board's
+small LiteX SoC around it for the ULX3S (:class:`CuneateSoC`) and the ButterStick
+(:class:`ButterStickSoC`, Verilog checked, no bitstream run): no CPU, the host on the board's
 UART through LiteX's UARTBone bridge (``litex.tools.litex_client.RemoteClient`` on the PC).
 
 Pinned: LiteX 2024.12 with migen 0.10 (both from PyPI; ``pip install "litex==2024.12"``).
@@ -19,6 +20,11 @@ The block's Verilog (``cuneate generate BLOCK --face wishbone``) is added to the
 source; :func:`build_soc` writes the SoC's Verilog and, with ``run``, builds the bitstream
 with the yowasp tools through shims named ``yosys``, ``nextpnr-ecp5`` and ``ecppack`` inside
 the build folder (on the build's PATH only).
+
+Simulated (:mod:`~cuneate.boards.litex_sim`): the same SoC with its clock and reset on pins, on
+Icarus 11 and Verilator 5.048 under cocotb, the host on LiteX's ``CommUART`` over UARTBone
+through a pseudo-terminal; spikes, clamp flags and counters equal the twin. Not run: the
+bitstream on a board, ``litex_server``/``RemoteClient`` (the same protocol over TCP).
 """
 
 from __future__ import annotations
@@ -29,7 +35,9 @@ import subprocess
 import sys
 from pathlib import Path
 
-__all__ = ["CuneatePeripheral", "CuneateSoC", "build_soc", "CUNEATE_BASE", "LITEX_VERSION"]
+__all__ = ["CuneatePeripheral", "CuneateSoC", "ButterStickSoC", "SOC_BOARDS", "build_soc",
+           "write_soc", "soc_around", "ulx3s_platform", "require_litex", "CUNEATE_BASE",
+           "LITEX_VERSION"]
 
 LITEX_VERSION = "2024.12"
 CUNEATE_BASE = 0x40000000
@@ -38,7 +46,8 @@ _ULX3S_IO = (("clk25", "G2", "LVCMOS33"), ("serial_tx", "L4", "LVCMOS33"),
              ("serial_rx", "M1", "LVCMOS33"))
 
 
-def _migen():
+def require_litex():
+    """Raise ``ImportError`` naming the pinned LiteX unless LiteX and migen import."""
     try:
         import litex  # noqa: F401
         import migen  # noqa: F401
@@ -52,7 +61,7 @@ class CuneatePeripheral:
 
     def __new__(cls, platform, spec, verilog_dir: Path, name: str = "cuneate_wb",
                 spike_fifo_depth: int = 256):
-        _migen()
+        require_litex()
         from migen import ClockSignal, If, Instance, ResetSignal, Signal
         from litex.gen import LiteXModule
         from litex.soc.interconnect import stream, wishbone
@@ -132,35 +141,92 @@ class CuneatePeripheral:
 def CuneateSoC(spec, verilog_dir: Path, sys_clk_hz: float, baud: int = 115200):
     """The ULX3S SoC: a PLL from 25 MHz to ``sys_clk_hz`` (the clock ``spec`` was sized
     for), UARTBone at ``baud`` on the FT231X, the peripheral at :data:`CUNEATE_BASE`."""
-    _migen()
-    from migen import ClockDomain
+    require_litex()
     from litex.build.generic_platform import IOStandard, Pins, Subsignal
-    from litex.build.lattice import LatticeECP5Platform
-    from litex.gen import LiteXModule
-    from litex.soc.cores.clock import ECP5PLL
-    from litex.soc.integration.soc import SoCRegion
-    from litex.soc.integration.soc_core import SoCMini
 
     (_, clk, std), (_, tx, _), (_, rx, _) = _ULX3S_IO
     io = [("clk25", 0, Pins(clk), IOStandard(std)),
           ("serial", 0, Subsignal("tx", Pins(tx)), Subsignal("rx", Pins(rx)), IOStandard(std))]
-    platform = LatticeECP5Platform("LFE5U-85F-6BG381C", io, toolchain="trellis")
+    platform = ulx3s_platform(io)
+    return soc_around(platform, _pll_crg(platform, "clk25", 25e6, sys_clk_hz), spec,
+                      verilog_dir, sys_clk_hz, baud)
+
+
+def _pll_crg(platform, osc: str, osc_hz: float, sys_clk_hz: float, more=None):
+    """A CRG (a LiteX module class): an ECP5 PLL from the oscillator pin ``osc`` to the
+    domain ``sys`` at ``sys_clk_hz``; ``more(crg)`` adds to it."""
+    from migen import ClockDomain
+    from litex.gen import LiteXModule
+    from litex.soc.cores.clock import ECP5PLL
 
     class _CRG(LiteXModule):
         def __init__(self):
             self.cd_sys = ClockDomain()
             self.pll = pll = ECP5PLL()
-            clk25 = platform.request("clk25")
-            pll.register_clkin(clk25, 25e6)
+            clk = platform.request(osc)
+            pll.register_clkin(clk, osc_hz)
             pll.create_clkout(self.cd_sys, sys_clk_hz)
             # nextpnr's target: the oscillator's period (it derives the PLL's output)
-            platform.add_period_constraint(clk25, 1e9 / 25e6)
+            platform.add_period_constraint(clk, 1e9 / osc_hz)
+            if more is not None:
+                more(self)
+    return _CRG
+
+
+def ButterStickSoC(spec, verilog_dir: Path, sys_clk_hz: float, baud: int = 115200):
+    """The ButterStick SoC (ECP5 LFE5UM5G-85F-8): a PLL from the 30 MHz oscillator to
+    ``sys_clk_hz``, UARTBone at ``baud`` on an adapter on SYZYGY 0 (the pins of
+    :data:`~cuneate.boards.butterstick.BUTTERSTICK_IO`), the SYZYGY banks held at 3.3 V by
+    :class:`~cuneate.boards.butterstick.VccioLogic` (its Verilog a source, ``cuneate_vccio``),
+    the peripheral at :data:`CUNEATE_BASE`."""
+    require_litex()
+    from migen import ClockSignal, Instance, ResetSignal
+    from litex.build.generic_platform import IOStandard, Misc, Pins, Subsignal
+    from litex.build.lattice import LatticeECP5Platform
+
+    from ..hdl.flow.verilog import verilog_text
+    from .butterstick import BUTTERSTICK_IO as pins, VccioLogic
+    std = IOStandard("LVCMOS33")
+    io = [("clk30", 0, Pins(pins["clk30"]), std),
+          ("serial", 0, Subsignal("tx", Pins(pins["serial_tx"])),
+           Subsignal("rx", Pins(pins["serial_rx"]), Misc("PULLMODE=UP")), std),
+          ("vccio_ctrl", 0, Subsignal("pdm", Pins(pins["vccio_pdm"])),
+           Subsignal("en", Pins(pins["vccio_en"])), std)]
+    platform = LatticeECP5Platform("LFE5UM5G-85F-8BG381C", io, toolchain="trellis")
+    vccio = Path(verilog_dir) / "cuneate_vccio.v"
+    vccio.write_text(verilog_text(VccioLogic(sys_clk_hz), "cuneate_vccio"))
+    platform.add_source(str(vccio))
+
+    def bank_control(crg):
+        ctrl = platform.request("vccio_ctrl")
+        crg.specials += Instance("cuneate_vccio", i_clk=ClockSignal("sys"),
+                                 i_rst=ResetSignal("sys"), o_pdm=ctrl.pdm, o_en=ctrl.en)
+    crg = _pll_crg(platform, "clk30", 30e6, sys_clk_hz, bank_control)
+    return soc_around(platform, crg, spec, verilog_dir, sys_clk_hz, baud)
+
+
+#: the boards :func:`build_soc` builds for
+SOC_BOARDS = {"ulx3s": CuneateSoC, "butterstick": ButterStickSoC}
+
+
+def ulx3s_platform(io):
+    """LiteX's ECP5 platform of the ULX3S's device (LFE5U-85F-6, trellis) with ``io``."""
+    from litex.build.lattice import LatticeECP5Platform
+    return LatticeECP5Platform("LFE5U-85F-6BG381C", io, toolchain="trellis")
+
+
+def soc_around(platform, crg, spec, verilog_dir: Path, sys_clk_hz: float, baud: int):
+    """A ``SoCMini`` on ``platform`` (its ``serial`` pins) with the clock domain ``sys`` of
+    ``crg()`` (a LiteX module): UARTBone at ``baud``, the peripheral at
+    :data:`CUNEATE_BASE`."""
+    from litex.soc.integration.soc import SoCRegion
+    from litex.soc.integration.soc_core import SoCMini
 
     class _SoC(SoCMini):
         def __init__(self):
             SoCMini.__init__(self, platform, clk_freq=sys_clk_hz, ident="cuneate",
                              ident_version=False)
-            self.crg = _CRG()
+            self.crg = crg()
             self.add_uartbone(baudrate=baud)
             self.cuneate = CuneatePeripheral(platform, spec, verilog_dir)
             self.bus.add_slave("cuneate", self.cuneate.bus,
@@ -185,24 +251,32 @@ def _tool_shims(build_dir: Path) -> Path:
     return shims
 
 
-def build_soc(spec, out: Path, sys_clk_hz: float, run: bool = False, baud: int = 115200
-              ) -> dict:
-    """Write the SoC's gateware into ``out/gateware`` (the block's Verilog beside it) and the
-    CSR map (``out/csr.json``); with ``run`` build the bitstream through the shims. Returns
-    ``{"gateware", "csr_json", "bitstream"}``."""
-    _migen()
+def write_soc(soc, out: Path, build_name: str, **verilog) -> None:
+    """LiteX's Builder on ``soc`` without running a toolchain: ``out/gateware/<build_name>.v``
+    (with its build script; ``verilog``: options of LiteX's Verilog converter) and the CSR
+    maps ``out/csr.json`` and ``out/csr.csv``."""
     from litex.soc.integration.builder import Builder
+    builder = Builder(soc, output_dir=str(out), gateware_dir=str(out / "gateware"),
+                      csr_json=str(out / "csr.json"), csr_csv=str(out / "csr.csv"),
+                      compile_software=False)
+    cwd = os.getcwd()
+    try:
+        builder.build(build_name=build_name, run=False, **verilog)
+    finally:
+        os.chdir(cwd)
+
+
+def build_soc(spec, out: Path, sys_clk_hz: float, run: bool = False, baud: int = 115200,
+              board: str = "ulx3s") -> dict:
+    """Write the SoC of ``board`` (a key of :data:`SOC_BOARDS`) into ``out/gateware`` (the
+    block's Verilog beside it) and the CSR map (``out/csr.json``); with ``run`` build the
+    bitstream through the shims. Returns
+    ``{"gateware", "csr_json", "bitstream"}``."""
+    require_litex()
     out = Path(out).resolve()
     gw = out / "gateware"
     gw.mkdir(parents=True, exist_ok=True)
-    soc = CuneateSoC(spec, gw, sys_clk_hz, baud)
-    builder = Builder(soc, output_dir=str(out), gateware_dir=str(gw),
-                      csr_json=str(out / "csr.json"), compile_software=False)
-    cwd = os.getcwd()
-    try:
-        builder.build(build_name="cuneate_litex", run=False)
-    finally:
-        os.chdir(cwd)
+    write_soc(SOC_BOARDS[board](spec, gw, sys_clk_hz, baud), out, "cuneate_litex")
     # the yowasp tools see only the build folder: its sources by their relative names
     ys = gw / "cuneate_litex.ys"
     ys.write_text(ys.read_text().replace(f"read_verilog {gw}/", "read_verilog "))

@@ -44,3 +44,27 @@ def test_litex_soc_bitstream_through_the_yowasp_shims(tmp_path):
     fmax = [line for line in log.splitlines() if "Max frequency" in line]
     print(fmax[-1])
     assert "PASS at 50.00 MHz" in fmax[-1]          # after routing, at the SoC's clock
+
+
+def test_litex_soc_for_the_butterstick_writes_its_pins_pll_and_bank_control(tmp_path):
+    """Verilog only (no bitstream run here): the ButterStick's pins (amaranth-boards' file and
+    the adapter on SYZYGY 0), the PLL from 30 MHz, the SYZYGY banks' control as a source."""
+    spec = axi_spec(IzhikevichConfig(n_neurons=64, clock_hz=60e6, update_hz=16e3))
+    r = build_soc(spec, tmp_path, 60e6, board="butterstick")
+    gw = Path(r["gateware"])
+    csr = json.loads(Path(r["csr_json"]).read_text())
+    assert csr["memories"]["cuneate"]["base"] == CUNEATE_BASE
+    top = (gw / "cuneate_litex.v").read_text()
+    assert "cuneate_wb cuneate_wb(" in top and "cuneate_vccio cuneate_vccio(" in top
+    assert "EHXPLLL" in top and "uartbone" in top
+    lpf = (gw / "cuneate_litex.lpf").read_text()
+    sites = {"clk30": "B12", "serial_tx": "G2", "serial_rx": "J3", "vccio_ctrl_en": "E12",
+             "vccio_ctrl_pdm[0]": "V1", "vccio_ctrl_pdm[1]": "E11", "vccio_ctrl_pdm[2]": "T2"}
+    for port, site in sites.items():
+        assert f'LOCATE COMP "{port}" SITE "{site}";' in lpf
+    assert 'FREQUENCY PORT "clk30" 30.0 MHz;' in lpf
+    reads = [line.split()[-1] for line in (gw / "cuneate_litex.ys").read_text().splitlines()
+             if line.startswith("read_verilog")]
+    assert sorted(reads) == ["cuneate_litex.v", "cuneate_vccio.v", "cuneate_wb.v"]
+    sh = (gw / "build_cuneate_litex.sh").read_text()
+    assert "--um5g-85k" in sh and "--speed 8" in sh and "CABGA381" in sh
