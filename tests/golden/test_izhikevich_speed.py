@@ -27,8 +27,9 @@ def assert_same(ref, fast):
     assert all(np.array_equal(a, b) for a, b in zip(ref.spike_steps, fast.spike_steps))
 
 
-@pytest.mark.parametrize("scheme", ["euler", "izhikevich"])
-# float64 in the default lane, float32 (its own compiled loops) in the long lane
+# float64 with the Izhikevich scheme in the default lane; Euler and float32 (its own compiled
+# loops) in the long lane
+@pytest.mark.parametrize("scheme", [pytest.param("euler", marks=pytest.mark.long), "izhikevich"])
 @pytest.mark.parametrize("dtype", [np.float64, pytest.param(np.float32, marks=pytest.mark.long)])
 def test_same_spikes_and_state_mixed_sets_all_current_forms(scheme, dtype):
     n, steps = 40, 3000

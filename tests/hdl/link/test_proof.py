@@ -26,15 +26,13 @@ def test_every_mutant_has_an_expectation():
     assert set(EXPECTED) == set(MUTANTS) == set(FROM_RESET)
 
 
+@pytest.mark.long
 def test_the_decoder_meets_the_wire_format_for_every_byte_stream(tmp_path):
     """k-induction (about 25 s with yices): every byte stream of every length, any receive-
     buffer timing, any payload back-pressure, any block and tick activity."""
     lcfg = decoder_proof_config()
     r = prove_decoder(lcfg, tmp_path, mode="prove", timeout_s=900)
     assert r.passed and r.mode == "prove" and r.depth == induction_depth(lcfg), r
-
-
-#: the default lane's mutant (the cheapest); the other two run in the long lane
 
 
 @pytest.mark.long
