@@ -1,0 +1,35 @@
+"""The Izhikevich arithmetic of a block's target neurons (the coincidence detector's targets,
+the learning layer's CNs): one core configuration, its tick external, of at least
+:func:`~cuneate.hdl.izhikevich.config.min_neurons` neurons (the targets first, the padding on
+parameter set 0), proven for the targets' current range."""
+
+from __future__ import annotations
+
+from ..lib.config import ConfigError
+from .config import IzhikevichConfig, min_neurons
+
+__all__ = ["target_arithmetic"]
+
+
+def target_arithmetic(cfg, what: str, current_format, current_range
+                      ) -> tuple[IzhikevichConfig, list[int]]:
+    """``(iz, target_sets)``: the arithmetic of ``cfg``'s targets (its ``n_targets``,
+    ``param_sets``, ``target_sets``, ``update_hz``, ``operand_width``, ``rounding``) taking
+    currents in ``current_format`` within ``current_range``, and each target's parameter set.
+    A refusal of the core's configuration is ``"<what>' Izhikevich arithmetic refused: ..."``."""
+    M = cfg.n_targets
+    ts = [0] * M if cfg.target_sets is None else list(cfg.target_sets)
+    if len(ts) != M or any(not 0 <= x < len(cfg.param_sets) for x in ts):
+        raise ConfigError(f"target_sets needs {M} indices into the {len(cfg.param_sets)} "
+                          f"parameter set(s)")
+    n_iz = max(M, min_neurons())
+    try:
+        iz = IzhikevichConfig(
+            n_neurons=n_iz, clock_hz=cfg.update_hz * n_iz, update_hz=cfg.update_hz,
+            param_sets=tuple(cfg.param_sets), neuron_sets=ts + [0] * (n_iz - M),
+            operand_width=cfg.operand_width, rounding=cfg.rounding,
+            current_format=current_format, current_range=current_range,
+            tick_source="external")
+    except ConfigError as exc:
+        raise ConfigError(f"{what}' Izhikevich arithmetic refused: {exc}") from None
+    return iz, ts
