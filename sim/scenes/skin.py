@@ -184,7 +184,7 @@ def core_keywords(scene) -> dict:
 def run(scene, engines: list[str] | None = None, build_dir: Path | None = None,
         progress: bool = False, log=None) -> SkinSceneRun:
     """Run a taxel-skin scene on its engines (or ``engines``)."""
-    from .runner import agreement
+    from .runner import agreement, run_engines
     say = log or (lambda msg: None)
     st, sen, fe, hw = scene["stimulus"], scene["sensor"], scene["frontend"], scene["hardware"]
     rows, cols = sen["grid"]
@@ -199,28 +199,15 @@ def run(scene, engines: list[str] | None = None, build_dir: Path | None = None,
     protocol = {"widths_ms": st["press_widths_ms"], "amplitudes": st["press_amplitudes_N"],
                 "base_amplitude": st["press_base_amplitude_N"],
                 "base_width_ms": st["press_base_width_ms"], "gap_ms": st["press_gap_ms"]}
-    results, timing = {}, {"engines_s": {}}
-    bar = None
-    if progress:
-        from tqdm import tqdm
-        bar = tqdm(total=len(names), desc="engines", unit="engine", leave=False)
     t_all = time.perf_counter()
-    for e in names:
-        t0 = time.perf_counter()
-        bd = (Path(build_dir) / e) if build_dir and ENGINES[e].background else None
-        results[e] = skin_grid(e, rows, cols, st["press_taxel"], fe["force_offset_mV"],
-                               fe["force_gain_mV_per_N"], hw["update_hz"], protocol,
-                               tuple(st["press_spread"]), core, build_dir=bd,
-                               sample_hz=sen["sample_rate_hz"],
-                               duration_ms=scene["scene"]["duration_ms"])
-        timing["engines_s"][e] = time.perf_counter() - t0
-        say(f"engine {e}: {int(results[e].counts.sum())} spikes "
-            f"({timing['engines_s'][e]:.1f} s)")
-        if bar:
-            bar.update(1)
-    if bar:
-        bar.close()
-    timing["engines_wall_s"] = time.perf_counter() - t_all
+    results, seconds = run_engines(
+        names, lambda e, bd: skin_grid(
+            e, rows, cols, st["press_taxel"], fe["force_offset_mV"], fe["force_gain_mV_per_N"],
+            hw["update_hz"], protocol, tuple(st["press_spread"]), core, build_dir=bd,
+            sample_hz=sen["sample_rate_hz"], duration_ms=scene["scene"]["duration_ms"]),
+        build_dir, lambda e, r, s: say(f"engine {e}: {int(r.counts.sum())} spikes ({s:.1f} s)"),
+        progress)
+    timing = {"engines_s": seconds, "engines_wall_s": time.perf_counter() - t_all}
     ref = "fixed" if "fixed" in results else names[0]
     agreement = {f"{e} vs {ref}": agreement(results[e].spikes_ms, results[ref].spikes_ms,
                                              cfg.dt_ms)
