@@ -24,14 +24,13 @@ supported FPGA (:data:`MAX_HISTORY_BITS`), and anything the Izhikevich configura
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
-from typing import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
 from ...golden import coincidence as gcun
-from ..izhikevich.config import CLAMP_KINDS, IzhikevichConfig
-from ..izhikevich.targets import target_arithmetic
+from ..izhikevich.config import CLAMP_KINDS
+from ..izhikevich.targets import TargetOptions, target_arithmetic
 from ..lib.config import (MAX_BLOCK_RAM_BITS, ConfigError, check_rounding, check_tick_source,
                           int_bits_for, refusing, whole_cycles_per_tick)
 from ..lib.fixed import QFormat
@@ -51,7 +50,7 @@ MAX_HISTORY_BITS = MAX_BLOCK_RAM_BITS
 
 
 @dataclass
-class CoincidenceConfig:
+class CoincidenceConfig(TargetOptions):
     """A coincidence detector: ``n_targets`` Izhikevich neurons driven by delayed, weighted,
     bi-exponential PSPs of ``n_sources`` afferents.
 
@@ -89,18 +88,9 @@ class CoincidenceConfig:
     max_delay_ticks: int = 513
     tau_rise_ms: float = gcun.TAU_RISE_MS
     tau_decay_ms: float = gcun.TAU_DECAY_MS
-    param_sets: Sequence = ("RS",)
-    target_sets: Sequence[int] | None = None
-    clock_hz: float = 40e6
     update_hz: float = 16e3
-    tick_source: str = "external"
     weight_bits: int = 12
     trace_frac_bits: int = 16
-    max_decay_error: float = 1e-2
-    operand_width: int = 18
-    rounding: str = "nearest"
-
-    iz: IzhikevichConfig = field(init=False, repr=False)
 
     def __post_init__(self):
         with refusing("coincidence detector"):

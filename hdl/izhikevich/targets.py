@@ -1,14 +1,35 @@
-"""The Izhikevich arithmetic of a block's target neurons (the coincidence detector's targets,
-the learning layer's CNs): one core configuration, its tick external, of at least
-:func:`~cuneate.hdl.izhikevich.config.min_neurons` neurons (the targets first, the padding on
-parameter set 0), proven for the targets' current range."""
+"""The options and the Izhikevich arithmetic of a block's target neurons (the coincidence
+detector's targets, the learning layer's CNs): one core configuration, its tick external, of at
+least :func:`~cuneate.hdl.izhikevich.config.min_neurons` neurons (the targets first, the
+padding on parameter set 0), proven for the targets' current range."""
 
 from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Sequence
 
 from ..lib.config import ConfigError
 from .config import IzhikevichConfig, min_neurons
 
-__all__ = ["target_arithmetic"]
+__all__ = ["TargetOptions", "target_arithmetic"]
+
+
+@dataclass(kw_only=True)
+class TargetOptions:
+    """The options every block of Izhikevich target neurons takes (keywords only; the block's
+    docstring states them): ``param_sets``, ``target_sets``, ``clock_hz``, ``tick_source``,
+    ``operand_width``, ``rounding``, ``max_decay_error``; ``iz`` is derived, the targets'
+    arithmetic (:func:`target_arithmetic`)."""
+
+    param_sets: Sequence = ("RS",)
+    target_sets: Sequence[int] | None = None
+    clock_hz: float = 40e6
+    tick_source: str = "external"
+    operand_width: int = 18
+    rounding: str = "nearest"
+    max_decay_error: float = 1e-2
+
+    iz: IzhikevichConfig = field(init=False, repr=False)
 
 
 def target_arithmetic(cfg, what: str, current_format, current_range

@@ -36,14 +36,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Sequence
 
 import numpy as np
 
 from ...golden.aidp import AidpParams, sigmoid
 from ..izhikevich.config import CLAMP_KINDS as IZ_CLAMP_KINDS
-from ..izhikevich.config import IzhikevichConfig
-from ..izhikevich.targets import target_arithmetic
+from ..izhikevich.targets import TargetOptions, target_arithmetic
 from ..lib.config import (ConfigError, check_rounding, check_tick_source, int_bits_for, refusing,
                           whole_cycles_per_tick)
 from ..lib.fixed import FixedConstant, QFormat
@@ -74,7 +72,7 @@ OPS = {"integrate": 0, "read": 1, "learn": 2, "write": 3}
 
 
 @dataclass
-class PlasticityConfig:
+class PlasticityConfig(TargetOptions):
     """A learning cuneate layer (see the module docstring).
 
     Parameters
@@ -116,22 +114,13 @@ class PlasticityConfig:
     tau_syn_ms: float = 6.4
     g_inh: float = 0.3
     current_limit: float = 64.0
-    param_sets: Sequence = ("RS",)
-    target_sets: Sequence[int] | None = None
-    clock_hz: float = 40e6
     update_hz: float = 2000.0
-    tick_source: str = "external"
     weight_bits: int = 16
     trace_frac_bits: int = 13
     drive_int_bits: int = 20
     drive_frac_bits: int = 8
     sigmoid_bits: int = 7
-    operand_width: int = 18
-    rounding: str = "nearest"
-    max_decay_error: float = 1e-2
     plastic: bool = True
-
-    iz: IzhikevichConfig = field(init=False, repr=False)
 
     def __post_init__(self):
         with refusing("learning layer", ValueError):
