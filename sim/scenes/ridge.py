@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import html
 import json
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -39,6 +39,7 @@ from ..coincidence.experiments import (RidgeSpec, detector_config, format_ridge,
 from ..engines.registry import block_engines, check_engine
 from ..report import DPI, board_link_line, files_html, html_table, pyplot, write_page
 from ..spikes import write_spikes
+from .runner import EngineRuns, run_engines
 
 __all__ = ["validate", "RidgeSceneRun", "run", "summary", "write_report", "format_run",
            "same_counts", "spec_of", "estimate"]
@@ -188,20 +189,14 @@ def estimate(scene, engines: list[str]) -> dict:
 
 
 @dataclass
-class RidgeSceneRun:
+class RidgeSceneRun(EngineRuns):
     """The result of a ridge scene: one ridge experiment per engine."""
 
-    scene: object
-    results: dict
-    ran: dict
-    timing: dict
     kind: str = "ridge"
-    files: dict = field(default_factory=dict)   # "spikes": engine -> file
 
 
 def run(scene, engines=None, build_dir=None, progress=False, log=None):
     """Run a ridge scene on its engines (or ``engines``)."""
-    from .runner import run_engines
     say = log or (lambda msg: None)
     names = list(engines or scene.engines)
     for e in names:

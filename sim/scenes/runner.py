@@ -9,6 +9,7 @@ each engine's spikes and :func:`decoders_agreement` holds their accuracies to go
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -18,8 +19,8 @@ from .. import progress as prog
 from ..decode import decode_trials, decoded_neurons
 from .registry import kind_module
 
-__all__ = ["run_scene", "agreement", "kind_of", "check_budget", "run_engines", "decode_engines",
-           "engines_agreement", "decoders_agreement"]
+__all__ = ["run_scene", "agreement", "kind_of", "check_budget", "EngineRuns", "run_engines",
+           "decode_engines", "engines_agreement", "decoders_agreement"]
 
 
 def kind_of(run_or_scene) -> str:
@@ -64,6 +65,18 @@ def check_budget(scene, engines: list[str], **known) -> dict:
                  "fewer trials or neurons, a shorter scene.duration_ms, a lower update rate "
                  "or faster engines")
     return est
+
+
+@dataclass
+class EngineRuns:
+    """A scene run on several engines (:func:`run_engines`): the scene, each engine's result,
+    what ran, the wall times; ``files``: what was written (``"spikes"``: engine -> file)."""
+
+    scene: object
+    results: dict
+    ran: dict
+    timing: dict
+    files: dict = field(default_factory=dict, kw_only=True)
 
 
 def run_engines(names: list[str], run, build_dir: Path | None = None, log=None,

@@ -24,7 +24,7 @@ from __future__ import annotations
 import html
 import json
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -37,6 +37,7 @@ from ..lif.experiments import skin_grid, skin_protocol
 from ..report import (DPI, board_link_line, files_html, fmt, fmt_distinct, html_table, pyplot,
                       write_page)
 from ..spikes import write_spikes
+from .runner import EngineRuns, run_engines
 
 __all__ = ["LIF_PRESETS", "validate", "SkinSceneRun", "run", "summary", "write_report",
            "format_run", "estimate"]
@@ -155,18 +156,13 @@ def estimate(scene, engines: list[str]) -> dict:
 
 
 @dataclass
-class SkinSceneRun:
+class SkinSceneRun(EngineRuns):
     """The result of a taxel-skin scene: one :class:`~cuneate.sim.lif.experiments.SkinResult`
     per engine, engine agreement, what ran and wall times."""
 
-    scene: object
-    results: dict
     agreement: dict
-    ran: dict
-    timing: dict
     block: dict
     kind: str = "skin"
-    files: dict = field(default_factory=dict)   # "spikes": engine -> file
 
     @property
     def engines(self) -> list[str]:
@@ -184,7 +180,7 @@ def core_keywords(scene) -> dict:
 def run(scene, engines: list[str] | None = None, build_dir: Path | None = None,
         progress: bool = False, log=None) -> SkinSceneRun:
     """Run a taxel-skin scene on its engines (or ``engines``)."""
-    from .runner import agreement, run_engines
+    from .runner import agreement
     say = log or (lambda msg: None)
     st, sen, fe, hw = scene["stimulus"], scene["sensor"], scene["frontend"], scene["hardware"]
     rows, cols = sen["grid"]
@@ -220,7 +216,7 @@ def run(scene, engines: list[str] | None = None, build_dir: Path | None = None,
                                 f"{int(round(hw['update_hz'] / sen['sample_rate_hz']))} "
                                 f"tick(s)"],
            "blocks": [block], "engines": names}
-    return SkinSceneRun(scene, results, agreement, ran, timing, block)
+    return SkinSceneRun(scene, results, ran, timing, agreement=agreement, block=block)
 
 
 def summary(run: SkinSceneRun) -> dict:
