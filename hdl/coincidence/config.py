@@ -24,15 +24,15 @@ supported FPGA (:data:`MAX_HISTORY_BITS`), and anything the Izhikevich configura
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
-from typing import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
 from ...golden import coincidence as gcun
-from ..izhikevich.config import CLAMP_KINDS, IzhikevichConfig
-from ..izhikevich.config import min_neurons as iz_min_neurons
-from ..lib.config import MAX_BLOCK_RAM_BITS, ConfigError, int_bits_for, refusing
+from ..izhikevich.config import CLAMP_KINDS
+from ..izhikevich.targets import TargetOptions, target_arithmetic
+from ..lib.config import (MAX_BLOCK_RAM_BITS, ConfigError, check_rounding, check_tick_source,
+                          int_bits_for, refusing, whole_cycles_per_tick)
 from ..lib.fixed import QFormat
 from ..lib.synapses import TraceView, trace_spec
 
@@ -50,7 +50,7 @@ MAX_HISTORY_BITS = MAX_BLOCK_RAM_BITS
 
 
 @dataclass
-class CoincidenceConfig:
+class CoincidenceConfig(TargetOptions):
     """A coincidence detector: ``n_targets`` Izhikevich neurons driven by delayed, weighted,
     bi-exponential PSPs of ``n_sources`` afferents.
 
@@ -88,18 +88,9 @@ class CoincidenceConfig:
     max_delay_ticks: int = 513
     tau_rise_ms: float = gcun.TAU_RISE_MS
     tau_decay_ms: float = gcun.TAU_DECAY_MS
-    param_sets: Sequence = ("RS",)
-    target_sets: Sequence[int] | None = None
-    clock_hz: float = 40e6
     update_hz: float = 16e3
-    tick_source: str = "external"
     weight_bits: int = 12
     trace_frac_bits: int = 16
-    max_decay_error: float = 1e-2
-    operand_width: int = 18
-    rounding: str = "nearest"
-
-    iz: IzhikevichConfig = field(init=False, repr=False)
 
     def __post_init__(self):
         with refusing("coincidence detector"):
@@ -126,10 +117,8 @@ class CoincidenceConfig:
         for k, v in (("n_sources", S), ("n_targets", M)):
             if not isinstance(v, (int, np.integer)) or v < 1:
                 raise ConfigError(f"{k} must be an integer >= 1, got {v!r}")
-        if self.rounding not in ("nearest", "truncate"):
-            raise ConfigError(f"unknown rounding {self.rounding!r}; known: nearest, truncate")
-        if self.tick_source not in ("internal", "external"):
-            raise ConfigError("tick_source must be 'internal' or 'external'")
+        check_rounding(self.rounding)
+        check_tick_source(self.tick_source)
         D = self.max_delay_ticks
         if not isinstance(D, (int, np.integer)) or D < 1:
             raise ConfigError(f"max_delay_ticks must be an integer >= 1, got {D!r}")
@@ -192,33 +181,16 @@ class CoincidenceConfig:
         # traces
         self._derive_traces()
         # cycles
-        self.cycles_per_tick = int(round(self.clock_hz / self.update_hz))
-        if abs(self.clock_hz / self.update_hz - self.cycles_per_tick) > 1e-9 * \
-                self.cycles_per_tick or self.cycles_per_tick < 1:
-            raise ConfigError(f"clock_hz / update_hz = {self.clock_hz / self.update_hz:.12g} "
-                              f"is not an integer number of cycles per tick")
+        self.cycles_per_tick = whole_cycles_per_tick(self.clock_hz, self.update_hz)
         self.cycles_needed = M * (S + CYCLES_PER_TARGET_EXTRA) + 2
         if self.cycles_needed > self.cycles_per_tick:
             raise ConfigError(f"{M} targets x {S} sources need {self.cycles_needed} cycles per "
                               f"tick; {self.clock_hz:g} Hz / {self.update_hz:g} Hz gives "
                               f"{self.cycles_per_tick}")
         # the Izhikevich arithmetic of the targets, proven for the PSP current range
-        ts = [0] * M if self.target_sets is None else list(self.target_sets)
-        if len(ts) != M or any(not 0 <= x < len(self.param_sets) for x in ts):
-            raise ConfigError(f"target_sets needs {M} indices into the {len(self.param_sets)} "
-                              f"parameter set(s)")
-        self.target_sets_ = ts
-        n_iz = max(M, iz_min_neurons())
-        try:
-            self.iz = IzhikevichConfig(
-                n_neurons=n_iz, clock_hz=self.update_hz * n_iz, update_hz=self.update_hz,
-                param_sets=tuple(self.param_sets), neuron_sets=ts + [0] * (n_iz - M),
-                operand_width=self.operand_width, rounding=self.rounding,
-                current_format=QFormat(int_bits_for(self.i_lo, self.i_hi), self.i_frac_bits),
-                current_range=(self.i_lo, self.i_hi), tick_source="external")
-        except ConfigError as exc:
-            raise ConfigError(f"coincidence detector: the targets' Izhikevich arithmetic "
-                              f"refused: {exc}") from None
+        self.iz, self.target_sets_ = target_arithmetic(
+            self, "coincidence detector: the targets",
+            QFormat(int_bits_for(self.i_lo, self.i_hi), self.i_frac_bits), (self.i_lo, self.i_hi))
         if self.i_raw_bounds[0] < self.iz.I.min_raw or self.i_raw_bounds[1] > self.iz.I.max_raw:
             raise ConfigError(f"PSP current range [{self.i_lo:g}, {self.i_hi:g}] mV/ms does not "
                               f"fit the Izhikevich current format {self.iz.I}")

@@ -41,7 +41,8 @@ from typing import Sequence
 import numpy as np
 
 from ...golden.fanout import RECTIFY
-from ..lib.config import MAX_BLOCK_RAM_BITS, ConfigError, refusing, shared_exponent
+from ..lib.config import (MAX_BLOCK_RAM_BITS, ConfigError, check_rounding, refusing,
+                          shared_exponent)
 from ..lib.fixed import QFormat
 
 __all__ = ["FanoutConfig", "ConfigError", "CLAMP_KINDS", "LATENCY", "MAX_TABLE_BITS",
@@ -148,8 +149,7 @@ class FanoutConfig:
                 raise ConfigError(f"afferent {i}: unknown rectify {m!r}; known: "
                                   f"{', '.join(RECTIFY)}")
         self.modes_ = tuple(RECTIFY.index(m) for m in modes)
-        if self.rounding not in ("nearest", "truncate"):
-            raise ConfigError(f"unknown rounding {self.rounding!r}; known: nearest, truncate")
+        check_rounding(self.rounding)
         if not (isinstance(self.sample_width, int) and 2 <= self.sample_width <= 32):
             raise ConfigError(f"sample_width must be 2 .. 32 bits, got {self.sample_width!r}")
         if not (isinstance(self.gain_width, int) and 2 <= self.gain_width <= 27):

@@ -5,10 +5,9 @@ writes every afferent's current into the block behind it."""
 from __future__ import annotations
 
 from amaranth import Cat, Module, Signal
-from amaranth.lib import wiring
 
 from ..lib.config import ConfigError
-from ..lib.payload import PayloadInfo, PayloadSpec, PayloadTwin, implements, payload_signature
+from ..lib.payload import BlockPayload, PayloadInfo, PayloadSpec, PayloadTwin, implements
 from .config import CLAMP_KINDS, FanoutConfig
 from .core import ChannelFanout
 from .twin import FanoutTwin
@@ -88,7 +87,7 @@ class _FanoutTwin(PayloadTwin):
         return self.inner.clamp_flags() | int(self.fanout.clamp_sticky) << self.n_inner
 
 
-class FanoutPayload(wiring.Component):
+class FanoutPayload(BlockPayload):
     """:class:`~cuneate.hdl.fanout.ChannelFanout` (attribute ``fanout``) in front of the
     inner block's payload (attribute ``inner``). The fan-out starts in the cycle after a
     burst's last write; ``busy`` covers the writes on offer, that cycle, the run and the inner
@@ -97,10 +96,7 @@ class FanoutPayload(wiring.Component):
     run was still going (impossible while the face honours ``busy``)."""
 
     def __init__(self, spec: FanoutSpec):
-        self.spec = spec
-        self.fanout = ChannelFanout(spec.fanout)
-        self.inner = spec.inner.build()
-        super().__init__(payload_signature(spec.info))
+        super().__init__(spec, fanout=ChannelFanout(spec.fanout), inner=spec.inner.build())
 
     def elaborate(self, platform):
         m = Module()

@@ -16,8 +16,8 @@ from typing import Sequence
 from .fixed import ROUNDINGS, FixedConstant, FixedPointError
 
 __all__ = ["ConfigError", "refusing", "MIN_NEURONS", "CoreOptions", "MAX_BLOCK_RAM_BITS",
-           "SATURATION", "TICK_SOURCES", "int_bits_for",
-           "check_delays", "shared_exponent"]
+           "SATURATION", "TICK_SOURCES", "int_bits_for", "check_rounding", "check_tick_source",
+           "whole_cycles_per_tick", "check_delays", "shared_exponent"]
 
 #: The most block-RAM bits a block may ask for: the block RAM of the largest supported FPGA
 #: (the ULX3S's ECP5-85F, 208 blocks of 18 Kibit).
@@ -72,11 +72,29 @@ class CoreOptions:
         if self.saturation not in SATURATION:
             raise ConfigError(f"saturation must be one of {SATURATION}, got "
                               f"{self.saturation!r}")
-        if self.rounding not in ROUNDINGS:
-            raise ConfigError(f"unknown rounding {self.rounding!r}; known: "
-                              f"{', '.join(ROUNDINGS)}")
-        if self.tick_source not in TICK_SOURCES:
-            raise ConfigError("tick_source must be 'internal' or 'external'")
+        check_rounding(self.rounding)
+        check_tick_source(self.tick_source)
+
+
+def check_rounding(rounding) -> None:
+    """Refuses a rounding other than :data:`~cuneate.hdl.lib.fixed.ROUNDINGS`."""
+    if rounding not in ROUNDINGS:
+        raise ConfigError(f"unknown rounding {rounding!r}; known: {', '.join(ROUNDINGS)}")
+
+
+def check_tick_source(tick_source) -> None:
+    """Refuses a tick source other than :data:`TICK_SOURCES`."""
+    if tick_source not in TICK_SOURCES:
+        raise ConfigError("tick_source must be 'internal' or 'external'")
+
+
+def whole_cycles_per_tick(clock_hz: float, update_hz: float) -> int:
+    """``clock_hz / update_hz``, refused unless a whole number (to 1e-9) of at least 1."""
+    cycles = int(round(clock_hz / update_hz))
+    if abs(clock_hz / update_hz - cycles) > 1e-9 * cycles or cycles < 1:
+        raise ConfigError(f"clock_hz / update_hz = {clock_hz / update_hz:.12g} "
+                          f"is not an integer number of cycles per tick")
+    return cycles
 
 
 def int_bits_for(lo: float, hi: float) -> int:

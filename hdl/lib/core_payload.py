@@ -9,10 +9,9 @@ is the ``spikes`` stream; ``busy`` is its sweep issue."""
 from __future__ import annotations
 
 from amaranth import Module
-from amaranth.lib import wiring
 
 from .config import ConfigError
-from .payload import PayloadSpec, payload_signature, write_port
+from .payload import BlockPayload, PayloadSpec, write_port
 
 __all__ = ["CorePayload", "CoreSpec"]
 
@@ -48,14 +47,12 @@ class CoreSpec(PayloadSpec):
         return CorePayload(self, self.core())
 
 
-class CorePayload(wiring.Component):
+class CorePayload(BlockPayload):
     """``core`` (built by the spec, kept as the attribute ``core`` so a simulation can watch
     it) behind the payload signature of ``spec.info``; the core's tick is external."""
 
     def __init__(self, spec, core):
-        self.spec = spec
-        self.core = core
-        super().__init__(payload_signature(spec.info))
+        super().__init__(spec, core=core)
 
     def elaborate(self, platform):
         m = Module()

@@ -39,7 +39,7 @@ from .config import ConfigError
 
 __all__ = ["PayloadInfo", "PayloadSpec", "BlockSpec", "PayloadTwin", "payload_signature",
            "write_layout", "spike_layout", "write_port", "implements", "payload_spec", "SPECS",
-           "SPIKES_SETTLE"]
+           "SPIKES_SETTLE", "BlockPayload"]
 
 #: cycles after ``sweep_done`` by which every spike of the sweep is offered on ``spikes`` (a
 #: core's spike FIFO, a block RAM, delivers a spike pushed with the sweep's last update a few
@@ -142,6 +142,18 @@ def write_port(write, block) -> list:
     port of ``block`` (``i_wr_en``, ``i_wr_addr``, ``i_wr_data``), a value a cycle."""
     return [write.ready.eq(1), block.i_wr_en.eq(write.valid),
             block.i_wr_addr.eq(write.payload.addr), block.i_wr_data.eq(write.payload.value)]
+
+
+class BlockPayload(wiring.Component):
+    """A payload component of ``spec`` (kept as :attr:`spec`): its signature is
+    :func:`payload_signature` of ``spec.info``; ``parts`` are its blocks, kept as attributes of
+    those names so a simulation can watch them (a subclass wires them in ``elaborate``)."""
+
+    def __init__(self, spec, **parts):
+        self.spec = spec
+        for name, part in parts.items():
+            setattr(self, name, part)
+        super().__init__(payload_signature(spec.info))
 
 
 class PayloadTwin:

@@ -10,7 +10,7 @@ import numpy as np
 
 from ..coincidence.config import CoincidenceConfig
 from ..izhikevich.config import PIPELINE_DEPTH, IzhikevichConfig, min_neurons
-from ..lib.config import ConfigError
+from ..lib.config import ConfigError, check_tick_source
 from ..lib.fixed import QFormat
 
 __all__ = ["NetworkConfig", "ConfigError", "POPULATIONS", "SWEEP_EXTRA", "AFFERENT_OPTIONS"]
@@ -58,8 +58,7 @@ class NetworkConfig:
     afferent_options: dict = field(default_factory=dict)
 
     def __post_init__(self):
-        if self.tick_source not in ("internal", "external"):
-            raise ConfigError("tick_source must be 'internal' or 'external'")
+        check_tick_source(self.tick_source)
         N = self.n_afferents
         if not isinstance(N, (int, np.integer)) or N < min_neurons():
             raise ConfigError(f"n_afferents must be an integer >= {min_neurons()} (the core's "

@@ -7,10 +7,9 @@ from __future__ import annotations
 
 import numpy as np
 from amaranth import Module, Mux
-from amaranth.lib import wiring
 
 from ..izhikevich.config import CLAMP_KINDS
-from ..lib.payload import (BlockSpec, PayloadInfo, PayloadTwin, implements, payload_signature,
+from ..lib.payload import (BlockPayload, BlockSpec, PayloadInfo, PayloadTwin, implements,
                            write_port)
 from .config import NetworkConfig
 from .core import REPORT_SETTLE, AfferentCuneateNetwork
@@ -64,15 +63,13 @@ class _NetworkTwin(PayloadTwin):
         return int(self.model.core.clamp_sticky | self.model.det.clamp_sticky)
 
 
-class NetworkPayload(wiring.Component):
+class NetworkPayload(BlockPayload):
     """:class:`~cuneate.hdl.network.AfferentCuneateNetwork` (the attribute ``network``) behind
     the payload signature. ``busy`` is the network's ``busy | tick_open`` (the next tick waits
     until every spike of the last is handed over), ``sweep_done`` its ``tick_done``."""
 
     def __init__(self, spec: NetworkSpec):
-        self.spec = spec
-        self.network = AfferentCuneateNetwork(spec.config)
-        super().__init__(payload_signature(spec.info))
+        super().__init__(spec, network=AfferentCuneateNetwork(spec.config))
 
     def elaborate(self, platform):
         m = Module()

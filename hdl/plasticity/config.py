@@ -36,16 +36,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Sequence
 
 import numpy as np
 
 from ...golden.aidp import AidpParams, sigmoid
 from ..izhikevich.config import CLAMP_KINDS as IZ_CLAMP_KINDS
-from ..izhikevich.config import IzhikevichConfig
-from ..izhikevich.config import min_neurons as iz_min_neurons
-from ..lib.config import ConfigError, int_bits_for
-from ..lib.fixed import FixedConstant, FixedPointError, QFormat
+from ..izhikevich.targets import TargetOptions, target_arithmetic
+from ..lib.config import (ConfigError, check_rounding, check_tick_source, int_bits_for, refusing,
+                          whole_cycles_per_tick)
+from ..lib.fixed import FixedConstant, QFormat
 from ..lib.synapses import TraceView, trace_spec
 
 __all__ = ["PlasticityConfig", "ConfigError", "CLAMP_KINDS", "SYNAPSE_CLAMP_KINDS",
@@ -73,7 +72,7 @@ OPS = {"integrate": 0, "read": 1, "learn": 2, "write": 3}
 
 
 @dataclass
-class PlasticityConfig:
+class PlasticityConfig(TargetOptions):
     """A learning cuneate layer (see the module docstring).
 
     Parameters
@@ -115,40 +114,25 @@ class PlasticityConfig:
     tau_syn_ms: float = 6.4
     g_inh: float = 0.3
     current_limit: float = 64.0
-    param_sets: Sequence = ("RS",)
-    target_sets: Sequence[int] | None = None
-    clock_hz: float = 40e6
     update_hz: float = 2000.0
-    tick_source: str = "external"
     weight_bits: int = 16
     trace_frac_bits: int = 13
     drive_int_bits: int = 20
     drive_frac_bits: int = 8
     sigmoid_bits: int = 7
-    operand_width: int = 18
-    rounding: str = "nearest"
-    max_decay_error: float = 1e-2
     plastic: bool = True
 
-    iz: IzhikevichConfig = field(init=False, repr=False)
-
     def __post_init__(self):
-        try:
+        with refusing("learning layer", ValueError):
             self._derive()
-        except ConfigError:
-            raise
-        except (FixedPointError, ValueError) as exc:
-            raise ConfigError(f"learning layer refused: {exc}") from None
 
     # ------------------------------------------------------------------------------------------
     def _derive(self):
         S = self.n_sources
         if not isinstance(S, (int, np.integer)) or S < 1:
             raise ConfigError(f"n_sources must be an integer >= 1, got {S!r}")
-        if self.rounding not in ("nearest", "truncate"):
-            raise ConfigError(f"unknown rounding {self.rounding!r}; known: nearest, truncate")
-        if self.tick_source not in ("internal", "external"):
-            raise ConfigError("tick_source must be 'internal' or 'external'")
+        check_rounding(self.rounding)
+        check_tick_source(self.tick_source)
         if not isinstance(self.rule, AidpParams):
             raise ConfigError("rule must be AidpParams (cuneate.golden.aidp)")
         src = np.tile(np.arange(S), (2, 1)) if self.sources is None else \
@@ -197,11 +181,7 @@ class PlasticityConfig:
         self._derive_learning()
         self._derive_izhikevich()
         # cycles
-        self.cycles_per_tick = int(round(self.clock_hz / self.update_hz))
-        if abs(self.clock_hz / self.update_hz - self.cycles_per_tick) > 1e-9 * \
-                self.cycles_per_tick or self.cycles_per_tick < 1:
-            raise ConfigError(f"clock_hz / update_hz = {self.clock_hz / self.update_hz:.12g} "
-                              f"is not an integer number of cycles per tick")
+        self.cycles_per_tick = whole_cycles_per_tick(self.clock_hz, self.update_hz)
         self.cycles_needed = TICK_PROLOGUE + M * (K + CYCLES_PER_TARGET_EXTRA)
         if self.cycles_needed > self.cycles_per_tick:
             raise ConfigError(f"{M} CNs x {K} synapses need {self.cycles_needed} cycles per "
@@ -329,25 +309,10 @@ class PlasticityConfig:
                              1e-300))) if top else 0.0 for t, e in zip(self.step_tables, tables)]
 
     def _derive_izhikevich(self):
-        M = self.n_targets
-        ts = [0] * M if self.target_sets is None else list(self.target_sets)
-        if len(ts) != M or any(not 0 <= x < len(self.param_sets) for x in ts):
-            raise ConfigError(f"target_sets needs {M} indices into the "
-                              f"{len(self.param_sets)} parameter set(s)")
-        self.target_sets_ = ts
-        n_iz = max(M, iz_min_neurons())
         lsb = 2.0 ** -self.i_frac_bits
-        try:
-            self.iz = IzhikevichConfig(
-                n_neurons=n_iz, clock_hz=self.update_hz * n_iz, update_hz=self.update_hz,
-                param_sets=tuple(self.param_sets), neuron_sets=ts + [0] * (n_iz - M),
-                operand_width=self.operand_width, rounding=self.rounding,
-                current_format=self.I_full,
-                current_range=(self.i_lim_raw[0] * lsb, self.i_lim_raw[1] * lsb),
-                tick_source="external")
-        except ConfigError as exc:
-            raise ConfigError(f"learning layer: the CNs' Izhikevich arithmetic refused: "
-                              f"{exc}") from None
+        self.iz, self.target_sets_ = target_arithmetic(
+            self, "learning layer: the CNs", self.I_full,
+            (self.i_lim_raw[0] * lsb, self.i_lim_raw[1] * lsb))
 
     # ------------------------------------------------------------------------------------------
     @property

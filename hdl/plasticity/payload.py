@@ -35,11 +35,10 @@ from __future__ import annotations
 
 import numpy as np
 from amaranth import Cat, Const, Module, Mux, Signal
-from amaranth.lib import wiring
 from amaranth.lib.fifo import SyncFIFOBuffered
 
 from ..lib.config import ConfigError
-from ..lib.payload import BlockSpec, PayloadInfo, PayloadTwin, implements, payload_signature
+from ..lib.payload import BlockPayload, BlockSpec, PayloadInfo, PayloadTwin, implements
 from .config import CLAMP_KINDS, STAGE_LATENCY, PlasticityConfig
 from .core import LearningLayer
 from .twin import PlasticityTwin
@@ -198,15 +197,13 @@ def _decode(amap: dict, addr: int) -> tuple[str, int]:
     raise ValueError(f"write address {addr} is outside the learning layer's map")
 
 
-class LearningPayload(wiring.Component):
+class LearningPayload(BlockPayload):
     """:class:`~cuneate.hdl.plasticity.core.LearningLayer` (attribute ``layer``) behind the
     payload signature (module docstring); its spikes and a readout's bytes pass through a
     FIFO of ``M + 2`` entries, each tagged with its sweep."""
 
     def __init__(self, spec: LearningSpec):
-        self.spec = spec
-        self.layer = LearningLayer(spec.config)
-        super().__init__(payload_signature(spec.info))
+        super().__init__(spec, layer=LearningLayer(spec.config))
 
     def elaborate(self, platform):
         m = Module()

@@ -22,7 +22,6 @@ Every cycle is watched; every target update is checked when its tick is complete
 
 from __future__ import annotations
 
-import random
 import time
 
 import cocotb
@@ -31,8 +30,8 @@ from cocotb.triggers import FallingEdge
 
 from cuneate.hdl.coincidence import CoincidenceConfig
 from cuneate.sim.coincidence.scoreboard import CoincidenceChecker
-from cuneate.sim.engines.bench import (bench_config, bench_report, bench_verdict, spikes_then_tick,
-                                       start_in_reset)
+from cuneate.sim.engines.bench import (bench_case, bench_config, bench_report, bench_verdict,
+                                       spikes_then_tick, start_in_reset)
 
 
 async def start_bench(dut):
@@ -51,10 +50,8 @@ def update_row(dut) -> dict:
 
 @cocotb.test()
 async def scoreboard(dut):
-    spec = bench_config()
-    cfg = CoincidenceConfig(**spec["detector"])
+    spec, cfg, rng = bench_case("detector", lambda kw: CoincidenceConfig(**kw))
     M, S = cfg.n_targets, cfg.n_sources
-    rng = random.Random(spec.get("seed", 1))
     n_ticks = spec["ticks"]
     period = spec.get("period", cfg.cycles_needed + 2 * S + 4)
     p_event = spec.get("event_p", 0.3)

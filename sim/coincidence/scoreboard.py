@@ -8,28 +8,26 @@ from __future__ import annotations
 import numpy as np
 
 from ...hdl.coincidence import CoincidenceConfig, CoincidenceTwin
-from ...hdl.lib.synapses import trace_golden_check
-from ..izhikevich.scoreboard import SweepChecker
+from ..izhikevich.scoreboard import TargetChecker
 
 __all__ = ["CoincidenceChecker"]
 
 
-class CoincidenceChecker:
+class CoincidenceChecker(TargetChecker):
     """Checks the updates of whole ticks against the twin (exact) and golden (bounded)."""
 
+    FAILURES = ("input_mismatches", "trace_mismatches", "current_mismatches",
+                "trace_golden_violations")
+
     def __init__(self, cfg: CoincidenceConfig):
-        self.cfg = cfg
+        super().__init__(cfg, {"ticks_checked": 0, "updates_checked": 0, "input_mismatches": 0,
+                               "trace_mismatches": 0, "current_mismatches": 0,
+                               "trace_golden_violations": 0, "trace_golden_max_ratio": 0.0})
         M = cfg.n_targets
         self.ref = CoincidenceTwin(cfg)         # history and inputs; state from the DUT
-        self.iz = SweepChecker(cfg.iz)
-        self.iz.prev_v, self.iz.prev_u = self.iz.prev_v[:M], self.iz.prev_u[:M]
         self.sel = np.asarray(cfg.target_sets_, dtype=np.int64)
         self.prev_xd = np.zeros(M, dtype=np.int64)
         self.prev_xr = np.zeros(M, dtype=np.int64)
-        self.stats = {"ticks_checked": 0, "updates_checked": 0, "input_mismatches": 0,
-                      "trace_mismatches": 0, "current_mismatches": 0,
-                      "trace_golden_violations": 0, "trace_golden_max_ratio": 0.0,
-                      "first_mismatch": None}
 
     def check(self, events, rows) -> None:
         """``events``: sources driven before this tick; ``rows``: dict of arrays by target."""
@@ -50,20 +48,9 @@ class CoincidenceChecker:
                                     f" xd={rows['xd'][k]} xr={rows['xr'][k]} i={rows['i'][k]};"
                                     f" twin a={a[k]} xd={out['xd'][k]} xr={out['xr'][k]} "
                                     f"i={out['i'][k]}")
-        errs, bounds = trace_golden_check(self.cfg.tview, out["ys"], [rows["xd"], rows["xr"]])
-        st["trace_golden_violations"] += int((errs > bounds).sum())
-        st["trace_golden_max_ratio"] = max(st["trace_golden_max_ratio"],
-                                           float((errs / bounds).max()))
+        self.golden_traces("trace", self.cfg.tview, out["ys"], [rows["xd"], rows["xr"]])
         self.iz.check(rows["v"], rows["u"], rows["i"], rows["spike"], rows["clamp"], self.sel)
         self.prev_xd, self.prev_xr = rows["xd"].copy(), rows["xr"].copy()
         self.ref.ticks += 1
         st["ticks_checked"] += 1
         st["updates_checked"] += self.cfg.n_targets
-
-    def failures(self) -> list[str]:
-        st, out = self.stats, list(self.iz.failures())
-        for k in ("input_mismatches", "trace_mismatches", "current_mismatches",
-                  "trace_golden_violations"):
-            if st[k]:
-                out.append(f"{st[k]} {k.replace('_', ' ')} ({st['first_mismatch']})")
-        return out

@@ -9,13 +9,8 @@ hold the bus's figures (``axi_*``: cycles, beats and register accesses each way)
 
 from __future__ import annotations
 
-from ..fanout.engines import FRONT, FanoutFront
-from ..izhikevich.engines import IzhikevichEngine
-from ..lif.engines import LifEngine
-from ..network.engines import NetworkEngine
-from ..plasticity.engines import PlasticityFace
-from .board import FaceEngine
-from .registry import implements
+from ..fanout.engines import FRONT
+from .board import FaceEngine, face_engines
 
 __all__ = ["AxiEngine", "AxiIzhikevich", "AxiLif", "AxiNetwork", "AxiPlasticity",
            "AxiFanoutFront"]
@@ -29,27 +24,8 @@ class AxiEngine(FaceEngine):
         return AxiTransport
 
 
-@implements("izhikevich", "axi", speed=1e6)
-class AxiIzhikevich(AxiEngine, IzhikevichEngine):
-    """The core (or array) behind the AXI face."""
-
-
-@implements("lif", "axi", speed=1e5)
-class AxiLif(AxiEngine, LifEngine):
-    """The LIF core behind the AXI face."""
-
-
-@implements("network", "axi", speed=1e5)
-class AxiNetwork(AxiEngine, NetworkEngine):
-    """The afferent -> cuneate network behind the AXI face."""
-
-
-@implements("plasticity", "axi", speed=1e5)
-class AxiPlasticity(AxiEngine, PlasticityFace):
-    """The learning layer behind the AXI face (:mod:`cuneate.hdl.plasticity.payload`)."""
-
-
-@implements(FRONT, "axi", speed=1e6)
-class AxiFanoutFront(AxiEngine, FanoutFront):
-    """The channel fan-out in front of a block behind the AXI face (the fan-out's payload
-    adapter in the AXI top)."""
+#: the AXI face's engines, one per block (the channel fan-out's: its payload adapter in the AXI
+#: top, in front of a block)
+AxiIzhikevich, AxiLif, AxiNetwork, AxiPlasticity, AxiFanoutFront = face_engines(
+    AxiEngine, "axi", "Axi",
+    {"izhikevich": 1e6, "lif": 1e5, "network": 1e5, "plasticity": 1e5, FRONT: 1e6})

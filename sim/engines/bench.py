@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 import os
+import random
 import time
 
 import cocotb
@@ -17,14 +18,22 @@ from cocotb.triggers import FallingEdge, RisingEdge
 
 from .waves import BENCH_CLOCK_NS
 
-__all__ = ["bench_config", "bench_report", "bench_verdict", "bench_progress", "start_in_reset",
-           "spikes_then_tick", "CoreBench"]
+__all__ = ["bench_config", "bench_case", "bench_report", "bench_verdict", "bench_progress",
+           "start_in_reset", "spikes_then_tick", "CoreBench"]
 
 
 def bench_config() -> dict:
     """The configuration the caller gave :func:`~cuneate.sim.engines.cocotb.run_cocotb`."""
     with open(os.environ["CUNEATE_BENCH_CONFIG"]) as f:
         return json.load(f)
+
+
+def bench_case(key: str, make) -> tuple[dict, object, random.Random]:
+    """The bench's configuration (:func:`bench_config`), its block's configuration
+    ``make(spec[key])`` and the random source of its stimulus, seeded with ``spec["seed"]``
+    (1 when not given)."""
+    spec = bench_config()
+    return spec, make(spec[key]), random.Random(spec.get("seed", 1))
 
 
 def bench_report(data: dict) -> None:

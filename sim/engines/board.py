@@ -2,7 +2,7 @@
 Verilator behind a simulated serial line (:class:`~cuneate.sim.link.engines.BoardTransport`,
 opened for the block's configuration), driven by the real host stack.
 
-One class per block it runs, each registered with
+One class per block it runs (:func:`face_engines`, as for every face), each registered with
 :func:`~cuneate.sim.engines.registry.implements`: the Izhikevich core (in a scene also as the
 afferents of the afferent -> cuneate network behind the link), the LIF core, the network, the
 learning layer, and the channel fan-out on chip in front of any of them
@@ -26,8 +26,8 @@ from ..plasticity.engines import PlasticityFace
 from .engine import BlockEngine
 from .registry import implements
 
-__all__ = ["FaceEngine", "BoardEngine", "BoardIzhikevich", "BoardLif", "BoardNetwork",
-           "BoardPlasticity", "BoardFanoutFront"]
+__all__ = ["FaceEngine", "FACE_BLOCKS", "face_engines", "BoardEngine", "BoardIzhikevich",
+           "BoardLif", "BoardNetwork", "BoardPlasticity", "BoardFanoutFront"]
 
 
 class FaceEngine(BlockEngine):
@@ -58,6 +58,31 @@ class FaceEngine(BlockEngine):
         return self.transport(fanout=fanout)
 
 
+#: the blocks every face serves: ``(block, its engine interface, its engines' class names'
+#: ending)``
+FACE_BLOCKS = (("izhikevich", IzhikevichEngine, "Izhikevich"), ("lif", LifEngine, "Lif"),
+               ("network", NetworkEngine, "Network"), ("plasticity", PlasticityFace, "Plasticity"),
+               (FRONT, FanoutFront, "FanoutFront"))
+
+
+def face_engines(face: type, name: str, prefix: str, speeds: dict,
+                 extras: dict | None = None) -> tuple[type, ...]:
+    """The engines ``name`` of every block of :data:`FACE_BLOCKS` behind the face ``face`` (a
+    :class:`FaceEngine`), each registered (:func:`~cuneate.sim.engines.registry.implements`)
+    at ``speeds[block]``: the class ``prefix + ending`` of ``face`` and the block's engine
+    interface, in ``face``'s module, with ``extras[block]`` (attributes the face adds for that
+    block); in :data:`FACE_BLOCKS`' order."""
+    made = []
+    for block, interface, ending in FACE_BLOCKS:
+        cls_name = prefix + ending
+        body = {"__module__": face.__module__, "__qualname__": cls_name,
+                "__doc__": f"The block ``{block}`` behind the ``{name}`` face "
+                           f"(:class:`{face.__name__}`, :class:`{interface.__name__}`)."}
+        cls = type(cls_name, (face, interface), body | (extras or {}).get(block, {}))
+        made.append(implements(block, name, speed=speeds[block])(cls))
+    return tuple(made)
+
+
 class BoardEngine(FaceEngine):
     """The blocks behind the UART link (``options``: more
     :class:`~cuneate.sim.link.engines.BoardTransport` keywords: ``port``, ``ahead``,
@@ -70,39 +95,20 @@ class BoardEngine(FaceEngine):
         return BoardTransport
 
 
-@implements("izhikevich", "board", speed=1e5)
-class BoardIzhikevich(BoardEngine, IzhikevichEngine):
-    """The core behind the link (:class:`~cuneate.hdl.link.LinkedTop`), in a scene also behind
-    the channel fan-out or as the afferents of the afferent -> cuneate network."""
-
-    layer = "chip"
-
-
-@implements("lif", "board", speed=1e3)
-class BoardLif(BoardEngine, LifEngine):
-    """The LIF core behind the link (:class:`~cuneate.hdl.link.LinkedTop`)."""
+def _readout_synapses(self, cfg) -> int:
+    """As many as a spike batch holds beside a tick's CN spikes, ``batch_sweeps`` readout
+    sweeps in a batch (at least one synapse)."""
+    from ..link.engines import board_link         # the board top loads when it runs
+    lc = board_link(cfg)
+    per = (lc.batch_capacity - cfg.n_targets) // (lc.batch_sweeps * readout_bytes(cfg))
+    return max(1, min(cfg.n_synapses, per))
 
 
-@implements("network", "board", speed=1e4)
-class BoardNetwork(BoardEngine, NetworkEngine):
-    """The network behind the link (:class:`~cuneate.hdl.link.LinkedTop`)."""
-
-
-@implements("plasticity", "board", speed=1e4)
-class BoardPlasticity(BoardEngine, PlasticityFace):
-    """The learning layer behind the link: its afferent spikes, window ends and readouts
-    streamed as writes (:mod:`cuneate.hdl.plasticity.payload`)."""
-
-    def readout_synapses(self, cfg) -> int:
-        """As many as a spike batch holds beside a tick's CN spikes, ``batch_sweeps``
-        readout sweeps in a batch (at least one synapse)."""
-        from ..link.engines import board_link         # the board top loads when it runs
-        lc = board_link(cfg)
-        per = (lc.batch_capacity - cfg.n_targets) // (lc.batch_sweeps * readout_bytes(cfg))
-        return max(1, min(cfg.n_synapses, per))
-
-
-@implements(FRONT, "board", speed=1e5)
-class BoardFanoutFront(BoardEngine, FanoutFront):
-    """The channel fan-out on chip in front of a block behind the link
-    (:class:`~cuneate.hdl.link.LinkedTop` of the fan-out's payload adapter)."""
+#: the board's engines, one per block: the core in a scene also behind the channel fan-out or
+#: as the afferents of the network on chip (``layer``); the learning layer's readout sweeps
+#: sized to the link's spike batch (``readout_synapses``)
+(BoardIzhikevich, BoardLif, BoardNetwork, BoardPlasticity, BoardFanoutFront) = face_engines(
+    BoardEngine, "board", "Board",
+    {"izhikevich": 1e5, "lif": 1e3, "network": 1e4, "plasticity": 1e4, FRONT: 1e5},
+    extras={"izhikevich": {"layer": "chip"},
+            "plasticity": {"readout_synapses": _readout_synapses}})

@@ -145,6 +145,13 @@ int main(int argc, char** argv) {
 #endif
         if (top->spike_valid) ++stream_spikes;
     };
+    // n cycles, each monitored
+    auto step = [&](int64_t n) {
+        for (int64_t k = 0; k < n; ++k) {
+            cycle();
+            monitor();
+        }
+    };
     h.start_clock();
     if (raw_cycles >= 0) {
         for (long long c = 0; c < raw_cycles; ++c) {
@@ -159,10 +166,7 @@ int main(int argc, char** argv) {
             if (seg < n_seg && seg_start[seg] <= sweep) {
                 // drain the pipeline, then write the currents that change
                 top->tick = 0;
-                for (int k = 0; k < PIPELINE_DEPTH + 2 + ARRAY_EXTRA; ++k) {
-                    cycle();
-                    monitor();
-                }
+                step(PIPELINE_DEPTH + 2 + ARRAY_EXTRA);
                 for (int64_t n = 0; n < N; ++n) {
                     int64_t x = seg_cur[seg * N + n];
                     if (x == cur[n]) continue;
@@ -170,14 +174,10 @@ int main(int argc, char** argv) {
                     top->i_wr_en = 1;
                     top->i_wr_addr = n;
                     top->i_wr_data = (uint64_t)x & imask;
-                    cycle();
-                    monitor();
+                    step(1);
                 }
                 top->i_wr_en = 0;
-                for (int k = 0; k < ARRAY_EXTRA; ++k) {
-                    cycle();
-                    monitor();
-                }
+                step(ARRAY_EXTRA);
                 ++seg;
                 continue;
             }
@@ -186,13 +186,9 @@ int main(int argc, char** argv) {
             int64_t end = (seg < n_seg) ? std::min<int64_t>(seg_start[seg], n_sweeps) : n_sweeps;
             for (; sweep < end; ++sweep) {
                 top->tick = 1;
-                cycle();
-                monitor();
+                step(1);
                 top->tick = 0;
-                for (int64_t c = 1; c < n_core; ++c) {
-                    cycle();
-                    monitor();
-                }
+                step(n_core - 1);
             }
         }
         top->tick = 0;

@@ -18,14 +18,14 @@ driven and what the twin counted.
 
 from __future__ import annotations
 
-import random
 import time
 
 import cocotb
 from cocotb.triggers import FallingEdge
 
 from cuneate.hdl.fanout import LATENCY, FanoutConfig
-from cuneate.sim.engines.bench import bench_config, bench_report, bench_verdict, start_in_reset
+from cuneate.sim.engines.bench import (bench_case, bench_config, bench_report, bench_verdict,
+                                       start_in_reset)
 from cuneate.sim.fanout.scoreboard import FanoutChecker
 
 
@@ -68,10 +68,8 @@ async def write_channel(dut, watch, mem, c, raw, pending=None):
 
 @cocotb.test()
 async def scoreboard(dut):
-    spec = bench_config()
-    cfg = FanoutConfig.from_kwargs(spec["fanout"])
+    spec, cfg, rng = bench_case("fanout", FanoutConfig.from_kwargs)
     N, C, S = cfg.n_neurons, cfg.n_channels, cfg.S
-    rng = random.Random(spec.get("seed", 1))
     checker = FanoutChecker(cfg)
     await start_bench(dut)
     watch = Watch(dut)

@@ -23,8 +23,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ...hdl.izhikevich import CLAMP_KINDS, IzhikevichConfig, IzhikevichTwin
+from ...hdl.lib.synapses import trace_golden_check
 
-__all__ = ["SweepChecker", "SweepStats"]
+__all__ = ["SweepChecker", "SweepStats", "TargetChecker"]
 
 
 @dataclass
@@ -141,4 +142,40 @@ class SweepChecker:
         if st.spike_disagreements:
             out.append(f"{st.spike_disagreements} spike decisions differ from golden away "
                        f"from the threshold")
+        return out
+
+
+class TargetChecker:
+    """What the checker of a block with Izhikevich target neurons shares (the coincidence
+    detector's, the learning layer's): :attr:`iz`, a :class:`SweepChecker` of the first
+    ``cfg.n_targets`` neurons of ``cfg.iz`` (the padding is never reported); :attr:`stats`,
+    ``stats`` and ``first_mismatch``; the golden check of traces (:meth:`golden_traces`) and
+    :meth:`failures`, each nonzero count of :attr:`FAILURES` a line."""
+
+    #: the counts of :attr:`stats` that are failures (beside the targets' own)
+    FAILURES: tuple = ()
+
+    def __init__(self, cfg, stats: dict):
+        self.cfg = cfg
+        M = cfg.n_targets
+        self.iz = SweepChecker(cfg.iz)
+        self.iz.prev_v, self.iz.prev_u = self.iz.prev_v[:M], self.iz.prev_u[:M]
+        self.iz.sel = self.iz.sel[:M]
+        self.stats = stats | {"first_mismatch": None}
+
+    def golden_traces(self, name: str, view, ys, traces) -> None:
+        """Traces against golden's exact decay of the same ``ys``
+        (:func:`~cuneate.hdl.lib.synapses.trace_golden_check`), counted as
+        ``<name>_golden_violations`` and ``<name>_golden_max_ratio``."""
+        st = self.stats
+        errs, bounds = trace_golden_check(view, ys, traces)
+        st[f"{name}_golden_violations"] += int((errs > bounds).sum())
+        st[f"{name}_golden_max_ratio"] = max(st[f"{name}_golden_max_ratio"],
+                                             float((errs / bounds).max()))
+
+    def failures(self) -> list[str]:
+        st, out = self.stats, list(self.iz.failures())
+        for k in self.FAILURES:
+            if st[k]:
+                out.append(f"{st[k]} {k.replace('_', ' ')} ({st['first_mismatch']})")
         return out

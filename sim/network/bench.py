@@ -24,7 +24,6 @@ outputs (``core.upd_*``, ``det.upd_*``) and the link are watched:
 
 from __future__ import annotations
 
-import random
 import time
 from collections import Counter
 
@@ -35,7 +34,7 @@ import numpy as np
 
 from cuneate.hdl.network import NetworkConfig
 from cuneate.sim.coincidence.scoreboard import CoincidenceChecker
-from cuneate.sim.engines.bench import bench_config, bench_report, start_in_reset
+from cuneate.sim.engines.bench import bench_case, bench_config, bench_report, start_in_reset
 from cuneate.sim.izhikevich.scoreboard import SweepChecker
 
 
@@ -93,11 +92,9 @@ def _signed(sig) -> int:
 
 @cocotb.test()
 async def scoreboard(dut):
-    spec = bench_config()
-    cfg = NetworkConfig(**spec["network"])
+    spec, cfg, rng = bench_case("network", lambda kw: NetworkConfig(**kw))
     N, M, S, F = cfg.n_afferents, cfg.n_targets, cfg.n_sources, cfg.first_source
     n_ticks = spec["ticks"]
-    rng = random.Random(spec.get("seed", 1))
     cur_lo, cur_hi = spec.get("current_range", [0.0, 40.0])
     core_chk = SweepChecker(cfg.core)
     det_chk = CoincidenceChecker(cfg.det)

@@ -15,7 +15,6 @@ and returns the spike stream and every weight read back through the host port.
 
 from __future__ import annotations
 
-import random
 import time
 
 import cocotb
@@ -23,8 +22,8 @@ import numpy as np
 from cocotb.triggers import FallingEdge
 
 from cuneate.hdl.plasticity import CLAMP_KINDS, OPS, PlasticityConfig
-from cuneate.sim.engines.bench import (bench_config, bench_progress, bench_report, bench_verdict,
-                                       spikes_then_tick, start_in_reset)
+from cuneate.sim.engines.bench import (bench_case, bench_config, bench_progress, bench_report,
+                                       bench_verdict, spikes_then_tick, start_in_reset)
 from cuneate.sim.plasticity.scoreboard import CN_FIELDS, SYN_FIELDS, LearningChecker
 
 SIGNED_CN = {"v", "u", "e", "i", "inh"}
@@ -108,10 +107,8 @@ async def window_end(dut, mon, apply: bool):
 
 @cocotb.test()
 async def scoreboard(dut):
-    spec = bench_config()
-    cfg = PlasticityConfig.from_kwargs(spec["layer"])
+    spec, cfg, rng = bench_case("layer", PlasticityConfig.from_kwargs)
     M, K, S = cfg.n_targets, cfg.n_synapses, cfg.n_sources
-    rng = random.Random(spec.get("seed", 1))
     n_ticks, window = spec["ticks"], spec.get("window", 20)
     p_event = spec.get("event_p", 0.3)
     checker = LearningChecker(cfg)

@@ -9,11 +9,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...hdl.lib.synapses import trace_golden_check
 from ...hdl.plasticity import PlasticityConfig
 from ...hdl.plasticity.datapath import calcium_input
 from ...hdl.plasticity.twin import PlasticityTwin
-from ..izhikevich.scoreboard import SweepChecker
+from ..izhikevich.scoreboard import TargetChecker
 
 __all__ = ["LearningChecker", "SYN_FIELDS", "CN_FIELDS"]
 
@@ -22,21 +21,19 @@ SYN_FIELDS = ("w", "cd", "cr", "l", "clamp")
 CN_FIELDS = ("v", "u", "e", "i", "inh", "a", "spike", "clamp")
 
 
-class LearningChecker:
+class LearningChecker(TargetChecker):
     """Checks whole ticks and windows against the twin (exact) and golden (bounded)."""
 
+    FAILURES = ("synapse_mismatches", "cn_mismatches", "window_mismatches",
+                "calcium_golden_violations")
+
     def __init__(self, cfg: PlasticityConfig):
-        self.cfg = cfg
-        M = cfg.n_targets
+        super().__init__(cfg, {"ticks_checked": 0, "synapse_updates_checked": 0,
+                               "cn_updates_checked": 0, "windows_checked": 0,
+                               "synapse_mismatches": 0, "cn_mismatches": 0,
+                               "window_mismatches": 0, "calcium_golden_violations": 0,
+                               "calcium_golden_max_ratio": 0.0, "spikes": 0})
         self.twin = PlasticityTwin(cfg, kernel="stages")
-        self.iz = SweepChecker(cfg.iz)
-        self.iz.prev_v, self.iz.prev_u = self.iz.prev_v[:M], self.iz.prev_u[:M]
-        self.iz.sel = self.iz.sel[:M]
-        self.stats = {"ticks_checked": 0, "synapse_updates_checked": 0,
-                      "cn_updates_checked": 0, "windows_checked": 0,
-                      "synapse_mismatches": 0, "cn_mismatches": 0, "window_mismatches": 0,
-                      "calcium_golden_violations": 0, "calcium_golden_max_ratio": 0.0,
-                      "spikes": 0, "first_mismatch": None}
 
     def _note(self, what: str) -> None:
         if self.stats["first_mismatch"] is None:
@@ -83,11 +80,8 @@ class LearningChecker:
         self.iz.check(cn["v"], cn["u"], cn["i"], cn["spike"], cn["clamp"])
         # the calcium traces against golden's decay of the same y
         _, ys = calcium_input(cfg, cd0, cr0, w0, late[cfg.src])
-        errs, bounds = trace_golden_check(cfg.cview, [y.ravel() for y in ys],
-                                          [syn["cd"].ravel(), syn["cr"].ravel()])
-        st["calcium_golden_violations"] += int((errs > bounds).sum())
-        st["calcium_golden_max_ratio"] = max(st["calcium_golden_max_ratio"],
-                                             float((errs / bounds).max()))
+        self.golden_traces("calcium", cfg.cview, [y.ravel() for y in ys],
+                           [syn["cd"].ravel(), syn["cr"].ravel()])
         st["spikes"] += int(np.count_nonzero(cn["spike"]))
         st["ticks_checked"] += 1
         st["synapse_updates_checked"] += syn["w"].size
@@ -103,11 +97,3 @@ class LearningChecker:
         st["window_mismatches"] += self._synapses(syn, exp, f"window {st['windows_checked']}",
                                                   ("w", "l", "clamp"))
         st["windows_checked"] += 1
-
-    def failures(self) -> list[str]:
-        st, out = self.stats, list(self.iz.failures())
-        for k in ("synapse_mismatches", "cn_mismatches", "window_mismatches",
-                  "calcium_golden_violations"):
-            if st[k]:
-                out.append(f"{st[k]} {k.replace('_', ' ')} ({st['first_mismatch']})")
-        return out

@@ -29,17 +29,17 @@ from __future__ import annotations
 
 import html
 import json
-import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from ..coincidence.experiments import (RidgeSpec, detector_config, format_ridge, ridge_estimate,
                                        ridge_experiment, ridge_problem)
-from ..engines.registry import ENGINES, block_engines, check_engine
+from ..engines.registry import block_engines, check_engine
 from ..report import DPI, board_link_line, files_html, html_table, pyplot, write_page
 from ..spikes import write_spikes
+from .runner import EngineRuns, run_engines
 
 __all__ = ["validate", "RidgeSceneRun", "run", "summary", "write_report", "format_run",
            "same_counts", "spec_of", "estimate"]
@@ -189,15 +189,10 @@ def estimate(scene, engines: list[str]) -> dict:
 
 
 @dataclass
-class RidgeSceneRun:
+class RidgeSceneRun(EngineRuns):
     """The result of a ridge scene: one ridge experiment per engine."""
 
-    scene: object
-    results: dict
-    ran: dict
-    timing: dict
     kind: str = "ridge"
-    files: dict = field(default_factory=dict)   # "spikes": engine -> file
 
 
 def run(scene, engines=None, build_dir=None, progress=False, log=None):
@@ -208,14 +203,10 @@ def run(scene, engines=None, build_dir=None, progress=False, log=None):
         check_engine("network", e)
     spec = spec_of(scene)
     cfg = detector_config(spec)
-    results, timing = {}, {"engines_s": {}}
-    for e in names:
-        t0 = time.perf_counter()
-        bd = Path(build_dir) / e if build_dir and ENGINES[e].background else None
-        results[e] = ridge_experiment(e, spec, build_dir=bd)
-        timing["engines_s"][e] = time.perf_counter() - t0
-        say(f"engine {e}: accuracy {100 * results[e].accuracy:.1f} % "
-            f"({timing['engines_s'][e]:.1f} s)")
+    results, seconds = run_engines(
+        names, lambda e, bd: ridge_experiment(e, spec, build_dir=bd), build_dir,
+        lambda e, r, s: say(f"engine {e}: accuracy {100 * r.accuracy:.1f} % ({s:.1f} s)"))
+    timing = {"engines_s": seconds}
     ran = {"stimulus": "ridges", "effects": [], "engines": names,
            "blocks": [{"block": "izhikevich_core", "neurons": 4, "role": "SA and FA afferents"},
                       {"block": "coincidence_detector", "neurons": cfg.n_targets,

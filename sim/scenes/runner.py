@@ -9,6 +9,7 @@ each engine's spikes and :func:`decoders_agreement` holds their accuracies to go
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -18,8 +19,8 @@ from .. import progress as prog
 from ..decode import decode_trials, decoded_neurons
 from .registry import kind_module
 
-__all__ = ["run_scene", "agreement", "kind_of", "check_budget", "decode_engines",
-           "engines_agreement", "decoders_agreement"]
+__all__ = ["run_scene", "agreement", "kind_of", "check_budget", "EngineRuns", "run_engines",
+           "decode_engines", "engines_agreement", "decoders_agreement"]
 
 
 def kind_of(run_or_scene) -> str:
@@ -64,6 +65,44 @@ def check_budget(scene, engines: list[str], **known) -> dict:
                  "fewer trials or neurons, a shorter scene.duration_ms, a lower update rate "
                  "or faster engines")
     return est
+
+
+@dataclass
+class EngineRuns:
+    """A scene run on several engines (:func:`run_engines`): the scene, each engine's result,
+    what ran, the wall times; ``files``: what was written (``"spikes"``: engine -> file)."""
+
+    scene: object
+    results: dict
+    ran: dict
+    timing: dict
+    files: dict = field(default_factory=dict, kw_only=True)
+
+
+def run_engines(names: list[str], run, build_dir: Path | None = None, log=None,
+                progress: bool = False) -> tuple[dict, dict]:
+    """``(results, seconds)``: ``results[e] = run(e, its build dir)`` and the seconds it took,
+    for each engine ``e`` of ``names`` in turn; a background engine (an HDL simulator) builds
+    in ``build_dir/<e>`` when ``build_dir`` is given, any other gets None. ``log(e, result,
+    seconds)`` after each; ``progress``: a bar over the engines."""
+    from ..engines.registry import ENGINES
+    results, seconds = {}, {}
+    bar = None
+    if progress:
+        from tqdm import tqdm
+        bar = tqdm(total=len(names), desc="engines", unit="engine", leave=False)
+    for e in names:
+        t0 = time.perf_counter()
+        bd = Path(build_dir) / e if build_dir and ENGINES[e].background else None
+        results[e] = run(e, bd)
+        seconds[e] = time.perf_counter() - t0
+        if log:
+            log(e, results[e], seconds[e])
+        if bar:
+            bar.update(1)
+    if bar:
+        bar.close()
+    return results, seconds
 
 
 def agreement(a: list, b: list, dt_ms: float) -> dict:

@@ -24,7 +24,7 @@ from __future__ import annotations
 import html
 import json
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -37,6 +37,7 @@ from ..lif.experiments import skin_grid, skin_protocol
 from ..report import (DPI, board_link_line, files_html, fmt, fmt_distinct, html_table, pyplot,
                       write_page)
 from ..spikes import write_spikes
+from .runner import EngineRuns, run_engines
 
 __all__ = ["LIF_PRESETS", "validate", "SkinSceneRun", "run", "summary", "write_report",
            "format_run", "estimate"]
@@ -155,18 +156,13 @@ def estimate(scene, engines: list[str]) -> dict:
 
 
 @dataclass
-class SkinSceneRun:
+class SkinSceneRun(EngineRuns):
     """The result of a taxel-skin scene: one :class:`~cuneate.sim.lif.experiments.SkinResult`
     per engine, engine agreement, what ran and wall times."""
 
-    scene: object
-    results: dict
     agreement: dict
-    ran: dict
-    timing: dict
     block: dict
     kind: str = "skin"
-    files: dict = field(default_factory=dict)   # "spikes": engine -> file
 
     @property
     def engines(self) -> list[str]:
@@ -199,28 +195,15 @@ def run(scene, engines: list[str] | None = None, build_dir: Path | None = None,
     protocol = {"widths_ms": st["press_widths_ms"], "amplitudes": st["press_amplitudes_N"],
                 "base_amplitude": st["press_base_amplitude_N"],
                 "base_width_ms": st["press_base_width_ms"], "gap_ms": st["press_gap_ms"]}
-    results, timing = {}, {"engines_s": {}}
-    bar = None
-    if progress:
-        from tqdm import tqdm
-        bar = tqdm(total=len(names), desc="engines", unit="engine", leave=False)
     t_all = time.perf_counter()
-    for e in names:
-        t0 = time.perf_counter()
-        bd = (Path(build_dir) / e) if build_dir and ENGINES[e].background else None
-        results[e] = skin_grid(e, rows, cols, st["press_taxel"], fe["force_offset_mV"],
-                               fe["force_gain_mV_per_N"], hw["update_hz"], protocol,
-                               tuple(st["press_spread"]), core, build_dir=bd,
-                               sample_hz=sen["sample_rate_hz"],
-                               duration_ms=scene["scene"]["duration_ms"])
-        timing["engines_s"][e] = time.perf_counter() - t0
-        say(f"engine {e}: {int(results[e].counts.sum())} spikes "
-            f"({timing['engines_s'][e]:.1f} s)")
-        if bar:
-            bar.update(1)
-    if bar:
-        bar.close()
-    timing["engines_wall_s"] = time.perf_counter() - t_all
+    results, seconds = run_engines(
+        names, lambda e, bd: skin_grid(
+            e, rows, cols, st["press_taxel"], fe["force_offset_mV"], fe["force_gain_mV_per_N"],
+            hw["update_hz"], protocol, tuple(st["press_spread"]), core, build_dir=bd,
+            sample_hz=sen["sample_rate_hz"], duration_ms=scene["scene"]["duration_ms"]),
+        build_dir, lambda e, r, s: say(f"engine {e}: {int(r.counts.sum())} spikes ({s:.1f} s)"),
+        progress)
+    timing = {"engines_s": seconds, "engines_wall_s": time.perf_counter() - t_all}
     ref = "fixed" if "fixed" in results else names[0]
     agreement = {f"{e} vs {ref}": agreement(results[e].spikes_ms, results[ref].spikes_ms,
                                              cfg.dt_ms)
@@ -233,7 +216,7 @@ def run(scene, engines: list[str] | None = None, build_dir: Path | None = None,
                                 f"{int(round(hw['update_hz'] / sen['sample_rate_hz']))} "
                                 f"tick(s)"],
            "blocks": [block], "engines": names}
-    return SkinSceneRun(scene, results, agreement, ran, timing, block)
+    return SkinSceneRun(scene, results, ran, timing, agreement=agreement, block=block)
 
 
 def summary(run: SkinSceneRun) -> dict:
