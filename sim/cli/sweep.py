@@ -103,6 +103,30 @@ def cmd_sweep(args) -> int:
     return 0
 
 
+#: the sweep's axes, each a comma-separated list of values: option, default, help
+AXES = (
+    ("--update-hz", "16000",
+     "comma-separated update rates (e.g. 4000,8000,16000,20000,32000,64000)"),
+    ("--operand-width", "18", "comma-separated (e.g. 16,18,20,25)"),
+    ("--frac-bits", "18:20", "comma-separated V:U state fraction bits (e.g. 16:18,18:20,20:22)"),
+    ("--current-frac-bits", "",
+     "comma-separated fraction bits of the core's current format (default: the battery's, "
+     "sQ10.8 unless a scene says otherwise; e.g. 8,10,12)"),
+    ("--rounding", "nearest", "nearest,truncate"),
+    ("--v-frac-bits", "16", "LIF: comma-separated state fraction bits (e.g. 8,12,16,20)"),
+    ("--weight-bits", None,
+     "LIF / coincidence: comma-separated weight widths (default 8 / 12; e.g. 2,4,6,8,10,12,16)"),
+    ("--decay", "multiply",
+     "LIF: multiply and/or shift (no multiplier; only where 1-exp(-dt/tau) is a power of two "
+     "within --max-decay-error, e.g. lif-pow2)"),
+    ("--max-decay-error", "0.01",
+     "LIF: comma-separated largest accepted relative error of the decay"),
+    ("--trace-frac-bits", "16",
+     "coincidence: comma-separated PSP trace fraction bits (e.g. 8,12,16)"),
+    ("--schemes", "euler", "golden schemes: euler,izhikevich,rk4"),
+)
+
+
 def register(groups: CommandGroups) -> None:
     p = groups.root.add_parser("sweep", help="accuracy against cost over the core's knobs")
     p.add_argument("--out", default="out/sweep", help="output directory (cache inside)")
@@ -116,28 +140,8 @@ def register(groups: CommandGroups) -> None:
                         "weights); coincidence detector: cuneate-afferents")
     p.add_argument("--duration-ms", type=positive_float, default=None,
                    help="biological time (default: a scene's length, else 1000)")
-    p.add_argument("--update-hz", default="16000",
-                   help="comma-separated update rates (e.g. 4000,8000,16000,20000,32000,64000)")
-    p.add_argument("--operand-width", default="18", help="comma-separated (e.g. 16,18,20,25)")
-    p.add_argument("--frac-bits", default="18:20",
-                   help="comma-separated V:U state fraction bits (e.g. 16:18,18:20,20:22)")
-    p.add_argument("--current-frac-bits", default="",
-                   help="comma-separated fraction bits of the core's current format (default: "
-                        "the battery's, sQ10.8 unless a scene says otherwise; e.g. 8,10,12)")
-    p.add_argument("--rounding", default="nearest", help="nearest,truncate")
-    p.add_argument("--v-frac-bits", default="16",
-                   help="LIF: comma-separated state fraction bits (e.g. 8,12,16,20)")
-    p.add_argument("--weight-bits", default=None,
-                   help="LIF / coincidence: comma-separated weight widths (default 8 / 12; "
-                        "e.g. 2,4,6,8,10,12,16)")
-    p.add_argument("--decay", default="multiply",
-                   help="LIF: multiply and/or shift (no multiplier; only where 1-exp(-dt/tau) "
-                        "is a power of two within --max-decay-error, e.g. lif-pow2)")
-    p.add_argument("--max-decay-error", default="0.01",
-                   help="LIF: comma-separated largest accepted relative error of the decay")
-    p.add_argument("--trace-frac-bits", default="16",
-                   help="coincidence: comma-separated PSP trace fraction bits (e.g. 8,12,16)")
-    p.add_argument("--schemes", default="euler", help="golden schemes: euler,izhikevich,rk4")
+    for flag, default, text in AXES:
+        p.add_argument(flag, default=default, help=text)
     p.add_argument("--no-float", action="store_true", help="skip the float64/float32 points")
     p.add_argument("--reference-hz", type=positive_float, default=256e3,
                    help="rate of the float64 RK4 reference (default 256e3)")
