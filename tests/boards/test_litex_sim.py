@@ -34,7 +34,9 @@ def _schedule(spec) -> dict:
 
 
 @pytest.mark.cocotb
-@pytest.mark.parametrize("simulator", SIMULATORS)
+# Icarus in the default lane; Verilator (its first build of the SoC about 20 s) in the long lane
+@pytest.mark.parametrize("simulator", [pytest.param(s, marks=pytest.mark.long)
+                                       if s == "verilator" else s for s in SIMULATORS])
 def test_litex_soc_through_uartbone_equals_the_twin(simulator, build_root):
     pytest.importorskip("litex", reason="LiteX 2024.12 (the synth extra) is not installed")
     from cuneate.boards.litex_sim import run_sim

@@ -71,7 +71,8 @@ def test_same_bits_random_parameters_and_states(a, b, c, d, I, v0, u0, dt, schem
     assert_same(ref, golden.simulate(kernel="numba", **kw))
 
 
-@pytest.mark.parametrize("threads", [1, 2])
+# two threads in the default lane, one in the long lane
+@pytest.mark.parametrize("threads", [pytest.param(1, marks=pytest.mark.long), 2])
 def test_divergence_detected_and_named_identically(threads):
     """Neurons diverge at different updates (a large step and currents): the first update
     with a diverged state and the lowest neuron in it are named, with the same values."""

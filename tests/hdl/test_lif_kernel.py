@@ -115,6 +115,7 @@ def _assert_same(ref_out, k_out, ctx):
         assert np.array_equal(ref_out["traces"], k_out["traces"]), f"{ctx}traces"
 
 
+@pytest.mark.long
 @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(name=st.sampled_from(sorted(CONFIGS)), seed=st.integers(0, 2**32 - 1),
        edge=st.sampled_from(["uniform", "extremes", "near-threshold"]))
