@@ -29,7 +29,7 @@ from .scene import scene_request
 from .sizing import size_core
 from .targets import TARGETS
 
-__all__ = ["build_target", "size_blocks", "BuildError", "yowasp_env"]
+__all__ = ["build_target", "board_platform", "size_blocks", "BuildError", "yowasp_env"]
 
 
 class BuildError(ToolError):
@@ -99,6 +99,15 @@ def _yosys_estimate(out: Path, top: str, target: dict) -> dict:
             for k, v in used.items()}
 
 
+def board_platform(target: dict, pack_registers: bool = True):
+    """The platform a build of ``target`` runs on: its board file's, with the ECP5 register
+    packing between yosys and nextpnr when ``pack_registers``."""
+    platform = target["platform"]()
+    if pack_registers and target["family"] == "ecp5":
+        platform = packing_platform(platform)
+    return platform
+
+
 def build_target(board: str, out: Path, n_neurons: int | None = None,
                  clock_hz: float | None = None, update_hz: float | None = None,
                  bitstream: bool = True, seed: int = 1, name: str | None = None,
@@ -142,10 +151,8 @@ def build_target(board: str, out: Path, n_neurons: int | None = None,
         report["scene"] = request.describe()
     if target.get("bitstream") and bitstream:
         from .top import BoardTop
-        platform = target["platform"]()
+        platform = board_platform(target, pack_registers)
         packing = pack_registers and target["family"] == "ecp5"
-        if packing:
-            platform = packing_platform(platform)
         top = BoardTop(lcfg, sized["pll"], target.get("uart_tx_enable", False),
                        target.get("status_leds"))
         opts = f"--report {name}.nextpnr.json --timing-allow-fail --seed {seed}"

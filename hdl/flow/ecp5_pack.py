@@ -325,13 +325,18 @@ class _PackingECP5:
 def packing_platform(platform):
     """``platform`` (an amaranth ECP5 platform instance, Trellis toolchain) as an instance of
     a subclass whose build script packs the registers (:data:`PACK_COMMAND`) between yosys and
-    nextpnr-ecp5. Anything else raises ``ValueError``."""
+    nextpnr-ecp5, with the resources and connectors added to ``platform``. Anything else
+    raises ``ValueError``."""
     if getattr(platform, "family", None) != "ecp5" or platform.toolchain != "Trellis":
         raise ValueError(f"register packing needs an ECP5 platform with the Trellis toolchain, "
                          f"not {type(platform).__name__}")
     cls = type(platform)
     packed = type(f"{cls.__name__}Packed", (_PackingECP5, cls), {"__module__": __name__})
-    return packed(toolchain=platform.toolchain)
+    out = packed(toolchain=platform.toolchain)
+    # what the board file added to its instance (a UART on a header, LEDs) comes along
+    out.add_resources([r for k, r in platform.resources.items() if k not in out.resources])
+    out.add_connectors([c for k, c in platform.connectors.items() if k not in out.connectors])
+    return out
 
 
 _USAGE = "usage: python -m cuneate.hdl.flow.ecp5_pack NETLIST.json [--report REPORT.json]"

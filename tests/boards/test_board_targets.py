@@ -9,7 +9,7 @@ import json
 
 import pytest
 
-from cuneate.boards.build import build_target
+from cuneate.boards.build import board_platform, build_target
 from cuneate.boards.sizing import clock_plans, limits, size_core
 from cuneate.boards.targets import TARGETS
 from cuneate.boards.top import BoardTop
@@ -35,8 +35,8 @@ def _text(data):
 def test_every_board_top_elaborates_with_its_uart_and_clock_plans(board):
     """Each plan's PLL makes the plan's clock from the plan's oscillator within its family's
     phase-detector and VCO ranges; the board top (PLL, a 64-neuron core behind the link, UART,
-    status LEDs) elaborates on the board's platform, its constraints binding the UART and the
-    oscillator to the board's pins."""
+    status LEDs) elaborates on the platform the build uses (ECP5: the packing one), its
+    constraints binding the UART and the oscillator to the board's pins."""
     t = TARGETS[board]
     for plan, pll in clock_plans(t):
         p = pll.plan
@@ -48,7 +48,7 @@ def test_every_board_top_elaborates_with_its_uart_and_clock_plans(board):
         assert plan.baud_error <= 0.01 and plan.cycles_per_tick * plan.update_hz == plan.clock_hz
     top = BoardTop(size_core(t, n_neurons=64)["link"], t["pll"], t.get("uart_tx_enable", False),
                    t.get("status_leds"))
-    files = t["platform"]().prepare(top, name="top").files
+    files = board_platform(t).prepare(top, name="top").files
     ext, pins = PINS[board]
     cons = _text(files[f"top.{ext}"])
     for pin in pins:
