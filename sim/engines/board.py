@@ -21,6 +21,7 @@ from ..fanout.engines import FRONT, FanoutFront
 from ..izhikevich.engines import IzhikevichEngine
 from ..lif.engines import LifEngine
 from ..network.engines import NetworkEngine
+from ...hdl.lib.config import ConfigError
 from ...hdl.plasticity.payload import readout_bytes
 from ..plasticity.engines import PlasticityFace
 from .engine import BlockEngine
@@ -97,11 +98,15 @@ class BoardEngine(FaceEngine):
 
 def _readout_synapses(self, cfg) -> int:
     """As many as a spike batch holds beside a tick's CN spikes, ``batch_sweeps`` readout
-    sweeps in a batch (at least one synapse)."""
+    sweeps in a batch; refused when not one synapse fits."""
     from ..link.engines import board_link         # the board top loads when it runs
     lc = board_link(cfg)
     per = (lc.batch_capacity - cfg.n_targets) // (lc.batch_sweeps * readout_bytes(cfg))
-    return max(1, min(cfg.n_synapses, per))
+    if per < 1:
+        raise ConfigError(f"the board link's spike batch ({lc.batch_capacity} spikes, "
+                          f"{lc.batch_sweeps} sweeps) holds no readout of a synapse "
+                          f"({readout_bytes(cfg)} bytes) beside {cfg.n_targets} CNs' spikes")
+    return min(cfg.n_synapses, per)
 
 
 #: the board's engines, one per block: the core in a scene also behind the channel fan-out or

@@ -128,18 +128,14 @@ def engines_agreement(spikes: dict, lay: dict, dt_ms: float) -> dict:
     """Each engine's spike trains against the reference ("fixed" if it ran, else the first
     engine), the afferents' and the cuneate layer's."""
     out = {}
-    names = list(spikes)
-    ref = "fixed" if "fixed" in spikes else None
-    for e in names:
+    ref = "fixed" if "fixed" in spikes else next(iter(spikes))
+    for e in spikes:
         if e == ref:
             continue
-        other = ref or names[0]
-        if e == other:
-            continue
-        out[f"{e} vs {other}"] = agreement(spikes[e], spikes[other], dt_ms)
+        out[f"{e} vs {ref}"] = agreement(spikes[e], spikes[ref], dt_ms)
         if lay:
-            out[f"{lay['population']}: {e} vs {other}"] = agreement(
-                lay["spikes"][e], lay["spikes"][other], dt_ms)
+            out[f"{lay['population']}: {e} vs {ref}"] = agreement(
+                lay["spikes"][e], lay["spikes"][ref], dt_ms)
     return out
 
 

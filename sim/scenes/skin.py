@@ -37,7 +37,7 @@ from ..lif.experiments import skin_grid, skin_protocol
 from ..report import (DPI, board_link_line, files_html, fmt, fmt_distinct, html_table, pyplot,
                       write_page)
 from ..spikes import write_spikes
-from .runner import EngineRuns, run_engines
+from .runner import EngineRuns, engines_agreement, run_engines
 
 __all__ = ["LIF_PRESETS", "validate", "SkinSceneRun", "run", "summary", "write_report",
            "format_run", "estimate"]
@@ -180,7 +180,6 @@ def core_keywords(scene) -> dict:
 def run(scene, engines: list[str] | None = None, build_dir: Path | None = None,
         progress: bool = False, log=None) -> SkinSceneRun:
     """Run a taxel-skin scene on its engines (or ``engines``)."""
-    from .runner import agreement
     say = log or (lambda msg: None)
     st, sen, fe, hw = scene["stimulus"], scene["sensor"], scene["frontend"], scene["hardware"]
     rows, cols = sen["grid"]
@@ -204,10 +203,7 @@ def run(scene, engines: list[str] | None = None, build_dir: Path | None = None,
         build_dir, lambda e, r, s: say(f"engine {e}: {int(r.counts.sum())} spikes ({s:.1f} s)"),
         progress)
     timing = {"engines_s": seconds, "engines_wall_s": time.perf_counter() - t_all}
-    ref = "fixed" if "fixed" in results else names[0]
-    agreement = {f"{e} vs {ref}": agreement(results[e].spikes_ms, results[ref].spikes_ms,
-                                             cfg.dt_ms)
-                 for e in names if e != ref}
+    agreement = engines_agreement({e: results[e].spikes_ms for e in names}, {}, cfg.dt_ms)
     ran = {"stimulus": "press", "effects": [], "effect_counts": {},
            "front_end": ["force"],
            "front_end_detail": [f"force: I = {fe['force_offset_mV']:g} mV + "
