@@ -46,7 +46,7 @@ import numpy as np
 from ...golden import izhikevich as golden
 from ..lib.banked import DP16KD_SHAPES, block_shapes
 from ..lib.config import (SATURATION, ConfigError, CoreOptions, int_bits_for, refusing,
-                          shared_exponent)
+                          shared_exponent, whole_cycles_per_tick)
 from ..lib.fixed import FixedConstant, QFormat, round_shift
 from .range import RangeSearchError, one_step_bound, reachable_ranges
 
@@ -214,17 +214,7 @@ class IzhikevichConfig(CoreOptions):
             raise ConfigError(f"bram_shapes must be (depth, width) pairs of positive integers, "
                               f"each depth a power of two, got {self.bram_shapes!r}")
         self.bram_shapes = shapes
-        if not (isinstance(self.clock_hz, (int, float)) and isinstance(self.update_hz,
-                                                                        (int, float))
-                and self.clock_hz > 0 and self.update_hz > 0 and math.isfinite(self.clock_hz)
-                and math.isfinite(self.update_hz)):
-            raise ConfigError("clock_hz and update_hz must be positive finite numbers")
-        ratio = self.clock_hz / self.update_hz
-        if abs(ratio - round(ratio)) > 1e-9 * ratio or round(ratio) < 1:
-            raise ConfigError(f"clock_hz / update_hz = {self.clock_hz:.12g} / "
-                              f"{self.update_hz:.12g} = {ratio:.12g} is not an integer number "
-                              f"of cycles per update")
-        self.cycles_per_tick = int(round(ratio))
+        self.cycles_per_tick = whole_cycles_per_tick(self.clock_hz, self.update_hz)
         if N > self.cycles_per_tick:
             raise ConfigError(
                 f"{N} neurons do not fit one sweep: at {self.clock_hz:g} Hz and "

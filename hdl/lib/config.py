@@ -9,6 +9,8 @@ refused later, at elaboration or while simulating.
 
 from __future__ import annotations
 
+import math
+import numbers
 from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Sequence
@@ -89,11 +91,16 @@ def check_tick_source(tick_source) -> None:
 
 
 def whole_cycles_per_tick(clock_hz: float, update_hz: float) -> int:
-    """``clock_hz / update_hz``, refused unless a whole number (to 1e-9) of at least 1."""
-    cycles = int(round(clock_hz / update_hz))
-    if abs(clock_hz / update_hz - cycles) > 1e-9 * cycles or cycles < 1:
-        raise ConfigError(f"clock_hz / update_hz = {clock_hz / update_hz:.12g} "
-                          f"is not an integer number of cycles per tick")
+    """``clock_hz / update_hz``: the cycles of one update (tick), refused unless both rates are
+    positive finite numbers and their ratio a whole number (to 1e-9) of at least 1."""
+    if not all(isinstance(x, numbers.Real) and not isinstance(x, bool) and math.isfinite(x)
+               and x > 0 for x in (clock_hz, update_hz)):
+        raise ConfigError("clock_hz and update_hz must be positive finite numbers")
+    ratio = clock_hz / update_hz
+    cycles = int(round(ratio))
+    if not math.isfinite(ratio) or abs(ratio - cycles) > 1e-9 * ratio or cycles < 1:
+        raise ConfigError(f"clock_hz / update_hz = {clock_hz:.12g} / {update_hz:.12g} = "
+                          f"{ratio:.12g} is not an integer number of cycles per update")
     return cycles
 
 

@@ -32,7 +32,7 @@ import numpy as np
 
 from ...golden import lif as golden
 from ..lib.config import MIN_NEURONS, SATURATION, ConfigError, CoreOptions, check_delays, \
-    int_bits_for
+    int_bits_for, whole_cycles_per_tick
 from ..lib.fixed import FixedConstant, QFormat
 from .checks import (MAX_OPERAND_WIDTH, MAX_V_FRAC_BITS, MAX_WEIGHT_BITS, LifSet, check_int64,
                      check_leak, check_weight_memory)
@@ -139,11 +139,7 @@ class LifConfig(CoreOptions):
             raise ConfigError("update_hz must be a positive finite number")
         if self.clock_hz is None:
             self.clock_hz = float(self.update_hz * N)
-        ratio = self.clock_hz / self.update_hz
-        if not math.isfinite(ratio) or abs(ratio - round(ratio)) > 1e-9 * ratio:
-            raise ConfigError(f"clock_hz / update_hz = {ratio:.12g} is not an integer number "
-                              f"of cycles per update")
-        self.cycles_per_tick = int(round(ratio))
+        self.cycles_per_tick = whole_cycles_per_tick(self.clock_hz, self.update_hz)
         if N > self.cycles_per_tick:
             raise ConfigError(f"{N} neurons do not fit one sweep of {self.cycles_per_tick} "
                               f"cycles (clock_hz / update_hz)")

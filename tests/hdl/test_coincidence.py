@@ -30,7 +30,7 @@ def _small(**kw):
     (dict(tau_rise_ms=1e-4), "PSP trace xr: decay k = 1 - exp(-dt/tau)"),
     (dict(tau_decay_ms=1e6, tau_rise_ms=1e5), "targets' Izhikevich arithmetic refused"),
     (dict(clock_hz=16e3 * 20), "3 targets x 4 sources need 38 cycles per tick"),
-    (dict(clock_hz=16e3 * 40.5), "is not an integer number of cycles per tick"),
+    (dict(clock_hz=16e3 * 40.5), "is not an integer number of cycles per update"),
     (dict(target_sets=[0, 1, 0]), "target_sets needs 3 indices into the 1 parameter set"),
     (dict(param_sets=("RS", "nope")), "targets' Izhikevich arithmetic refused"),
 ])
