@@ -10,40 +10,23 @@ from __future__ import annotations
 
 from amaranth import Module
 
-from .config import ConfigError
-from .payload import BlockPayload, PayloadSpec, write_port
+from .payload import BlockPayload, BlockSpec, write_port
 
 __all__ = ["CorePayload", "CoreSpec"]
 
 
-class CoreSpec(PayloadSpec):
-    """The spec of a block whose configuration (:attr:`config`) has ``to_kwargs``,
-    ``from_kwargs`` and ``tick_source``: :meth:`retimed` and :meth:`external` from it,
-    :meth:`build` a :class:`CorePayload` of :meth:`core` (a subclass makes the core)."""
+class CoreSpec(BlockSpec):
+    """The :class:`~cuneate.hdl.lib.payload.BlockSpec` of a core whose configuration rebuilds
+    from its keywords by ``from_kwargs``; its component is a :class:`CorePayload` of
+    :meth:`core` (a subclass makes the core)."""
 
-    config: object
-
-    @property
-    def external(self) -> bool:
-        return self.config.tick_source == "external"
-
-    def options(self) -> dict:
-        """The spec's own options besides the configuration (an array's cores)."""
-        return {}
-
-    def retimed(self, clock_hz: float | None = None):
-        kw = self.config.to_kwargs(tick_source="external")
-        if clock_hz is not None:
-            kw["clock_hz"] = clock_hz
-        return type(self)(type(self.config).from_kwargs(kw), **self.options())
+    def config_from(self, kw: dict):
+        return type(self.config).from_kwargs(kw)
 
     def core(self):
         raise NotImplementedError
 
-    def build(self) -> "CorePayload":
-        if not self.external:
-            raise ConfigError(f"a payload's ticks come from its face: the {self.info.block} "
-                              f"needs tick_source='external' (retimed() gives it)")
+    def component(self) -> "CorePayload":
         return CorePayload(self, self.core())
 
 
