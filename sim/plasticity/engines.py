@@ -236,11 +236,14 @@ class PlasticityFace(PlasticityEngine):
             raise ValueError(f"{self.name}: a CN spike in a readout sweep or a readout id in "
                              f"a tick")
         lsb = cfg.W.lsb
+        order = np.argsort(got.tick[~cn], kind="stable")      # readout ids grouped by sweep
+        r_sweep, r_id = got.tick[~cn][order], got.neuron[~cn][order]
         reads = []                              # raw weights at each readout
         for i in range(len(plan.readouts)):
             sweeps = np.flatnonzero(plan.tick_of_sweep == -1 - i).reshape(M, C)
-            reads.append(np.stack([weights_from_ids(cfg, got.neuron[np.isin(got.tick, s)])
-                                   for s in sweeps]).reshape(M, K))
+            bounds = np.searchsorted(r_sweep, np.stack([sweeps[:, 0], sweeps[:, -1] + 1], 1))
+            reads.append(np.stack([weights_from_ids(cfg, r_id[lo:hi])
+                                   for lo, hi in bounds]).reshape(M, K))
         snaps = [(0, cfg.weights_raw * lsb)] + [(done, w * lsb) for done, w in
                                                 zip(plan.readouts[:-1], reads[:-1])]
         sp, st, j = tick[cn] // pres.n_ticks, tick[cn] % pres.n_ticks, got.neuron[cn]
