@@ -6,9 +6,10 @@ block's payload twin (:func:`cuneate.sim.axi.scoreboard.check_face`): every swee
 and its TLAST, the empty sweeps' markers, the constants, every counter, the refusals answered
 with an error, the clamp flags as the twin's (a clamp provoked) and cleared over the bus.
 
-The learning layer behind the AXI face: its protocol streamed as writes, every sweep's ids as
-the payload twin's and the weights of its readout sweeps equal to the fixed engine's after
-learning (Icarus in the default lane, Verilator in the long lane).
+The learning layer behind the AXI and Wishbone faces: its protocol streamed as writes, every
+sweep's ids as the payload twin's and the weights of its readout sweeps equal to the fixed
+engine's after learning (AXI on Icarus in the default lane; Verilator and the Wishbone face in
+the long lane).
 
 Default lane: the LIF core behind the AXI face and behind the Wishbone face, on both
 simulators. Long lane: the Izhikevich array and the network behind the AXI face, and the channel
@@ -139,21 +140,24 @@ def _learning():
 
 
 @pytest.mark.cocotb
-# Icarus in the default lane; Verilator's build (about a minute) in the long lane
-@pytest.mark.parametrize("simulator", [pytest.param(s, marks=pytest.mark.long)
-                                       if s == "verilator" else s for s in SIMULATORS])
-def test_the_learning_layer_learns_behind_the_axi_face(simulator, build_root):
+# AXI on Icarus in the default lane; Verilator's build (about a minute) and the Wishbone face
+# in the long lane
+@pytest.mark.parametrize("face, simulator", [
+    pytest.param(f, s, marks=pytest.mark.long) if (f, s) != ("axi", "icarus") else (f, s)
+    for f in ("axi", "wishbone") for s in SIMULATORS])
+def test_the_learning_layer_learns_behind_the_bus_faces(face, simulator, build_root):
     """The layer's protocol streamed on s_axis (afferent spikes, window ends, readout
-    requests): every sweep's ids, counters and clamp flags as the payload twin's, and the
-    weights read back in the readout sweeps equal the fixed engine's after learning."""
+    requests): every sweep's ids, counters (over the face's AXI4-Lite or Wishbone registers)
+    and clamp flags as the payload twin's, and the weights read back in the readout sweeps
+    equal the fixed engine's after learning."""
     spec, pres = _learning()
     cfg, C = spec.config, spec.parts
     flags = np.array([True, True])
     plan = face_schedule(cfg, pres, flags, readout_synapses=spec.readout_synapses)
     sched = {k: [(first, raw.tolist()) for first, raw in rows]
              for k, rows in plan.writes.items()}
-    report = run_face(simulator, spec, "axi", sched, plan.n_sweeps,
-                      build_root / f"axi_learning_{simulator}", seed=7)
+    report = run_face(simulator, spec, face, sched, plan.n_sweeps,
+                      build_root / f"{face}_learning_{simulator}", seed=7)
     got = check_face(spec, sched, plan.n_sweeps, report)
     fixed = run_learning("fixed", cfg, pres, flags)
     assert got["spikes"] > fixed.spike_cn.size > 0 and C == 2
