@@ -1,6 +1,6 @@
 """The block behind the Wishbone face as a LiteX peripheral (:class:`CuneatePeripheral`) and a
 small LiteX SoC around it for the ULX3S (:class:`CuneateSoC`) and the ButterStick
-(:class:`ButterStickSoC`, Verilog checked, no bitstream run): no CPU, the host on the board's
+(:class:`ButterStickSoC`): no CPU, the host on the board's
 UART through LiteX's UARTBone bridge (``litex.tools.litex_client.RemoteClient`` on the PC).
 
 Pinned: LiteX 2024.12 with migen 0.10 (both from PyPI; ``pip install "litex==2024.12"``).
