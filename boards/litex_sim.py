@@ -5,7 +5,9 @@ PLL (the rest as the ULX3S build: UARTBone, the peripheral at ``CUNEATE_BASE``);
 cocotbext-uart on ``serial_rx``/``serial_tx`` bridged to a pseudo-terminal, one pump each bit
 time) while :func:`host_session`, in a thread of this process, drives it through
 ``litex.tools.remote.comm_uart.CommUART`` on that terminal with the addresses of the
-``csr.csv`` LiteX wrote.
+``csr.csv`` LiteX wrote; or (``bridge="litex_server"``) as a LiteX user's scripts do: LiteX's
+``RemoteServer`` (what ``litex_server --uart`` runs) on that terminal and the session on a
+``RemoteClient`` over Etherbone on a local TCP port.
 
 The line: ``sys_clk_hz / CLOCKS_PER_BIT`` baud (8 clocks a bit; the nominal clock only sets
 UARTBone's tuning word and its 100 ms frame timeout, the simulator's clock period is 10 ns);
@@ -16,21 +18,25 @@ from __future__ import annotations
 
 import re
 import shutil
+import socket
 import threading
 import time
+import warnings
 from pathlib import Path
 
 from .litex_soc import (CUNEATE_BASE, LITEX_VERSION, require_litex, soc_around, ulx3s_platform,
                         write_soc)
 
 __all__ = ["write_sim_soc", "host_session", "run_sim", "SIM_TOP", "CLOCKS_PER_BIT",
-           "SIM_CLOCK_HZ"]
+           "SIM_CLOCK_HZ", "BRIDGES"]
 
 SIM_TOP = "cuneate_litex_sim"
 CLOCKS_PER_BIT = 8
 #: the SoC's nominal clock in simulation (UARTBone's tuning word and timeout)
 SIM_CLOCK_HZ = 100e6
 _BLOCK = "cuneate_wb"
+#: how the host reaches UARTBone: LiteX's CommUART itself, or litex_server + RemoteClient
+BRIDGES = ("comm_uart", "litex_server")
 
 
 def write_sim_soc(spec, out: Path, sys_clk_hz: float = SIM_CLOCK_HZ,
@@ -169,12 +175,18 @@ def host_session(comm, spec, schedule: dict, n_sweeps: int) -> dict:
             "spike_lost": read(regs.cuneate_spike_lost.addr), "transactions": n_tx[0]}
 
 
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
 def _host_thread(files: dict, soc: dict, spec, schedule, n_sweeps, result: dict,
-                 wait_s: float):
-    """Wait for the bench's terminal name, run :func:`host_session` on it, then write the
-    bench's stop file (also on failure: the error goes into ``result``)."""
+                 wait_s: float, bridge: str):
+    """Wait for the bench's terminal name, run :func:`host_session` on it through ``bridge``,
+    then write the bench's stop file (also on failure: the error goes into ``result``)."""
     from litex.tools.remote.comm_uart import CommUART
-    comm = None
+    comm = client = None
     try:
         end = time.monotonic() + wait_s
         while not files["pty"].exists():
@@ -183,22 +195,43 @@ def _host_thread(files: dict, soc: dict, spec, schedule, n_sweeps, result: dict,
             time.sleep(0.05)
         comm = CommUART(files["pty"].read_text().strip(), 115200,
                         csr_csv=str(soc["csr_csv"]))
-        comm.open()
-        result.update(host_session(comm, spec, schedule, n_sweeps))
+        if bridge == "litex_server":
+            from litex.tools.litex_client import RemoteClient
+            from litex.tools.litex_server import RemoteServer
+            server = RemoteServer(comm, "127.0.0.1", _free_port())
+            server.open()                        # opens the terminal
+            with warnings.catch_warnings():      # LiteX 2024.12's Thread.setDaemon
+                warnings.simplefilter("ignore", DeprecationWarning)
+                server.start(1)
+            client = RemoteClient("127.0.0.1", server.bind_port, csr_csv=str(soc["csr_csv"]))
+            client.open()
+            # RemoteClient answers zeros after its 2 s default timeout; the simulated line
+            # is slower than that under load
+            client.socket.settimeout(wait_s)
+            result.update(host_session(client, spec, schedule, n_sweeps))
+            result["bridge"] = f"RemoteClient -> RemoteServer on 127.0.0.1:{server.bind_port}"
+        else:
+            comm.open()
+            result.update(host_session(comm, spec, schedule, n_sweeps))
+            result["bridge"] = "CommUART"
     except BaseException as exc:         # noqa: BLE001 - reported to the caller
         result["error"] = f"{type(exc).__name__}: {exc}"
     finally:
+        if client is not None:
+            client.close()
         if comm is not None:
             comm.close()
         files["stop"].write_text("done\n")
 
 
 def run_sim(simulator: str, spec, schedule: dict, n_sweeps: int, build_dir: Path,
-            wall_s: float = 120.0) -> dict:
-    """The SoC of ``spec`` on ``simulator`` with :func:`host_session` on LiteX's
-    ``CommUART``: the session's result, with ``"bench"`` (the bench's report: bytes each
+            wall_s: float = 120.0, bridge: str = "comm_uart") -> dict:
+    """The SoC of ``spec`` on ``simulator`` with :func:`host_session` through ``bridge``
+    (:data:`BRIDGES`): the session's result, with ``"bench"`` (the bench's report: bytes each
     way, cycles, bits pumped) and ``"sources"``. Raises ``RuntimeError`` naming the host's
     error."""
+    if bridge not in BRIDGES:
+        raise ValueError(f"bridge must be one of {BRIDGES}, not {bridge!r}")
     from ..sim.engines.cocotb import run_cocotb
     build_dir = Path(build_dir).resolve()
     soc = write_sim_soc(spec, build_dir / "soc", lowered=simulator == "icarus")
@@ -209,7 +242,8 @@ def run_sim(simulator: str, spec, schedule: dict, n_sweeps: int, build_dir: Path
         f.unlink(missing_ok=True)
     result: dict = {}
     host = threading.Thread(target=_host_thread, daemon=True,
-                            args=(files, soc, spec, schedule, n_sweeps, result, wall_s))
+                            args=(files, soc, spec, schedule, n_sweeps, result, wall_s,
+                                  bridge))
     host.start()
     cfg = {"clock_ns": 10, "clocks_per_bit": CLOCKS_PER_BIT,
            "pty_file": str(files["pty"]), "stop_file": str(files["stop"]), "wall_s": wall_s}

@@ -1,11 +1,12 @@
 """The LiteX SoC (boards/litex_sim.py) simulated on Icarus and Verilator with the host on
 LiteX's own ``CommUART`` over UARTBone (a pseudo-terminal bridged to cocotbext-uart on the
-SoC's serial pins): a small Izhikevich core's currents written through the write CSRs, sweeps
+SoC's serial pins), and through ``litex_server``'s RemoteServer and a RemoteClient as a LiteX
+user's scripts reach a board: a small Izhikevich core's currents written through the write CSRs, sweeps
 stepped through the Wishbone face, the spike beats popped from the FIFO, the clamp flags and
 the face's counters read; compared with the block's payload twin.
 
-Default lane (about 5 to 8 s on Icarus, 3 s on Verilator with its model cached, 20 s
-without). Without LiteX (the ``synth`` extra) both cases skip, and CI fails on them:
+Default lane: CommUART on Icarus (about 5 to 8 s); long lane: Verilator (3 s with its model
+cached, 20 s without) and the RemoteClient on both. Without LiteX (the ``synth`` extra) both cases skip, and CI fails on them:
 ``scripts/check_simulators_ran.py`` counts a skipped simulator case as not passed."""
 
 import numpy as np
@@ -34,18 +35,22 @@ def _schedule(spec) -> dict:
 
 
 @pytest.mark.cocotb
-# Icarus in the default lane; Verilator (its first build of the SoC about 20 s) in the long lane
-@pytest.mark.parametrize("simulator", [pytest.param(s, marks=pytest.mark.long)
-                                       if s == "verilator" else s for s in SIMULATORS])
-def test_litex_soc_through_uartbone_equals_the_twin(simulator, build_root):
+# CommUART on Icarus in the default lane; Verilator (its first build of the SoC about 20 s) and
+# litex_server + RemoteClient in the long lane
+@pytest.mark.parametrize("simulator, bridge", [
+    pytest.param(s, b, marks=pytest.mark.long) if (s, b) != ("icarus", "comm_uart") else (s, b)
+    for b in ("comm_uart", "litex_server") for s in SIMULATORS])
+def test_litex_soc_through_uartbone_equals_the_twin(simulator, bridge, build_root):
     pytest.importorskip("litex", reason="LiteX 2024.12 (the synth extra) is not installed")
     from cuneate.boards.litex_sim import run_sim
     spec = _spec()
     sched = _schedule(spec)
-    got = run_sim(simulator, spec, sched, SWEEPS, build_root / f"litex_sim_{simulator}")
+    got = run_sim(simulator, spec, sched, SWEEPS, build_root / f"litex_sim_{simulator}_{bridge}",
+                  bridge=bridge)
     want = reference(spec, sched, SWEEPS)
     n = check_packets(spec.info, got["packets"], want.sweeps)
-    print(f"\n{simulator}: {n} spikes, {got['transactions']} transactions, {got['bench']}")
+    print(f"\n{simulator}, {got['bridge']}: {n} spikes, {got['transactions']} transactions, "
+          f"{got['bench']}")
     assert n > 0 and want.clamp_flags != 0
     assert reference(spec, {0: sched[0]}, SWEEPS).sweeps != want.sweeps   # sweep 3's burst shows
     assert got["clamp_flags"] == want.clamp_flags
