@@ -5,8 +5,8 @@ PLL (the rest as the ULX3S build: UARTBone, the peripheral at ``CUNEATE_BASE``);
 cocotbext-uart on ``serial_rx``/``serial_tx`` bridged to a pseudo-terminal, one pump each bit
 time) while :func:`host_session`, in a thread of this process, drives it through
 ``litex.tools.remote.comm_uart.CommUART`` on that terminal with the addresses of the
-``csr.csv`` LiteX wrote; or (``bridge="litex_server"``) as a LiteX user's scripts do: LiteX's
-``RemoteServer`` (what ``litex_server --uart`` runs) on that terminal and the session on a
+``csr.csv`` LiteX wrote; or (``bridge="litex_server"``) as a LiteX user reaches a board:
+``litex_server --uart`` on that terminal in its own process and the session on a
 ``RemoteClient`` over Etherbone on a local TCP port.
 
 The line: ``sys_clk_hz / CLOCKS_PER_BIT`` baud (8 clocks a bit; the nominal clock only sets
@@ -19,9 +19,10 @@ from __future__ import annotations
 import re
 import shutil
 import socket
+import subprocess
+import sys
 import threading
 import time
-import warnings
 from pathlib import Path
 
 from .litex_soc import (CUNEATE_BASE, LITEX_VERSION, require_litex, soc_around, ulx3s_platform,
@@ -181,36 +182,63 @@ def _free_port() -> int:
         return s.getsockname()[1]
 
 
+def _litex_server(pty: str, wait_s: float):
+    """``litex_server --uart`` on the terminal ``pty``, in its own process as a user runs it,
+    listening on a free local port: ``(process, port)`` once it accepts connections."""
+    port = _free_port()
+    proc = subprocess.Popen([sys.executable, "-m", "litex.tools.litex_server", "--uart",
+                             "--uart-port", pty, "--bind-ip", "127.0.0.1", "--bind-port",
+                             str(port)], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                            text=True)
+    end = time.monotonic() + wait_s
+    while True:
+        try:
+            socket.create_connection(("127.0.0.1", port), timeout=1).close()
+            return proc, port
+        except OSError:
+            if proc.poll() is not None or time.monotonic() > end:
+                proc.kill()
+                raise RuntimeError(f"litex_server did not start: {proc.communicate()[0]!r}")
+            time.sleep(0.1)
+
+
+def _strict_client(csr_csv: str, port: int, timeout_s: float):
+    """LiteX's ``RemoteClient`` on ``port`` whose read raises on a missing answer (LiteX's
+    own returns zeros after a timeout)."""
+    from litex.tools.litex_client import RemoteClient
+
+    class StrictClient(RemoteClient):
+        def receive_packet(self, sock, addr_size):
+            packet = super().receive_packet(sock, addr_size)
+            if packet == 0:
+                raise TimeoutError(f"no answer from litex_server within {timeout_s:g} s")
+            return packet
+    client = StrictClient("127.0.0.1", port, csr_csv=csr_csv)
+    client.open()
+    client.socket.settimeout(timeout_s)
+    return client
+
+
 def _host_thread(files: dict, soc: dict, spec, schedule, n_sweeps, result: dict,
                  wait_s: float, bridge: str):
     """Wait for the bench's terminal name, run :func:`host_session` on it through ``bridge``,
     then write the bench's stop file (also on failure: the error goes into ``result``)."""
     from litex.tools.remote.comm_uart import CommUART
-    comm = client = None
+    comm = client = server = None
     try:
         end = time.monotonic() + wait_s
         while not files["pty"].exists():
             if time.monotonic() > end or files["stop"].exists():
                 raise TimeoutError("the bench never opened its terminal")
             time.sleep(0.05)
-        comm = CommUART(files["pty"].read_text().strip(), 115200,
-                        csr_csv=str(soc["csr_csv"]))
+        pty = files["pty"].read_text().strip()
         if bridge == "litex_server":
-            from litex.tools.litex_client import RemoteClient
-            from litex.tools.litex_server import RemoteServer
-            server = RemoteServer(comm, "127.0.0.1", _free_port())
-            server.open()                        # opens the terminal
-            with warnings.catch_warnings():      # LiteX 2024.12's Thread.setDaemon
-                warnings.simplefilter("ignore", DeprecationWarning)
-                server.start(1)
-            client = RemoteClient("127.0.0.1", server.bind_port, csr_csv=str(soc["csr_csv"]))
-            client.open()
-            # RemoteClient answers zeros after its 2 s default timeout; the simulated line
-            # is slower than that under load
-            client.socket.settimeout(wait_s)
+            server, port = _litex_server(pty, wait_s)
+            client = _strict_client(str(soc["csr_csv"]), port, wait_s)
             result.update(host_session(client, spec, schedule, n_sweeps))
-            result["bridge"] = f"RemoteClient -> RemoteServer on 127.0.0.1:{server.bind_port}"
+            result["bridge"] = f"RemoteClient -> litex_server on 127.0.0.1:{port}"
         else:
+            comm = CommUART(pty, 115200, csr_csv=str(soc["csr_csv"]))
             comm.open()
             result.update(host_session(comm, spec, schedule, n_sweeps))
             result["bridge"] = "CommUART"
@@ -219,6 +247,9 @@ def _host_thread(files: dict, soc: dict, spec, schedule, n_sweeps, result: dict,
     finally:
         if client is not None:
             client.close()
+        if server is not None:
+            server.terminate()               # litex_server runs until stopped
+            server.communicate(timeout=10)
         if comm is not None:
             comm.close()
         files["stop"].write_text("done\n")

@@ -127,6 +127,7 @@ class CoincidenceConfig(TargetOptions):
                               f"({D * S / 2**20:.3g} Mibit) does not fit the block RAM of the "
                               f"largest supported FPGA ({MAX_HISTORY_BITS / 2**20:.3g} Mibit); at "
                               f"{S} source(s) at most {MAX_HISTORY_BITS // S} ticks")
+        self.cycles_per_tick = whole_cycles_per_tick(self.clock_hz, self.update_hz)
         self.dt_ms = 1000.0 / self.update_hz
         # delays
         d = np.zeros((M, S), dtype=np.int64) if self.delays_ticks is None else \
@@ -181,7 +182,6 @@ class CoincidenceConfig(TargetOptions):
         # traces
         self._derive_traces()
         # cycles
-        self.cycles_per_tick = whole_cycles_per_tick(self.clock_hz, self.update_hz)
         self.cycles_needed = M * (S + CYCLES_PER_TARGET_EXTRA) + 2
         if self.cycles_needed > self.cycles_per_tick:
             raise ConfigError(f"{M} targets x {S} sources need {self.cycles_needed} cycles per "

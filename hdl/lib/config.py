@@ -97,8 +97,8 @@ def whole_cycles_per_tick(clock_hz: float, update_hz: float) -> int:
                and x > 0 for x in (clock_hz, update_hz)):
         raise ConfigError("clock_hz and update_hz must be positive finite numbers")
     ratio = clock_hz / update_hz
-    cycles = int(round(ratio))
-    if not math.isfinite(ratio) or abs(ratio - cycles) > 1e-9 * ratio or cycles < 1:
+    cycles = int(round(ratio)) if math.isfinite(ratio) else 0
+    if cycles < 1 or abs(ratio - cycles) > 1e-9 * ratio:
         raise ConfigError(f"clock_hz / update_hz = {clock_hz:.12g} / {update_hz:.12g} = "
                           f"{ratio:.12g} is not an integer number of cycles per update")
     return cycles

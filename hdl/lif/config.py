@@ -25,6 +25,7 @@ accepted only when that power of two is within ``max_decay_error`` of the exact 
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass, field
 from typing import Sequence
 
@@ -134,8 +135,8 @@ class LifConfig(CoreOptions):
         if self.decay not in DECAYS:
             raise ConfigError(f"decay must be one of {DECAYS}, got {self.decay!r}")
         self._check_options()
-        if not (isinstance(self.update_hz, (int, float)) and math.isfinite(self.update_hz)
-                and self.update_hz > 0):
+        if not (isinstance(self.update_hz, numbers.Real) and not isinstance(self.update_hz, bool)
+                and math.isfinite(self.update_hz) and self.update_hz > 0):
             raise ConfigError("update_hz must be a positive finite number")
         if self.clock_hz is None:
             self.clock_hz = float(self.update_hz * N)

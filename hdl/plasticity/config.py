@@ -148,6 +148,7 @@ class PlasticityConfig(TargetOptions):
         self.src = src.astype(np.int64)
         M, K = src.shape
         self.n_targets, self.n_synapses = int(M), int(K)
+        self.cycles_per_tick = whole_cycles_per_tick(self.clock_hz, self.update_hz)
         self.dt_ms = 1000.0 / self.update_hz
         p = self.rule
         try:
@@ -181,7 +182,6 @@ class PlasticityConfig(TargetOptions):
         self._derive_learning()
         self._derive_izhikevich()
         # cycles
-        self.cycles_per_tick = whole_cycles_per_tick(self.clock_hz, self.update_hz)
         self.cycles_needed = TICK_PROLOGUE + M * (K + CYCLES_PER_TARGET_EXTRA)
         if self.cycles_needed > self.cycles_per_tick:
             raise ConfigError(f"{M} CNs x {K} synapses need {self.cycles_needed} cycles per "

@@ -1,7 +1,7 @@
 """The LiteX SoC (boards/litex_sim.py) simulated on Icarus and Verilator with the host on
 LiteX's own ``CommUART`` over UARTBone (a pseudo-terminal bridged to cocotbext-uart on the
-SoC's serial pins), and through ``litex_server``'s RemoteServer and a RemoteClient as a LiteX
-user's scripts reach a board: a small Izhikevich core's currents written through the write CSRs, sweeps
+SoC's serial pins), and through ``litex_server`` (its own process) and a RemoteClient as a
+LiteX user reaches a board: a small Izhikevich core's currents written through the write CSRs, sweeps
 stepped through the Wishbone face, the spike beats popped from the FIFO, the clamp flags and
 the face's counters read; compared with the block's payload twin.
 
