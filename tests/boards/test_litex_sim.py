@@ -6,7 +6,7 @@ stepped through the Wishbone face, the spike beats popped from the FIFO, the cla
 the face's counters read; compared with the block's payload twin.
 
 Default lane: CommUART on Icarus (about 5 to 8 s); long lane: Verilator (3 s with its model
-cached, 20 s without) and the RemoteClient on both. Without LiteX (the ``synth`` extra) both cases skip, and CI fails on them:
+cached, 20 s without) and the RemoteClient on both. Without LiteX (the ``synth`` extra) every case skips, and CI fails on them:
 ``scripts/check_simulators_ran.py`` counts a skipped simulator case as not passed."""
 
 import numpy as np
