@@ -118,7 +118,8 @@ TARGET = open_flow_target(
     "butterstick", "ButterStick r1.0, Lattice ECP5 LFE5UM5G-85F speed grade 8: bitstream "
     "(yosys, nextpnr-ecp5, ecppack); UART through an adapter on SYZYGY 0", "ecp5",
     "LFE5UM5G-85F-8BG381C", platform, PLANS, {"LUT": 83640, "FF": 83640, "BRAM": 208, "DSP": 156},
-    # board-build fmax bound (MHz) for the sizing: provisional: the ULX3S's filled board build (ECP5 speed grade 6; this board is grade 8) until this board's largest build is measured
-    link_fmax_mhz=80.8, status_leds=0, loader_board=None,
+    # board-build fmax bound (MHz) for the sizing: the largest build's (10 cores of 4096 at
+    # 80 MHz), lowest of seeds 1-3 (benchmarks/boards.md)
+    link_fmax_mhz=126.58, status_leds=0, loader_board=None,
     uart="no USB-serial on the board: a 3.3 V USB-UART adapter on SYZYGY port 0, S0 (FPGA "
          "G2, out) and S1 (FPGA J3, in); the board's gateware powers the bank at 3.3 V")

@@ -24,7 +24,8 @@ TARGET = open_flow_target(
     amaranth_board("colorlight_5a75b_r7_0", "Colorlight_5A75B_R70Platform",
                    lambda cls: without_commands(cls, ("openFPGALoader",))),
     ULX3S_PLANS, {"LUT": 24288, "FF": 24288, "BRAM": 56, "DSP": 28},
-    # board-build fmax bound (MHz) for the sizing: provisional: the ULX3S's filled board build (ECP5, the same speed grade 6) until this board's largest build is measured
-    link_fmax_mhz=80.8, status_leds=0, loader_board="colorlight",
+    # board-build fmax bound (MHz) for the sizing: the largest build's (3 cores of 3072 at
+    # 60 MHz), lowest of seeds 1-3 (benchmarks/boards.md)
+    link_fmax_mhz=89.02, status_leds=0, loader_board="colorlight",
     uart="no USB on the board: a 3.3 V USB-UART adapter on J19, the LED pin (FPGA P11, out) "
          "and the button pin (FPGA M13, in)")

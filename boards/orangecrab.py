@@ -38,7 +38,8 @@ TARGET = open_flow_target(
     "orangecrab", "OrangeCrab r0.2, Lattice ECP5 LFE5U-25F speed grade 8: bitstream (yosys, "
     "nextpnr-ecp5, ecppack); UART through an adapter on the Feather header", "ecp5",
     "LFE5U-25F-8MG285C", platform, PLANS, {"LUT": 24288, "FF": 24288, "BRAM": 56, "DSP": 28},
-    # board-build fmax bound (MHz) for the sizing: provisional: the ULX3S's filled board build (ECP5 speed grade 6; this board is grade 8) until this board's largest build is measured
-    link_fmax_mhz=80.8, loader_board="orangecrab",
+    # board-build fmax bound (MHz) for the sizing: the largest build's (2 cores of 4608 at
+    # 96 MHz), lowest of seeds 1-3 (benchmarks/boards.md)
+    link_fmax_mhz=113.24, loader_board="orangecrab",
     uart="no USB-serial on the board: a 3.3 V USB-UART adapter on the Feather header's TX "
          "(FPGA M18, out) and RX (FPGA N17, in) pins")

@@ -22,6 +22,8 @@ PLANS = rpll_plans("gw1n", 48, 54, 72)
 TARGET = gowin_target(
     "tang_nano_9k", "Sipeed Tang Nano 9K, Gowin GW1NR-9 C6/I5", "GW1NR-LV9QN88PC6/I5",
     "TangNano9kPlatform", PLANS, {"LUT": 8640, "FF": 6480, "BRAM": 26, "DSP": 20},
-    # board-build fmax bound (MHz) for the sizing: the 1000-neuron build at 48 MHz, seed 1 (measured; the largest build's three seeds are in benchmarks/boards.md)
+    # board-build fmax bound (MHz) for the sizing: the 1000-neuron build at 48 MHz, seed 1
+    # (the largest build, 26 of 26 block RAMs, did not finish place and route in an hour;
+    # benchmarks/boards.md)
     link_fmax_mhz=57.3, loader_board="tangnano9k",
     uart="the BL702's USB serial port (pins 17 tx, 18 rx)")

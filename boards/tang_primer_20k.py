@@ -23,6 +23,7 @@ TARGET = gowin_target(
     "tang_primer_20k", "Sipeed Tang Primer 20K (Dock), Gowin GW2A-18 C8/I7",
     "GW2A-LV18PG256C8/I7", "TangPrimer20kDockPlatform", PLANS,
     {"LUT": 20736, "FF": 15552, "BRAM": 46, "DSP": 48},
-    # board-build fmax bound (MHz) for the sizing: provisional: the GW1NR-9's measured board-build fmax (the GW2A-18 C8 is the faster family member) until this board's largest build is measured
-    link_fmax_mhz=57.3, loader_board="tangprimer20k",
+    # board-build fmax bound (MHz) for the sizing: the largest build's (2 cores of 4096 at
+    # 72 MHz), lowest of seeds 1-3 (benchmarks/boards.md)
+    link_fmax_mhz=141.28, loader_board="tangprimer20k",
     uart="the Dock's USB debugger's serial port (pins M11 tx, T13 rx)")
