@@ -264,8 +264,7 @@ def scene_graph(scene):
         return skin_graph(rows * cols, fe["force_offset_mV"], fe["force_gain_mV_per_N"], lif)
     if kind == "learning":               # the layer before learning (a run writes the learnt)
         from ..plasticity.protocol import layer_config
-        n_aff = len(scene.populations[0]["gratings"]) * len(scene["learning"]["afferent_gains"])
-        return learning_graph(layer_config(scene, n_aff))
+        return learning_graph(layer_config(scene))
     if kind == "ridge":
         from ..coincidence.experiments import detector_config
         from ..scenes.ridge import spec_of

@@ -3,7 +3,8 @@ alone or behind a face (UART, AXI, Wishbone).
 
 The layer's configuration is the scene's (:func:`~cuneate.sim.plasticity.protocol
 .layer_config`: its afferents, CNs, synapses, initial weights and rule), the one its runs use;
-its afferent count follows from the scene's tethers and gains, so nothing is synthesized.
+its afferent count follows from the scene's tethers and gains (``n_afferents``), so nothing is
+synthesized.
 """
 
 from __future__ import annotations
@@ -21,10 +22,8 @@ def scene_layer(scene, tick_source: str = "internal"):
     if scene.kind != "learning":
         raise CliError(f"cuneate generate plasticity: {scene.name!r} is a {scene.kind} scene; "
                        f"the layer is made from a learning scene (stimulus.kind = learning)")
-    n_sources = len(scene.populations[0]["gratings"]) * \
-        len(scene["learning"]["afferent_gains"])
     try:
-        cfg = layer_config(scene, n_sources)
+        cfg = layer_config(scene)
         if tick_source != cfg.tick_source:
             cfg = type(cfg).from_kwargs(cfg.to_kwargs() | {"tick_source": tick_source})
     except ConfigError as exc:

@@ -112,8 +112,16 @@ def _concat(a, b):
                          a.window_ticks, np.concatenate([a.order, b.order]), a.dt_ms)
 
 
-def layer_config(scene, n_sources: int):
-    """The layer's :class:`~cuneate.hdl.plasticity.PlasticityConfig` of a scene."""
+def n_afferents(scene) -> int:
+    """A learning scene's afferents: each listed tether at each gain."""
+    return len(scene.populations[0]["gratings"]) * len(scene["learning"]["afferent_gains"])
+
+
+def layer_config(scene, n_sources: int | None = None):
+    """The layer's :class:`~cuneate.hdl.plasticity.PlasticityConfig` of a scene
+    (``n_sources``: its afferents, :func:`n_afferents` when not given)."""
+    if n_sources is None:
+        n_sources = n_afferents(scene)
     from ...hdl.plasticity import PlasticityConfig
     lp, hw = scene["learning"], scene["hardware"]
     rng = np.random.default_rng(lp["anatomy_seed"])

@@ -113,7 +113,8 @@ def estimate(scene, engines: list[str]) -> dict:
     w = _work(scene)
     lp = scene["learning"]
     n_cls = len(scene.classes())
-    aff = len(scene.populations[0]["gratings"]) * len(lp["afferent_gains"])
+    from ..plasticity.protocol import n_afferents
+    aff = n_afferents(scene)
     n_s = scene["scene"]["duration_ms"] * scene["hardware"]["update_hz"] / 1000.0
     seconds = 5e-8 * n_cls * aff * n_s
     for e in engines:
