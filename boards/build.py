@@ -99,13 +99,16 @@ def _yosys_estimate(out: Path, top: str, target: dict) -> dict:
             for k, v in used.items()}
 
 
+def packs_registers(target: dict, pack_registers: bool = True) -> bool:
+    """Whether a build of ``target`` packs registers (asked, and an ECP5 target)."""
+    return pack_registers and target["family"] == "ecp5"
+
+
 def board_platform(target: dict, pack_registers: bool = True):
     """The platform a build of ``target`` runs on: its board file's, with the ECP5 register
-    packing between yosys and nextpnr when ``pack_registers``."""
+    packing between yosys and nextpnr when :func:`packs_registers`."""
     platform = target["platform"]()
-    if pack_registers and target["family"] == "ecp5":
-        platform = packing_platform(platform)
-    return platform
+    return packing_platform(platform) if packs_registers(target, pack_registers) else platform
 
 
 def build_target(board: str, out: Path, n_neurons: int | None = None,
@@ -152,7 +155,7 @@ def build_target(board: str, out: Path, n_neurons: int | None = None,
     if target.get("bitstream") and bitstream:
         from .top import BoardTop
         platform = board_platform(target, pack_registers)
-        packing = pack_registers and target["family"] == "ecp5"
+        packing = packs_registers(target, pack_registers)
         top = BoardTop(lcfg, sized["pll"], target.get("uart_tx_enable", False),
                        target.get("status_leds"))
         opts = f"--report {name}.nextpnr.json --timing-allow-fail --seed {seed}"
